@@ -1,0 +1,35 @@
+"""Model-based controllers of monograph chapter 5 (numpy + pinocchio; no simulator inside).
+
+The core never imports gymnasium, mujoco, envs or eval; :mod:`.policies` joins controllers and envs by duck
+typing and is imported on demand (``redundancy_gym.make_policy``).
+"""
+
+from .acceleration_clik import AccelerationClik, AccelerationClikResult
+from .clik import Clik, ClikProblem, ClikResult
+from .exceptions import ControllerError, PolicyError
+from .frame_position_task import FramePositionTask
+from .joint_limit_objective import JointLimitObjective
+from .objective import Objective, ObjectiveValue
+from .posture_objective import PostureObjective
+from .redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
+from .task import Task
+
+__all__ = [
+    "METHODS",
+    "AccelerationClik",
+    "AccelerationClikResult",
+    "Clik",
+    "ClikProblem",
+    "ClikResult",
+    "ControllerError",
+    "FramePositionTask",
+    "JointLimitObjective",
+    "Objective",
+    "ObjectiveValue",
+    "PolicyError",
+    "PostureObjective",
+    "Resolution",
+    "Task",
+    "WeightMatrix",
+    "resolve",
+]

@@ -1,0 +1,149 @@
+"""Velocity-level closed-loop inverse kinematics with nullspace optimization (monograph 5.1.2, 5.1.4)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..model import RobotModel
+from .exceptions import ControllerError
+from .objective import Objective
+from .redundancy_resolution import METHODS, WeightMatrix, resolve
+from .task import Task
+
+__all__ = ["Clik", "ClikProblem", "ClikResult"]
+
+
+class ClikProblem(NamedTuple):
+    """One CLIK step, built at a configuration and ready to :meth:`Clik.solve`.
+
+    Attributes:
+        q: configuration [rad or m].
+        jacobian: ``J_w`` (m x nv).
+        error: ``e = w_d - w(q)`` (5.5).
+        velocity: effective task velocity ``wdot_d + K e`` (5.5).
+        gradient: ``(dH/dq)^T`` of the summed nullspace objectives (nv).
+        objective: ``H(q)``.
+    """
+
+    q: NDArray[np.float64]
+    jacobian: NDArray[np.float64]
+    error: NDArray[np.float64]
+    velocity: NDArray[np.float64]
+    gradient: NDArray[np.float64]
+    objective: float
+
+
+class ClikResult(NamedTuple):
+    """Joint velocities of one CLIK step and diagnostics.
+
+    Attributes:
+        qdot: joint velocities [rad/s or m/s]; zeros when ``success`` is False.
+        error: task error ``e`` before the step.
+        error_norm: ``|e|``.
+        sigma_min: smallest singular value of ``J W^-1/2``.
+        damping: damped-least-squares damping used (0 otherwise).
+        objective: nullspace objective ``H(q)``.
+        success: False when the solve met a singularity it cannot pass (pseudoinverse).
+        status: ``"ok"``, ``"damped"`` or ``"singular"``.
+    """
+
+    qdot: NDArray[np.float64]
+    error: NDArray[np.float64]
+    error_norm: float
+    sigma_min: float
+    damping: float
+    objective: float
+    success: bool
+    status: str
+
+
+class Clik:
+    """Velocity-level CLIK ``qdot = J#_W (wdot_d + K e) - alpha N_W W^-1 (dH/dq)^T`` (5.5), (5.14).
+
+    Solved as in Algorithm 10 (Cholesky of ``J W^-1 J^T``, no explicit pseudoinverse). Variants:
+    ``"pseudoinverse"`` (exact; reports singular configurations), ``"dls"`` (damped least squares (5.22) whose
+    damping grows as the smallest singular value falls below ``dls_threshold``; keeps the nullspace term) and
+    ``"transpose"`` (transposed Jacobian (5.24), ``qdot = W^-1 J^T (wdot_d + K e)``; ignores objectives).
+
+    Args:
+        model: the robot model.
+        task: the task ``w(q)``.
+        method: one of ``"pseudoinverse"``, ``"dls"``, ``"transpose"``.
+        gain: ``K`` [1/s], scalar or one per task coordinate, >= 0.
+        weights: ``W``: scalar, diagonal (nv) or full (nv x nv) positive definite.
+        nullspace_gain: ``alpha`` >= 0 of (5.14).
+        objectives: nullspace objectives ``H`` (summed).
+        singular_threshold: smallest singular value below which ``"pseudoinverse"`` reports a singularity.
+        dls_threshold: ``eps`` of the DLS damping law.
+        dls_max_damping: ``k_max`` of the DLS damping law.
+    """
+
+    def __init__(self, model: RobotModel, task: Task, *, method: str = "pseudoinverse",
+                 gain: ArrayLike | float = 10.0, weights: ArrayLike | float = 1.0, nullspace_gain: float = 1.0,
+                 objectives: Sequence[Objective] = (), singular_threshold: float = 1e-6,
+                 dls_threshold: float = 0.05, dls_max_damping: float = 0.01) -> None:
+        if method not in METHODS:
+            raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
+        gain_arr = np.broadcast_to(np.asarray(gain, dtype=np.float64), (task.dim,)).copy()
+        if np.any(gain_arr < 0.0) or not np.all(np.isfinite(gain_arr)):
+            raise ControllerError("gain must be finite and >= 0")
+        if not np.isfinite(nullspace_gain) or nullspace_gain < 0.0:
+            raise ControllerError(f"nullspace_gain must be finite and >= 0, got {nullspace_gain!r}")
+        for name, value in (("singular_threshold", singular_threshold), ("dls_threshold", dls_threshold),
+                            ("dls_max_damping", dls_max_damping)):
+            if not np.isfinite(value) or value <= 0.0:
+                raise ControllerError(f"{name} must be finite and > 0, got {value!r}")
+        for objective in objectives:
+            if not isinstance(objective, Objective):
+                raise ControllerError(f"{objective!r} has no evaluate(model, q) method")
+        self.model = model
+        self.task = task
+        self.method = method
+        self.gain = gain_arr
+        self.weights = WeightMatrix(weights, model.nv)
+        self.nullspace_gain = float(nullspace_gain)
+        self.objectives = tuple(objectives)
+        self.singular_threshold = float(singular_threshold)
+        self.dls_threshold = float(dls_threshold)
+        self.dls_max_damping = float(dls_max_damping)
+
+    def build(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikProblem:
+        """Evaluate kinematics and objectives at ``q`` for the reference ``w_d`` and ``wdot_d``."""
+        q = self.model.check_configuration(q)
+        self.model.update(q)
+        error = self.task.error(self.model, np.asarray(target, dtype=np.float64))
+        jacobian = self.task.jacobian(self.model)
+        velocity = self.gain * error
+        if target_velocity is not None:
+            wdot = np.asarray(target_velocity, dtype=np.float64)
+            if wdot.shape != error.shape or not np.all(np.isfinite(wdot)):
+                raise ControllerError(f"target_velocity must be finite with shape {error.shape}")
+            velocity = velocity + wdot
+        value, gradient = self._objectives(q)
+        return ClikProblem(q, jacobian, error, velocity, gradient, value)
+
+    def solve(self, problem: ClikProblem) -> ClikResult:
+        """Joint velocities for a built problem."""
+        z = self.nullspace_gain * problem.gradient if self.objectives else None
+        res = resolve(problem.jacobian, problem.velocity, z, self.weights, method=self.method,
+                      singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,
+                      dls_max_damping=self.dls_max_damping)
+        return ClikResult(res.x, problem.error, float(np.linalg.norm(problem.error)), res.sigma_min, res.damping,
+                          problem.objective, res.success, res.status)
+
+    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
+        """``solve(build(q, target, target_velocity))``."""
+        return self.solve(self.build(q, target, target_velocity))
+
+    def _objectives(self, q: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
+        value = 0.0
+        gradient = np.zeros(self.model.nv)
+        for objective in self.objectives:
+            v, g = objective.evaluate(self.model, q)
+            value += v
+            gradient += g
+        return value, gradient

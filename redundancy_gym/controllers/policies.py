@@ -1,0 +1,232 @@
+"""Policies with the stable-baselines3 ``predict`` signature: analytic reference controllers and learned models.
+
+This module joins controllers and environments (DESIGN.md): it reads what it needs from the env by duck
+typing (``OBSERVATION_LAYOUT``, ``ROBOT_XML``, ``TCP_FRAME``, ``TASK_AXES``, ``max_joint_speed``) and never
+imports gymnasium or mujoco, so the same policy object can drive a robot fed with the same observation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..model import RobotModel
+from .clik import Clik, ClikResult
+from .exceptions import PolicyError
+from .frame_position_task import FramePositionTask
+from .joint_limit_objective import JointLimitObjective
+from .posture_objective import PostureObjective
+from .redundancy_resolution import METHODS
+
+__all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPolicy", "Sb3Policy", "ZeroPolicy",
+           "make_policy"]
+
+POLICY_NAMES: tuple[str, ...] = ("clik", "zero", "random")
+_SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
+
+
+@runtime_checkable
+class Policy(Protocol):
+    """The stable-baselines3 prediction signature shared by every policy."""
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+        """Action for an observation, and the (unused) recurrent state."""
+        ...
+
+
+class ZeroPolicy:
+    """Always the zero action (for a velocity-commanded arm: hold still)."""
+
+    def __init__(self, env: Any) -> None:
+        self._action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+        """The zero action."""
+        return self._action.copy(), state
+
+
+class RandomPolicy:
+    """Uniform random actions in the action box, from the policy's own seeded generator.
+
+    Args:
+        env: the environment (its action space bounds are used).
+        seed: seed of the generator.
+    """
+
+    def __init__(self, env: Any, seed: int | None = 0) -> None:
+        space = env.action_space
+        self._low = np.asarray(space.low, dtype=np.float64)
+        self._high = np.asarray(space.high, dtype=np.float64)
+        if not (np.all(np.isfinite(self._low)) and np.all(np.isfinite(self._high))):
+            raise PolicyError("the random policy needs a bounded action space")
+        self._dtype = space.dtype
+        self._rng = np.random.default_rng(seed)
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+        """A uniform random action."""
+        return self._rng.uniform(self._low, self._high).astype(self._dtype), state
+
+
+@dataclass(frozen=True)
+class ClikPolicyConfig:
+    """Defaults of the CLIK reference policy (see :class:`~redundancy_gym.controllers.Clik`).
+
+    Attributes:
+        method: ``"pseudoinverse"``, ``"dls"`` or ``"transpose"``.
+        gain: task-space feedback ``K`` [1/s] of (5.5).
+        nullspace_gain: ``alpha`` of (5.14).
+        joint_limit_activation: ``d_a`` of the joint-limit potential [rad].
+        joint_limit_slope: slope of the joint-limit potential at the limit.
+        joint_limit_weight: weight of the joint-limit objective (0 switches it off).
+        posture_weight: weight of a pull towards the env's starting posture (0 switches it off).
+        dls_threshold: ``eps`` of the DLS damping law.
+        dls_max_damping: ``k_max`` of the DLS damping law.
+    """
+
+    method: str = "dls"
+    gain: float = 20.0
+    nullspace_gain: float = 1.0
+    joint_limit_activation: float = 0.35
+    joint_limit_slope: float = 1.0
+    joint_limit_weight: float = 1.0
+    posture_weight: float = 0.0
+    dls_threshold: float = 0.05
+    dls_max_damping: float = 0.01
+
+
+class ClikPolicy:
+    """Velocity-level CLIK (5.14) on the env's task, as a policy: observation in, normalized joint velocities out.
+
+    The joint configuration and the task reference (position and velocity) are read from the observation;
+    the model is the env's robot MJCF loaded by pinocchio. The last :class:`ClikResult` is kept in
+    :attr:`last_result` for diagnostics.
+
+    Args:
+        env: an env exposing ``OBSERVATION_LAYOUT`` (with ``q``, ``tcp_ref``, ``tcp_ref_vel``), ``ROBOT_XML``,
+            ``TCP_FRAME``, ``TASK_AXES`` and ``max_joint_speed`` (e.g. PlanarReach-v0).
+        **kwargs: fields of :class:`ClikPolicyConfig`.
+    """
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        valid = {f.name for f in fields(ClikPolicyConfig)}
+        unknown = set(kwargs) - valid
+        if unknown:
+            raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
+        self.config = ClikPolicyConfig(**kwargs)
+        if self.config.method not in METHODS:
+            raise PolicyError(f"unknown method {self.config.method!r}; valid methods: {', '.join(METHODS)}")
+        base = getattr(env, "unwrapped", env)
+        required = ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES", "max_joint_speed")
+        missing = [name for name in required if not hasattr(base, name)]
+        if missing:
+            raise PolicyError(f"the clik policy does not support {type(base).__name__}: it lacks {', '.join(missing)}")
+        self._layout = base.OBSERVATION_LAYOUT
+        self._speed = float(base.max_joint_speed)
+        self.model = RobotModel.from_mjcf(base.ROBOT_XML)
+        objectives = []
+        if self.config.joint_limit_weight > 0.0:
+            objectives.append(JointLimitObjective.from_model(
+                self.model, activation_distance=self.config.joint_limit_activation,
+                slope=self.config.joint_limit_slope, weight=self.config.joint_limit_weight))
+        if self.config.posture_weight > 0.0:
+            reference = getattr(base, "nominal_configuration", None)
+            if reference is None:
+                raise PolicyError("posture_weight > 0 needs an env with nominal_configuration")
+            objectives.append(PostureObjective(reference, self.config.posture_weight))
+        self.controller = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES),
+                               method=self.config.method, gain=self.config.gain,
+                               nullspace_gain=self.config.nullspace_gain, objectives=objectives,
+                               dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping)
+        self.last_result: ClikResult | None = None
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+        """Normalized joint velocity command for one observation."""
+        obs = np.asarray(observation, dtype=np.float64)
+        result = self.controller.step(obs[self._layout["q"]], obs[self._layout["tcp_ref"]],
+                                      obs[self._layout["tcp_ref_vel"]])
+        self.last_result = result
+        action = np.clip(result.qdot / self._speed, -1.0, 1.0)
+        return action.astype(np.float32), state
+
+    def describe(self) -> dict[str, Any]:
+        """The configuration, for reports."""
+        return asdict(self.config)
+
+
+class Sb3Policy:
+    """A stable-baselines3 model loaded from a ``.zip``; ``predict`` is the model's own.
+
+    Args:
+        path: the ``.zip`` written by ``model.save``.
+        env: the environment (checked against the model's spaces by SB3).
+        algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG when omitted.
+    """
+
+    def __init__(self, path: str | Path, env: Any = None, algo: str | None = None) -> None:
+        path = Path(path)
+        if not path.is_file():
+            raise PolicyError(f"policy file not found: {path}")
+        try:
+            import stable_baselines3 as sb3
+        except ImportError as exc:  # the 'learn' extra
+            raise PolicyError("loading a .zip policy needs stable-baselines3: pip install 'redundancy-gym[learn]'") from exc
+        names = (algo,) if algo else _SB3_ALGOS
+        errors = []
+        for name in names:
+            cls = getattr(sb3, name, None)
+            if cls is None:
+                raise PolicyError(f"unknown SB3 algorithm {name!r}; valid: {', '.join(_SB3_ALGOS)}")
+            try:
+                self.model = cls.load(str(path), device="cpu")
+                self.algo = name
+                break
+            except Exception as exc:  # SB3 raises assorted errors for a class mismatch
+                errors.append(f"{name}: {type(exc).__name__}")
+        else:
+            raise PolicyError(f"{path} is not a stable-baselines3 model of {', '.join(names)} ({'; '.join(errors)})")
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+        """The SB3 model's action."""
+        return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
+
+
+def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
+    """Build a policy for ``env``.
+
+    Args:
+        name: ``"clik"`` (reference controller), ``"zero"``, ``"random"`` or the path of a stable-baselines3
+            ``.zip``.
+        env: the environment the policy will act in.
+        **kwargs: options of the policy (``ClikPolicyConfig`` fields for ``clik``, ``seed`` for ``random``,
+            ``algo`` for a ``.zip``).
+    """
+    if name == "clik":
+        return ClikPolicy(env, **kwargs)
+    if name == "zero":
+        _no_options(name, kwargs)
+        return ZeroPolicy(env)
+    if name == "random":
+        unknown = set(kwargs) - {"seed"}
+        if unknown:
+            raise PolicyError(f"unknown random-policy option(s) {', '.join(sorted(unknown))}; valid: seed")
+        return RandomPolicy(env, **kwargs)
+    if name.endswith(".zip") or Path(name).is_file():
+        unknown = set(kwargs) - {"algo"}
+        if unknown:
+            raise PolicyError(f"unknown option(s) {', '.join(sorted(unknown))} for a .zip policy; valid: algo")
+        return Sb3Policy(name, env, **kwargs)
+    raise PolicyError(f"unknown policy {name!r}; valid: {', '.join(POLICY_NAMES)} or the path of an SB3 .zip")
+
+
+def _no_options(name: str, kwargs: dict[str, Any]) -> None:
+    if kwargs:
+        raise PolicyError(f"the {name} policy takes no options, got {', '.join(sorted(kwargs))}")

@@ -1,0 +1,7 @@
+"""Gymnasium environments on MuJoCo for redundant robots, one class per file (ids registered in
+:mod:`redundancy_gym.registration`)."""
+
+from .exceptions import EnvConfigError, InvalidActionError
+from .planar_reach import PlanarReachEnv
+
+__all__ = ["EnvConfigError", "InvalidActionError", "PlanarReachEnv"]

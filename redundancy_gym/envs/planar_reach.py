@@ -1,0 +1,374 @@
+"""PlanarReach-v0: a planar 4-DoF arm whose TCP follows a vertical line past a sphere obstacle (monograph 5.6.2)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import mujoco
+import numpy as np
+from gymnasium import spaces, utils
+from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+from numpy.typing import NDArray
+
+from ..assets import (
+    PLANAR_ARM_FEEDFORWARDS,
+    PLANAR_ARM_JOINTS,
+    PLANAR_ARM_LINK_GEOMS,
+    PLANAR_ARM_SERVOS,
+    PLANAR_ARM_TCP,
+    PLANAR_ARM_XML,
+    PLANAR_OBSTACLE_GEOM,
+)
+from ..assets.planar_arm_scene import planar_arm_scene_xml
+from .exceptions import EnvConfigError, InvalidActionError
+
+__all__ = ["PlanarReachEnv", "default_config"]
+
+_TIMESTEP = 0.001  # [s], the MJCF option; the control period is frame_skip * _TIMESTEP
+_CLEARANCE_HORIZON = 10.0  # [m] distances beyond this are reported as this value
+
+
+def default_config() -> dict[str, Any]:
+    """Default keyword arguments of :class:`PlanarReachEnv` (a fresh dict each call)."""
+    return {
+        "obstacle": True,
+        "obstacle_center": (0.55, 0.05),
+        "obstacle_radius": 0.1,
+        "line_start": (0.9, 0.45),
+        "line_end": (0.9, -0.45),
+        "duration": 2.0,
+        "initial_configuration": (-1.3, 1.0, 0.9, 0.5),
+        "max_joint_speed": 3.0,
+        "tracking_weight": 10.0,
+        "energy_weight": 0.1,
+        "collision_penalty": 10.0,
+        "reset_noise_scale": 0.1,
+        "success_tolerance": 1e-3,
+        "frame_skip": 10,
+    }
+
+
+class PlanarReachEnv(MujocoEnv, utils.EzPickle):
+    r"""## Description
+    A planar 4-DoF arm moving in the vertical x-z plane (the motivational example of monograph 5.6.2,
+    fig. 5.30). Its tool centre point (TCP) must follow a straight vertical line from ``line_start`` (top) to
+    ``line_end`` (bottom) in ``duration`` seconds along a rest-to-rest quintic time law, then hold the end
+    point until the time limit. The arm has four joints for a two-dimensional task: two degrees of redundancy
+    that a controller may use, for example to keep clear of the optional sphere obstacle near the line (the
+    reference path itself does not touch it, but the links may).
+
+    The plant is the MJCF in ``redundancy_gym/assets/planar_arm.xml``: link lengths 0.5/0.4/0.3/0.2 m,
+    masses 4/3/2/1 kg, gravity compensated, each joint driven by a stiff servo on the integrated velocity
+    command with velocity feed-forward (a position-controlled robot taking velocity commands).
+
+    ## Action Space
+    ``Box(-1, 1, (4,), float32)``: joint velocity commands normalized by ``max_joint_speed``,
+    ``qdot_cmd = max_joint_speed * clip(action, -1, 1)`` [rad/s]. Non-finite actions raise
+    :class:`~redundancy_gym.envs.InvalidActionError`.
+
+    ## Observation Space
+    ``Box(-inf, inf, (18,), float64)``; the slices are in :attr:`OBSERVATION_LAYOUT`:
+
+    | index | name | unit |
+    |-------|------|------|
+    | 0-3   | ``q``: joint angles | rad |
+    | 4-7   | ``qdot``: joint velocities | rad/s |
+    | 8-9   | ``tcp``: TCP position (x, z) | m |
+    | 10-11 | ``tcp_ref``: reference TCP position (x, z) | m |
+    | 12-13 | ``tcp_ref_vel``: reference TCP velocity (x, z) | m/s |
+    | 14    | ``phase``: ``min(t / duration, 1)`` | - |
+    | 15-16 | ``obstacle_center``: (x, z), zeros without obstacle | m |
+    | 17    | ``obstacle_radius``: 0 without obstacle | m |
+
+    ## Rewards
+    The reward is the sum of the terms reported in ``info``:
+
+    - ``reward_tracking = -tracking_weight * |tcp - tcp_ref|`` [m]
+    - ``reward_energy = -energy_weight * qdot^T qdot * dt`` (the pseudoenergy increment)
+    - ``reward_collision = -collision_penalty`` on the step that collides, else 0
+
+    ``info`` also holds ``task_error`` [m], ``pseudoenergy`` (``qdot^T qdot dt`` of the step, [rad^2/s]),
+    ``min_clearance`` [m] (smallest distance between a link capsule and the obstacle; ``inf`` without
+    obstacle), ``collision`` (bool), ``joint_limit_margin`` [rad] (smallest distance of a joint to a limit),
+    ``line_finished`` (the reference has reached ``line_end``), ``peak_joint_speed`` (``max |qdot_i|``
+    [rad/s]), ``max_task_error`` (largest ``task_error`` of the episode so far), ``is_success`` (line finished,
+    no collision, ``max_task_error <= success_tolerance``), ``time`` [s], ``tcp`` and ``tcp_ref``.
+
+    ## Starting State
+    ``q = q_0 + u`` with ``u ~ U(-reset_noise_scale, reset_noise_scale)^4`` drawn from the env's generator,
+    then projected by a minimum-norm Newton iteration onto the configurations whose TCP is exactly at
+    ``line_start`` (so the redundant posture varies but the task starts without error). ``q_0`` is
+    ``initial_configuration`` projected the same way. Joint velocities are zero; servo targets equal ``q``.
+
+    ## Episode End
+    - Termination: a link touches the obstacle (``min_clearance <= 0``).
+    - Truncation: the time limit of the registration (250 steps = 2.5 s at the default 100 Hz). Keep it at
+      least ``duration / dt`` steps when changing ``duration`` (``gym.make(..., max_episode_steps=N)``).
+
+    ## Arguments
+    - ``obstacle`` (bool): include the sphere obstacle in the scene.
+    - ``obstacle_center`` ((x, z) [m]), ``obstacle_radius`` ([m], > 0).
+    - ``line_start``, ``line_end`` ((x, z) [m]): the TCP line, both inside the reach of 1.4 m.
+    - ``duration`` ([s], > 0): time to traverse the line.
+    - ``initial_configuration`` (4 angles [rad]): seed of the starting posture.
+    - ``max_joint_speed`` ([rad/s], > 0): velocity command at action 1.
+    - ``tracking_weight``, ``energy_weight``, ``collision_penalty`` (>= 0): reward weights.
+    - ``reset_noise_scale`` ([rad], >= 0): joint noise of the starting posture.
+    - ``success_tolerance`` ([m], > 0): largest TCP error of a successful episode.
+    - ``frame_skip`` (int >= 1): physics steps of 1 ms per control step.
+    - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    OBSERVATION_LAYOUT: dict[str, slice] = {
+        "q": slice(0, 4),
+        "qdot": slice(4, 8),
+        "tcp": slice(8, 10),
+        "tcp_ref": slice(10, 12),
+        "tcp_ref_vel": slice(12, 14),
+        "phase": slice(14, 15),
+        "obstacle_center": slice(15, 17),
+        "obstacle_radius": slice(17, 18),
+    }
+    ROBOT_XML = PLANAR_ARM_XML
+    TCP_FRAME = PLANAR_ARM_TCP
+    TASK_AXES = "xz"
+
+    def __init__(self, obstacle: bool = True, obstacle_center: Sequence[float] = (0.55, 0.05),
+                 obstacle_radius: float = 0.1, line_start: Sequence[float] = (0.9, 0.45),
+                 line_end: Sequence[float] = (0.9, -0.45), duration: float = 2.0,
+                 initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5), max_joint_speed: float = 3.0,
+                 tracking_weight: float = 10.0, energy_weight: float = 0.1, collision_penalty: float = 10.0,
+                 reset_noise_scale: float = 0.1, success_tolerance: float = 1e-3, frame_skip: int = 10, render_mode: str | None = None,
+                 width: int = 480, height: int = 480, camera_name: str | None = "side", **kwargs: Any) -> None:
+        if kwargs:
+            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
+            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
+        utils.EzPickle.__init__(self, obstacle, obstacle_center, obstacle_radius, line_start, line_end, duration,
+                                initial_configuration, max_joint_speed, tracking_weight, energy_weight,
+                                collision_penalty, reset_noise_scale, success_tolerance, frame_skip, render_mode, width, height,
+                                camera_name)
+        self._obstacle = bool(obstacle)
+        self._obstacle_center = _point(obstacle_center, "obstacle_center")
+        self._obstacle_radius = _positive(obstacle_radius, "obstacle_radius")
+        self._line_start = _point(line_start, "line_start")
+        self._line_end = _point(line_end, "line_end")
+        for name, p in (("line_start", self._line_start), ("line_end", self._line_end)):
+            if np.linalg.norm(p) >= 1.4:
+                raise EnvConfigError(f"{name} {tuple(p)} is outside the arm's reach of 1.4 m from (0, 0)")
+        self._duration = _positive(duration, "duration")
+        self._max_joint_speed = _positive(max_joint_speed, "max_joint_speed")
+        self._tracking_weight = _non_negative(tracking_weight, "tracking_weight")
+        self._energy_weight = _non_negative(energy_weight, "energy_weight")
+        self._collision_penalty = _non_negative(collision_penalty, "collision_penalty")
+        self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
+        self._success_tolerance = _positive(success_tolerance, "success_tolerance")
+        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
+            raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
+        seed_q = np.asarray(initial_configuration, dtype=np.float64)
+        if seed_q.shape != (4,) or not np.all(np.isfinite(seed_q)):
+            raise EnvConfigError(f"initial_configuration must be 4 finite angles [rad], got {initial_configuration!r}")
+        self._scene_xml = planar_arm_scene_xml(
+            obstacle_center=self._obstacle_center if self._obstacle else None,
+            obstacle_radius=self._obstacle_radius, line_start=self._line_start, line_end=self._line_end)
+        self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
+                         "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
+        observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
+        MujocoEnv.__init__(self, str(PLANAR_ARM_XML), int(frame_skip), observation_space=observation_space,
+                           render_mode=render_mode, width=width, height=height,
+                           camera_name=camera_name if render_mode is not None else None)
+        self._resolve_names()
+        self._time = 0.0
+        self._max_task_error = 0.0
+        self._collided = False
+        self._nominal_q = self._project_to_line_start(np.clip(seed_q, self._lower, self._upper))
+        if self._nominal_q is None:
+            raise EnvConfigError(f"no configuration near initial_configuration {tuple(seed_q)} puts the TCP at "
+                                 f"line_start {tuple(self._line_start)}")
+
+    # ------------------------------------------------------------------ gymnasium API
+    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        model = mujoco.MjModel.from_xml_string(self._scene_xml)
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
+        if abs(model.opt.timestep - _TIMESTEP) > 1e-12:
+            raise EnvConfigError(f"the planar arm MJCF must use a {_TIMESTEP} s timestep")
+        # velocity command range follows max_joint_speed (servo and feed-forward actuators alike)
+        model.actuator_ctrlrange[:] = [-self._max_joint_speed, self._max_joint_speed]
+        return model, mujoco.MjData(model)
+
+    def _set_action_space(self) -> spaces.Box:
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(4,), dtype=np.float32)
+        return self.action_space
+
+    def _step_mujoco_simulation(self, ctrl: NDArray[np.float64], n_frames: int) -> None:
+        self.data.ctrl[:] = ctrl
+        mujoco.mj_step(self.model, self.data, nstep=n_frames)
+        # mj_step leaves positions of the state before the last integration; observe the current one
+        mujoco.mj_kinematics(self.model, self.data)
+
+    def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != (4,):
+            raise InvalidActionError(f"action must have shape (4,), got {action.shape}")
+        if not np.all(np.isfinite(action)):
+            raise InvalidActionError(f"action must be finite, got {action}")
+        qdot_cmd = self._max_joint_speed * np.clip(action, -1.0, 1.0)
+        self.do_simulation(np.concatenate([qdot_cmd, qdot_cmd]), self.frame_skip)
+        self._time += self.dt
+        observation = self._get_obs()
+        reward, terms, metrics = self._get_rew()
+        info = {**terms, **metrics}
+        if self.render_mode == "human":
+            self.render()
+        return observation, reward, bool(metrics["collision"]), False, info
+
+    def reset_model(self) -> NDArray[np.float64]:
+        self._time = 0.0
+        self._max_task_error = 0.0
+        self._collided = False
+        q = None
+        for _ in range(20):
+            noise = self.np_random.uniform(-self._reset_noise_scale, self._reset_noise_scale, size=4)
+            q = self._project_to_line_start(np.clip(self._nominal_q + noise, self._lower, self._upper))
+            if q is not None:
+                break
+        if q is None:  # the noise kept leaving the line's reach; start from the nominal posture
+            q = self._nominal_q.copy()
+        self.set_state(q, np.zeros(4))
+        self.data.act[self._servo_act] = q
+        mujoco.mj_forward(self.model, self.data)
+        return self._get_obs()
+
+    def _get_reset_info(self) -> dict[str, Any]:
+        return self._metrics(np.zeros(4))
+
+    # ------------------------------------------------------------------ task
+    def reference(self, time: float) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+        """TCP reference position [m], velocity [m/s] and phase at ``time`` [s] (quintic rest-to-rest law)."""
+        tau = min(max(time / self._duration, 0.0), 1.0)
+        s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+        sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / self._duration if tau < 1.0 else 0.0
+        delta = self._line_end - self._line_start
+        return self._line_start + s * delta, sdot * delta, tau
+
+    @property
+    def nominal_configuration(self) -> NDArray[np.float64]:
+        """Starting posture before noise [rad]: ``initial_configuration`` projected onto the line start."""
+        return self._nominal_q.copy()
+
+    @property
+    def max_joint_speed(self) -> float:
+        """Joint velocity command at action 1 [rad/s]."""
+        return self._max_joint_speed
+
+    @property
+    def tcp_position(self) -> NDArray[np.float64]:
+        """Current TCP position (x, z) [m]."""
+        return self.data.site_xpos[self._tcp_site][[0, 2]].copy()
+
+    def _get_obs(self) -> NDArray[np.float64]:
+        ref_pos, ref_vel, phase = self.reference(self._time)
+        center = self._obstacle_center if self._obstacle else np.zeros(2)
+        radius = self._obstacle_radius if self._obstacle else 0.0
+        return np.concatenate([self.data.qpos[self._qpos], self.data.qvel[self._qvel], self.tcp_position,
+                               ref_pos, ref_vel, [phase], center, [radius]])
+
+    def _get_rew(self) -> tuple[float, dict[str, float], dict[str, Any]]:
+        """``(reward, terms, metrics)``: the reward is the sum of ``terms``."""
+        qdot = self.data.qvel[self._qvel]
+        metrics = self._metrics(qdot)
+        terms = {
+            "reward_tracking": -self._tracking_weight * metrics["task_error"],
+            "reward_energy": -self._energy_weight * metrics["pseudoenergy"],
+            "reward_collision": -self._collision_penalty if metrics["collision"] else 0.0,
+        }
+        return float(sum(terms.values())), terms, metrics
+
+    def _metrics(self, qdot: NDArray[np.float64]) -> dict[str, Any]:
+        ref_pos, _, phase = self.reference(self._time)
+        tcp = self.tcp_position
+        clearance = self._min_clearance()
+        q = self.data.qpos[self._qpos]
+        error = float(np.linalg.norm(tcp - ref_pos))
+        self._max_task_error = max(self._max_task_error, error)
+        self._collided = self._collided or clearance <= 0.0
+        finished = bool(phase >= 1.0)
+        return {
+            "task_error": error,
+            "pseudoenergy": float(qdot @ qdot) * self.dt,
+            "min_clearance": clearance,
+            "collision": bool(clearance <= 0.0),
+            "joint_limit_margin": float(np.min(np.minimum(q - self._lower, self._upper - q))),
+            "line_finished": finished,
+            "peak_joint_speed": float(np.max(np.abs(qdot))),
+            "max_task_error": self._max_task_error,
+            "is_success": finished and not self._collided and self._max_task_error <= self._success_tolerance,
+            "time": self._time,
+            "tcp": tcp,
+            "tcp_ref": ref_pos,
+        }
+
+    def _min_clearance(self) -> float:
+        if self._obstacle_geom is None:
+            return float("inf")
+        return float(min(mujoco.mj_geomDistance(self.model, self.data, self._obstacle_geom, g,
+                                                _CLEARANCE_HORIZON, None) for g in self._link_geoms))
+
+    # ------------------------------------------------------------------ helpers
+    def _resolve_names(self) -> None:
+        m = self.model
+        joints = [m.joint(n) for n in PLANAR_ARM_JOINTS]
+        self._qpos = np.array([j.qposadr[0] for j in joints])
+        self._qvel = np.array([j.dofadr[0] for j in joints])
+        self._lower = np.array([j.range[0] for j in joints])
+        self._upper = np.array([j.range[1] for j in joints])
+        self._servo_act = np.array([m.actuator_actadr[m.actuator(n).id] for n in PLANAR_ARM_SERVOS])
+        servo_ids = [m.actuator(n).id for n in PLANAR_ARM_SERVOS]
+        ff_ids = [m.actuator(n).id for n in PLANAR_ARM_FEEDFORWARDS]
+        if servo_ids + ff_ids != list(range(8)):
+            raise EnvConfigError("planar arm actuators must be the 4 servos followed by the 4 feed-forwards")
+        self._tcp_site = m.site(PLANAR_ARM_TCP).id
+        self._link_geoms = [m.geom(n).id for n in PLANAR_ARM_LINK_GEOMS]
+        self._obstacle_geom = m.geom(PLANAR_OBSTACLE_GEOM).id if self._obstacle else None
+        self._jacp = np.zeros((3, m.nv))
+
+    def _project_to_line_start(self, q: NDArray[np.float64], iterations: int = 50) -> NDArray[np.float64] | None:
+        """Minimum-norm Newton steps from ``q`` onto ``tcp(q) == line_start``; ``None`` if it does not converge."""
+        data = mujoco.MjData(self.model)
+        q = q.copy()
+        for _ in range(iterations):
+            data.qpos[self._qpos] = q
+            mujoco.mj_kinematics(self.model, data)
+            mujoco.mj_comPos(self.model, data)
+            error = self._line_start - data.site_xpos[self._tcp_site][[0, 2]]
+            if np.linalg.norm(error) < 1e-12:
+                return q
+            mujoco.mj_jacSite(self.model, data, self._jacp, None, self._tcp_site)
+            jac = self._jacp[[0, 2]][:, self._qvel]
+            q = q + jac.T @ np.linalg.solve(jac @ jac.T + 1e-10 * np.eye(2), error)
+            if np.any(q < self._lower) or np.any(q > self._upper):
+                return None
+        return q if np.linalg.norm(error) < 1e-9 else None
+
+
+def _point(value: Sequence[float], name: str) -> NDArray[np.float64]:
+    p = np.asarray(value, dtype=np.float64)
+    if p.shape != (2,) or not np.all(np.isfinite(p)):
+        raise EnvConfigError(f"{name} must be a finite (x, z) pair [m], got {value!r}")
+    return p
+
+
+def _positive(value: float, name: str) -> float:
+    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
+        raise EnvConfigError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def _non_negative(value: float, name: str) -> float:
+    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value < 0:
+        raise EnvConfigError(f"{name} must be a finite number >= 0, got {value!r}")
+    return float(value)

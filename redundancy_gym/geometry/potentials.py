@@ -1,0 +1,92 @@
+"""Repulsive distance potentials for nullspace avoidance (monograph 5.3, (5.50)-(5.59)).
+
+A potential maps a scalar distance ``d`` [m or rad] to a cost that is zero for ``d >= d_a`` (the activation
+distance) and grows as ``d`` shrinks. :class:`PiecewisePotential` is the C2 quadratic/cubic potential
+``H_c23`` of (5.58) with gradient (5.59); it is used for joint-limit avoidance (``d`` = distance to a limit)
+and for collision avoidance (``d`` = swept-sphere distance).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .exceptions import GeometryError
+
+__all__ = ["PiecewisePotential", "PotentialValue"]
+
+
+@dataclass(frozen=True)
+class PotentialValue:
+    """Potential, first and second derivative with respect to the distance, elementwise."""
+
+    value: NDArray[np.float64]
+    slope: NDArray[np.float64]
+    curvature: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PiecewisePotential:
+    """The C2 piecewise quadratic/cubic potential ``H_c23`` (5.52)-(5.59).
+
+    ``H(d) = H_2(d)`` for ``d < t d_a`` (quadratic, so the gradient keeps growing linearly when the distance
+    becomes negative), ``H_3(d)`` for ``t d_a <= d <= d_a`` (cubic) and ``0`` beyond ``d_a``. The seven
+    coefficients follow from ``H_2'(0) = s_0`` (5.55), C2 continuity at ``t d_a`` (5.56) and
+    ``H_3 = H_3' = H_3'' = 0`` at ``d_a`` (5.57); the closed form is (5.58).
+
+    The monograph's ``s_0`` is the slope at zero distance, which is negative for a repulsive potential; here
+    ``slope`` is its magnitude, ``s_0 = -slope``, so that every parameter is positive.
+
+    Args:
+        activation_distance: ``d_a`` [m or rad], > 0; the potential vanishes beyond it.
+        slope: ``|H'(0)|`` [1/m or 1/rad], > 0.
+        switch_ratio: ``t`` in (0, 1); the quadratic branch starts below ``t d_a``.
+    """
+
+    activation_distance: float
+    slope: float = 1.0
+    switch_ratio: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.activation_distance) or self.activation_distance <= 0.0:
+            raise GeometryError(f"activation_distance must be finite and > 0, got {self.activation_distance!r}")
+        if not np.isfinite(self.slope) or self.slope <= 0.0:
+            raise GeometryError(f"slope must be finite and > 0, got {self.slope!r}")
+        if not 0.0 < self.switch_ratio < 1.0:
+            raise GeometryError(f"switch_ratio must lie in (0, 1), got {self.switch_ratio!r}")
+
+    def evaluate(self, distance: ArrayLike) -> PotentialValue:
+        """Value, first and second derivative of (5.58) at each distance (elementwise, any shape)."""
+        d = np.asarray(distance, dtype=np.float64)
+        if not np.all(np.isfinite(d)):
+            raise GeometryError("distances must be finite")
+        s0 = -self.slope
+        da = self.activation_distance
+        t = self.switch_ratio
+        quad = d < t * da
+        cubic = (~quad) & (d <= da)
+        value = np.zeros_like(d)
+        slope = np.zeros_like(d)
+        curvature = np.zeros_like(d)
+        # (5.58)/(5.59), quadratic branch
+        dq = d[quad]
+        value[quad] = -s0 * dq**2 / (da * (t + 1.0)) + s0 * dq - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0))
+        slope[quad] = -2.0 * s0 * dq / (da * (t + 1.0)) + s0
+        curvature[quad] = -2.0 * s0 / (da * (t + 1.0))
+        # cubic branch
+        rest = da - d[cubic]
+        denom = da * da * (t * t - 1.0)
+        value[cubic] = s0 * rest**3 / (3.0 * denom)
+        slope[cubic] = -s0 * rest**2 / denom
+        curvature[cubic] = 2.0 * s0 * rest / denom
+        return PotentialValue(value, slope, curvature)
+
+    def value(self, distance: ArrayLike) -> NDArray[np.float64]:
+        """``H_c23(d)`` (5.58)."""
+        return self.evaluate(distance).value
+
+    def derivative(self, distance: ArrayLike) -> NDArray[np.float64]:
+        """``dH_c23/dd`` (5.59)."""
+        return self.evaluate(distance).slope

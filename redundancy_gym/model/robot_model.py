@@ -1,0 +1,259 @@
+"""The controller's model of a robot, built by pinocchio from the same MJCF that MuJoCo simulates.
+
+Every controller gets kinematic and dynamic quantities only through :class:`RobotModel`. The model keeps one
+pinocchio ``Data``; :meth:`RobotModel.update` runs forward kinematics and the joint Jacobians once per
+configuration and the query methods read from that cache, so a control step that needs several frames and
+Jacobians pays for one recursive pass.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pinocchio as pin
+from numpy.typing import ArrayLike, NDArray
+
+from .exceptions import ModelError, UnknownFrameError
+
+__all__ = ["JacobianKind", "RobotModel"]
+
+JacobianKind = Literal["translational", "rotational", "full"]
+_JACOBIAN_ROWS: dict[str, slice] = {"translational": slice(0, 3), "rotational": slice(3, 6), "full": slice(0, 6)}
+_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+class RobotModel:
+    """Kinematics and momentum of a fixed-base robot (frames, Jacobians, CoM, centroidal momentum, integration).
+
+    Frames are the MJCF bodies, joints and sites (pinocchio turns sites into frames). All Jacobians are
+    expressed in the world-aligned frame at the frame origin (pinocchio's ``LOCAL_WORLD_ALIGNED``), so that
+    ``J_T qdot`` is the world velocity of the frame origin [m/s] and ``J_R qdot`` its angular velocity [rad/s].
+
+    Args:
+        model: a pinocchio model.
+        source: where the model came from (for messages).
+    """
+
+    def __init__(self, model: pin.Model, source: str = "<pinocchio model>") -> None:
+        self._model = model
+        self._data = model.createData()
+        self.source = source
+        self._frame_ids: dict[str, int] = {}
+        for index, frame in enumerate(model.frames):
+            self._frame_ids.setdefault(frame.name, index)
+        self._q: NDArray[np.float64] | None = None
+        self._jacobians_ready = False
+
+    @classmethod
+    def from_mjcf(cls, path: str | Path) -> RobotModel:
+        """Build the model from an MJCF file (the same file MuJoCo loads)."""
+        path = Path(path)
+        if not path.is_file():
+            raise ModelError(f"MJCF file not found: {path}")
+        try:
+            model = pin.buildModelFromMJCF(str(path))
+        except Exception as exc:  # pinocchio raises plain RuntimeError/ValueError
+            raise ModelError(f"pinocchio could not load {path}: {exc}") from exc
+        return cls(model, source=str(path))
+
+    # ------------------------------------------------------------------ description
+    @property
+    def pinocchio_model(self) -> pin.Model:
+        """The underlying pinocchio model (read-only use; for tests and advanced users)."""
+        return self._model
+
+    @property
+    def nq(self) -> int:
+        """Number of generalized coordinates."""
+        return int(self._model.nq)
+
+    @property
+    def nv(self) -> int:
+        """Number of generalized velocities."""
+        return int(self._model.nv)
+
+    @property
+    def joint_names(self) -> list[str]:
+        """Names of the actuated joints in configuration order (the 'universe' joint excluded)."""
+        return list(self._model.names)[1:]
+
+    @property
+    def frame_names(self) -> list[str]:
+        """Every frame name the model knows."""
+        return list(self._frame_ids)
+
+    @property
+    def lower_limits(self) -> NDArray[np.float64]:
+        """Lower joint position limits [rad or m]."""
+        return np.array(self._model.lowerPositionLimit, dtype=np.float64)
+
+    @property
+    def upper_limits(self) -> NDArray[np.float64]:
+        """Upper joint position limits [rad or m]."""
+        return np.array(self._model.upperPositionLimit, dtype=np.float64)
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass [kg]."""
+        return float(sum(inertia.mass for inertia in self._model.inertias))
+
+    def frame_id(self, name: str) -> int:
+        """Index of a frame; raises :class:`UnknownFrameError` naming the valid frames."""
+        try:
+            return self._frame_ids[name]
+        except KeyError:
+            raise UnknownFrameError(
+                f"unknown frame {name!r} in {self.source}; valid frames: {', '.join(self._frame_ids)}"
+            ) from None
+
+    # ------------------------------------------------------------------ state
+    def check_configuration(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Return ``q`` as a float array after checking its size and finiteness."""
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape != (self.nq,):
+            raise ModelError(f"configuration must have shape ({self.nq},), got {q.shape}")
+        if not np.all(np.isfinite(q)):
+            raise ModelError("configuration contains non-finite values")
+        return q
+
+    def update(self, q: ArrayLike) -> None:
+        """Forward kinematics and joint Jacobians at ``q``; later queries read this cache."""
+        q = self.check_configuration(q)
+        pin.forwardKinematics(self._model, self._data, q)
+        pin.updateFramePlacements(self._model, self._data)
+        self._q = q.copy()
+        self._jacobians_ready = False
+
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """The configuration of the last :meth:`update`."""
+        return self._require_update().copy()
+
+    def _require_update(self) -> NDArray[np.float64]:
+        if self._q is None:
+            raise ModelError("call RobotModel.update(q) before querying frames or Jacobians")
+        return self._q
+
+    def _ensure_jacobians(self) -> None:
+        q = self._require_update()
+        if not self._jacobians_ready:
+            pin.computeJointJacobians(self._model, self._data, q)
+            self._jacobians_ready = True
+
+    # ------------------------------------------------------------------ frames
+    def frame_position(self, frame: str | int) -> NDArray[np.float64]:
+        """World position of a frame origin [m]."""
+        self._require_update()
+        return self._data.oMf[self._resolve(frame)].translation.copy()
+
+    def frame_rotation(self, frame: str | int) -> NDArray[np.float64]:
+        """World orientation of a frame (3x3 rotation matrix)."""
+        self._require_update()
+        return self._data.oMf[self._resolve(frame)].rotation.copy()
+
+    def frame_placement(self, frame: str | int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(R, p)``: world rotation and position of a frame."""
+        self._require_update()
+        placement = self._data.oMf[self._resolve(frame)]
+        return placement.rotation.copy(), placement.translation.copy()
+
+    def frame_jacobian(self, frame: str | int, kind: JacobianKind = "full") -> NDArray[np.float64]:
+        """World-aligned frame Jacobian: ``translational`` (3 x nv), ``rotational`` (3 x nv) or ``full`` (6 x nv)."""
+        rows = self._rows(kind)
+        self._ensure_jacobians()
+        jac = pin.getFrameJacobian(self._model, self._data, self._resolve(frame), _WORLD_ALIGNED)
+        return np.array(jac[rows], dtype=np.float64)
+
+    def point_jacobian(self, frame: str | int, point: ArrayLike) -> NDArray[np.float64]:
+        """Translational Jacobian (3 x nv) of a world point rigidly attached to ``frame``.
+
+        ``J_p = J_T - [p - p_frame]_x J_R``: the velocity of a point ``p`` on the frame's body.
+        """
+        jac = self.frame_jacobian(frame, "full")
+        offset = np.asarray(point, dtype=np.float64) - self.frame_position(frame)
+        # v_p = v_o + omega x r = v_o - r x omega
+        return jac[:3] - _skew(offset) @ jac[3:]
+
+    def frame_jacobian_derivative_times_velocity(self, q: ArrayLike, qdot: ArrayLike, frame: str | int,
+                                                 kind: JacobianKind = "full") -> NDArray[np.float64]:
+        """``Jdot qdot`` of the world-aligned frame Jacobian (the drift term of (5.18)).
+
+        Computed as the frame's classical acceleration at zero joint acceleration, so it matches
+        ``d/dt (J qdot)`` for the linear part (classical, not spatial, acceleration). Leaves the
+        kinematic cache at ``q``.
+        """
+        rows = self._rows(kind)
+        q = self.check_configuration(q)
+        qdot = self._check_velocity(qdot)
+        pin.forwardKinematics(self._model, self._data, q, qdot, np.zeros(self.nv))
+        pin.updateFramePlacements(self._model, self._data)
+        self._q = q.copy()
+        self._jacobians_ready = False
+        acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(frame), _WORLD_ALIGNED)
+        return np.asarray(acc.vector, dtype=np.float64)[rows].copy()
+
+    # ------------------------------------------------------------------ mass properties and momentum
+    def com(self) -> NDArray[np.float64]:
+        """Position of the centre of mass [m] at the configuration of the last :meth:`update`."""
+        q = self._require_update()
+        return np.array(pin.centerOfMass(self._model, self._data, q, False), dtype=np.float64)
+
+    def com_jacobian(self) -> NDArray[np.float64]:
+        """Jacobian of the centre of mass (3 x nv) [m/rad]."""
+        q = self._require_update()
+        return np.array(pin.jacobianCenterOfMass(self._model, self._data, q, False), dtype=np.float64)
+
+    def centroidal_momentum_matrix(self) -> NDArray[np.float64]:
+        """Centroidal momentum matrix ``A_G`` (6 x nv): ``[p; L_G] = A_G qdot`` (linear first, about the CoM)."""
+        q = self._require_update()
+        return np.array(pin.computeCentroidalMap(self._model, self._data, q), dtype=np.float64)
+
+    def mass_matrix(self) -> NDArray[np.float64]:
+        """Joint-space inertia matrix (nv x nv)."""
+        q = self._require_update()
+        mass = pin.crba(self._model, self._data, q)
+        return np.triu(mass) + np.triu(mass, 1).T
+
+    # ------------------------------------------------------------------ integration
+    def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration manifold)."""
+        q = self.check_configuration(q)
+        qdot = self._check_velocity(qdot)
+        return np.array(pin.integrate(self._model, q, qdot * float(dt)), dtype=np.float64)
+
+    def difference(self, q0: ArrayLike, q1: ArrayLike) -> NDArray[np.float64]:
+        """Tangent vector ``v`` with ``integrate(q0, v, 1) == q1``."""
+        return np.array(pin.difference(self._model, self.check_configuration(q0), self.check_configuration(q1)))
+
+    def clamp(self, q: ArrayLike) -> NDArray[np.float64]:
+        """``q`` clipped into the joint limits."""
+        return np.clip(self.check_configuration(q), self.lower_limits, self.upper_limits)
+
+    # ------------------------------------------------------------------ helpers
+    def _check_velocity(self, qdot: ArrayLike) -> NDArray[np.float64]:
+        qdot = np.asarray(qdot, dtype=np.float64)
+        if qdot.shape != (self.nv,):
+            raise ModelError(f"velocity must have shape ({self.nv},), got {qdot.shape}")
+        if not np.all(np.isfinite(qdot)):
+            raise ModelError("velocity contains non-finite values")
+        return qdot
+
+    def _resolve(self, frame: str | int) -> int:
+        if isinstance(frame, str):
+            return self.frame_id(frame)
+        if not 0 <= int(frame) < len(self._model.frames):
+            raise UnknownFrameError(f"frame index {frame} out of range [0, {len(self._model.frames)})")
+        return int(frame)
+
+    @staticmethod
+    def _rows(kind: str) -> slice:
+        try:
+            return _JACOBIAN_ROWS[kind]
+        except KeyError:
+            raise ModelError(f"unknown Jacobian kind {kind!r}; valid kinds: {', '.join(_JACOBIAN_ROWS)}") from None
+
+
+def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
