@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..model import RobotModel
+from ..sb3_import import import_stable_baselines3
 from .clik import Clik, ClikResult
 from .exceptions import PolicyError
 from .frame_position_task import FramePositionTask
@@ -175,7 +176,7 @@ class Sb3Policy:
         if not path.is_file():
             raise PolicyError(f"policy file not found: {path}")
         try:
-            import stable_baselines3 as sb3
+            sb3 = import_stable_baselines3()
         except ImportError as exc:  # the 'learn' extra
             raise PolicyError("loading a .zip policy needs stable-baselines3: pip install 'redundancy-gym[learn]'") from exc
         names = (algo,) if algo else _SB3_ALGOS

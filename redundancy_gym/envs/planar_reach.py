@@ -123,6 +123,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - v0: initial version.
     """
 
+    metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
     OBSERVATION_LAYOUT: dict[str, slice] = {
         "q": slice(0, 4),
         "qdot": slice(4, 8),

@@ -1,0 +1,39 @@
+# Two commands on a fresh machine: `make demo` and `make test`; each sets up .venv itself.
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+export MUJOCO_GL ?= osmesa
+
+.PHONY: demo test system-deps clean
+
+demo: $(VENV)/.core-installed
+	$(BIN)/redundancy-gym demo --out results
+
+test: $(VENV)/.test-installed
+	$(BIN)/python -m pytest -q
+
+# libosmesa6 renders headless (MUJOCO_GL=osmesa); installed when missing and run as root
+system-deps:
+	@if ! ldconfig -p 2>/dev/null | grep -q libOSMesa; then \
+	  if [ "$$(id -u)" = 0 ]; then \
+	    echo "installing libosmesa6"; \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libosmesa6 >/dev/null; \
+	  else \
+	    echo "warning: libosmesa6 is missing; headless rendering needs 'sudo apt-get install libosmesa6'"; \
+	  fi; \
+	fi
+
+$(VENV)/bin/python:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install -q --upgrade pip
+
+$(VENV)/.core-installed: pyproject.toml | $(VENV)/bin/python system-deps
+	$(BIN)/pip install -q -e .
+	touch $@
+
+$(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps
+	$(BIN)/pip install -q -e ".[test]"
+	touch $@ $(VENV)/.core-installed
+
+clean:
+	rm -rf $(VENV) results runs .pytest_cache

@@ -1,0 +1,52 @@
+"""Plots of evaluation traces (matplotlib, headless)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .evaluate import EpisodeTrace  # noqa: E402
+
+__all__ = ["plot_traces"]
+
+
+def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "",
+                error_tolerance: float | None = 1e-3) -> Path:
+    """TCP error, peak joint speed and obstacle clearance over time, one line per labelled episode.
+
+    Args:
+        traces: label -> episode trace.
+        path: PNG path (parents created).
+        title: figure title.
+        error_tolerance: drawn as a dashed line on the error axis [m] (``None`` for none).
+    """
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
+    for label, trace in traces.items():
+        axes[0].semilogy(trace.time, np.maximum(trace.task_error, 1e-9), label=label)
+        axes[1].plot(trace.time, trace.joint_speed, label=label)
+        clearance = np.where(np.isfinite(trace.min_clearance), trace.min_clearance, np.nan)
+        axes[2].plot(trace.time, clearance, label=label)
+    if error_tolerance is not None:
+        axes[0].axhline(error_tolerance, color="k", ls="--", lw=0.8, label=f"tolerance {error_tolerance:g} m")
+    axes[2].axhline(0.0, color="r", ls="--", lw=0.8, label="contact")
+    axes[0].set_ylabel("TCP error [m]")
+    axes[1].set_ylabel("max |joint speed| [rad/s]")
+    axes[2].set_ylabel("obstacle clearance [m]")
+    axes[2].set_xlabel("time [s]")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,55 @@
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import redundancy_gym
+from redundancy_gym.controllers import PolicyError
+from redundancy_gym.controllers.policies import ClikPolicy, Policy
+
+ENV_ID = "redundancy_gym/PlanarReach-v0"
+
+
+def test_policies_share_the_sb3_signature() -> None:
+    env = gym.make(ENV_ID)
+    obs, _ = env.reset(seed=0)
+    for name in ("clik", "zero", "random"):
+        policy = redundancy_gym.make_policy(name, env)
+        assert isinstance(policy, Policy)
+        action, state = policy.predict(obs, state=None, episode_start=np.array([True]), deterministic=True)
+        assert action.shape == env.action_space.shape and env.action_space.contains(action)
+        assert state is None
+
+
+def test_random_policy_is_seeded() -> None:
+    env = gym.make(ENV_ID)
+    obs, _ = env.reset(seed=0)
+    a = [redundancy_gym.make_policy("random", env, seed=3).predict(obs)[0] for _ in range(2)]
+    assert np.array_equal(a[0], a[1])
+    assert not np.array_equal(a[0], redundancy_gym.make_policy("random", env, seed=4).predict(obs)[0])
+
+
+def test_clik_policy_tracks_the_line() -> None:
+    env = gym.make(ENV_ID, obstacle=False)
+    policy = redundancy_gym.make_policy("clik", env)
+    assert isinstance(policy, ClikPolicy)
+    obs, _ = env.reset(seed=1)
+    while True:
+        obs, reward, terminated, truncated, info = env.step(policy.predict(obs)[0])
+        assert policy.last_result is not None and policy.last_result.success
+        if terminated or truncated:
+            break
+    assert info["is_success"] and info["max_task_error"] <= 1e-3
+
+
+@pytest.mark.parametrize("name, kwargs, match", [
+    ("nope", {}, "clik, zero, random"), ("clik", {"gian": 1}, "valid"), ("clik", {"method": "svd"}, "dls"),
+    ("zero", {"x": 1}, "no options"), ("missing.zip", {}, "not found"),
+])
+def test_policy_errors(name: str, kwargs: dict, match: str) -> None:
+    with pytest.raises(PolicyError, match=match):
+        redundancy_gym.make_policy(name, gym.make(ENV_ID), **kwargs)
+
+
+def test_clik_policy_rejects_unsupported_env() -> None:
+    with pytest.raises(PolicyError, match="lacks"):
+        redundancy_gym.make_policy("clik", gym.make("CartPole-v1"))

@@ -1,0 +1,93 @@
+"""Checks every registered env must pass."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env as gym_check_env
+
+import redundancy_gym
+from redundancy_gym.envs import EnvConfigError, InvalidActionError
+
+ENV_IDS = redundancy_gym.ENV_IDS
+
+
+def _rollout(env: gym.Env, seed: int, steps: int) -> tuple[list[np.ndarray], list[float], list[dict]]:
+    rng = np.random.default_rng(seed)
+    obs, info = env.reset(seed=seed)
+    observations, rewards, infos = [obs], [], [info]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, env.action_space.shape))
+        observations.append(obs)
+        rewards.append(reward)
+        infos.append(info)
+        if terminated or truncated:
+            break
+    return observations, rewards, infos
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_gymnasium_check_env(env_id: str) -> None:
+    env = gym.make(env_id)
+    gym_check_env(env.unwrapped, skip_render_check=True)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_sb3_check_env(env_id: str) -> None:
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    env = gym.make(env_id)
+    sb3_check_env(env, warn=True)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_same_seed_same_episode(env_id: str) -> None:
+    a = _rollout(gym.make(env_id), seed=7, steps=60)
+    b = _rollout(gym.make(env_id), seed=7, steps=60)
+    assert len(a[0]) == len(b[0])
+    for x, y in zip(a[0], b[0], strict=True):
+        assert np.array_equal(x, y)
+    assert a[1] == b[1]
+    c = _rollout(gym.make(env_id), seed=8, steps=5)
+    assert not np.array_equal(a[0][0], c[0][0])  # the seed matters
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_reward_is_sum_of_terms_and_finite(env_id: str) -> None:
+    observations, rewards, infos = _rollout(gym.make(env_id), seed=3, steps=100)
+    for obs in observations:
+        assert np.all(np.isfinite(obs))
+    for reward, info in zip(rewards, infos[1:], strict=True):
+        terms = [v for k, v in info.items() if k.startswith("reward_")]
+        assert terms and reward == pytest.approx(sum(terms), abs=1e-12)
+        assert np.isfinite(reward)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_non_finite_or_misshaped_actions_raise(env_id: str) -> None:
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    bad = np.zeros(env.action_space.shape)
+    bad[0] = np.nan
+    with pytest.raises(InvalidActionError):
+        env.step(bad)
+    with pytest.raises(InvalidActionError):
+        env.step(np.zeros(env.action_space.shape[0] + 1))
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_unknown_kwarg_names_valid_ones(env_id: str) -> None:
+    with pytest.raises(EnvConfigError, match="valid"):
+        gym.make(env_id, not_an_option=1)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_rgb_render_headless(env_id: str) -> None:
+    env = gym.make(env_id, render_mode="rgb_array", width=64, height=48)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.shape == (48, 64, 3) and frame.dtype == np.uint8 and frame.std() > 0
+    env.close()

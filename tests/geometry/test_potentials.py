@@ -1,0 +1,50 @@
+import numpy as np
+import pytest
+
+from redundancy_gym.geometry import GeometryError, PiecewisePotential
+
+
+@pytest.mark.parametrize("t", [0.2, 0.5, 0.8])
+def test_c2_conditions(t: float) -> None:
+    """(5.55)-(5.57): slope at 0, C2 at the switch t d_a, zero value/slope/curvature at d_a."""
+    pot = PiecewisePotential(activation_distance=0.3, slope=2.0, switch_ratio=t)
+    da = 0.3
+    assert pot.derivative(0.0) == pytest.approx(-2.0)  # (5.55) with s_0 = -slope
+    eps = 1e-9
+    left, right = pot.evaluate([t * da - eps]), pot.evaluate([t * da + eps])
+    for a, b in ((left.value, right.value), (left.slope, right.slope), (left.curvature, right.curvature)):
+        assert a[0] == pytest.approx(b[0], abs=1e-6)
+    at = pot.evaluate([da - 1e-12, da, da + 1e-3])
+    assert np.allclose(at.value, 0.0, atol=1e-20) and np.allclose(at.slope, 0.0, atol=1e-12)
+    assert np.allclose(at.curvature, 0.0, atol=1e-9)
+
+
+def test_derivatives_match_finite_differences() -> None:
+    pot = PiecewisePotential(activation_distance=0.25, slope=1.5, switch_ratio=0.4)
+    d = np.linspace(-0.2, 0.4, 301)
+    h = 1e-6
+    res = pot.evaluate(d)
+    fd1 = (pot.value(d + h) - pot.value(d - h)) / (2 * h)
+    fd2 = (pot.derivative(d + h) - pot.derivative(d - h)) / (2 * h)
+    assert np.allclose(res.slope, fd1, atol=1e-6)
+    assert np.allclose(res.curvature, fd2, atol=1e-4)
+
+
+def test_repulsive_and_monotone() -> None:
+    pot = PiecewisePotential(0.3)
+    d = np.linspace(-0.5, 0.5, 1001)
+    v = pot.value(d)
+    assert np.all(np.diff(v) <= 1e-15) and np.all(v >= 0)
+    assert np.all(pot.derivative(d[d < 0.3]) < 0)
+
+
+@pytest.mark.parametrize("kwargs", [dict(activation_distance=0.0), dict(activation_distance=0.1, slope=-1.0),
+                                    dict(activation_distance=0.1, switch_ratio=1.0)])
+def test_invalid_parameters(kwargs: dict) -> None:
+    with pytest.raises(GeometryError):
+        PiecewisePotential(**kwargs)
+
+
+def test_non_finite_distance_raises() -> None:
+    with pytest.raises(GeometryError):
+        PiecewisePotential(0.1).value([np.nan])

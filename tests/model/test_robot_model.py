@@ -1,0 +1,184 @@
+import mujoco
+import numpy as np
+import pytest
+
+from redundancy_gym.assets import PLANAR_ARM_JOINTS, PLANAR_ARM_TCP, PLANAR_ARM_XML
+from redundancy_gym.model import ModelError, RobotModel, UnknownFrameError
+
+BODIES = ("link1", "link2", "link3", "link4")
+
+
+@pytest.fixture(scope="module")
+def plant() -> tuple[mujoco.MjModel, mujoco.MjData]:
+    model = mujoco.MjModel.from_xml_path(str(PLANAR_ARM_XML))
+    return model, mujoco.MjData(model)
+
+
+def _random_q(model: RobotModel, rng: np.random.Generator) -> np.ndarray:
+    return rng.uniform(model.lower_limits, model.upper_limits)
+
+
+def test_forward_kinematics_agrees_with_mujoco(planar_model: RobotModel, plant, rng) -> None:
+    mj_model, mj_data = plant
+    for _ in range(50):
+        q = _random_q(planar_model, rng)
+        mj_data.qpos[:] = q
+        mujoco.mj_kinematics(mj_model, mj_data)
+        planar_model.update(q)
+        assert np.allclose(planar_model.frame_position(PLANAR_ARM_TCP), mj_data.site(PLANAR_ARM_TCP).xpos, atol=1e-9)
+        for body in BODIES:
+            R, p = planar_model.frame_placement(body)
+            assert np.allclose(p, mj_data.body(body).xpos, atol=1e-9)
+            assert np.allclose(R, mj_data.body(body).xmat.reshape(3, 3), atol=1e-9)
+
+
+def test_limits_and_mass_match_mujoco(planar_model: RobotModel, plant) -> None:
+    mj_model, _ = plant
+    ranges = np.array([mj_model.joint(j).range for j in PLANAR_ARM_JOINTS])
+    assert np.allclose(planar_model.lower_limits, ranges[:, 0])
+    assert np.allclose(planar_model.upper_limits, ranges[:, 1])
+    assert planar_model.total_mass == pytest.approx(float(mj_model.body_mass.sum()))
+    assert planar_model.joint_names == list(PLANAR_ARM_JOINTS)
+
+
+@pytest.mark.parametrize("frame", [PLANAR_ARM_TCP, "link3"])
+def test_frame_jacobians_match_finite_differences(planar_model: RobotModel, rng, frame: str) -> None:
+    h = 1e-7
+    for _ in range(10):
+        q = _random_q(planar_model, rng)
+        planar_model.update(q)
+        jt = planar_model.frame_jacobian(frame, "translational")
+        jr = planar_model.frame_jacobian(frame, "rotational")
+        R0 = planar_model.frame_rotation(frame)
+        fd_t = np.zeros((3, 4))
+        fd_r = np.zeros((3, 4))
+        for i in range(4):
+            dq = np.zeros(4)
+            dq[i] = h
+            planar_model.update(q + dq)
+            p_plus, R_plus = planar_model.frame_position(frame), planar_model.frame_rotation(frame)
+            planar_model.update(q - dq)
+            p_minus = planar_model.frame_position(frame)
+            fd_t[:, i] = (p_plus - p_minus) / (2 * h)
+            skew = (R_plus @ R0.T - np.eye(3)) / h  # world angular velocity, first order
+            fd_r[:, i] = [skew[2, 1], skew[0, 2], skew[1, 0]]
+        assert np.allclose(jt, fd_t, atol=1e-6)
+        assert np.allclose(jr, fd_r, atol=1e-5)
+        full = (planar_model.update(q), planar_model.frame_jacobian(frame, "full"))[1]
+        assert np.allclose(full, np.vstack([jt, jr]))
+
+
+def test_point_jacobian_matches_finite_differences(planar_model: RobotModel, rng) -> None:
+    q = _random_q(planar_model, rng)
+    planar_model.update(q)
+    R, p = planar_model.frame_placement("link2")
+    local = np.array([0.13, 0.02, -0.04])
+    point = p + R @ local
+    jac = planar_model.point_jacobian("link2", point)
+    h = 1e-7
+    fd = np.zeros((3, 4))
+    for i in range(4):
+        dq = np.zeros(4)
+        dq[i] = h
+        planar_model.update(q + dq)
+        Rp, pp = planar_model.frame_placement("link2")
+        planar_model.update(q - dq)
+        Rm, pm = planar_model.frame_placement("link2")
+        fd[:, i] = ((pp + Rp @ local) - (pm + Rm @ local)) / (2 * h)
+    assert np.allclose(jac, fd, atol=1e-6)
+
+
+def test_com_and_jacobian(planar_model: RobotModel, plant, rng) -> None:
+    mj_model, mj_data = plant
+    q = _random_q(planar_model, rng)
+    mj_data.qpos[:] = q
+    mujoco.mj_forward(mj_model, mj_data)
+    planar_model.update(q)
+    assert np.allclose(planar_model.com(), mj_data.subtree_com[0], atol=1e-9)
+    jac = planar_model.com_jacobian()
+    h = 1e-7
+    for i in range(4):
+        dq = np.zeros(4)
+        dq[i] = h
+        planar_model.update(q + dq)
+        c_plus = planar_model.com()
+        planar_model.update(q - dq)
+        c_minus = planar_model.com()
+        assert np.allclose(jac[:, i], (c_plus - c_minus) / (2 * h), atol=1e-6)
+
+
+def test_centroidal_momentum_matches_mujoco_bodies(planar_model: RobotModel, plant, rng) -> None:
+    """A_G qdot against linear and angular momentum summed from MuJoCo's body velocities and inertias."""
+    mj_model, mj_data = plant
+    q = _random_q(planar_model, rng)
+    qdot = rng.normal(size=4)
+    mj_data.qpos[:] = q
+    mj_data.qvel[:] = qdot
+    mujoco.mj_forward(mj_model, mj_data)
+    com = mj_data.subtree_com[0].copy()
+    linear = np.zeros(3)
+    angular = np.zeros(3)
+    vel = np.zeros(6)
+    for body in BODIES:
+        b = mj_data.body(body)
+        bid = mj_model.body(body).id
+        mujoco.mj_objectVelocity(mj_model, mj_data, mujoco.mjtObj.mjOBJ_BODY, bid, vel, 0)  # at the body CoM, world
+        omega, v = vel[:3], vel[3:]
+        mass = mj_model.body_mass[bid]
+        R = b.ximat.reshape(3, 3)
+        inertia = R @ np.diag(mj_model.body_inertia[bid]) @ R.T
+        linear += mass * v
+        angular += mass * np.cross(b.xipos - com, v) + inertia @ omega
+    planar_model.update(q)
+    momentum = planar_model.centroidal_momentum_matrix() @ qdot
+    assert np.allclose(momentum[:3], linear, atol=1e-9)
+    assert np.allclose(momentum[3:], angular, atol=1e-9)
+    assert np.allclose(momentum[:3], planar_model.total_mass * planar_model.com_jacobian() @ qdot, atol=1e-9)
+
+
+def test_mass_matrix_matches_mujoco(planar_model: RobotModel, plant, rng) -> None:
+    """Joint-space inertia including the rotor armature, which pinocchio reads from the MJCF too."""
+    mj_model, mj_data = plant
+    q = _random_q(planar_model, rng)
+    mj_data.qpos[:] = q
+    mujoco.mj_forward(mj_model, mj_data)
+    full = np.zeros((4, 4))
+    mujoco.mj_fullM(mj_model, mj_data, full)
+    planar_model.update(q)
+    assert np.allclose(planar_model.mass_matrix(), full, atol=1e-9)
+
+
+def test_integration_round_trip(planar_model: RobotModel, rng) -> None:
+    q = _random_q(planar_model, rng)
+    v = rng.normal(size=4)
+    q1 = planar_model.integrate(q, v, 0.01)
+    assert np.allclose(q1, q + 0.01 * v)
+    assert np.allclose(planar_model.difference(q, q1), 0.01 * v)
+
+
+def test_jacobian_drift_matches_finite_differences(planar_model: RobotModel, rng) -> None:
+    q = _random_q(planar_model, rng)
+    qdot = rng.normal(size=4)
+    drift = planar_model.frame_jacobian_derivative_times_velocity(q, qdot, PLANAR_ARM_TCP, "translational")
+    h = 1e-6
+    planar_model.update(q + h * qdot)
+    j_plus = planar_model.frame_jacobian(PLANAR_ARM_TCP, "translational")
+    planar_model.update(q - h * qdot)
+    j_minus = planar_model.frame_jacobian(PLANAR_ARM_TCP, "translational")
+    assert np.allclose(drift, (j_plus - j_minus) @ qdot / (2 * h), atol=1e-6)
+
+
+def test_errors_name_the_valid_choices(planar_model: RobotModel) -> None:
+    with pytest.raises(ModelError, match="update"):
+        RobotModel.from_mjcf(PLANAR_ARM_XML).frame_position("tcp")
+    planar_model.update(np.zeros(4))
+    with pytest.raises(UnknownFrameError, match="tcp"):
+        planar_model.frame_position("nope")
+    with pytest.raises(ModelError, match="translational"):
+        planar_model.frame_jacobian("tcp", "linear")  # type: ignore[arg-type]
+    with pytest.raises(ModelError, match="shape"):
+        planar_model.update(np.zeros(3))
+    with pytest.raises(ModelError, match="non-finite"):
+        planar_model.update(np.array([0, np.nan, 0, 0]))
+    with pytest.raises(ModelError, match="not found"):
+        RobotModel.from_mjcf("/nonexistent.xml")
