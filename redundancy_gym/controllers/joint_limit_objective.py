@@ -57,8 +57,8 @@ class JointLimitObjective:
         q = np.asarray(q, dtype=np.float64)
         if q.shape != self.lower.shape:
             raise ControllerError(f"q must have shape {self.lower.shape}, got {q.shape}")
-        low = self.potential.evaluate(q - self.lower)
-        high = self.potential.evaluate(self.upper - q)
-        value = self.weight * float(np.sum(low.value) + np.sum(high.value))
-        gradient = self.weight * (low.slope - high.slope)
+        n = q.size
+        both = self.potential.evaluate(np.concatenate([q - self.lower, self.upper - q]))
+        value = self.weight * float(both.value.sum())
+        gradient = self.weight * (both.slope[:n] - both.slope[n:])
         return ObjectiveValue(value, gradient)

@@ -65,6 +65,9 @@ class PiecewisePotential:
         s0 = -self.slope
         da = self.activation_distance
         t = self.switch_ratio
+        if d.size == 0 or d.min() > da:  # the common case in a control loop: nothing is near
+            zero = np.zeros_like(d)
+            return PotentialValue(zero, zero.copy(), zero.copy())
         quad = d < t * da
         cubic = (~quad) & (d <= da)
         value = np.zeros_like(d)
