@@ -6,6 +6,7 @@ from pathlib import Path
 
 from .evaluate import evaluate, format_report
 from .plots import plot_traces
+from .speed_error import plot_speed_error, speed_error_markdown
 from .video import record_episode
 
 __all__ = ["run_demo"]
@@ -37,6 +38,28 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
         path, _ = record_episode(_PLANAR, "clik", out / f"planar_reach_clik_{tag}.mp4", seed=seed,
                                  env_kwargs={"obstacle": obstacle})
         written.append(path)
+    written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     for path in written:
         print(f"wrote {path}")
     return written
+
+
+def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+    """Every PlanarReach reference variant and the trivial policies, obstacle off: time against error."""
+    candidates = {
+        "clik (dls)": ("clik", {"method": "dls"}),
+        "clik (pseudoinverse)": ("clik", {"method": "pseudoinverse"}),
+        "clik (transpose)": ("clik", {"method": "transpose"}),
+        "clik (dls, no joint-limit objective)": ("clik", {"method": "dls", "joint_limit_weight": 0.0}),
+        "zero": ("zero", {}),
+        "random": ("random", {}),
+    }
+    reports = {}
+    for label, (policy, kwargs) in candidates.items():
+        reports[label] = evaluate(_PLANAR, policy, episodes=episodes, seed=seed, env_kwargs={"obstacle": False},
+                                  policy_kwargs=kwargs, progress=progress).to_json()
+    title = f"PlanarReach-v0 without obstacle, {episodes} episodes from seed {seed}"
+    markdown = out / "speed_vs_error.md"
+    markdown.write_text("# Speed vs error\n\n" + speed_error_markdown(reports, title))
+    print("\n" + speed_error_markdown(reports, title))
+    return [markdown, plot_speed_error(reports, out / "speed_vs_error.png", "PlanarReach-v0: time vs error")]

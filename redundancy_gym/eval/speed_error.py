@@ -1,0 +1,48 @@
+"""Speed-vs-error report: each policy's compute time per step against its task error, as markdown and a plot."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+__all__ = ["plot_speed_error", "speed_error_markdown"]
+
+
+def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str) -> str:
+    """A markdown table of evaluation-contract objects, one row per labelled policy."""
+    lines = [f"## {title}", "",
+             "| policy | success | collision | task error rms [m] | task error max [m] | pseudoenergy | "
+             "step median [us] | step p99 [us] |",
+             "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for label, r in reports.items():
+        step = r["step_time_us"]
+        lines.append(f"| {label} | {r['success_rate']:.2f} | {r['collision_rate']:.2f} | {r['task_error_rms']:.2e} | "
+                     f"{r['task_error_max']:.2e} | {r['pseudoenergy']:.3f} | {step['median']:.1f} | {step['p99']:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
+def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str) -> Path:
+    """Scatter of median step time [us] against max task error [m] (log-log), one point per policy."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for label, r in reports.items():
+        x, y = r["step_time_us"]["median"], max(r["task_error_max"], 1e-9)
+        ax.scatter([x], [y], s=40)
+        ax.annotate(label, (x, y), textcoords="offset points", xytext=(5, 4), fontsize=8)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("policy compute time per step, median [us]")
+    ax.set_ylabel("max task error [m]")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
