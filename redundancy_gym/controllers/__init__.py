@@ -9,7 +9,7 @@ from .clik import Clik, ClikProblem, ClikResult
 from .exceptions import ControllerError, PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
-from .objective import Objective, ObjectiveValue
+from .objective import Objective, ObjectiveValue, sum_objectives
 from .posture_objective import PostureObjective
 from .redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
 from .task import Task
@@ -32,4 +32,5 @@ __all__ = [
     "Task",
     "WeightMatrix",
     "resolve",
+    "sum_objectives",
 ]

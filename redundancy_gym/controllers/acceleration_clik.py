@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model import RobotModel
 from .exceptions import ControllerError
-from .objective import Objective
+from .objective import Objective, sum_objectives
 from .redundancy_resolution import METHODS, WeightMatrix, resolve
 from .task import Task
 
@@ -109,12 +109,7 @@ class AccelerationClik:
         velocity_error = np.asarray(target_velocity, dtype=np.float64) - jacobian @ qdot
         acceleration = (np.asarray(target_acceleration, dtype=np.float64) + self.kd * velocity_error
                         + self.kp * error)  # (5.19)
-        value = 0.0
-        gradient = np.zeros(self.model.nv)
-        for objective in self.objectives:
-            v, g = objective.evaluate(self.model, q)
-            value += v
-            gradient += g
+        value, gradient = sum_objectives(self.objectives, self.model, q)
         z = self.nullspace_gain * gradient + self.nullspace_damping * self.weights.apply(qdot)
         res = resolve(jacobian, acceleration - drift, z, self.weights, method=self.method,
                       singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,

@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..model import RobotModel
 from .exceptions import ControllerError
-from .objective import Objective
+from .objective import Objective, sum_objectives
 from .redundancy_resolution import METHODS, WeightMatrix, resolve
 from .task import Task
 
@@ -123,7 +123,7 @@ class Clik:
             if wdot.shape != error.shape or not np.all(np.isfinite(wdot)):
                 raise ControllerError(f"target_velocity must be finite with shape {error.shape}")
             velocity = velocity + wdot
-        value, gradient = self._objectives(q)
+        value, gradient = sum_objectives(self.objectives, self.model, q)
         return ClikProblem(q, jacobian, error, velocity, gradient, value)
 
     def solve(self, problem: ClikProblem) -> ClikResult:
@@ -138,12 +138,3 @@ class Clik:
     def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
         """``solve(build(q, target, target_velocity))``."""
         return self.solve(self.build(q, target, target_velocity))
-
-    def _objectives(self, q: NDArray[np.float64]) -> tuple[float, NDArray[np.float64]]:
-        value = 0.0
-        gradient = np.zeros(self.model.nv)
-        for objective in self.objectives:
-            v, g = objective.evaluate(self.model, q)
-            value += v
-            gradient += g
-        return value, gradient

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
@@ -9,7 +10,7 @@ from numpy.typing import NDArray
 
 from ..model import RobotModel
 
-__all__ = ["Objective", "ObjectiveValue"]
+__all__ = ["Objective", "ObjectiveValue", "sum_objectives"]
 
 
 class ObjectiveValue(NamedTuple):
@@ -30,3 +31,14 @@ class Objective(Protocol):
     def evaluate(self, model: RobotModel, q: NDArray[np.float64]) -> ObjectiveValue:
         """Value and gradient at ``q``."""
         ...
+
+
+def sum_objectives(objectives: Sequence[Objective], model: RobotModel, q: NDArray[np.float64]) -> ObjectiveValue:
+    """``H = sum H_i`` and its gradient (zeros when there are no objectives)."""
+    value = 0.0
+    gradient = np.zeros(model.nv)
+    for objective in objectives:
+        v, g = objective.evaluate(model, q)
+        value += v
+        gradient += g
+    return ObjectiveValue(value, gradient)

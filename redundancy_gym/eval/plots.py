@@ -13,7 +13,7 @@ import numpy as np  # noqa: E402
 
 from .evaluate import EpisodeTrace  # noqa: E402
 
-__all__ = ["plot_traces"]
+__all__ = ["plot_traces", "save_figure"]
 
 
 def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "",
@@ -44,6 +44,11 @@ def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: 
         ax.legend(fontsize=8, loc="best")
     if title:
         fig.suptitle(title)
+    return save_figure(fig, path)
+
+
+def save_figure(fig: plt.Figure, path: str | Path) -> Path:
+    """Lay out, write as PNG (parents created) and close a figure."""
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

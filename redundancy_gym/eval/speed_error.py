@@ -11,6 +11,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from .plots import save_figure  # noqa: E402
+
 __all__ = ["plot_speed_error", "speed_error_markdown"]
 
 
@@ -40,9 +42,4 @@ def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, ti
     ax.set_ylabel("max task error [m]")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
