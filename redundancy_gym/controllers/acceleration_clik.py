@@ -99,7 +99,7 @@ class AccelerationClik:
     def step(self, q: ArrayLike, qdot: ArrayLike, target: ArrayLike, target_velocity: ArrayLike,
              target_acceleration: ArrayLike) -> AccelerationClikResult:
         """Joint accelerations for the state ``(q, qdot)`` and the reference ``(w_d, wdot_d, wddot_d)``."""
-        q = self.model.check_configuration(q)
+        q = np.asarray(q, dtype=np.float64)  # checked by model.update inside task.drift
         qdot = np.asarray(qdot, dtype=np.float64)
         if qdot.shape != (self.model.nv,) or not np.all(np.isfinite(qdot)):
             raise ControllerError(f"qdot must be finite with shape ({self.model.nv},)")

@@ -113,8 +113,7 @@ class Clik:
 
     def build(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikProblem:
         """Evaluate kinematics and objectives at ``q`` for the reference ``w_d`` and ``wdot_d``."""
-        q = self.model.check_configuration(q)
-        self.model.update(q)
+        q = self.model.update(q)
         error = self.task.error(self.model, np.asarray(target, dtype=np.float64))
         jacobian = self.task.jacobian(self.model)
         velocity = self.gain * error

@@ -221,7 +221,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self.do_simulation(np.concatenate([qdot_cmd, qdot_cmd]), self.frame_skip)
         self._time += self.dt
         observation = self._get_obs()
-        reward, terms, metrics = self._get_rew()
+        metrics = self._metrics(self.data.qvel[self._qvel])
+        reward, terms = self._get_rew(metrics)
         info = {**terms, **metrics}
         if self.render_mode == "human":
             self.render()
@@ -278,18 +279,17 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         return np.concatenate([self.data.qpos[self._qpos], self.data.qvel[self._qvel], self.tcp_position,
                                ref_pos, ref_vel, [phase], center, [radius]])
 
-    def _get_rew(self) -> tuple[float, dict[str, float], dict[str, Any]]:
-        """``(reward, terms, metrics)``: the reward is the sum of ``terms``."""
-        qdot = self.data.qvel[self._qvel]
-        metrics = self._metrics(qdot)
+    def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
+        """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
         terms = {
             "reward_tracking": -self._tracking_weight * metrics["task_error"],
             "reward_energy": -self._energy_weight * metrics["pseudoenergy"],
             "reward_collision": -self._collision_penalty if metrics["collision"] else 0.0,
         }
-        return float(sum(terms.values())), terms, metrics
+        return float(sum(terms.values())), terms
 
     def _metrics(self, qdot: NDArray[np.float64]) -> dict[str, Any]:
+        """Step metrics for ``info``; also advances the episode's running max error and collision flag."""
         ref_pos, _, phase = self.reference(self._time)
         tcp = self.tcp_position
         clearance = self._min_clearance()
@@ -336,10 +336,11 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._link_geoms = [m.geom(n).id for n in PLANAR_ARM_LINK_GEOMS]
         self._obstacle_geom = m.geom(PLANAR_OBSTACLE_GEOM).id if self._obstacle else None
         self._jacp = np.zeros((3, m.nv))
+        self._scratch = mujoco.MjData(m)  # for the start-posture projection, so reset allocates nothing
 
     def _project_to_line_start(self, q: NDArray[np.float64], iterations: int = 50) -> NDArray[np.float64] | None:
         """Minimum-norm Newton steps from ``q`` onto ``tcp(q) == line_start``; ``None`` if it does not converge."""
-        data = mujoco.MjData(self.model)
+        data = self._scratch
         q = q.copy()
         for _ in range(iterations):
             data.qpos[self._qpos] = q

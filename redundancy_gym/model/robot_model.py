@@ -1,9 +1,9 @@
 """The controller's model of a robot, built by pinocchio from the same MJCF that MuJoCo simulates.
 
 Every controller gets kinematic and dynamic quantities only through :class:`RobotModel`. The model keeps one
-pinocchio ``Data``; :meth:`RobotModel.update` runs forward kinematics and the joint Jacobians once per
-configuration and the query methods read from that cache, so a control step that needs several frames and
-Jacobians pays for one recursive pass.
+pinocchio ``Data``; :meth:`RobotModel.update` runs one recursive pass (forward kinematics with the joint
+Jacobians) per configuration and the query methods read from that cache, so a control step that needs several
+frames and Jacobians pays for that pass once.
 """
 
 from __future__ import annotations
@@ -44,7 +44,6 @@ class RobotModel:
         for index, frame in enumerate(model.frames):
             self._frame_ids.setdefault(frame.name, index)
         self._q: NDArray[np.float64] | None = None
-        self._jacobians_ready = False
 
     @classmethod
     def from_mjcf(cls, path: str | Path) -> RobotModel:
@@ -118,13 +117,17 @@ class RobotModel:
             raise ModelError("configuration contains non-finite values")
         return q
 
-    def update(self, q: ArrayLike) -> None:
-        """Forward kinematics and joint Jacobians at ``q``; later queries read this cache."""
+    def update(self, q: ArrayLike) -> NDArray[np.float64]:
+        """Forward kinematics and joint Jacobians at ``q``; later queries read this cache.
+
+        Returns the checked configuration (a float copy of ``q``).
+        """
         q = self.check_configuration(q)
-        pin.forwardKinematics(self._model, self._data, q)
+        # computeJointJacobians runs the forward kinematics pass itself
+        pin.computeJointJacobians(self._model, self._data, q)
         pin.updateFramePlacements(self._model, self._data)
         self._q = q.copy()
-        self._jacobians_ready = False
+        return q
 
     @property
     def q(self) -> NDArray[np.float64]:
@@ -135,12 +138,6 @@ class RobotModel:
         if self._q is None:
             raise ModelError("call RobotModel.update(q) before querying frames or Jacobians")
         return self._q
-
-    def _ensure_jacobians(self) -> None:
-        q = self._require_update()
-        if not self._jacobians_ready:
-            pin.computeJointJacobians(self._model, self._data, q)
-            self._jacobians_ready = True
 
     # ------------------------------------------------------------------ frames
     def frame_position(self, frame: str | int) -> NDArray[np.float64]:
@@ -162,7 +159,7 @@ class RobotModel:
     def frame_jacobian(self, frame: str | int, kind: JacobianKind = "full") -> NDArray[np.float64]:
         """World-aligned frame Jacobian: ``translational`` (3 x nv), ``rotational`` (3 x nv) or ``full`` (6 x nv)."""
         rows = self._rows(kind)
-        self._ensure_jacobians()
+        self._require_update()
         jac = pin.getFrameJacobian(self._model, self._data, self._resolve(frame), _WORLD_ALIGNED)
         return np.array(jac[rows], dtype=np.float64)
 
@@ -182,15 +179,13 @@ class RobotModel:
 
         Computed as the frame's classical acceleration at zero joint acceleration, so it matches
         ``d/dt (J qdot)`` for the linear part (classical, not spatial, acceleration). Leaves the
-        kinematic cache at ``q``.
+        kinematic cache (placements and Jacobians) at ``q``.
         """
         rows = self._rows(kind)
-        q = self.check_configuration(q)
+        q = self.update(q)
         qdot = self._check_velocity(qdot)
+        # same q: placements and the joint Jacobians of update() stay valid
         pin.forwardKinematics(self._model, self._data, q, qdot, np.zeros(self.nv))
-        pin.updateFramePlacements(self._model, self._data)
-        self._q = q.copy()
-        self._jacobians_ready = False
         acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(frame), _WORLD_ALIGNED)
         return np.asarray(acc.vector, dtype=np.float64)[rows].copy()
 
