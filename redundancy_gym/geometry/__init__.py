@@ -3,7 +3,7 @@
 Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 """
 
-from .distance import PackedVolumes, SSVDistance, SSVDistances, distance, distances, indexed_distances
+from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
 from .potentials import PiecewisePotential, PotentialValue
 from .primitives import KIND_NAMES, LSS, PSS, SSV, TSS
@@ -16,6 +16,7 @@ __all__ = [
     "TSS",
     "GeometryError",
     "PackedVolumes",
+    "PairBatch",
     "PiecewisePotential",
     "PotentialValue",
     "SSVDistance",

@@ -11,9 +11,13 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 from .primitives import SSV
-from .ssv_kernels import ssv_pair, ssv_pairs_indexed
+from .ssv_kernels import GROUPS, ssv_pairs_at, ssv_pairs_indexed
 
-__all__ = ["PackedVolumes", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
+__all__ = ["PackedVolumes", "PairBatch", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
+
+
+_FIRST = np.zeros(1, dtype=np.int64)
+_SECOND = np.ones(1, dtype=np.int64)
 
 
 class SSVDistance(NamedTuple):
@@ -79,11 +83,10 @@ def distance(a: SSV, b: SSV) -> SSVDistance:
     """
     if not isinstance(a, SSV) or not isinstance(b, SSV):
         raise GeometryError(f"distance expects PSS, LSS or TSS, got {type(a).__name__}, {type(b).__name__}")
-    pa = np.empty(3)
-    pb = np.empty(3)
-    n = np.empty(3)
-    d = ssv_pair(a.vertices, a.radius, a.kind, b.vertices, b.radius, b.kind, pa, pb, n)
-    return SSVDistance(float(d), pa, pb, n)
+    out = SSVDistances(np.empty(1), np.empty((1, 3)), np.empty((1, 3)), np.empty((1, 3)))
+    ssv_pairs_indexed(np.stack([a.vertices, b.vertices]), np.array([a.radius, b.radius]),
+                      np.array([a.kind, b.kind], dtype=np.int64), _FIRST, _SECOND, *out)
+    return SSVDistance(float(out.distance[0]), out.point_a[0], out.point_b[0], out.normal[0])
 
 
 def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: ArrayLike) -> SSVDistances:
@@ -111,3 +114,59 @@ def distances(a: Sequence[SSV] | PackedVolumes, b: Sequence[SSV] | PackedVolumes
                          np.concatenate([pa.kinds, pb.kinds]))
     n = len(pa)
     return indexed_distances(both, np.arange(n), np.arange(n, 2 * n))
+
+
+class PairBatch:
+    """A fixed set of volume pairs evaluated again and again (a control loop's collision queries).
+
+    The pairs are sorted by type once, so that :meth:`compute` runs one tight compiled loop per pair type,
+    and the kernel is entered with the addresses of buffers this object owns (a NumPy array argument costs
+    numba about 0.4 us to box). Move the volumes by writing into :attr:`vertices` in place; :meth:`compute`
+    then returns the distances in the original pair order, in buffers that the next call overwrites.
+
+    Args:
+        volumes: the volumes; their arrays are copied into buffers owned by the batch.
+        index_a, index_b: (K,) volume indices of each pair.
+    """
+
+    def __init__(self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike) -> None:
+        packed = volumes if isinstance(volumes, PackedVolumes) else PackedVolumes.from_volumes(volumes)
+        ia = np.asarray(index_a, dtype=np.int64).reshape(-1)
+        ib = np.asarray(index_b, dtype=np.int64).reshape(-1)
+        if ia.shape != ib.shape:
+            raise GeometryError(f"index arrays must have equal length, got {ia.size} and {ib.size}")
+        m = len(packed)
+        if ia.size and (min(ia.min(), ib.min()) < 0 or max(ia.max(), ib.max()) >= m):
+            raise GeometryError(f"pair indices must lie in [0, {m})")
+        self.vertices = np.ascontiguousarray(packed.vertices, dtype=np.float64).copy()
+        self.radii = np.ascontiguousarray(packed.radii, dtype=np.float64).copy()
+        self.kinds = np.ascontiguousarray(packed.kinds, dtype=np.int64).copy()
+        ka, kb = self.kinds[ia], self.kinds[ib]
+        swap = ka > kb
+        lo = np.where(swap, ib, ia)
+        hi = np.where(swap, ia, ib)
+        group = np.array([GROUPS.index((int(a), int(b))) for a, b in zip(self.kinds[lo], self.kinds[hi])],
+                         dtype=np.int64).reshape(-1)
+        order = np.argsort(group, kind="stable")
+        self._index_a = np.ascontiguousarray(lo[order])
+        self._index_b = np.ascontiguousarray(hi[order])
+        self._slot = np.ascontiguousarray(order.astype(np.int64))
+        self._swap = np.ascontiguousarray(swap[order].astype(np.int64))
+        self._starts = np.searchsorted(group[order], np.arange(7)).astype(np.int64)
+        k = ia.size
+        self.result = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
+        buffers = (self.vertices, self.radii, self.kinds, self._index_a, self._index_b, self._slot, self._swap,
+                   self._starts, *self.result)
+        self._header = np.array([b.ctypes.data for b in buffers] + [m, k], dtype=np.int64)
+        self._header_address = int(self._header.ctypes.data)
+        ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step
+        # the compiled entry point skips the dispatcher's type matching on every call
+        self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
+
+    def __len__(self) -> int:
+        return int(self._slot.size)
+
+    def compute(self) -> SSVDistances:
+        """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""
+        self._kernel(self._header_address)
+        return self.result

@@ -201,3 +201,23 @@ def test_invalid_input_raises() -> None:
         TSS([0, 0], [1, 0, 0], [0, 1, 0], 0.1)
     with pytest.raises(GeometryError, match="PSS, LSS or TSS"):
         distance(PSS([0, 0, 0], 1.0), [0, 0, 0])  # type: ignore[arg-type]
+
+
+def test_pair_batch_matches_single_queries_in_the_original_order(rng: np.random.Generator) -> None:
+    from redundancy_gym.geometry import PairBatch
+
+    volumes = [random_volume(rng, KINDS[i % 3], spread=0.4) for i in range(24)]
+    volumes.append(PSS(volumes[0].points[0], 0.1))  # touching primitives: the centroid normal
+    ia = rng.integers(0, len(volumes), 60)
+    ib = rng.integers(0, len(volumes), 60)
+    ia[-1], ib[-1] = len(volumes) - 1, 0
+    batch = PairBatch(volumes, ia, ib)
+    result = batch.compute()
+    for k in range(60):
+        single = distance(volumes[ia[k]], volumes[ib[k]])
+        assert result.distance[k] == pytest.approx(single.distance, abs=1e-12)
+        np.testing.assert_allclose(result.point_a[k], single.point_a, atol=1e-12)
+        np.testing.assert_allclose(result.point_b[k], single.point_b, atol=1e-12)
+        np.testing.assert_allclose(result.normal[k], single.normal, atol=1e-12)
+    batch.vertices[:] += np.array([0.5, -0.2, 0.1])  # moving every volume leaves the distances unchanged
+    np.testing.assert_allclose(batch.compute().distance, result.distance.copy(), atol=1e-12)
