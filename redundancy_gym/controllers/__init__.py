@@ -6,6 +6,7 @@ typing and is imported on demand (``redundancy_gym.make_policy``).
 
 from .acceleration_clik import AccelerationClik, AccelerationClikResult
 from .clik import Clik, ClikProblem, ClikResult
+from .collision_objective import CollisionObjective
 from .exceptions import ControllerError, PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
@@ -21,6 +22,7 @@ __all__ = [
     "Clik",
     "ClikProblem",
     "ClikResult",
+    "CollisionObjective",
     "ControllerError",
     "FramePositionTask",
     "JointLimitObjective",

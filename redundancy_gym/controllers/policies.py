@@ -14,9 +14,11 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..model import RobotModel
+from ..geometry import PSS, Segment
+from ..model import RobotModel, collision_model_from_mjcf
 from ..sb3_import import import_stable_baselines3
 from .clik import Clik, ClikResult
+from .collision_objective import CollisionObjective
 from .exceptions import PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
@@ -89,6 +91,12 @@ class ClikPolicyConfig:
         posture_weight: weight of a pull towards the env's starting posture (0 switches it off).
         dls_threshold: ``eps`` of the DLS damping law.
         dls_max_damping: ``k_max`` of the DLS damping law.
+        collision_avoidance: ``"auto"`` (on when the env has an obstacle), ``"on"`` or ``"off"``: the
+            nullspace collision objective (5.49)-(5.61) on the robot's geoms and the env's obstacle.
+        collision_activation: ``d_a`` of the collision potential [m].
+        collision_slope: slope of the collision potential at contact [1/m].
+        collision_weight: weight of the collision objective.
+        self_collision: also avoid robot-robot pairs (non-adjacent links).
     """
 
     method: str = "dls"
@@ -100,6 +108,15 @@ class ClikPolicyConfig:
     posture_weight: float = 0.0
     dls_threshold: float = 0.05
     dls_max_damping: float = 0.01
+    collision_avoidance: str = "auto"
+    collision_activation: float = 0.15
+    collision_slope: float = 5.0
+    collision_weight: float = 1.0
+    self_collision: bool = True
+
+
+COLLISION_MODES = ("auto", "on", "off")
+OBSTACLE_SEGMENT = "obstacle"
 
 
 class ClikPolicy:
@@ -141,16 +158,52 @@ class ClikPolicy:
             if reference is None:
                 raise PolicyError("posture_weight > 0 needs an env with nominal_configuration")
             objectives.append(PostureObjective(reference, self.config.posture_weight))
+        self.collision: CollisionObjective | None = None
+        self._obstacle_slices: tuple[slice, slice] | None = None
+        if self.config.collision_avoidance not in COLLISION_MODES:
+            raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: "
+                              f"{', '.join(COLLISION_MODES)}")
+        has_obstacle = bool(getattr(base, "has_obstacle", False))
+        wanted = self.config.collision_avoidance == "on" or (self.config.collision_avoidance == "auto" and has_obstacle)
+        if wanted:
+            self.collision = self._collision_objective(base, has_obstacle)
+            objectives.append(self.collision)
         self.controller = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES),
                                method=self.config.method, gain=self.config.gain,
                                nullspace_gain=self.config.nullspace_gain, objectives=objectives,
                                dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping)
         self.last_result: ClikResult | None = None
 
+    def _collision_objective(self, base: Any, has_obstacle: bool) -> CollisionObjective:
+        """Robot segments from the robot MJCF; the obstacle (a sphere, read from the observation) as a PSS."""
+        environment = []
+        if has_obstacle:
+            if "obstacle_center" not in self._layout or "obstacle_radius" not in self._layout:
+                raise PolicyError(f"{type(base).__name__} has an obstacle but no obstacle_center/obstacle_radius "
+                                  "in OBSERVATION_LAYOUT")
+            # a unit sphere at the origin, moved and scaled from the observation in predict()
+            environment.append(Segment(OBSTACLE_SEGMENT, (PSS(np.zeros(3), 1.0),)))
+            self._obstacle_slices = (self._layout["obstacle_center"], self._layout["obstacle_radius"])
+        model = collision_model_from_mjcf(self.model, environment, self_collision=self.config.self_collision)
+        return CollisionObjective(model, activation_distance=self.config.collision_activation,
+                                  slope=self.config.collision_slope, weight=self.config.collision_weight)
+
+    def _update_obstacle(self, obs: NDArray[np.float64]) -> None:
+        if self.collision is None or self._obstacle_slices is None:
+            return
+        center_slice, radius_slice = self._obstacle_slices
+        center = obs[center_slice]
+        radius = float(obs[radius_slice][0])
+        # planar envs give (x, z); the sphere is scaled by its radius about the origin, then moved
+        position = np.array([center[0], 0.0, center[1]]) if center.size == 2 else np.asarray(center, dtype=np.float64)
+        self.collision.collision_model.set_environment_placement(OBSTACLE_SEGMENT, np.eye(3), position)
+        self.collision.collision_model.set_environment_radius(OBSTACLE_SEGMENT, max(radius, 0.0))
+
     def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
         """Normalized joint velocity command for one observation."""
         obs = np.asarray(observation, dtype=np.float64)
+        self._update_obstacle(obs)
         result = self.controller.step(obs[self._layout["q"]], obs[self._layout["tcp_ref"]],
                                       obs[self._layout["tcp_ref_vel"]])
         self.last_result = result

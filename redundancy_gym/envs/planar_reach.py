@@ -33,7 +33,7 @@ def default_config() -> dict[str, Any]:
     """Default keyword arguments of :class:`PlanarReachEnv` (a fresh dict each call)."""
     return {
         "obstacle": True,
-        "obstacle_center": (0.55, 0.05),
+        "obstacle_center": (0.7, -0.12),
         "obstacle_radius": 0.1,
         "line_start": (0.9, 0.45),
         "line_end": (0.9, -0.45),
@@ -120,7 +120,10 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version. Before release the default obstacle moved from (0.55, 0.05) to (0.7, -0.12): at the
+      old place the arm had to pass the obstacle on the other side, which no local method can do (the chain
+      cannot change sides without crossing it); at the new place plain CLIK still collides and nullspace
+      collision avoidance passes it, as in monograph 5.6.2.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
@@ -138,7 +141,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     TCP_FRAME = PLANAR_ARM_TCP
     TASK_AXES = "xz"
 
-    def __init__(self, obstacle: bool = True, obstacle_center: Sequence[float] = (0.55, 0.05),
+    def __init__(self, obstacle: bool = True, obstacle_center: Sequence[float] = (0.7, -0.12),
                  obstacle_radius: float = 0.1, line_start: Sequence[float] = (0.9, 0.45),
                  line_end: Sequence[float] = (0.9, -0.45), duration: float = 2.0,
                  initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5), max_joint_speed: float = 3.0,
@@ -249,6 +252,11 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         return self._metrics(np.zeros(4))
 
     # ------------------------------------------------------------------ task
+    @property
+    def has_obstacle(self) -> bool:
+        """Whether the scene contains the obstacle sphere."""
+        return self._obstacle
+
     def reference(self, time: float) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
         """TCP reference position [m], velocity [m/s] and phase at ``time`` [s] (quintic rest-to-rest law)."""
         tau = min(max(time / self._duration, 0.0), 1.0)

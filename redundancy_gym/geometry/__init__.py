@@ -3,6 +3,7 @@
 Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 """
 
+from .collision_model import CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
 from .potentials import PiecewisePotential, PotentialValue
@@ -14,13 +15,18 @@ __all__ = [
     "PSS",
     "SSV",
     "TSS",
+    "CollisionModel",
+    "CollisionState",
     "GeometryError",
+    "Kinematics",
     "PackedVolumes",
     "PairBatch",
     "PiecewisePotential",
     "PotentialValue",
     "SSVDistance",
     "SSVDistances",
+    "Segment",
+    "bounding_lss",
     "distance",
     "distances",
     "indexed_distances",

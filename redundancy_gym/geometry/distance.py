@@ -153,10 +153,11 @@ class PairBatch:
         self._slot = np.ascontiguousarray(order.astype(np.int64))
         self._swap = np.ascontiguousarray(swap[order].astype(np.int64))
         self._starts = np.searchsorted(group[order], np.arange(7)).astype(np.int64)
+        self._active = np.ones(ia.size, dtype=np.int64)
         k = ia.size
         self.result = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
         buffers = (self.vertices, self.radii, self.kinds, self._index_a, self._index_b, self._slot, self._swap,
-                   self._starts, *self.result)
+                   self._starts, self._active, *self.result)
         self._header = np.array([b.ctypes.data for b in buffers] + [m, k], dtype=np.int64)
         self._header_address = int(self._header.ctypes.data)
         ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step
@@ -165,6 +166,13 @@ class PairBatch:
 
     def __len__(self) -> int:
         return int(self._slot.size)
+
+    def set_active(self, mask: ArrayLike) -> None:
+        """Compute only the pairs where ``mask`` (in the original pair order) is true; the others get +inf."""
+        m = np.asarray(mask, dtype=bool).reshape(-1)
+        if m.size != len(self):
+            raise GeometryError(f"mask must have {len(self)} entries, got {m.size}")
+        self._active[:] = m[self._slot]
 
     def compute(self) -> SSVDistances:
         """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""

@@ -516,10 +516,11 @@ def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n
 
 
 @njit(cache=True)
-def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, out_d, out_pa, out_pb,
+def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb,
                       out_n):
     """Like :func:`ssv_pairs_indexed` for pairs pre-sorted into the six :data:`GROUPS` (``index_a`` holds the
     lower kind); pair ``k`` is written to row ``slot[k]``, with witnesses swapped back where ``swap[k]``.
+    Pairs with ``active[k] == 0`` are skipped (their distance is written as +inf).
 
     One tight loop per pair type, with no kind dispatch inside: about twice as fast as the generic loop for
     the cheap pair types. Touching primitives get the centroid normal of :func:`ssv_pairs_indexed`.
@@ -527,6 +528,9 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
     v = vertices
     for g in range(6):
         for k in range(starts[g], starts[g + 1]):
+            if active[k] == 0:
+                out_d[slot[k]] = np.inf
+                continue
             i = index_a[k]
             j = index_b[k]
             ox = v[i, 0, 0]
@@ -571,17 +575,18 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
 def ssv_pairs_at(header):
     """:func:`ssv_pairs_grouped` on buffers described by the int64 array at address ``header``.
 
-    ``header`` holds: addresses of vertices, radii, kinds, index_a, index_b, slot, swap, starts, out_d, out_pa,
-    out_pb, out_n, then the number of volumes and of pairs. Boxing one NumPy array into a numba call costs
+    ``header`` holds: addresses of vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d,
+    out_pa, out_pb, out_n, then the number of volumes and of pairs. Boxing one NumPy array into a numba call costs
     about 0.4 us, as much as 50 sphere pairs take; one integer costs a few nanoseconds. Only
     :class:`~redundancy_gym.geometry.PairBatch` calls this, with C-contiguous buffers it owns and checked once.
     """
-    h = carray(_int64_pointer(header), (14,))
-    m = h[12]
-    n = h[13]
+    h = carray(_int64_pointer(header), (15,))
+    m = h[13]
+    n = h[14]
     ssv_pairs_grouped(carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
                       carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
                       carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
                       carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
-                      carray(_float64_pointer(h[8]), (n,)), carray(_float64_pointer(h[9]), (n, 3)),
-                      carray(_float64_pointer(h[10]), (n, 3)), carray(_float64_pointer(h[11]), (n, 3)))
+                      carray(_int64_pointer(h[8]), (n,)),
+                      carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
+                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)))

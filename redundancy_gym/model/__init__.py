@@ -3,7 +3,16 @@
 Never imports gymnasium, mujoco, envs or eval.
 """
 
+from .collision_geometry import CollisionGeometry, collision_geometry_from_mjcf, collision_model_from_mjcf
 from .exceptions import ModelError, UnknownFrameError
 from .robot_model import JacobianKind, RobotModel
 
-__all__ = ["JacobianKind", "ModelError", "RobotModel", "UnknownFrameError"]
+__all__ = [
+    "CollisionGeometry",
+    "JacobianKind",
+    "ModelError",
+    "RobotModel",
+    "UnknownFrameError",
+    "collision_geometry_from_mjcf",
+    "collision_model_from_mjcf",
+]

@@ -1,0 +1,113 @@
+"""Collision segments from the MJCF geoms, through pinocchio's MJCF geometry loader (monograph 5.2.2).
+
+Sphere geoms become PSS, capsule geoms LSS, and mesh geoms whose name starts with ``triangle_prefix`` TSS
+(a triangle mesh of 3 vertices, or a thin triangular prism of 6 whose mid-plane triangle is the TSS and whose
+half thickness is the radius: MuJoCo simulates the prism, the controller sees the TSS). Geoms moving with one joint form
+one segment, named after their body and attached to the joint's frame; world geoms form environment segments. Other geom types are
+left out and listed, since a scene "models only what it needs".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..geometry import LSS, PSS, SSV, TSS, CollisionModel, Segment
+from .exceptions import ModelError
+from .robot_model import RobotModel
+
+__all__ = ["CollisionGeometry", "collision_geometry_from_mjcf", "collision_model_from_mjcf"]
+
+TRIANGLE_PREFIX = "tss"
+
+
+@dataclass(frozen=True)
+class CollisionGeometry:
+    """Segments read from an MJCF: robot (per joint), environment (world geoms), adjacent pairs, skipped geoms."""
+
+    robot: tuple[Segment, ...]
+    environment: tuple[Segment, ...]
+    adjacent: tuple[tuple[str, str], ...]
+    skipped: tuple[str, ...]
+
+
+def _triangle(points: np.ndarray, name: str) -> tuple[np.ndarray, float]:
+    """Mid-plane triangle and half thickness of a 3-vertex triangle or a 6-vertex triangular prism."""
+    if len(points) == 3:
+        return points, 0.0
+    if len(points) != 6:
+        raise ModelError(f"geom {name!r}: a TSS mesh needs 3 or 6 vertices, got {len(points)}")
+    center = points.mean(axis=0)
+    normal = np.linalg.svd(points - center)[2][-1]
+    height = (points - center) @ normal
+    top, bottom = points[height >= 0.0], points[height < 0.0]
+    if len(top) != 3:
+        raise ModelError(f"geom {name!r}: the 6 vertices are not a triangular prism")
+    # pair each top vertex with the bottom vertex whose in-plane position matches
+    mid = []
+    for p in top:
+        flat = bottom - np.outer((bottom - p) @ normal, normal)
+        q = bottom[int(np.argmin(np.linalg.norm(flat - p, axis=1)))]
+        mid.append(0.5 * (p + q))
+    return np.array(mid), float(0.5 * (height.max() - height.min()))
+
+
+def _volume(obj: pin.GeometryObject, prefix: str) -> SSV | None:
+    shape = obj.geometry
+    placement = obj.placement
+    rot, pos = placement.rotation, placement.translation
+    kind = type(shape).__name__
+    if kind == "Sphere":
+        return PSS(pos, shape.radius)
+    if kind == "Capsule":
+        axis = rot[:, 2] * shape.halfLength
+        return LSS(pos - axis, pos + axis, shape.radius)
+    if kind == "Convex" and obj.name.startswith(prefix):
+        local = np.array([np.asarray(shape.points(i)) for i in range(shape.num_points)])
+        tri, radius = _triangle(local, obj.name)
+        world = tri @ rot.T + pos
+        return TSS(world[0], world[1], world[2], radius)
+    return None
+
+
+def collision_geometry_from_mjcf(model: RobotModel, path: str | Path | None = None, *,
+                                 triangle_prefix: str = TRIANGLE_PREFIX) -> CollisionGeometry:
+    """Segments of an MJCF (default: the file ``model`` was built from)."""
+    source = Path(path if path is not None else model.source)
+    if not source.is_file():
+        raise ModelError(f"MJCF file not found: {source}")
+    pm = model.pinocchio_model
+    try:
+        geom = pin.buildGeomFromMJCF(pm, str(source), pin.GeometryType.COLLISION)
+    except Exception as exc:  # pinocchio raises plain RuntimeError/ValueError
+        raise ModelError(f"pinocchio could not read the geoms of {source}: {exc}") from exc
+    per_joint: dict[int, list[SSV]] = {}
+    body: dict[int, str] = {}
+    environment: list[Segment] = []
+    skipped: list[str] = []
+    for obj in geom.geometryObjects:
+        volume = _volume(obj, triangle_prefix)
+        if volume is None:
+            skipped.append(obj.name)
+        elif obj.parentJoint == 0:
+            environment.append(Segment(obj.name, (volume,)))
+        else:
+            per_joint.setdefault(int(obj.parentJoint), []).append(volume)
+            body.setdefault(int(obj.parentJoint), pm.frames[obj.parentFrame].name)
+    # named after the body, attached to the joint frame the geom placements are relative to
+    robot = tuple(Segment(body[j], tuple(v), frame=pm.names[j]) for j, v in sorted(per_joint.items()))
+    present = set(per_joint)
+    adjacent = tuple((body[pm.parents[j]], body[j]) for j in sorted(present) if pm.parents[j] in present)
+    return CollisionGeometry(robot, tuple(environment), adjacent, tuple(skipped))
+
+
+def collision_model_from_mjcf(model: RobotModel, environment: tuple[Segment, ...] | list[Segment] = (),
+                              path: str | Path | None = None, **kwargs: object) -> CollisionModel:
+    """A :class:`CollisionModel` of the MJCF's robot geoms (adjacent links excluded) plus ``environment``
+    (and the MJCF's own world geoms); ``kwargs`` go to :class:`CollisionModel`."""
+    geometry = collision_geometry_from_mjcf(model, path)
+    return CollisionModel(geometry.robot, tuple(geometry.environment) + tuple(environment),
+                          exclude=geometry.adjacent, **kwargs)  # type: ignore[arg-type]
