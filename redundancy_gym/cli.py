@@ -1,4 +1,4 @@
-"""The ``redundancy-gym`` command: ``eval``, ``train``, ``demo``, ``render``."""
+"""The ``redundancy-gym`` command: ``eval``, ``train``, ``demo``, ``render``, ``bench``."""
 
 from __future__ import annotations
 
@@ -57,6 +57,12 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--out", required=True)
     re.add_argument("--seed", type=int, default=0)
     re.add_argument("--env-kwargs", type=_json_object, default={})
+    be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
+    be.add_argument("name", choices=("ssv",), help="ssv: swept-sphere distances against coal")
+    be.add_argument("--json", dest="json_path", default="results/bench_ssv.json")
+    be.add_argument("--seed", type=int, default=0)
+    be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
+    be.add_argument("--no-progress", action="store_true")
     return parser
 
 
@@ -96,6 +102,13 @@ def main(argv: Sequence[str] | None = None) -> int:
             path, summary = record_episode(args.env_id, args.policy, args.out, seed=args.seed,
                                            env_kwargs=args.env_kwargs)
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
+        elif args.command == "bench":
+            from .eval.bench_ssv import format_ssv_bench, run_ssv_bench, write_ssv_bench
+
+            timing = {"min_time": 0.002, "repeats": 2} if args.quick else {}
+            report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing)
+            print(format_ssv_bench(report))
+            print(f"wrote {write_ssv_bench(report, args.json_path)}")
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

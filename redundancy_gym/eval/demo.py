@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .evaluate import evaluate, format_report
-from .plots import plot_traces
+from .plots import plot_clearance, plot_traces
 from .speed_error import plot_speed_error, speed_error_markdown
 from .video import record_episode
 
@@ -33,6 +33,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
         traces[f"clik, obstacle={obstacle} (seed {seed})"] = report.traces[0]
     written.append(plot_traces(traces, out / "planar_reach_clik.png",
                                title="PlanarReach-v0: velocity-level CLIK (DLS) with joint-limit objective"))
+    written.append(_clearance(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
         path, _ = record_episode(_PLANAR, "clik", out / f"planar_reach_clik_{tag}.mp4", seed=seed,
@@ -42,6 +43,19 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     for path in written:
         print(f"wrote {path}")
     return written
+
+
+def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
+    """Clearance to the obstacle over time, CLIK with and without the nullspace collision objective."""
+    traces = {}
+    for mode, label in (("off", "clik without collision objective"), ("auto", "clik with collision objective")):
+        report = evaluate(_PLANAR, "clik", episodes=episodes, seed=seed, policy_kwargs={"collision_avoidance": mode},
+                          keep_traces=True, progress=progress)
+        c = report.to_json()
+        traces[f"{label}: collisions {c['collision_rate']:.0%}, min {1e3 * c['min_clearance']:.1f} mm"] = \
+            report.traces[0]
+    return plot_clearance(traces, out / "planar_reach_clearance.png",
+                          f"PlanarReach-v0 with obstacle (seed {seed}; an episode ends at contact)")
 
 
 def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:

@@ -55,3 +55,17 @@ def save_figure(fig: plt.Figure, path: str | Path) -> Path:
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
+
+
+def plot_clearance(traces: dict[str, EpisodeTrace], path: str | Path, title: str) -> Path:
+    """Minimum swept-sphere clearance over time, one line per labelled episode, with the contact line."""
+    fig, ax = plt.subplots(figsize=(7.5, 3.6))
+    for label, trace in traces.items():
+        ax.plot(trace.time, 1e3 * trace.min_clearance, label=label)
+    ax.axhline(0.0, color="k", lw=0.8, ls="--", label="contact")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("min clearance [mm]")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    return save_figure(fig, path)

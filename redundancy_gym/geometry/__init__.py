@@ -6,7 +6,7 @@ Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 from .collision_model import CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
-from .potentials import PiecewisePotential, PotentialValue
+from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential
 from .primitives import KIND_NAMES, LSS, PSS, SSV, TSS
 
 __all__ = [
@@ -17,12 +17,14 @@ __all__ = [
     "TSS",
     "CollisionModel",
     "CollisionState",
+    "CubicPotential",
     "GeometryError",
     "Kinematics",
     "PackedVolumes",
     "PairBatch",
     "PiecewisePotential",
     "PotentialValue",
+    "QuadraticPotential",
     "SSVDistance",
     "SSVDistances",
     "Segment",

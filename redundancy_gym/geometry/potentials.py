@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 
-__all__ = ["PiecewisePotential", "PotentialValue"]
+__all__ = ["CubicPotential", "PiecewisePotential", "PotentialValue", "QuadraticPotential"]
 
 
 @dataclass(frozen=True)
@@ -93,3 +93,63 @@ class PiecewisePotential:
     def derivative(self, distance: ArrayLike) -> NDArray[np.float64]:
         """``dH_c23/dd`` (5.59)."""
         return self.evaluate(distance).slope
+
+
+def _check(activation_distance: float, gain: float) -> None:
+    if not np.isfinite(activation_distance) or activation_distance <= 0.0:
+        raise GeometryError(f"activation_distance must be finite and > 0, got {activation_distance!r}")
+    if not np.isfinite(gain) or gain <= 0.0:
+        raise GeometryError(f"gain must be finite and > 0, got {gain!r}")
+
+
+def _distances(distance: ArrayLike) -> NDArray[np.float64]:
+    d = np.asarray(distance, dtype=np.float64)
+    if not np.all(np.isfinite(d)):
+        raise GeometryError("distances must be finite")
+    return d
+
+
+@dataclass(frozen=True)
+class QuadraticPotential:
+    """``H_c2(d) = s_0 (d - d_a)^2`` for ``d < d_a``, else 0 (5.50): C1 at ``d_a`` (its curvature jumps).
+
+    Args:
+        activation_distance: ``d_a`` [m or rad], > 0.
+        gain: ``s_0`` > 0.
+    """
+
+    activation_distance: float
+    gain: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check(self.activation_distance, self.gain)
+
+    def evaluate(self, distance: ArrayLike) -> PotentialValue:
+        """Value, first and second derivative at each distance."""
+        d = _distances(distance)
+        on = d < self.activation_distance
+        x = np.where(on, d - self.activation_distance, 0.0)
+        return PotentialValue(self.gain * x**2, 2.0 * self.gain * x, np.where(on, 2.0 * self.gain, 0.0))
+
+
+@dataclass(frozen=True)
+class CubicPotential:
+    """``H_c3(d) = -s_0 (d - d_a)^3`` for ``d < d_a``, else 0: (5.51) with the sign that makes it repulsive
+    for ``s_0 > 0`` (as printed, ``s_0 (d - d_a)^3`` is negative below ``d_a``); C2 at ``d_a``.
+
+    Args:
+        activation_distance: ``d_a`` [m or rad], > 0.
+        gain: ``s_0`` > 0.
+    """
+
+    activation_distance: float
+    gain: float = 1.0
+
+    def __post_init__(self) -> None:
+        _check(self.activation_distance, self.gain)
+
+    def evaluate(self, distance: ArrayLike) -> PotentialValue:
+        """Value, first and second derivative at each distance."""
+        d = _distances(distance)
+        x = np.where(d < self.activation_distance, d - self.activation_distance, 0.0)
+        return PotentialValue(-self.gain * x**3, -3.0 * self.gain * x**2, -6.0 * self.gain * x)

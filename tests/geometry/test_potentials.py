@@ -48,3 +48,29 @@ def test_invalid_parameters(kwargs: dict) -> None:
 def test_non_finite_distance_raises() -> None:
     with pytest.raises(GeometryError):
         PiecewisePotential(0.1).value([np.nan])
+
+
+@pytest.mark.parametrize("cls", ["QuadraticPotential", "CubicPotential"])
+def test_h_c2_and_h_c3_derivatives_and_activation(cls: str) -> None:
+    import redundancy_gym.geometry as g
+
+    pot = getattr(g, cls)(activation_distance=0.2, gain=3.0)
+    d = np.linspace(-0.1, 0.3, 81)
+    val = pot.evaluate(d)
+    h = 1e-6
+    np.testing.assert_allclose(val.slope, (pot.evaluate(d + h).value - pot.evaluate(d - h).value) / (2 * h), atol=1e-5)
+    smooth = np.abs(d - 0.2) > 1e-3  # H_c2's curvature jumps at d_a
+    np.testing.assert_allclose(val.curvature[smooth],
+                               ((pot.evaluate(d + h).slope - pot.evaluate(d - h).slope) / (2 * h))[smooth], atol=1e-5)
+    assert np.all(val.value[d >= 0.2] == 0.0) and np.all(val.value[d < 0.2] > 0.0)
+    assert np.all(np.diff(val.value) <= 0.0)  # repulsive: grows as the distance shrinks
+    at = pot.evaluate(np.array([0.2 - 1e-9, 0.2]))
+    assert abs(at.value[0] - at.value[1]) < 1e-12 and abs(at.slope[0] - at.slope[1]) < 1e-7  # C1 at d_a
+
+
+def test_only_h_c3_is_c2_at_the_activation_distance() -> None:
+    from redundancy_gym.geometry import CubicPotential, QuadraticPotential
+
+    inside = np.array([0.2 - 1e-9])
+    assert abs(CubicPotential(0.2, 3.0).evaluate(inside).curvature[0]) < 1e-7
+    assert QuadraticPotential(0.2, 3.0).evaluate(inside).curvature[0] == pytest.approx(6.0)
