@@ -455,30 +455,25 @@ def ssv_pairs_indexed(vertices, radii, kinds, index_a, index_b, out_d, out_pa, o
         out_n[k, 2] = n[2]
 
 
-@intrinsic
-def _float64_pointer(typingctx, address):
-    """Reinterpret an integer address as ``float64*`` (the caller owns and validated the buffer)."""
-    if not isinstance(address, types.Integer):
-        return None
-    sig = types.CPointer(types.float64)(address)
+def _pointer_intrinsic(dtype: types.Type):  # noqa: ANN202 - returns a numba intrinsic
+    """An intrinsic reinterpreting an integer address as ``dtype*`` (the caller owns and validated the buffer)."""
 
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+    @intrinsic
+    def as_pointer(typingctx, address):
+        if not isinstance(address, types.Integer):
+            return None
+        sig = types.CPointer(dtype)(address)
 
-    return sig, codegen
+        def codegen(context, builder, signature, args):
+            return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
+
+        return sig, codegen
+
+    return as_pointer
 
 
-@intrinsic
-def _int64_pointer(typingctx, address):
-    """Reinterpret an integer address as ``int64*`` (the caller owns and validated the buffer)."""
-    if not isinstance(address, types.Integer):
-        return None
-    sig = types.CPointer(types.int64)(address)
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(signature.return_type))
-
-    return sig, codegen
+_float64_pointer = _pointer_intrinsic(types.float64)
+_int64_pointer = _pointer_intrinsic(types.int64)
 
 
 GROUPS = ((KIND_PSS, KIND_PSS), (KIND_PSS, KIND_LSS), (KIND_PSS, KIND_TSS), (KIND_LSS, KIND_LSS),
