@@ -160,6 +160,7 @@ class ClikPolicy:
             objectives.append(PostureObjective(reference, self.config.posture_weight))
         self.collision: CollisionObjective | None = None
         self._obstacle_slices: tuple[slice, slice] | None = None
+        self._obstacle_seen: tuple[float, ...] | None = None
         if self.config.collision_avoidance not in COLLISION_MODES:
             raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: "
                               f"{', '.join(COLLISION_MODES)}")
@@ -194,6 +195,10 @@ class ClikPolicy:
         center_slice, radius_slice = self._obstacle_slices
         center = obs[center_slice]
         radius = float(obs[radius_slice][0])
+        seen = (*center.tolist(), radius)
+        if seen == self._obstacle_seen:  # placing the environment again would only redo the same transforms
+            return
+        self._obstacle_seen = seen
         # planar envs give (x, z); the sphere is scaled by its radius about the origin, then moved
         position = np.array([center[0], 0.0, center[1]]) if center.size == 2 else np.asarray(center, dtype=np.float64)
         self.collision.collision_model.set_environment_placement(OBSTACLE_SEGMENT, np.eye(3), position)

@@ -136,6 +136,7 @@ class CollisionModel:
         self.segments = self.robot + self.environment
         self.bounding_margin = float(bounding_margin)
         index = {s.name: i for i, s in enumerate(self.segments)}
+        self._segment_index = index
         pairs: list[tuple[int, int]] = []
         nr = len(self.robot)
         if self_collision:
@@ -163,7 +164,7 @@ class CollisionModel:
         self._batch = PairBatch(volumes, ia, ib)
         self._owner = np.array(owner, dtype=np.int64)
         self._starts = np.searchsorted(self._owner, np.arange(len(pairs))).astype(np.int64)
-        self._ends = np.append(self._starts[1:], len(owner)).astype(np.int64)
+        self._one_each = len(owner) == len(pairs)  # every segment pair is a single volume pair
         self._env_placement = {s.name: (np.eye(3), np.zeros(3)) for s in self.environment}
         self._env_dirty = True
 
@@ -173,6 +174,7 @@ class CollisionModel:
         prunable = [p for p, (i, j) in enumerate(pairs)
                     if len(self.segments[i].volumes) > 1 or len(self.segments[j].volumes) > 1]
         self._prunable = np.array(prunable, dtype=np.int64)
+        self._has_bounds = self.bounding and bool(prunable)
         self._bound_row = np.full(len(pairs), -1, dtype=np.int64)
         self._bound_row[self._prunable] = np.arange(len(prunable))
         self._bound_local = PackedVolumes.from_volumes(bounds).vertices.copy()
@@ -204,7 +206,7 @@ class CollisionModel:
         """Change the radius of a single-volume environment segment (a sphere obstacle that grows or shrinks)."""
         if name not in self._env_placement:
             raise GeometryError(f"unknown environment segment {name!r}; valid: {sorted(self._env_placement)}")
-        k = [s.name for s in self.segments].index(name)
+        k = self._segment_index[name]
         if len(self.segments[k].volumes) != 1:
             raise GeometryError(f"segment {name!r} has several volumes; give it new volumes instead")
         r = float(radius)
@@ -223,7 +225,8 @@ class CollisionModel:
             else:
                 rot, pos = kinematics.frame_placement(s.frame)
             self._batch.vertices[sl] = self._local[sl] @ rot.T + pos
-            self._bound_batch.vertices[k] = self._bound_local[k] @ rot.T + pos
+            if self._has_bounds:
+                self._bound_batch.vertices[k] = self._bound_local[k] @ rot.T + pos
         self._env_dirty = False
 
     def evaluate(self, kinematics: Kinematics) -> CollisionState:
@@ -235,18 +238,18 @@ class CollisionModel:
             return CollisionState((), np.zeros(0), empty, empty.copy(), empty.copy(), np.zeros(0, dtype=bool))
         exact = np.ones(n, dtype=bool)
         bound = None
-        if self.bounding and self._prunable.size:
+        if self._has_bounds:
             bound = self._bound_batch.compute()
             exact[self._prunable[bound.distance > self.bounding_margin]] = False
             self._batch.set_active(exact[self._owner])
         res = self._batch.compute()
         dist = res.distance
-        # the closest volume pair of each segment pair (pairs are contiguous per segment pair)
-        which = self._starts + np.array([int(np.argmin(dist[s:e])) for s, e in zip(self._starts, self._ends)])
-        distance = dist[which].copy()
-        point_a = res.point_a[which].copy()
-        point_b = res.point_b[which].copy()
-        normal = res.normal[which].copy()
+        # the closest volume pair of each segment pair: sorted by (pair, distance), each pair's first entry
+        which = self._starts if self._one_each else np.lexsort((dist, self._owner))[self._starts]
+        distance = dist[which]
+        point_a = res.point_a[which]
+        point_b = res.point_b[which]
+        normal = res.normal[which]
         if bound is not None and not exact.all():
             skipped = np.flatnonzero(~exact)
             rows = self._bound_row[skipped]

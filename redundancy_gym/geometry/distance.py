@@ -11,13 +11,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 from .primitives import SSV
-from .ssv_kernels import GROUPS, ssv_pairs_at, ssv_pairs_indexed
+from .ssv_kernels import GROUP_OF, ssv_pairs_at, ssv_pairs_grouped
 
 __all__ = ["PackedVolumes", "PairBatch", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
-
-
-_FIRST = np.zeros(1, dtype=np.int64)
-_SECOND = np.ones(1, dtype=np.int64)
 
 
 class SSVDistance(NamedTuple):
@@ -83,24 +79,44 @@ def distance(a: SSV, b: SSV) -> SSVDistance:
     """
     if not isinstance(a, SSV) or not isinstance(b, SSV):
         raise GeometryError(f"distance expects PSS, LSS or TSS, got {type(a).__name__}, {type(b).__name__}")
-    out = SSVDistances(np.empty(1), np.empty((1, 3)), np.empty((1, 3)), np.empty((1, 3)))
-    ssv_pairs_indexed(np.stack([a.vertices, b.vertices]), np.array([a.radius, b.radius]),
-                      np.array([a.kind, b.kind], dtype=np.int64), _FIRST, _SECOND, *out)
+    out = indexed_distances(PackedVolumes.from_volumes((a, b)), [0], [1])
     return SSVDistance(float(out.distance[0]), out.point_a[0], out.point_b[0], out.normal[0])
+
+
+class _Layout(NamedTuple):
+    """Pairs sorted by type for :func:`ssv_pairs_grouped` (lower kind first, original row in ``slot``)."""
+
+    index_a: NDArray[np.int64]
+    index_b: NDArray[np.int64]
+    slot: NDArray[np.int64]
+    swap: NDArray[np.int64]
+    starts: NDArray[np.int64]
+
+
+def _layout(kinds: NDArray[np.int64], index_a: ArrayLike, index_b: ArrayLike) -> _Layout:
+    """Check the pair indices and sort the pairs into the kernel's six type groups."""
+    ia = np.asarray(index_a, dtype=np.int64).reshape(-1)
+    ib = np.asarray(index_b, dtype=np.int64).reshape(-1)
+    if ia.shape != ib.shape:
+        raise GeometryError(f"index arrays must have equal length, got {ia.size} and {ib.size}")
+    m = kinds.size
+    if ia.size and (min(ia.min(), ib.min()) < 0 or max(ia.max(), ib.max()) >= m):
+        raise GeometryError(f"pair indices must lie in [0, {m})")
+    swap = kinds[ia] > kinds[ib]
+    lo = np.where(swap, ib, ia)
+    hi = np.where(swap, ia, ib)
+    group = GROUP_OF[kinds[lo], kinds[hi]]
+    order = np.argsort(group, kind="stable")
+    return _Layout(np.ascontiguousarray(lo[order]), np.ascontiguousarray(hi[order]), order.astype(np.int64),
+                   swap[order].astype(np.int64), np.searchsorted(group[order], np.arange(7)).astype(np.int64))
 
 
 def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: ArrayLike) -> SSVDistances:
     """Distances of the pairs ``(volumes[index_a[k]], volumes[index_b[k]])`` in one compiled call."""
-    ia = np.ascontiguousarray(index_a, dtype=np.int64)
-    ib = np.ascontiguousarray(index_b, dtype=np.int64)
-    if ia.shape != ib.shape or ia.ndim != 1:
-        raise GeometryError(f"index arrays must be 1-D of equal length, got {ia.shape} and {ib.shape}")
-    m = len(volumes)
-    if ia.size and (min(ia.min(), ib.min()) < 0 or max(ia.max(), ib.max()) >= m):
-        raise GeometryError(f"pair indices must lie in [0, {m})")
-    k = ia.size
+    layout = _layout(volumes.kinds, index_a, index_b)
+    k = layout.slot.size
     out = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
-    ssv_pairs_indexed(volumes.vertices, volumes.radii, volumes.kinds, ia, ib, *out)
+    ssv_pairs_grouped(volumes.vertices, volumes.radii, volumes.kinds, *layout, np.ones(k, dtype=np.int64), *out)
     return out
 
 
@@ -131,33 +147,18 @@ class PairBatch:
 
     def __init__(self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike) -> None:
         packed = volumes if isinstance(volumes, PackedVolumes) else PackedVolumes.from_volumes(volumes)
-        ia = np.asarray(index_a, dtype=np.int64).reshape(-1)
-        ib = np.asarray(index_b, dtype=np.int64).reshape(-1)
-        if ia.shape != ib.shape:
-            raise GeometryError(f"index arrays must have equal length, got {ia.size} and {ib.size}")
-        m = len(packed)
-        if ia.size and (min(ia.min(), ib.min()) < 0 or max(ia.max(), ib.max()) >= m):
-            raise GeometryError(f"pair indices must lie in [0, {m})")
         self.vertices = np.ascontiguousarray(packed.vertices, dtype=np.float64).copy()
         self.radii = np.ascontiguousarray(packed.radii, dtype=np.float64).copy()
         self.kinds = np.ascontiguousarray(packed.kinds, dtype=np.int64).copy()
-        ka, kb = self.kinds[ia], self.kinds[ib]
-        swap = ka > kb
-        lo = np.where(swap, ib, ia)
-        hi = np.where(swap, ia, ib)
-        group = np.array([GROUPS.index((int(a), int(b))) for a, b in zip(self.kinds[lo], self.kinds[hi])],
-                         dtype=np.int64).reshape(-1)
-        order = np.argsort(group, kind="stable")
-        self._index_a = np.ascontiguousarray(lo[order])
-        self._index_b = np.ascontiguousarray(hi[order])
-        self._slot = np.ascontiguousarray(order.astype(np.int64))
-        self._swap = np.ascontiguousarray(swap[order].astype(np.int64))
-        self._starts = np.searchsorted(group[order], np.arange(7)).astype(np.int64)
-        self._active = np.ones(ia.size, dtype=np.int64)
-        k = ia.size
+        layout = _layout(self.kinds, index_a, index_b)
+        self._slot = layout.slot
+        m = len(packed)
+        k = layout.slot.size
+        self._active = np.ones(k, dtype=np.int64)
         self.result = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
-        buffers = (self.vertices, self.radii, self.kinds, self._index_a, self._index_b, self._slot, self._swap,
-                   self._starts, self._active, *self.result)
+        # the buffers stay referenced by self (layout included), so the addresses below stay valid
+        self._layout = layout
+        buffers = (self.vertices, self.radii, self.kinds, *layout, self._active, *self.result)
         self._header = np.array([b.ctypes.data for b in buffers] + [m, k], dtype=np.int64)
         self._header_address = int(self._header.ctypes.data)
         ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step

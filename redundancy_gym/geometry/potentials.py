@@ -9,6 +9,7 @@ and for collision avoidance (``d`` = swept-sphere distance).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -95,22 +96,35 @@ class PiecewisePotential:
         return self.evaluate(distance).slope
 
 
-def _check(activation_distance: float, gain: float) -> None:
-    if not np.isfinite(activation_distance) or activation_distance <= 0.0:
-        raise GeometryError(f"activation_distance must be finite and > 0, got {activation_distance!r}")
-    if not np.isfinite(gain) or gain <= 0.0:
-        raise GeometryError(f"gain must be finite and > 0, got {gain!r}")
+@dataclass(frozen=True)
+class _PowerPotential:
+    """``H(d) = s_0 |d - d_a|^k`` for ``d < d_a``, else 0, for the power ``k`` of the subclass."""
 
+    POWER: ClassVar[int]
+    activation_distance: float
+    gain: float = 1.0
 
-def _distances(distance: ArrayLike) -> NDArray[np.float64]:
-    d = np.asarray(distance, dtype=np.float64)
-    if not np.all(np.isfinite(d)):
-        raise GeometryError("distances must be finite")
-    return d
+    def __post_init__(self) -> None:
+        if not np.isfinite(self.activation_distance) or self.activation_distance <= 0.0:
+            raise GeometryError(f"activation_distance must be finite and > 0, got {self.activation_distance!r}")
+        if not np.isfinite(self.gain) or self.gain <= 0.0:
+            raise GeometryError(f"gain must be finite and > 0, got {self.gain!r}")
+
+    def evaluate(self, distance: ArrayLike) -> PotentialValue:
+        """Value, first and second derivative at each distance."""
+        d = np.asarray(distance, dtype=np.float64)
+        if not np.all(np.isfinite(d)):
+            raise GeometryError("distances must be finite")
+        k = self.POWER
+        # below d_a, x = d - d_a < 0, so s_0 |x|^k = s_0 (-1)^k x^k
+        c = self.gain * (-1.0) ** k
+        on = d < self.activation_distance
+        x = np.where(on, d - self.activation_distance, 0.0)
+        return PotentialValue(c * x**k, c * k * x ** (k - 1), np.where(on, c * k * (k - 1) * x ** (k - 2), 0.0))
 
 
 @dataclass(frozen=True)
-class QuadraticPotential:
+class QuadraticPotential(_PowerPotential):
     """``H_c2(d) = s_0 (d - d_a)^2`` for ``d < d_a``, else 0 (5.50): C1 at ``d_a`` (its curvature jumps).
 
     Args:
@@ -118,22 +132,11 @@ class QuadraticPotential:
         gain: ``s_0`` > 0.
     """
 
-    activation_distance: float
-    gain: float = 1.0
-
-    def __post_init__(self) -> None:
-        _check(self.activation_distance, self.gain)
-
-    def evaluate(self, distance: ArrayLike) -> PotentialValue:
-        """Value, first and second derivative at each distance."""
-        d = _distances(distance)
-        on = d < self.activation_distance
-        x = np.where(on, d - self.activation_distance, 0.0)
-        return PotentialValue(self.gain * x**2, 2.0 * self.gain * x, np.where(on, 2.0 * self.gain, 0.0))
+    POWER: ClassVar[int] = 2
 
 
 @dataclass(frozen=True)
-class CubicPotential:
+class CubicPotential(_PowerPotential):
     """``H_c3(d) = -s_0 (d - d_a)^3`` for ``d < d_a``, else 0: (5.51) with the sign that makes it repulsive
     for ``s_0 > 0`` (as printed, ``s_0 (d - d_a)^3`` is negative below ``d_a``); C2 at ``d_a``.
 
@@ -142,14 +145,4 @@ class CubicPotential:
         gain: ``s_0`` > 0.
     """
 
-    activation_distance: float
-    gain: float = 1.0
-
-    def __post_init__(self) -> None:
-        _check(self.activation_distance, self.gain)
-
-    def evaluate(self, distance: ArrayLike) -> PotentialValue:
-        """Value, first and second derivative at each distance."""
-        d = _distances(distance)
-        x = np.where(d < self.activation_distance, d - self.activation_distance, 0.0)
-        return PotentialValue(-self.gain * x**3, -3.0 * self.gain * x**2, -6.0 * self.gain * x)
+    POWER: ClassVar[int] = 3

@@ -10,8 +10,8 @@ rounding can only make a candidate slightly worse, never infeasible, and no bran
 that can vanish.
 
 The kernels are plain numba functions on tuples of floats (no heap allocation in the inner loop); the
-public entry point is :func:`ssv_pairs_indexed`: many pairs given as indices into one array of volumes,
-the layout of a collision model (a single pair is the batch of one).
+public entry points are :func:`ssv_pairs_grouped` (pairs given as indices into one array of volumes, pre-sorted
+by pair type) and :func:`ssv_pairs_at` (the same on buffer addresses, for repeated calls).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-__all__ = ["GROUPS", "KIND_LSS", "KIND_PSS", "KIND_TSS", "ssv_pairs_at", "ssv_pairs_grouped", "ssv_pairs_indexed"]
+__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "ssv_pairs_at", "ssv_pairs_grouped"]
 
 KIND_PSS = 0
 KIND_LSS = 1
@@ -346,24 +346,6 @@ def triangle_triangle(a0, a1, a2, b0, b1, b2):
 
 
 @njit(cache=True)
-def _pair_ordered(a0, a1, a2, ka, b0, b1, b2, kb):
-    """Squared distance and witnesses for kinds ``ka <= kb``."""
-    if ka == KIND_PSS:
-        if kb == KIND_PSS:
-            return _dist2(a0, b0), a0, b0
-        if kb == KIND_LSS:
-            e, q = point_segment(a0, b0, b1)
-            return e, a0, q
-        e, q = point_triangle(a0, b0, b1, b2)
-        return e, a0, q
-    if ka == KIND_LSS:
-        if kb == KIND_LSS:
-            return segment_segment(a0, a1, b0, b1)
-        return segment_triangle(a0, a1, b0, b1, b2)
-    return triangle_triangle(a0, a1, a2, b0, b1, b2)
-
-
-@njit(cache=True)
 def _centroid(p0, p1, p2, kind):
     if kind == KIND_PSS:
         return p0
@@ -380,79 +362,6 @@ def _fallback_normal(a0, a1, a2, ka, b0, b1, b2, kb):
     if cn > 0.0:
         return (c[0] / cn, c[1] / cn, c[2] / cn)
     return (0.0, 0.0, 1.0)
-
-
-@njit(cache=True)
-def ssv_pairs_indexed(vertices, radii, kinds, index_a, index_b, out_d, out_pa, out_pb, out_n):
-    """SSV distances of the pairs ``(index_a[k], index_b[k])`` of one volume array.
-
-    The loop body reads and writes array elements only and passes tuples to the helpers: passing arrays to
-    a call would cost reference counting per pair (that alone made a PSS-PSS pair 15 times slower).
-
-    Args:
-        vertices: (M, 3, 3) generating vertices [m].
-        radii: (M,) sphere radii [m].
-        kinds: (M,) kind codes (0 PSS, 1 LSS, 2 TSS).
-        index_a, index_b: (K,) volume indices of each pair.
-        out_d: (K,) SSV distances [m], written.
-        out_pa, out_pb, out_n: (K, 3) witness points and unit normals, written.
-    """
-    v = vertices
-    for k in range(index_a.shape[0]):
-        i = index_a[k]
-        j = index_b[k]
-        ka = kinds[i]
-        kb = kinds[j]
-        # shifting to a vertex of ``a`` keeps large coordinates from eating the digits of small distances
-        ox = v[i, 0, 0]
-        oy = v[i, 0, 1]
-        oz = v[i, 0, 2]
-        a0 = (0.0, 0.0, 0.0)
-        b0 = (v[j, 0, 0] - ox, v[j, 0, 1] - oy, v[j, 0, 2] - oz)
-        a1 = a0
-        a2 = a0
-        b1 = b0
-        b2 = b0
-        if ka != KIND_PSS:  # unused rows are not even loaded
-            a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
-            a2 = (v[i, 2, 0] - ox, v[i, 2, 1] - oy, v[i, 2, 2] - oz)
-        if kb != KIND_PSS:
-            b1 = (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz)
-            b2 = (v[j, 2, 0] - ox, v[j, 2, 1] - oy, v[j, 2, 2] - oz)
-        swapped = ka > kb
-        if swapped:
-            a0, a1, a2, b0, b1, b2 = b0, b1, b2, a0, a1, a2
-            ka, kb = kb, ka
-        # dispatch in the loop body: a call returning through the generic helper costs more than PSS-PSS itself
-        if ka == KIND_PSS and kb == KIND_PSS:
-            d2 = _dist2(a0, b0)
-            pa = a0
-            pb = b0
-        elif ka == KIND_PSS and kb == KIND_LSS:
-            d2, pb = point_segment(a0, b0, b1)
-            pa = a0
-        else:
-            d2, pa, pb = _pair_ordered(a0, a1, a2, ka, b0, b1, b2, kb)
-        if swapped:
-            pa, pb = pb, pa
-            a0, a1, a2, b0, b1, b2 = b0, b1, b2, a0, a1, a2
-            ka, kb = kb, ka
-        dist = np.sqrt(d2)
-        if dist > 0.0:
-            inv = 1.0 / dist
-            n = ((pb[0] - pa[0]) * inv, (pb[1] - pa[1]) * inv, (pb[2] - pa[2]) * inv)
-        else:
-            n = _fallback_normal(a0, a1, a2, ka, b0, b1, b2, kb)
-        out_d[k] = dist - radii[i] - radii[j]
-        out_pa[k, 0] = pa[0] + ox
-        out_pa[k, 1] = pa[1] + oy
-        out_pa[k, 2] = pa[2] + oz
-        out_pb[k, 0] = pb[0] + ox
-        out_pb[k, 1] = pb[1] + oy
-        out_pb[k, 2] = pb[2] + oz
-        out_n[k, 0] = n[0]
-        out_n[k, 1] = n[1]
-        out_n[k, 2] = n[2]
 
 
 def _pointer_intrinsic(dtype: types.Type):  # noqa: ANN202 - returns a numba intrinsic
@@ -478,6 +387,10 @@ _int64_pointer = _pointer_intrinsic(types.int64)
 
 GROUPS = ((KIND_PSS, KIND_PSS), (KIND_PSS, KIND_LSS), (KIND_PSS, KIND_TSS), (KIND_LSS, KIND_LSS),
           (KIND_LSS, KIND_TSS), (KIND_TSS, KIND_TSS))
+# GROUP_OF[lower kind, higher kind] -> index into GROUPS
+GROUP_OF = np.full((3, 3), -1, dtype=np.int64)
+for _g, (_ka, _kb) in enumerate(GROUPS):
+    GROUP_OF[_ka, _kb] = _g
 
 
 @njit(cache=True)
@@ -513,12 +426,19 @@ def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n
 @njit(cache=True)
 def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb,
                       out_n):
-    """Like :func:`ssv_pairs_indexed` for pairs pre-sorted into the six :data:`GROUPS` (``index_a`` holds the
-    lower kind); pair ``k`` is written to row ``slot[k]``, with witnesses swapped back where ``swap[k]``.
-    Pairs with ``active[k] == 0`` are skipped (their distance is written as +inf).
+    """SSV distances of pairs of one volume array, pre-sorted into the six :data:`GROUPS`.
 
-    One tight loop per pair type, with no kind dispatch inside: about twice as fast as the generic loop for
-    the cheap pair types. Touching primitives get the centroid normal of :func:`ssv_pairs_indexed`.
+    ``index_a[k]`` holds the lower kind; pair ``k`` is written to row ``slot[k]``, with witnesses swapped back
+    where ``swap[k]``; pairs with ``active[k] == 0`` are skipped (distance +inf). One tight loop per pair type,
+    with no kind dispatch inside (about twice as fast as dispatching per pair for the cheap types). Large
+    coordinates are shifted to a vertex of ``index_a`` first so they do not eat the digits of small distances.
+    Touching primitives get the direction between the primitives' centroids as normal.
+
+    Args:
+        vertices: (M, 3, 3) generating vertices [m]; radii: (M,) [m]; kinds: (M,) codes (0 PSS, 1 LSS, 2 TSS).
+        index_a, index_b, slot, swap: (K,) pair layout; starts: (7,) first pair of each group.
+        active: (K,) nonzero to compute the pair.
+        out_d: (K,) SSV distances [m]; out_pa, out_pb, out_n: (K, 3) witnesses and unit normals (written).
     """
     v = vertices
     for g in range(6):
