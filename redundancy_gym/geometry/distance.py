@@ -116,7 +116,8 @@ def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: Array
     layout = _layout(volumes.kinds, index_a, index_b)
     k = layout.slot.size
     out = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
-    ssv_pairs_grouped(volumes.vertices, volumes.radii, volumes.kinds, *layout, np.ones(k, dtype=np.int64), *out)
+    ssv_pairs_grouped(volumes.vertices, volumes.radii, volumes.kinds, *layout, np.ones(k, dtype=np.int64), *out,
+                      np.empty(k, dtype=np.int64))
     return out
 
 
@@ -156,9 +157,10 @@ class PairBatch:
         k = layout.slot.size
         self._active = np.ones(k, dtype=np.int64)
         self.result = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
+        self._todo = np.empty(k, dtype=np.int64)
         # the buffers stay referenced by self (layout included), so the addresses below stay valid
         self._layout = layout
-        buffers = (self.vertices, self.radii, self.kinds, *layout, self._active, *self.result)
+        buffers = (self.vertices, self.radii, self.kinds, *layout, self._active, *self.result, self._todo)
         self._header = np.array([b.ctypes.data for b in buffers] + [m, k], dtype=np.int64)
         self._header_address = int(self._header.ctypes.data)
         ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step

@@ -35,28 +35,33 @@ _WELL_CONDITIONED = 1e-6
 
 _INF = np.inf
 
+# error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
+# here is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
+# multiplication and ignoring the sign of zero; it keeps IEEE NaN/inf semantics, which the guards rely on.
+_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
-@njit(cache=True)
+
+@njit(**_JIT)
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _add_scaled(a, s, d):
     return (a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2])
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _dist2(a, b):
     dx = a[0] - b[0]
     dy = a[1] - b[1]
@@ -64,7 +69,7 @@ def _dist2(a, b):
     return dx * dx + dy * dy + dz * dz
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def point_segment(p, a, b):
     """Closest point on segment ``[a, b]`` to ``p`` (5.38)-(5.43): ``(squared distance, point)``."""
     d = _sub(b, a)
@@ -80,7 +85,7 @@ def point_segment(p, a, b):
     return _dist2(p, q), q
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def segment_segment(a0, a1, b0, b1):
     """Closest points of segments ``[a0, a1]`` and ``[b0, b1]`` (5.44)-(5.48): ``(d2, point_a, point_b)``.
 
@@ -149,7 +154,7 @@ def segment_segment(a0, a1, b0, b1):
     return best, pa, pb
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _triangle(v0, v1, v2):
     """Per-triangle quantities reused by every query: ``(v0, e0, e1, aa, bb, cc, det, n, regular)``."""
     e0 = _sub(v1, v0)
@@ -161,7 +166,7 @@ def _triangle(v0, v1, v2):
     return v0, e0, e1, aa, bb, cc, det, _cross(e0, e1), det > _SINGULAR * aa * cc
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _project(x, tri):
     """Projection of ``x`` onto the plane of a regular triangle: ``(inside, point)``."""
     v0, e0, e1, aa, bb, cc, det = tri[0], tri[1], tri[2], tri[3], tri[4], tri[5], tri[6]
@@ -174,7 +179,7 @@ def _project(x, tri):
     return (s >= 0.0 and t >= 0.0 and s + t <= 1.0), q
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _vertex_plane(p, tri):
     """Vertex/plane query: squared distance to the projection when it falls inside the triangle, else inf."""
     if not tri[8]:
@@ -185,7 +190,7 @@ def _vertex_plane(p, tri):
     return _INF, p
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def point_triangle(p, v0, v1, v2):
     """Closest point of triangle ``(v0, v1, v2)`` to ``p``: ``(squared distance, point)``.
 
@@ -208,7 +213,7 @@ def point_triangle(p, v0, v1, v2):
     return best, q
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _pierce(p0, p1, h0, h1, tri):
     """Where the segment ``[p0, p1]`` with plane heights ``h0, h1`` crosses a regular triangle."""
     if h0 * h1 > 0.0 or h0 == h1:  # same side, or parallel to the plane (in-plane cases are edge/edge cases)
@@ -217,12 +222,12 @@ def _pierce(p0, p1, h0, h1, tri):
     return _project(x, tri)
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _heights(p, tri):
     return _dot(tri[7], _sub(p, tri[0]))
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def segment_triangle(p0, p1, v0, v1, v2):
     """Closest points of a segment and a triangle: ``(d2, point_on_segment, point_on_triangle)``.
 
@@ -253,7 +258,7 @@ def segment_triangle(p0, p1, v0, v1, v2):
     return best, pa, pb
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _edges_pierce(a0, a1, a2, tri):
     """Whether an edge of triangle ``a`` crosses the regular triangle ``tri``: ``(hit, point)``."""
     h0 = _heights(a0, tri)
@@ -269,7 +274,7 @@ def _edges_pierce(a0, a1, a2, tri):
     return hit, x
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _edge_pair(best, pa, pb, dist, u0, u1, pu0, pu1, w0, w1, pw0, pw1):
     """Edge/edge candidate, skipped when the projections on the current normal are ``dist`` or more apart:
     for unit ``n``, ``|y - x| >= min(n.y) - max(n.x)`` bounds every pair of points of the two edges."""
@@ -281,7 +286,7 @@ def _edge_pair(best, pa, pb, dist, u0, u1, pu0, pu1, w0, w1, pw0, pw1):
     return best, pa, pb
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def triangle_triangle(a0, a1, a2, b0, b1, b2):
     """Closest points of two triangles: ``(d2, point_a, point_b)``.
 
@@ -345,7 +350,7 @@ def triangle_triangle(a0, a1, a2, b0, b1, b2):
     return best, pa, pb
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _centroid(p0, p1, p2, kind):
     if kind == KIND_PSS:
         return p0
@@ -354,7 +359,7 @@ def _centroid(p0, p1, p2, kind):
     return ((p0[0] + p1[0] + p2[0]) / 3.0, (p0[1] + p1[1] + p2[1]) / 3.0, (p0[2] + p1[2] + p2[2]) / 3.0)
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _fallback_normal(a0, a1, a2, ka, b0, b1, b2, kb):
     """Normal for touching or intersecting primitives (coinciding witnesses): the centroid direction."""
     c = _sub(_centroid(b0, b1, b2, kb), _centroid(a0, a1, a2, ka))
@@ -393,13 +398,13 @@ for _g, (_ka, _kb) in enumerate(GROUPS):
     GROUP_OF[_ka, _kb] = _g
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _load(v, i, ox, oy, oz):
     return ((v[i, 0, 0] - ox, v[i, 0, 1] - oy, v[i, 0, 2] - oz), (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz),
             (v[i, 2, 0] - ox, v[i, 2, 1] - oy, v[i, 2, 2] - oz))
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n):
     dist = np.sqrt(d2)
     if d2 > 0.0:
@@ -423,28 +428,137 @@ def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n
     return dist
 
 
-@njit(cache=True)
+@njit(**_JIT)
+def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo):
+    """Sphere/sphere pairs ``lo..hi`` as one flat loop; concentric and inactive pairs are left in ``todo``."""
+    nt = 0
+    for k in range(lo, hi):
+        i = index_a[k]
+        j = index_b[k]
+        ax = v[i, 0, 0]
+        ay = v[i, 0, 1]
+        az = v[i, 0, 2]
+        dx = v[j, 0, 0] - ax
+        dy = v[j, 0, 1] - ay
+        dz = v[j, 0, 2] - az
+        q = dx * dx + dy * dy + dz * dz
+        apart = q > 0.0
+        inv = 1.0 / np.sqrt(q if apart else 1.0)
+        r = slot[k]
+        out_d[r] = np.sqrt(q) - radii[i] - radii[j]
+        out_pa[r, 0] = ax
+        out_pa[r, 1] = ay
+        out_pa[r, 2] = az
+        out_pb[r, 0] = v[j, 0, 0]
+        out_pb[r, 1] = v[j, 0, 1]
+        out_pb[r, 2] = v[j, 0, 2]
+        out_n[r, 0] = dx * inv
+        out_n[r, 1] = dy * inv
+        out_n[r, 2] = dz * inv
+        todo[nt] = k
+        nt += 0 if (apart and active[k] != 0) else 1
+    return nt
+
+
+@njit(**_JIT)
+def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo):
+    """Segment/segment pairs ``lo..hi`` in the common case; returns how many pairs it left in ``todo``.
+
+    The capsule pair is the most frequent and the cheapest nontrivial one, so its loop body is kept flat and
+    free of unpredictable branches: the unconstrained minimum (5.46) is clamped as in :func:`segment_segment`,
+    with the denominators replaced by 1 where they are not well conditioned so nothing overflows. Pairs whose
+    result that would not be exact (near-parallel or collapsed segments, touching segments, inactive pairs)
+    are listed in ``todo`` for the general path. Both volumes are of one kind, so pairs are never swapped.
+    """
+    nt = 0
+    for k in range(lo, hi):
+        i = index_a[k]
+        j = index_b[k]
+        ox = v[i, 0, 0]
+        oy = v[i, 0, 1]
+        oz = v[i, 0, 2]
+        d1x = v[i, 1, 0] - ox
+        d1y = v[i, 1, 1] - oy
+        d1z = v[i, 1, 2] - oz
+        b0x = v[j, 0, 0] - ox
+        b0y = v[j, 0, 1] - oy
+        b0z = v[j, 0, 2] - oz
+        d2x = v[j, 1, 0] - v[j, 0, 0]
+        d2y = v[j, 1, 1] - v[j, 0, 1]
+        d2z = v[j, 1, 2] - v[j, 0, 2]
+        aa = d1x * d1x + d1y * d1y + d1z * d1z
+        ee = d2x * d2x + d2y * d2y + d2z * d2z
+        bb = d1x * d2x + d1y * d2y + d1z * d2z
+        cc = -(d1x * b0x + d1y * b0y + d1z * b0z)
+        ff = -(d2x * b0x + d2y * b0y + d2z * b0z)
+        det = aa * ee - bb * bb
+        regular = det > _WELL_CONDITIONED * aa * ee  # false for collapsed segments too (0 > 0)
+        inv_det = 1.0 / (det if regular else 1.0)
+        inv_aa = 1.0 / (aa if regular else 1.0)
+        inv_ee = 1.0 / (ee if regular else 1.0)
+        s = min(max((bb * ff - cc * ee) * inv_det, 0.0), 1.0)
+        t = min(max((bb * s + ff) * inv_ee, 0.0), 1.0)
+        s = min(max((bb * t - cc) * inv_aa, 0.0), 1.0)
+        pax = s * d1x
+        pay = s * d1y
+        paz = s * d1z
+        dx = b0x + t * d2x - pax
+        dy = b0y + t * d2y - pay
+        dz = b0z + t * d2z - paz
+        q = dx * dx + dy * dy + dz * dz
+        apart = q > 0.0
+        inv = 1.0 / np.sqrt(q if apart else 1.0)
+        r = slot[k]
+        out_d[r] = np.sqrt(q) - radii[i] - radii[j]
+        out_pa[r, 0] = pax + ox
+        out_pa[r, 1] = pay + oy
+        out_pa[r, 2] = paz + oz
+        out_pb[r, 0] = pax + dx + ox
+        out_pb[r, 1] = pay + dy + oy
+        out_pb[r, 2] = paz + dz + oz
+        out_n[r, 0] = dx * inv
+        out_n[r, 1] = dy * inv
+        out_n[r, 2] = dz * inv
+        todo[nt] = k
+        nt += 0 if (regular and apart and active[k] != 0) else 1
+    return nt
+
+
+@njit(**_JIT)
 def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb,
-                      out_n):
+                      out_n, todo):
     """SSV distances of pairs of one volume array, pre-sorted into the six :data:`GROUPS`.
 
     ``index_a[k]`` holds the lower kind; pair ``k`` is written to row ``slot[k]``, with witnesses swapped back
     where ``swap[k]``; pairs with ``active[k] == 0`` are skipped (distance +inf). One tight loop per pair type,
-    with no kind dispatch inside (about twice as fast as dispatching per pair for the cheap types). Large
-    coordinates are shifted to a vertex of ``index_a`` first so they do not eat the digits of small distances.
-    Touching primitives get the direction between the primitives' centroids as normal.
+    with no kind dispatch inside (about twice as fast as dispatching per pair for the cheap types); sphere and
+    capsule pairs take flat loops that hand the rare hard cases to the general path. Large coordinates are shifted to
+    a vertex of ``index_a`` first so they do not eat the digits of small distances. Touching primitives get
+    the direction between the primitives' centroids as normal.
 
     Args:
         vertices: (M, 3, 3) generating vertices [m]; radii: (M,) [m]; kinds: (M,) codes (0 PSS, 1 LSS, 2 TSS).
         index_a, index_b, slot, swap: (K,) pair layout; starts: (7,) first pair of each group.
         active: (K,) nonzero to compute the pair.
         out_d: (K,) SSV distances [m]; out_pa, out_pb, out_n: (K, 3) witnesses and unit normals (written).
+        todo: (K,) int64 scratch.
     """
     v = vertices
     for g in range(6):
-        for k in range(starts[g], starts[g + 1]):
+        lo = starts[g]
+        hi = starts[g + 1]
+        # the flat sphere and capsule loops leave their hard cases in todo[:n] for the general path below
+        if g == 0:
+            hi = lo + _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb,
+                                         out_n, todo)
+        elif g == 3:
+            hi = lo + _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb,
+                                          out_n, todo)
+        for kk in range(lo, hi):
+            k = todo[kk - lo] if (g == 0 or g == 3) else kk
+            s = slot[k]
             if active[k] == 0:
-                out_d[slot[k]] = np.inf
+                out_d[s] = np.inf
                 continue
             i = index_a[k]
             j = index_b[k]
@@ -475,7 +589,6 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
                 _, a1, a2 = _load(v, i, ox, oy, oz)
                 _, b1, b2 = _load(v, j, ox, oy, oz)
                 d2, pa, pb = triangle_triangle(a0, a1, a2, b0, b1, b2)
-            s = slot[k]
             if _store(s, d2, pa, pb, radii[i], radii[j], ox, oy, oz, swap[k], out_d, out_pa, out_pb, out_n) <= 0.0:
                 _, a1, a2 = _load(v, i, ox, oy, oz)
                 _, b1, b2 = _load(v, j, ox, oy, oz)
@@ -486,22 +599,23 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
                 out_n[s, 2] = sign * n[2]
 
 
-@njit(cache=True)
+@njit(**_JIT)
 def ssv_pairs_at(header):
     """:func:`ssv_pairs_grouped` on buffers described by the int64 array at address ``header``.
 
     ``header`` holds: addresses of vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d,
-    out_pa, out_pb, out_n, then the number of volumes and of pairs. Boxing one NumPy array into a numba call costs
+    out_pa, out_pb, out_n, todo, then the number of volumes and of pairs. Boxing one NumPy array into a numba call costs
     about 0.4 us, as much as 50 sphere pairs take; one integer costs a few nanoseconds. Only
     :class:`~redundancy_gym.geometry.PairBatch` calls this, with C-contiguous buffers it owns and checked once.
     """
-    h = carray(_int64_pointer(header), (15,))
-    m = h[13]
-    n = h[14]
+    h = carray(_int64_pointer(header), (16,))
+    m = h[14]
+    n = h[15]
     ssv_pairs_grouped(carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
                       carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
                       carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
                       carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
                       carray(_int64_pointer(h[8]), (n,)),
                       carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
-                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)))
+                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
+                      carray(_int64_pointer(h[13]), (n,)))

@@ -221,3 +221,46 @@ def test_pair_batch_matches_single_queries_in_the_original_order(rng: np.random.
         np.testing.assert_allclose(result.normal[k], single.normal, atol=1e-12)
     batch.vertices[:] += np.array([0.5, -0.2, 0.1])  # moving every volume leaves the distances unchanged
     np.testing.assert_allclose(batch.compute().distance, result.distance.copy(), atol=1e-12)
+
+
+def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: np.random.Generator) -> None:
+    """The branch-free PSS-PSS and LSS-LSS loops must agree with the general closest-point code on every pair,
+    with hard cases (parallel, nearly parallel, collapsed, intersecting, concentric, inactive) mixed in."""
+    from redundancy_gym.geometry import PairBatch
+    from redundancy_gym.geometry.ssv_kernels import segment_segment
+
+    def lss(p0: list[float], p1: list[float]) -> LSS:
+        return LSS(p0, p1, 0.05)
+
+    hard = [
+        (lss([0, 0, 0], [1, 0, 0]), lss([0.2, 0.3, 0], [1.4, 0.3, 0])),  # parallel, overlapping projections
+        (lss([0, 0, 0], [1, 0, 0]), lss([1.4, 0.3, 0], [0.2, 0.3, 0])),  # antiparallel
+        (lss([0, 0, 0], [1, 0, 0]), lss([0, 0.2, 0], [1, 0.2 + 1e-9, 0])),  # nearly parallel
+        (lss([0.3, 0.3, 0.3], [0.3, 0.3, 0.3]), lss([0, 0, 0], [1, 0, 0])),  # collapsed segment
+        (lss([0, 0, 0], [1, 0, 0]), lss([0.5, -1, 0], [0.5, 1, 0])),  # crossing: intersecting primitives
+        (lss([0, 0, 0], [1, 0, 0]), lss([1, 0, 0], [2, 1, 0])),  # sharing an end point
+    ]
+    pairs = [(random_volume(rng, "LSS"), random_volume(rng, "LSS")) for _ in range(40)] + hard
+    pairs += [(random_volume(rng, "PSS"), random_volume(rng, "PSS")) for _ in range(20)]
+    pairs += [(PSS([0.1, 0.2, 0.3], 0.1), PSS([0.1, 0.2, 0.3], 0.2))]  # concentric
+    order = rng.permutation(len(pairs))
+    volumes = [v for k in order for v in pairs[k]]
+    ia = np.arange(0, len(volumes), 2)
+    ib = ia + 1
+    batch = PairBatch(volumes, ia, ib)
+    active = np.ones(len(ia), dtype=bool)
+    active[::7] = False
+    batch.set_active(active)
+    res = batch.compute()
+    for k, (a, b) in enumerate(zip(volumes[::2], volumes[1::2])):
+        if not active[k]:
+            assert res.distance[k] == np.inf
+            continue
+        assert np.all(np.isfinite(res.normal[k])) and np.linalg.norm(res.normal[k]) == pytest.approx(1.0)
+        assert res.distance[k] == pytest.approx(ssv_distance(a, b), abs=TOL)
+        if isinstance(a, LSS):
+            p = [tuple(x) for x in (*a.points, *b.points)]
+            d2, pa, pb = segment_segment(*p)
+            assert res.distance[k] == pytest.approx(np.sqrt(d2) - a.radius - b.radius, abs=1e-12)
+            np.testing.assert_allclose(res.point_a[k], pa, atol=1e-12)
+            np.testing.assert_allclose(res.point_b[k], pb, atol=1e-12)
