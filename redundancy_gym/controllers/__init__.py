@@ -8,6 +8,7 @@ from .acceleration_clik import AccelerationClik, AccelerationClikResult
 from .clik import Clik, ClikProblem, ClikResult
 from .collision_objective import CollisionObjective
 from .exceptions import ControllerError, PolicyError
+from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .objective import Objective, ObjectiveValue, sum_objectives
@@ -24,6 +25,7 @@ __all__ = [
     "ClikResult",
     "CollisionObjective",
     "ControllerError",
+    "FrameAxisTask",
     "FramePositionTask",
     "JointLimitObjective",
     "Objective",

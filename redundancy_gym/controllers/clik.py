@@ -119,6 +119,9 @@ class Clik:
         velocity = self.gain * error
         if target_velocity is not None:
             wdot = np.asarray(target_velocity, dtype=np.float64)
+            feedforward = getattr(self.task, "feedforward", None)
+            if feedforward is not None:  # tasks whose velocity is given in other coordinates (FrameAxisTask)
+                wdot = feedforward(self.model, wdot)
             if wdot.shape != error.shape or not np.all(np.isfinite(wdot)):
                 raise ControllerError(f"target_velocity must be finite with shape {error.shape}")
             velocity = velocity + wdot

@@ -262,13 +262,19 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
     """Build a policy for ``env``.
 
     Args:
-        name: ``"clik"`` (reference controller), ``"zero"``, ``"random"`` or the path of a stable-baselines3
+        name: ``"clik"`` (reference controller: :class:`ClikPolicy`, or
+            :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikPolicy` for grasp tasks), ``"zero"``, ``"random"`` or the path of a stable-baselines3
             ``.zip``.
         env: the environment the policy will act in.
         **kwargs: options of the policy (``ClikPolicyConfig`` fields for ``clik``, ``seed`` for ``random``,
             ``algo`` for a ``.zip``).
     """
     if name == "clik":
+        base = getattr(env, "unwrapped", env)
+        if "grasp_position" in getattr(base, "observation_layout", {}):
+            from .grasp_clik_policy import GraspClikPolicy
+
+            return GraspClikPolicy(env, **kwargs)
         return ClikPolicy(env, **kwargs)
     if name == "zero":
         _no_options(name, kwargs)

@@ -1,7 +1,8 @@
 """Gymnasium environments on MuJoCo for redundant robots, one class per file (ids registered in
 :mod:`redundancy_gym.registration`)."""
 
+from .agri_reach import AgriReachEnv
 from .exceptions import EnvConfigError, InvalidActionError
 from .planar_reach import PlanarReachEnv
 
-__all__ = ["EnvConfigError", "InvalidActionError", "PlanarReachEnv"]
+__all__ = ["AgriReachEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]

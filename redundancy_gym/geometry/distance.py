@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 from .primitives import SSV
-from .ssv_kernels import GROUP_OF, ssv_pairs_at, ssv_pairs_grouped
+from .ssv_kernels import GROUP_OF, cull_pairs_at, ssv_pairs_at, ssv_pairs_grouped
 
 __all__ = ["PackedVolumes", "PairBatch", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
 
@@ -160,12 +160,18 @@ class PairBatch:
         self._todo = np.empty(k, dtype=np.int64)
         # the buffers stay referenced by self (layout included), so the addresses below stay valid
         self._layout = layout
+        self._centers = np.empty((m, 3))
+        self._bounds = np.empty(m)
         buffers = (self.vertices, self.radii, self.kinds, *layout, self._active, *self.result, self._todo)
-        self._header = np.array([b.ctypes.data for b in buffers] + [m, k], dtype=np.int64)
+        self._header = np.array([b.ctypes.data for b in buffers] + [m, k, self._centers.ctypes.data,
+                                                                    self._bounds.ctypes.data], dtype=np.int64)
         self._header_address = int(self._header.ctypes.data)
         ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step
         # the compiled entry point skips the dispatcher's type matching on every call
         self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
+        cull_pairs_at(self._header_address, 0.0)
+        self._cull_kernel = cull_pairs_at.overloads[cull_pairs_at.signatures[0]].entry_point
+        self._active[:] = 1  # compiling the broad phase above wrote the mask
 
     def __len__(self) -> int:
         return int(self._slot.size)
@@ -176,6 +182,12 @@ class PairBatch:
         if m.size != len(self):
             raise GeometryError(f"mask must have {len(self)} entries, got {m.size}")
         self._active[:] = m[self._slot]
+
+    def cull(self, margin: float) -> int:
+        """Compute (in the next :meth:`compute`) only the pairs whose bounding spheres are at most ``margin`` [m]
+        apart, for the current :attr:`vertices`; returns how many. Culled pairs get +inf, and their SSV distance
+        is known to exceed ``margin`` (a broad phase; replaces any :meth:`set_active` mask)."""
+        return int(self._cull_kernel(self._header_address, float(margin)))
 
     def compute(self) -> SSVDistances:
         """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""

@@ -20,7 +20,7 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "ssv_pairs_at", "ssv_pairs_grouped"]
+__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at", "ssv_pairs_grouped"]
 
 KIND_PSS = 0
 KIND_LSS = 1
@@ -619,3 +619,60 @@ def ssv_pairs_at(header):
                       carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
                       carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
                       carray(_int64_pointer(h[13]), (n,)))
+
+
+@njit(**_JIT)
+def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers, bounds):
+    """Activate exactly the pairs whose bounding spheres are at most ``margin`` apart; returns how many.
+
+    A volume's bounding sphere is centred on the mean of its vertices with radius the farthest vertex plus
+    the SSV radius, so the sphere distance is a lower bound of the SSV distance: a culled pair is farther
+    than ``margin``. ``centers`` (M, 3) and ``bounds`` (M,) are scratch.
+    """
+    m = radii.shape[0]
+    for i in range(m):
+        nv = kinds[i] + 1
+        cx = 0.0
+        cy = 0.0
+        cz = 0.0
+        for r in range(nv):
+            cx += vertices[i, r, 0]
+            cy += vertices[i, r, 1]
+            cz += vertices[i, r, 2]
+        cx /= nv
+        cy /= nv
+        cz /= nv
+        far = 0.0
+        for r in range(nv):
+            dx = vertices[i, r, 0] - cx
+            dy = vertices[i, r, 1] - cy
+            dz = vertices[i, r, 2] - cz
+            far = max(far, dx * dx + dy * dy + dz * dz)
+        centers[i, 0] = cx
+        centers[i, 1] = cy
+        centers[i, 2] = cz
+        bounds[i] = np.sqrt(far) + radii[i]
+    count = 0
+    for k in range(index_a.shape[0]):
+        i = index_a[k]
+        j = index_b[k]
+        dx = centers[i, 0] - centers[j, 0]
+        dy = centers[i, 1] - centers[j, 1]
+        dz = centers[i, 2] - centers[j, 2]
+        reach = bounds[i] + bounds[j] + margin
+        near = dx * dx + dy * dy + dz * dz <= reach * reach
+        active[k] = 1 if near else 0
+        count += 1 if near else 0
+    return count
+
+
+@njit(**_JIT)
+def cull_pairs_at(header, margin):
+    """:func:`cull_pairs` on the buffers of a :func:`ssv_pairs_at` header followed by two scratch addresses."""
+    h = carray(_int64_pointer(header), (18,))
+    m = h[14]
+    n = h[15]
+    return cull_pairs(carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
+                      carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
+                      carray(_int64_pointer(h[4]), (n,)), margin, carray(_int64_pointer(h[8]), (n,)),
+                      carray(_float64_pointer(h[16]), (m, 3)), carray(_float64_pointer(h[17]), (m,)))

@@ -4,13 +4,16 @@ Sphere geoms become PSS, capsule geoms LSS, and mesh geoms whose name starts wit
 (a triangle mesh of 3 vertices, or a thin triangular prism of 6 whose mid-plane triangle is the TSS and whose
 half thickness is the radius: MuJoCo simulates the prism, the controller sees the TSS). Geoms moving with one joint form
 one segment, named after their body and attached to the joint's frame; world geoms form environment segments. Other geom types are
-left out and listed, since a scene "models only what it needs".
+left out and listed, since a scene "models only what it needs". Pairs never checked: a segment and its nearest
+ancestor segment (joints without geoms in between, as in a compact wrist, do not separate them), and the body
+pairs of the MJCF's ``<contact><exclude/>`` entries (``world`` standing for every world geom).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from xml.etree import ElementTree
 
 import numpy as np
 import pinocchio as pin
@@ -26,7 +29,8 @@ TRIANGLE_PREFIX = "tss"
 
 @dataclass(frozen=True)
 class CollisionGeometry:
-    """Segments read from an MJCF: robot (per joint), environment (world geoms), adjacent pairs, skipped geoms."""
+    """Segments read from an MJCF: robot (per joint), environment (world geoms), excluded (adjacent) pairs, skipped
+    geoms."""
 
     robot: tuple[Segment, ...]
     environment: tuple[Segment, ...]
@@ -100,8 +104,30 @@ def collision_geometry_from_mjcf(model: RobotModel, path: str | Path | None = No
     # named after the body, attached to the joint frame the geom placements are relative to
     robot = tuple(Segment(body[j], tuple(v), frame=pm.names[j]) for j, v in sorted(per_joint.items()))
     present = set(per_joint)
-    adjacent = tuple((body[pm.parents[j]], body[j]) for j in sorted(present) if pm.parents[j] in present)
-    return CollisionGeometry(robot, tuple(environment), adjacent, tuple(skipped))
+    adjacent: list[tuple[str, str]] = []
+    for j in sorted(present):
+        # the nearest ancestor that carries geoms: joints without geoms (a compact wrist) do not separate links
+        parent = pm.parents[j]
+        while parent > 0 and parent not in present:
+            parent = pm.parents[parent]
+        if parent in present:
+            adjacent.append((body[parent], body[j]))
+    names = {s.name for s in robot} | {s.name for s in environment}
+    for a, b in _mjcf_excludes(source):
+        # MJCF names the world body "world"; its geoms are environment segments named after the geoms
+        pairs_a = [e.name for e in environment] if a == "world" else [a]
+        pairs_b = [e.name for e in environment] if b == "world" else [b]
+        adjacent.extend((x, y) for x in pairs_a for y in pairs_b if x in names and y in names)
+    return CollisionGeometry(robot, tuple(environment), tuple(adjacent), tuple(skipped))
+
+
+def _mjcf_excludes(path: Path) -> list[tuple[str, str]]:
+    """Body pairs of the MJCF's ``<contact><exclude body1 body2/>`` entries."""
+    try:
+        root = ElementTree.parse(path).getroot()
+    except ElementTree.ParseError as exc:
+        raise ModelError(f"{path} is not valid XML: {exc}") from exc
+    return [(e.get("body1", ""), e.get("body2", "")) for e in root.iter("exclude")]
 
 
 def collision_model_from_mjcf(model: RobotModel, environment: tuple[Segment, ...] | list[Segment] = (),

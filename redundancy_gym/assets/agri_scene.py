@@ -1,0 +1,62 @@
+"""Scene composition for AgriReach: the 9-DoF arm plus pools of plant geoms, composed with ``dm_control.mjcf``.
+
+The scene is compiled once per env with as many plant geoms of each category as the (pruned) crop row can
+hold; every reset places the new row's parts into them and hides the spare ones, so a reset never recompiles.
+Plant geoms are visual in MuJoCo (``contype = conaffinity = 0``): the env judges contacts on the swept-sphere
+model of the same parts. Stems, shoots and petioles are capsules, peppers spheres, and a leaf blade (two TSS)
+a thin box (MuJoCo has no swept triangle; DESIGN.md: "simulate them as a mesh or box").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from dm_control import mjcf
+
+from . import AGRI_ARM_XML
+
+__all__ = ["PLANT_COLORS", "POOL_CATEGORIES", "TARGET_COLOR", "agri_scene_xml", "pool_geom_name"]
+
+POOL_CATEGORIES = ("stem", "shoot", "fruit", "petiole", "leaf")
+PLANT_COLORS = {
+    "stem": (0.35, 0.55, 0.2, 1.0),
+    "shoot": (0.4, 0.6, 0.22, 1.0),
+    "petiole": (0.3, 0.6, 0.25, 1.0),
+    "leaf": (0.2, 0.55, 0.15, 0.9),
+    "fruit": (0.8, 0.12, 0.08, 1.0),
+}
+TARGET_COLOR = (1.0, 0.75, 0.05, 1.0)
+_POOL_TYPE = {"stem": "capsule", "shoot": "capsule", "petiole": "capsule", "fruit": "sphere", "leaf": "box"}
+
+
+def pool_geom_name(category: str, index: int) -> str:
+    """MJCF name of the ``index``-th pooled geom of a category."""
+    return f"{category}_{index}"
+
+
+def agri_scene_xml(capacity: Mapping[str, int]) -> str:
+    """MJCF text of the arm with ``capacity[category]`` hidden plant geoms per category of :data:`POOL_CATEGORIES`.
+
+    Also adds a floor, cameras ``side`` and ``front``, and the (non-colliding) ``approach_line`` marker.
+    """
+    unknown = set(capacity) - set(POOL_CATEGORIES)
+    if unknown:
+        raise ValueError(f"unknown plant categories {sorted(unknown)}; valid: {', '.join(POOL_CATEGORIES)}")
+    root = mjcf.from_path(str(AGRI_ARM_XML))
+    root.asset.add("texture", name="sky", type="skybox", builtin="gradient", rgb1=[0.92, 0.94, 0.97],
+                   rgb2=[0.62, 0.68, 0.78], width=256, height=256)
+    grid = root.asset.add("texture", name="grid", type="2d", builtin="checker", rgb1=[0.55, 0.5, 0.42],
+                          rgb2=[0.5, 0.45, 0.38], width=256, height=256)
+    floor_material = root.asset.add("material", name="floor", texture=grid, texrepeat=[8, 8])
+    world = root.worldbody
+    world.add("geom", name="floor", type="plane", size=[5.0, 5.0, 0.05], material=floor_material,
+              contype=0, conaffinity=0)
+    world.add("camera", name="side", pos=[-0.9, -2.3, 2.0], xyaxes=[0.93, -0.37, 0, 0.2, 0.5, 0.85])
+    world.add("camera", name="front", pos=[-1.4, 0.0, 1.5], xyaxes=[0, -1, 0, 0.3, 0, 0.95])
+    for category in POOL_CATEGORIES:
+        for k in range(int(capacity.get(category, 0))):
+            world.add("geom", name=pool_geom_name(category, k), type=_POOL_TYPE[category], size=[0.01, 0.01, 0.01],
+                      pos=[0.0, 0.0, -10.0], rgba=[0, 0, 0, 0], contype=0, conaffinity=0, group=2)
+    world.add("geom", name="approach_line", type="capsule", size=[0.003, 0.075], pos=[0.0, 0.0, -10.0],
+              rgba=[1.0, 0.75, 0.05, 0.6], contype=0, conaffinity=0, group=3)
+    return root.to_xml_string()

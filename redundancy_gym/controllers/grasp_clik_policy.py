@@ -1,0 +1,231 @@
+"""The ``clik`` reference policy of grasp-approach tasks (AgriReach): a task-space path to the pre-grasp pose,
+a straight radial approach, and velocity-level CLIK with nullspace collision and joint-limit avoidance.
+
+Monograph 5.3 (Baur et al. 2012 setup): the 5-D task (TCP position and tool axis) leaves four of the nine
+degrees of freedom to the nullspace, where the gradient of the self- and plant-collision potential (5.49)-(5.61)
+and of the joint-limit potential is projected (5.14); with ``W = I`` the particular solution is the minimum
+joint-velocity one. Like :mod:`.policies` it reads the env by duck typing and imports no simulator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..geometry import LSS, PSS, SSV, TSS, Segment
+from ..model import RobotModel, collision_model_from_mjcf
+from .clik import Clik, ClikResult
+from .collision_objective import CollisionObjective
+from .exceptions import PolicyError
+from .frame_axis_task import FrameAxisTask
+from .joint_limit_objective import JointLimitObjective
+from .redundancy_resolution import METHODS
+
+__all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
+
+_START_TIME = 1e-9  # an observation with time below this starts a new episode
+
+
+@dataclass(frozen=True)
+class GraspClikConfig:
+    """Defaults of the grasp-approach CLIK policy.
+
+    Attributes:
+        method: ``"pseudoinverse"``, ``"dls"`` or ``"transpose"`` (see :class:`Clik`).
+        gain: task-space feedback ``K`` [1/s].
+        nullspace_gain: ``alpha`` of (5.14).
+        max_speed: average TCP speed of the move to the pre-grasp pose [m/s].
+        max_turn_rate: average tool-axis turn rate of that move [rad/s].
+        min_duration: shortest move to the pre-grasp pose [s].
+        approach_speed: average TCP speed of the straight approach [m/s].
+        collision_avoidance: ``"on"`` or ``"off"``: the nullspace collision objective on self pairs and the
+            observed hard obstacles.
+        collision_activation: ``d_a`` [m]; collision_slope: ``|H'(0)|`` [1/m]; collision_weight: weight.
+        avoid_leaves: also keep clear of observed leaves and petioles (soft obstacles).
+        joint_limit_activation: ``d_a`` of the joint-limit potential [rad or m]; joint_limit_weight: its weight.
+    """
+
+    method: str = "dls"
+    gain: float = 10.0
+    nullspace_gain: float = 1.0
+    max_speed: float = 0.35
+    max_turn_rate: float = 0.8
+    min_duration: float = 1.0
+    approach_speed: float = 0.12
+    collision_avoidance: str = "on"
+    collision_activation: float = 0.1
+    collision_slope: float = 4.0
+    collision_weight: float = 1.0
+    avoid_leaves: bool = False
+    joint_limit_activation: float = 0.2
+    joint_limit_weight: float = 0.5
+
+
+class GraspPath:
+    """Quintic rest-to-rest move from the start pose to the pre-grasp pose (tool axis turned on the great
+    circle), then a straight quintic approach to the grasp pose along the fixed approach axis.
+
+    Args:
+        start, pregrasp, grasp: TCP positions [m]; start_axis, approach: unit tool axes.
+        move_duration, approach_duration: [s].
+    """
+
+    def __init__(self, start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
+                 grasp: NDArray[np.float64], approach: NDArray[np.float64], move_duration: float,
+                 approach_duration: float) -> None:
+        self.start, self.pregrasp, self.grasp = start.copy(), pregrasp.copy(), grasp.copy()
+        self.start_axis = start_axis / np.linalg.norm(start_axis)
+        self.approach = approach / np.linalg.norm(approach)
+        self.move_duration, self.approach_duration = float(move_duration), float(approach_duration)
+        cross = np.cross(self.start_axis, self.approach)
+        sin, cos = float(np.linalg.norm(cross)), float(self.start_axis @ self.approach)
+        self.turn_angle = float(np.arctan2(sin, cos))
+        if sin > 1e-9:
+            self.turn_axis = cross / sin
+        else:  # parallel or antiparallel: any axis orthogonal to the start axis
+            helper = np.array([0.0, 0.0, 1.0]) if abs(self.start_axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            self.turn_axis = np.cross(self.start_axis, helper)
+            self.turn_axis /= np.linalg.norm(self.turn_axis)
+            if cos > 0.0:
+                self.turn_angle = 0.0
+
+    @property
+    def duration(self) -> float:
+        """End of the approach [s]."""
+        return self.move_duration + self.approach_duration
+
+    @staticmethod
+    def _law(t: float, duration: float) -> tuple[float, float]:
+        tau = min(max(t / duration, 0.0), 1.0)
+        s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+        sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration if tau < 1.0 else 0.0
+        return s, sdot
+
+    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Target ``[p, a]`` and target velocity ``[v, omega]`` at time ``t`` [s]."""
+        if t < self.move_duration:
+            s, sdot = self._law(t, self.move_duration)
+            angle = s * self.turn_angle
+            k = self.turn_axis
+            a0 = self.start_axis
+            axis = a0 * np.cos(angle) + np.cross(k, a0) * np.sin(angle) + k * (k @ a0) * (1.0 - np.cos(angle))
+            position = self.start + s * (self.pregrasp - self.start)
+            velocity = sdot * (self.pregrasp - self.start)
+            omega = sdot * self.turn_angle * k
+            return np.concatenate([position, axis]), np.concatenate([velocity, omega])
+        s, sdot = self._law(t - self.move_duration, self.approach_duration)
+        position = self.pregrasp + s * (self.grasp - self.pregrasp)
+        return np.concatenate([position, self.approach]), np.concatenate([sdot * (self.grasp - self.pregrasp),
+                                                                         np.zeros(3)])
+
+
+def _tool_axis(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The x axis of the rotation ``(w, x, y, z)``."""
+    w, x, y, z = quaternion / np.linalg.norm(quaternion)
+    return np.array([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)])
+
+
+def obstacle_volumes(block: NDArray[np.float64]) -> list[tuple[SSV, bool]]:
+    """The valid rows of an observation's obstacle block as ``(volume, hard)``."""
+    rows = np.asarray(block, dtype=np.float64).reshape(-1, 15)
+    out: list[tuple[SSV, bool]] = []
+    for row in rows:
+        if row[0] < 0.5:
+            continue
+        v = row[5:14].reshape(3, 3)
+        r = float(row[14])
+        kind = int(np.argmax(row[1:4]))
+        volume: SSV = PSS(v[0], r) if kind == 0 else (LSS(v[0], v[1], r) if kind == 1 else TSS(v[0], v[1], v[2], r))
+        out.append((volume, bool(row[4] > 0.5)))
+    return out
+
+
+class GraspClikPolicy:
+    """Velocity-level CLIK along a :class:`GraspPath`, as a policy (observation in, normalized joint velocities out).
+
+    At the first observation of an episode (``time`` 0) it plans the path from the observed TCP pose and builds
+    its collision model: the robot's own segments from the robot MJCF (non-adjacent links, the lift column)
+    and one segment per observed obstacle. :attr:`last_result` keeps the last :class:`ClikResult`.
+
+    Args:
+        env: an env exposing ``observation_layout`` (``q``, ``tcp_position``, ``tcp_quaternion``,
+            ``grasp_position``, ``approach``, ``pregrasp_position``, ``time``, ``obstacles``), ``ROBOT_XML``,
+            ``TCP_FRAME`` and ``max_joint_speeds`` (e.g. AgriReach-v0).
+        **kwargs: fields of :class:`GraspClikConfig`.
+    """
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        valid = {f.name for f in fields(GraspClikConfig)}
+        unknown = set(kwargs) - valid
+        if unknown:
+            raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
+        self.config = GraspClikConfig(**kwargs)
+        if self.config.method not in METHODS:
+            raise PolicyError(f"unknown method {self.config.method!r}; valid methods: {', '.join(METHODS)}")
+        if self.config.collision_avoidance not in ("on", "off"):
+            raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: on, off")
+        base = getattr(env, "unwrapped", env)
+        required = ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds")
+        missing = [name for name in required if not hasattr(base, name)]
+        if missing:
+            raise PolicyError(f"the grasp clik policy does not support {type(base).__name__}: it lacks "
+                              f"{', '.join(missing)}")
+        self._layout = dict(base.observation_layout)
+        self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
+        self.model = RobotModel.from_mjcf(base.ROBOT_XML)
+        self._joint_limits = JointLimitObjective.from_model(
+            self.model, activation_distance=self.config.joint_limit_activation, slope=1.0,
+            weight=self.config.joint_limit_weight)
+        self.task = FrameAxisTask(base.TCP_FRAME, axis=0)
+        self.collision: CollisionObjective | None = None
+        self.path: GraspPath | None = None
+        self.controller = self._controller([])
+        self.last_result: ClikResult | None = None
+
+    def _controller(self, environment: list[Segment]) -> Clik:
+        objectives: list[Any] = [self._joint_limits]
+        self.collision = None
+        if self.config.collision_avoidance == "on":
+            model = collision_model_from_mjcf(self.model, environment)
+            self.collision = CollisionObjective(model, activation_distance=self.config.collision_activation,
+                                                slope=self.config.collision_slope, weight=self.config.collision_weight)
+            objectives.append(self.collision)
+        return Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
+                    nullspace_gain=self.config.nullspace_gain, objectives=objectives)
+
+    def _plan(self, obs: NDArray[np.float64]) -> None:
+        lay = self._layout
+        start = obs[lay["tcp_position"]]
+        axis = _tool_axis(obs[lay["tcp_quaternion"]])
+        pregrasp, grasp, approach = obs[lay["pregrasp_position"]], obs[lay["grasp_position"]], obs[lay["approach"]]
+        c = self.config
+        turn = float(np.arccos(np.clip(axis @ approach / np.linalg.norm(approach), -1.0, 1.0)))
+        move = max(c.min_duration, float(np.linalg.norm(pregrasp - start)) / c.max_speed, turn / c.max_turn_rate)
+        approach_time = max(0.5, float(np.linalg.norm(grasp - pregrasp)) / c.approach_speed)
+        self.path = GraspPath(start, axis, pregrasp, grasp, approach, move, approach_time)
+        environment = []
+        for k, (volume, hard) in enumerate(obstacle_volumes(obs[lay["obstacles"]])):
+            if hard or c.avoid_leaves:
+                environment.append(Segment(f"obstacle_{k}", (volume,)))
+        if self.config.collision_avoidance == "on":
+            self.controller = self._controller(environment)
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+        """Normalized joint velocity command for one observation."""
+        obs = np.asarray(observation, dtype=np.float64)
+        t = float(obs[self._layout["time"]][0])
+        if self.path is None or t < _START_TIME:
+            self._plan(obs)
+        assert self.path is not None
+        target, velocity = self.path(t)
+        result = self.controller.step(obs[self._layout["q"]], target, velocity)
+        self.last_result = result
+        return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32), state
+
+    def describe(self) -> dict[str, Any]:
+        """The configuration, for reports."""
+        return asdict(self.config)
