@@ -264,3 +264,24 @@ def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: 
             assert res.distance[k] == pytest.approx(np.sqrt(d2) - a.radius - b.radius, abs=1e-12)
             np.testing.assert_allclose(res.point_a[k], pa, atol=1e-12)
             np.testing.assert_allclose(res.point_b[k], pb, atol=1e-12)
+
+
+def test_cull_keeps_every_pair_within_the_margin_and_only_lower_bounded_ones_out(rng: np.random.Generator) -> None:
+    """The broad phase is conservative: a culled pair is farther than the margin, and compute() gives +inf there."""
+    from redundancy_gym.geometry import PairBatch
+
+    volumes = [random_volume(rng, KINDS[i % 3], spread=1.5, size=0.3) for i in range(40)]
+    ia = rng.integers(0, 40, 300)
+    ib = rng.integers(0, 40, 300)
+    batch = PairBatch(volumes, ia, ib)
+    exact = batch.compute().distance.copy()
+    assert np.all(np.isfinite(exact))
+    margin = 0.3
+    count = batch.cull(margin)
+    culled = batch.compute().distance
+    active = np.isfinite(culled)
+    assert count == int(active.sum()) and 0 < count < 300  # the test scene has both kinds
+    assert np.all(exact[~active] > margin)
+    np.testing.assert_allclose(culled[active], exact[active], atol=1e-12)
+    batch.set_active(np.ones(300, dtype=bool))
+    np.testing.assert_allclose(batch.compute().distance, exact, atol=1e-12)
