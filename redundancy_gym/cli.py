@@ -58,8 +58,9 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--seed", type=int, default=0)
     re.add_argument("--env-kwargs", type=_json_object, default={})
     be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv",), help="ssv: swept-sphere distances against coal")
-    be.add_argument("--json", dest="json_path", default="results/bench_ssv.json")
+    be.add_argument("name", choices=("ssv", "envs"),
+                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid")
+    be.add_argument("--json", dest="json_path", help="default: results/bench_<name>.json")
     be.add_argument("--seed", type=int, default=0)
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
     be.add_argument("--no-progress", action="store_true")
@@ -103,12 +104,21 @@ def main(argv: Sequence[str] | None = None) -> int:
                                            env_kwargs=args.env_kwargs)
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
-            from .eval.bench_ssv import format_ssv_bench, run_ssv_bench, write_ssv_bench
+            json_path = args.json_path or f"results/bench_{args.name}.json"
+            if args.name == "ssv":
+                from .eval.bench_ssv import format_ssv_bench, run_ssv_bench, write_ssv_bench
 
-            timing = {"min_time": 0.002, "repeats": 2} if args.quick else {}
-            report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing)
-            print(format_ssv_bench(report))
-            print(f"wrote {write_ssv_bench(report, args.json_path)}")
+                timing = {"min_time": 0.002, "repeats": 2} if args.quick else {}
+                report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing)
+                print(format_ssv_bench(report))
+                print(f"wrote {write_ssv_bench(report, json_path)}")
+            else:
+                from .eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
+
+                report = run_envs_bench(seconds=0.3 if args.quick else 3.0, seed=args.seed,
+                                        progress=not args.no_progress)
+                print(format_envs_bench(report))
+                print(f"wrote {write_envs_bench(report, json_path)}")
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

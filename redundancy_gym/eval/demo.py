@@ -12,10 +12,12 @@ from .video import record_episode
 __all__ = ["run_demo"]
 
 _PLANAR = "redundancy_gym/PlanarReach-v0"
+_AGRI = "redundancy_gym/AgriReach-v0"
 
 
 def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
-    """Evaluate the ``clik`` reference on PlanarReach with and without obstacle; write JSON, PNG and MP4.
+    """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
+    crops); write JSON, PNG and MP4.
 
     Returns the paths written.
     """
@@ -40,8 +42,23 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
                                  env_kwargs={"obstacle": obstacle})
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
+    written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
     for path in written:
         print(f"wrote {path}")
+    return written
+
+
+def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+    """The grasp-approach CLIK reference on AgriReach, medium and hard crops: JSON and one video."""
+    written = []
+    for difficulty in ("medium", "hard"):
+        report = evaluate(_AGRI, "clik", episodes=episodes, seed=seed, env_kwargs={"difficulty": difficulty},
+                          progress=progress)
+        written.append(report.write_json(out / f"agri_reach_clik_{difficulty}.json"))
+        print(f"\n== AgriReach-v0, clik, difficulty={difficulty}\n{format_report(report.to_json())}")
+    path, _ = record_episode(_AGRI, "clik", out / "agri_reach_clik_medium.mp4", seed=seed,
+                             env_kwargs={"difficulty": "medium"})
+    written.append(path)
     return written
 
 

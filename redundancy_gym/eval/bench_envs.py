@@ -1,0 +1,98 @@
+"""``redundancy-gym bench envs``: env steps per second with a zero policy, ours against Gymnasium's MuJoCo envs.
+
+Every env of ours and the peers (Gymnasium's ``Pusher-v5`` and ``Humanoid-v5``) is made with ``gym.make`` (so
+the same wrappers apply) and stepped with the zero action for a fixed wall time, resetting when an episode ends
+(resets count: they are part of what a training loop pays). Ratios ``<ours>_vs_<peer>`` compare rates measured
+in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from tqdm.auto import tqdm
+
+from .. import ENV_IDS
+from .exceptions import EvalError
+
+__all__ = ["PEERS", "format_envs_bench", "run_envs_bench", "write_envs_bench"]
+
+PEERS = ("Pusher-v5", "Humanoid-v5")
+_SHORT = {"redundancy_gym/PlanarReach-v0": "planar", "redundancy_gym/AgriReach-v0": "agri",
+          "Pusher-v5": "pusher", "Humanoid-v5": "humanoid"}
+
+
+def _steps_per_second(env_id: str, seconds: float, seed: int, env_kwargs: dict[str, Any]) -> dict[str, float]:
+    env = gym.make(env_id, **env_kwargs)
+    try:
+        env.reset(seed=seed)
+        action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+        for _ in range(50):  # warm caches and compiled kernels
+            env.step(action)
+        env.reset(seed=seed)
+        steps = resets = 0
+        start = time.perf_counter()
+        while True:
+            _, _, terminated, truncated, _ = env.step(action)
+            steps += 1
+            if terminated or truncated:
+                env.reset()
+                resets += 1
+            if steps % 64 == 0 and time.perf_counter() - start >= seconds:
+                break
+        elapsed = time.perf_counter() - start
+    finally:
+        env.close()
+    return {"steps_per_second": steps / elapsed, "steps": steps, "resets": resets, "seconds": elapsed}
+
+
+def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] = ENV_IDS,
+                   peers: Sequence[str] = PEERS, env_kwargs: dict[str, dict[str, Any]] | None = None,
+                   progress: bool = True) -> dict[str, Any]:
+    """Steps per second of ``envs`` and ``peers`` (zero policy, ``seconds`` each); returns the report.
+
+    Args:
+        seconds: wall time per env.
+        seed: reset seed.
+        envs: our env ids; peers: Gymnasium ids measured in the same run.
+        env_kwargs: optional ``gym.make`` kwargs per id.
+        progress: show a progress bar.
+    """
+    if seconds <= 0:
+        raise EvalError(f"seconds must be > 0, got {seconds}")
+    env_kwargs = env_kwargs or {}
+    rates: dict[str, dict[str, float]] = {}
+    for env_id in tqdm([*envs, *peers], desc="bench envs", disable=not progress):
+        rates[env_id] = _steps_per_second(env_id, seconds, seed, env_kwargs.get(env_id, {}))
+    ratios = {}
+    for ours in envs:
+        for peer in peers:
+            name = f"{_SHORT.get(ours, ours)}_vs_{_SHORT.get(peer, peer)}"
+            ratios[name] = rates[ours]["steps_per_second"] / rates[peer]["steps_per_second"]
+    return {"benchmark": "envs", "seed": seed, "seconds_per_env": seconds, "policy": "zero",
+            "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
+            "envs": rates, "ratios": ratios, **ratios}
+
+
+def format_envs_bench(report: dict[str, Any]) -> str:
+    """A plain-text table of steps/s and ratios."""
+    lines = ["env | steps/s | resets", "-" * 40]
+    for env_id, r in report["envs"].items():
+        lines.append(f"{env_id} | {r['steps_per_second']:.0f} | {r['resets']}")
+    lines += [f"{name} = {value:.2f}" for name, value in report["ratios"].items()]
+    return "\n".join(lines)
+
+
+def write_envs_bench(report: dict[str, Any], path: str | Path) -> Path:
+    """Write the report as JSON (parents created)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(report, indent=2) + "\n")
+    return path

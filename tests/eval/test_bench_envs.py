@@ -1,0 +1,22 @@
+"""bench envs: the report's rates and ratios are consistent and measured for every env asked for."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from redundancy_gym.eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
+
+
+def test_envs_bench_report(tmp_path) -> None:
+    report = run_envs_bench(seconds=0.05, envs=("redundancy_gym/AgriReach-v0",), peers=("Pusher-v5",),
+                            progress=False)
+    agri = report["envs"]["redundancy_gym/AgriReach-v0"]
+    pusher = report["envs"]["Pusher-v5"]
+    assert agri["steps"] > 0 and pusher["steps"] > 0
+    assert agri["steps_per_second"] == pytest.approx(agri["steps"] / agri["seconds"])
+    assert report["agri_vs_pusher"] == pytest.approx(agri["steps_per_second"] / pusher["steps_per_second"])
+    assert "agri_vs_pusher" in format_envs_bench(report)
+    written = json.loads(write_envs_bench(report, tmp_path / "b.json").read_text())
+    assert written["agri_vs_pusher"] == report["agri_vs_pusher"]
