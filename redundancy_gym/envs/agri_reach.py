@@ -23,6 +23,8 @@ from ..assets.agri_scene import PLANT_COLORS, POOL_CATEGORIES, TARGET_COLOR, agr
 from ..assets.crop_row import DIFFICULTIES, CropRow, crop_row_defaults, generate_crop_row
 from ..geometry import LSS, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
+from .validation import non_negative as _non_negative
+from .validation import positive as _positive
 
 __all__ = ["AgriReachEnv", "default_config"]
 
@@ -622,18 +624,6 @@ def _place_box(m: mujoco.MjModel, g: int, points: NDArray[np.float64], half_thic
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, frame.reshape(-1))
     m.geom_quat[g] = quat
-
-
-def _positive(value: float, name: str) -> float:
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
-        raise EnvConfigError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
-
-
-def _non_negative(value: float, name: str) -> float:
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value < 0:
-        raise EnvConfigError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
 
 
 def _count(value: int, name: str) -> int:

@@ -22,6 +22,8 @@ from ..assets import (
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .exceptions import EnvConfigError, InvalidActionError
+from .validation import non_negative as _non_negative
+from .validation import positive as _positive
 
 __all__ = ["PlanarReachEnv", "default_config"]
 
@@ -370,15 +372,3 @@ def _point(value: Sequence[float], name: str) -> NDArray[np.float64]:
     if p.shape != (2,) or not np.all(np.isfinite(p)):
         raise EnvConfigError(f"{name} must be a finite (x, z) pair [m], got {value!r}")
     return p
-
-
-def _positive(value: float, name: str) -> float:
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
-        raise EnvConfigError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
-
-
-def _non_negative(value: float, name: str) -> float:
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value < 0:
-        raise EnvConfigError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)

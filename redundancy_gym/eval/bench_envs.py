@@ -8,11 +8,9 @@ in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5.
 
 from __future__ import annotations
 
-import json
 import platform
 import time
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
@@ -20,6 +18,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from .. import ENV_IDS
+from .bench_ssv import write_ssv_bench as write_envs_bench
 from .exceptions import EvalError
 
 __all__ = ["PEERS", "format_envs_bench", "run_envs_bench", "write_envs_bench"]
@@ -88,11 +87,3 @@ def format_envs_bench(report: dict[str, Any]) -> str:
         lines.append(f"{env_id} | {r['steps_per_second']:.0f} | {r['resets']}")
     lines += [f"{name} = {value:.2f}" for name, value in report["ratios"].items()]
     return "\n".join(lines)
-
-
-def write_envs_bench(report: dict[str, Any], path: str | Path) -> Path:
-    """Write the report as JSON (parents created)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(report, indent=2) + "\n")
-    return path

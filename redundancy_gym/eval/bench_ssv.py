@@ -183,7 +183,7 @@ def format_ssv_bench(report: dict[str, Any]) -> str:
 
 
 def write_ssv_bench(report: dict[str, Any], path: str | Path) -> Path:
-    """Write the report as JSON (parents created)."""
+    """Write a benchmark report as JSON (parents created); ``bench envs`` writes its report with it too."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(report, indent=2) + "\n")
