@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dm_control import mjcf
 
 from . import AGRI_ARM_XML
+from .backdrop import add_backdrop
 
 __all__ = ["PLANT_COLORS", "POOL_CATEGORIES", "TARGET_COLOR", "agri_scene_xml", "pool_geom_name"]
 
@@ -43,14 +44,8 @@ def agri_scene_xml(capacity: Mapping[str, int]) -> str:
     if unknown:
         raise ValueError(f"unknown plant categories {sorted(unknown)}; valid: {', '.join(POOL_CATEGORIES)}")
     root = mjcf.from_path(str(AGRI_ARM_XML))
-    root.asset.add("texture", name="sky", type="skybox", builtin="gradient", rgb1=[0.92, 0.94, 0.97],
-                   rgb2=[0.62, 0.68, 0.78], width=256, height=256)
-    grid = root.asset.add("texture", name="grid", type="2d", builtin="checker", rgb1=[0.55, 0.5, 0.42],
-                          rgb2=[0.5, 0.45, 0.38], width=256, height=256)
-    floor_material = root.asset.add("material", name="floor", texture=grid, texrepeat=[8, 8])
+    add_backdrop(root, floor_size=5.0, floor_colors=((0.55, 0.5, 0.42), (0.5, 0.45, 0.38)), floor_repeat=8)
     world = root.worldbody
-    world.add("geom", name="floor", type="plane", size=[5.0, 5.0, 0.05], material=floor_material,
-              contype=0, conaffinity=0)
     world.add("camera", name="side", pos=[-0.9, -2.3, 2.0], xyaxes=[0.93, -0.37, 0, 0.2, 0.5, 0.85])
     world.add("camera", name="front", pos=[-1.4, 0.0, 1.5], xyaxes=[0, -1, 0, 0.3, 0, 0.95])
     for category in POOL_CATEGORIES:

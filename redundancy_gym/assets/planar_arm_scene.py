@@ -8,6 +8,7 @@ import numpy as np
 from dm_control import mjcf
 
 from . import PLANAR_ARM_XML, PLANAR_OBSTACLE_GEOM
+from .backdrop import add_backdrop
 
 __all__ = ["planar_arm_scene_xml"]
 
@@ -28,14 +29,9 @@ def planar_arm_scene_xml(
         line_end: ``(x, z)`` where it ends [m].
     """
     root = mjcf.from_path(str(PLANAR_ARM_XML))
-    root.asset.add("texture", name="sky", type="skybox", builtin="gradient", rgb1=[0.92, 0.94, 0.97],
-                   rgb2=[0.62, 0.68, 0.78], width=256, height=256)
-    grid = root.asset.add("texture", name="grid", type="2d", builtin="checker", rgb1=[0.82, 0.84, 0.86],
-                          rgb2=[0.74, 0.76, 0.79], width=256, height=256)
-    floor_material = root.asset.add("material", name="floor", texture=grid, texrepeat=[6, 6])
+    add_backdrop(root, floor_size=2.0, floor_position=(0.5, 0.0, -0.7),
+                 floor_colors=((0.82, 0.84, 0.86), (0.74, 0.76, 0.79)), floor_repeat=6)
     world = root.worldbody
-    world.add("geom", name="floor", type="plane", size=[2.0, 2.0, 0.05], pos=[0.5, 0.0, -0.7],
-              material=floor_material, contype=0, conaffinity=0)
     world.add("camera", name="side", pos=[0.55, -2.6, 0.15], xyaxes=[1, 0, 0, 0, 0.05, 1])
     start = [line_start[0], 0.0, line_start[1]]
     end = [line_end[0], 0.0, line_end[1]]

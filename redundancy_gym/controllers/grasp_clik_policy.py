@@ -9,7 +9,7 @@ joint-velocity one. Like :mod:`.policies` it reads the env by duck typing and im
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -22,7 +22,7 @@ from .collision_objective import CollisionObjective
 from .exceptions import PolicyError
 from .frame_axis_task import FrameAxisTask
 from .joint_limit_objective import JointLimitObjective
-from .redundancy_resolution import METHODS
+from .policy_options import config_from_options, env_with_attributes
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
@@ -158,21 +158,11 @@ class GraspClikPolicy:
     """
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
-        valid = {f.name for f in fields(GraspClikConfig)}
-        unknown = set(kwargs) - valid
-        if unknown:
-            raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
-        self.config = GraspClikConfig(**kwargs)
-        if self.config.method not in METHODS:
-            raise PolicyError(f"unknown method {self.config.method!r}; valid methods: {', '.join(METHODS)}")
+        self.config = config_from_options(GraspClikConfig, kwargs)
         if self.config.collision_avoidance not in ("on", "off"):
             raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: on, off")
-        base = getattr(env, "unwrapped", env)
-        required = ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds")
-        missing = [name for name in required if not hasattr(base, name)]
-        if missing:
-            raise PolicyError(f"the grasp clik policy does not support {type(base).__name__}: it lacks "
-                              f"{', '.join(missing)}")
+        base = env_with_attributes(env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"),
+                                   "grasp clik")
         self._layout = dict(base.observation_layout)
         self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
@@ -182,7 +172,7 @@ class GraspClikPolicy:
         self.task = FrameAxisTask(base.TCP_FRAME, axis=0)
         self.collision: CollisionObjective | None = None
         self.path: GraspPath | None = None
-        self.controller = self._controller([])
+        self.controller: Clik | None = None  # built by the first observation, with the observed obstacles
         self.last_result: ClikResult | None = None
 
     def _controller(self, environment: list[Segment]) -> Clik:
@@ -210,7 +200,7 @@ class GraspClikPolicy:
         for k, (volume, hard) in enumerate(obstacle_volumes(obs[lay["obstacles"]])):
             if hard or c.avoid_leaves:
                 environment.append(Segment(f"obstacle_{k}", (volume,)))
-        if self.config.collision_avoidance == "on":
+        if self.controller is None or self.config.collision_avoidance == "on":
             self.controller = self._controller(environment)
 
     def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
@@ -220,7 +210,7 @@ class GraspClikPolicy:
         t = float(obs[self._layout["time"]][0])
         if self.path is None or t < _START_TIME:
             self._plan(obs)
-        assert self.path is not None
+        assert self.path is not None and self.controller is not None
         target, velocity = self.path(t)
         result = self.controller.step(obs[self._layout["q"]], target, velocity)
         self.last_result = result

@@ -7,7 +7,7 @@ imports gymnasium or mujoco, so the same policy object can drive a robot fed wit
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
@@ -22,8 +22,8 @@ from .collision_objective import CollisionObjective
 from .exceptions import PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
+from .policy_options import config_from_options, env_with_attributes
 from .posture_objective import PostureObjective
-from .redundancy_resolution import METHODS
 
 __all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPolicy", "Sb3Policy", "ZeroPolicy",
            "make_policy"]
@@ -133,18 +133,9 @@ class ClikPolicy:
     """
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
-        valid = {f.name for f in fields(ClikPolicyConfig)}
-        unknown = set(kwargs) - valid
-        if unknown:
-            raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
-        self.config = ClikPolicyConfig(**kwargs)
-        if self.config.method not in METHODS:
-            raise PolicyError(f"unknown method {self.config.method!r}; valid methods: {', '.join(METHODS)}")
-        base = getattr(env, "unwrapped", env)
-        required = ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES", "max_joint_speed")
-        missing = [name for name in required if not hasattr(base, name)]
-        if missing:
-            raise PolicyError(f"the clik policy does not support {type(base).__name__}: it lacks {', '.join(missing)}")
+        self.config = config_from_options(ClikPolicyConfig, kwargs)
+        base = env_with_attributes(env, ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES",
+                                         "max_joint_speed"), "clik")
         self._layout = base.OBSERVATION_LAYOUT
         self._speed = float(base.max_joint_speed)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)

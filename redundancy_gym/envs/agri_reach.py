@@ -249,6 +249,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             self.observation_layout[name] = slice(start, start + size)
             start += size
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(start,), dtype=np.float64)
+        self._dynamic = np.empty(self.observation_layout["obstacles"].start)  # the per-step part of the observation
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
         self._row: CropRow | None = None
@@ -279,7 +280,6 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self.data.qpos[self._qpos] = q
         self.data.act[self._servo_act] = q
         mujoco.mj_forward(self.model, self.data)
-        self._dynamic = np.empty(self.observation_layout["obstacles"].start)
         metrics = self._metrics(np.zeros(9))
         return self._get_obs(), metrics
 
@@ -411,12 +411,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         if batch.cull(self._horizon) == 0:
             return self._horizon, 0
         d = batch.compute().distance
-        clearance = min(float(d[self._hard_pairs].min()) if self._hard_pairs.size else np.inf, self._horizon)
-        leaves = 0
-        if self._soft_pairs.size:
-            touched = self._soft_part[d[self._soft_pairs] <= 0.0]
-            leaves = int(np.unique(touched).size) if touched.size else 0
-        return clearance, leaves
+        n_hard = self._n_hard_pairs  # pairs are ordered hard (arm-plant, self) first, then soft
+        clearance = min(float(d[:n_hard].min()) if n_hard else np.inf, self._horizon)
+        touched = self._soft_part[d[n_hard:] <= 0.0]
+        return clearance, (int(np.unique(touched).size) if touched.size else 0)
 
     # ------------------------------------------------------------------ scene
     def _pool_capacity(self) -> dict[str, int]:
@@ -429,13 +427,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
     def _reachable(self, row: CropRow) -> NDArray[np.int64]:
         """Parts that can meet the arm: within its reach capsule around the lift column."""
-        reach = PackedVolumes.from_volumes([LSS([0.0, 0.0, _SHOULDER_Z[0]], [0.0, 0.0, _SHOULDER_Z[1]],
-                                                _REACH + _ARM_RADIUS)])
-        volumes = PackedVolumes(np.concatenate([row.vertices, reach.vertices]), np.concatenate([row.radius, reach.radii]),
-                                np.concatenate([row.kind, reach.kinds]))
-        n = len(row)
-        d = indexed_distances(volumes, np.arange(n), np.full(n, n)).distance
-        return np.flatnonzero(d <= 0.0)
+        reach = LSS([0.0, 0.0, _SHOULDER_Z[0]], [0.0, 0.0, _SHOULDER_Z[1]], _REACH + _ARM_RADIUS)
+        return np.flatnonzero(_distances_to(row, np.arange(len(row)), reach) <= 0.0)
 
     def _choose_target(self, row: CropRow, rng: np.random.Generator) -> int | None:
         """A pepper of the near row facing the arm, reachable, with a clear approach corridor (or None)."""
@@ -458,13 +451,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                 continue
             corridor = LSS(center - _CORRIDOR[0] * approach, center - _CORRIDOR[1] * approach, _CORRIDOR[2])
             others = hard[hard != f]
-            if others.size:
-                packed = PackedVolumes(np.concatenate([row.vertices[others], corridor.vertices[None]]),
-                                       np.concatenate([row.radius[others], [corridor.radius]]),
-                                       np.concatenate([row.kind[others], [corridor.kind]]))
-                m = others.size
-                if indexed_distances(packed, np.arange(m), np.full(m, m)).distance.min() < 0.01:
-                    continue
+            if others.size and _distances_to(row, others, corridor).min() < 0.01:
+                continue
             self._grasp = center.copy()
             self._approach = approach
             self._pregrasp = pregrasp
@@ -513,8 +501,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         ia = np.concatenate([ia_h, ia_r, ia_s])
         ib = np.concatenate([ib_h, ib_r, ib_s])
         self._batch = PairBatch(volumes, ia, ib)
-        self._hard_pairs = np.arange(ia_h.size + ia_r.size)
-        self._soft_pairs = np.arange(ia_h.size + ia_r.size, ia.size)
+        self._n_hard_pairs = ia_h.size + ia_r.size
         self._soft_part = ib_s  # leaves are counted per part
 
     def _observed_obstacles(self, row: CropRow, target: int) -> NDArray[np.float64]:
@@ -524,10 +511,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         if self._k == 0 or parts.size == 0:
             return block.reshape(-1)
         corridor = LSS(self._grasp, self._grasp - (_CORRIDOR[1] + 0.3) * self._approach, 0.0)
-        packed = PackedVolumes(np.concatenate([row.vertices[parts], corridor.vertices[None]]),
-                               np.concatenate([row.radius[parts], [0.0]]), np.concatenate([row.kind[parts], [1]]))
-        n = parts.size
-        d = indexed_distances(packed, np.arange(n), np.full(n, n)).distance
+        d = _distances_to(row, parts, corridor)
         # hard obstacles first at equal distance: they are what a controller must avoid
         order = parts[np.lexsort((~row.hard[parts], d))][: self._k]
         for r, k in enumerate(order):
@@ -575,6 +559,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._pool = {c: np.array([m.geom(pool_geom_name(c, k)).id for k in range(n)], dtype=np.int64)
                       for c, n in self._pool_capacity().items()}
         self._approach_line = m.geom("approach_line").id
+
+
+def _distances_to(row: CropRow, parts: NDArray[np.int64], volume: LSS) -> NDArray[np.float64]:
+    """SSV distances of the row's ``parts`` to one volume, in one compiled call."""
+    n = parts.size
+    packed = PackedVolumes(np.concatenate([row.vertices[parts], volume.vertices[None]]),
+                           np.concatenate([row.radius[parts], [volume.radius]]),
+                           np.concatenate([row.kind[parts], [volume.kind]]))
+    return indexed_distances(packed, np.arange(n), np.full(n, n)).distance
 
 
 def _self_collision_pairs(m: mujoco.MjModel, geoms: NDArray[np.int64]) -> NDArray[np.int64]:

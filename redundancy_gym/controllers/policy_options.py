@@ -1,0 +1,35 @@
+"""Checks shared by the reference policies: options against their config dataclass, and what the env must expose."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from typing import Any, TypeVar
+
+from .exceptions import PolicyError
+from .redundancy_resolution import METHODS
+
+__all__ = ["config_from_options", "env_with_attributes"]
+
+C = TypeVar("C")
+
+
+def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
+    """``config_type(**options)``, with a :class:`PolicyError` naming the valid options or redundancy methods."""
+    valid = {f.name for f in fields(config_type)}  # type: ignore[arg-type]
+    unknown = set(options) - valid
+    if unknown:
+        raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
+    config = config_type(**options)
+    method = getattr(config, "method", METHODS[0])
+    if method not in METHODS:
+        raise PolicyError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
+    return config
+
+
+def env_with_attributes(env: Any, required: tuple[str, ...], policy: str) -> Any:
+    """The unwrapped env, after checking that it has every attribute in ``required``."""
+    base = getattr(env, "unwrapped", env)
+    missing = [name for name in required if not hasattr(base, name)]
+    if missing:
+        raise PolicyError(f"the {policy} policy does not support {type(base).__name__}: it lacks {', '.join(missing)}")
+    return base
