@@ -4,7 +4,8 @@ The scene is compiled once per env with as many plant geoms of each category as 
 hold; every reset places the new row's parts into them and hides the spare ones, so a reset never recompiles.
 Plant geoms are visual in MuJoCo (``contype = conaffinity = 0``): the env judges contacts on the swept-sphere
 model of the same parts. Stems, shoots and petioles are capsules, peppers spheres, and a leaf blade (two TSS)
-a thin box (MuJoCo has no swept triangle; DESIGN.md: "simulate them as a mesh or box").
+one flat ellipsoid (MuJoCo has no swept triangle; DESIGN.md allows "a mesh or box", and an ellipsoid draws the
+blade's outline with one geom). The pool ``leaf`` counts blades.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ PLANT_COLORS = {
     "fruit": (0.8, 0.12, 0.08, 1.0),
 }
 TARGET_COLOR = (1.0, 0.75, 0.05, 1.0)
-_POOL_TYPE = {"stem": "capsule", "shoot": "capsule", "petiole": "capsule", "fruit": "sphere", "leaf": "box"}
+_POOL_TYPE = {"stem": "capsule", "shoot": "capsule", "petiole": "capsule", "fruit": "sphere", "leaf": "ellipsoid"}
 
 
 def pool_geom_name(category: str, index: int) -> str:

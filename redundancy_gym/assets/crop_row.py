@@ -14,12 +14,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["DIFFICULTIES", "PART_KINDS", "CropRow", "crop_row_defaults", "generate_crop_row"]
+__all__ = ["DIFFICULTIES", "PART_KINDS", "PART_REACH", "CropRow", "crop_row_defaults", "generate_crop_row"]
 
 PART_KINDS = ("stem", "fruit", "petiole", "leaf", "shoot")
 """Categories of plant parts; stems, shoots and fruits are hard obstacles, petioles and leaves soft."""
 _HARD = {"stem": True, "fruit": True, "petiole": False, "leaf": False, "shoot": True}
 _KIND_CODE = {"stem": 1, "fruit": 0, "petiole": 1, "leaf": 2, "shoot": 1}  # PSS 0, LSS 1, TSS 2
+STEM_HEIGHT = 2.2  # [m]
+LEAF_LENGTH = (0.15, 0.25)  # [m] blade length range
+PETIOLE_LENGTH = 0.1  # [m] longest petiole
+SHOOT_LENGTH = 0.22  # [m] longest horizontal run of a side shoot
+PETIOLE_RADIUS = 0.002  # [m]
+LEAF_RADIUS = 0.002  # [m] half thickness of a blade
+PART_REACH = PETIOLE_LENGTH + LEAF_LENGTH[1] + 0.05
+"""Bound on how far [m] a part reaches horizontally from its stem's axis (leaves are the longest; 0.05 m covers
+the stem's lean at working height)."""
 
 DIFFICULTIES = ("easy", "medium", "hard")
 _DIFFICULTY = {
@@ -50,6 +59,8 @@ class CropRow:
         hard: (N,) True for stems, shoots and fruits (contact is a collision), False for leaves and petioles.
         stem_base: (S, 3) stem foot points [m]; stem_top: (S, 3) stem top points [m].
         near_row: (S,) True for stems of the near row.
+        blade: (N,) index of the leaf blade a TSS belongs to (the two triangles of a blade share it), -1 for
+            other parts.
     """
 
     category: NDArray[np.str_]
@@ -61,14 +72,25 @@ class CropRow:
     stem_base: NDArray[np.float64]
     stem_top: NDArray[np.float64]
     near_row: NDArray[np.bool_]
+    blade: NDArray[np.int64]
 
     def __len__(self) -> int:
         return int(self.kind.size)
 
+    def whole_blades(self, keep: NDArray[np.int64]) -> NDArray[np.int64]:
+        """Sorted part indices: ``keep`` plus the other triangle of every leaf blade it touches."""
+        mask = np.zeros(len(self), dtype=bool)
+        mask[keep] = True
+        blades = np.unique(self.blade[mask & (self.blade >= 0)])
+        mask |= (self.blade >= 0) & np.isin(self.blade, blades)
+        return np.flatnonzero(mask)
+
     def subset(self, keep: NDArray[np.int64]) -> CropRow:
-        """The parts with indices ``keep`` (stems stay listed in ``stem_base``/``stem_top``)."""
-        return CropRow(self.category[keep], self.kind[keep], self.vertices[keep], self.radius[keep], self.plant[keep],
-                       self.hard[keep], self.stem_base, self.stem_top, self.near_row)
+        """The parts :meth:`whole_blades` of ``keep`` (a blade stays whole), in their order; stems stay listed
+        in ``stem_base``/``stem_top``."""
+        k = self.whole_blades(keep)
+        return CropRow(self.category[k], self.kind[k], self.vertices[k], self.radius[k], self.plant[k], self.hard[k],
+                       self.stem_base, self.stem_top, self.near_row, self.blade[k])
 
     def stem_point(self, plant: int, z: float) -> NDArray[np.float64]:
         """Point of stem ``plant`` at height ``z`` [m]."""
@@ -76,18 +98,17 @@ class CropRow:
         return a + (z - a[2]) / (b[2] - a[2]) * (b - a)
 
 
-def _uniform(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
-    return float(rng.uniform(bounds[0], bounds[1]))
-
-
 def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, row_gap: float = 0.45,
                       row_length: float = 8.0, stem_spacing: tuple[float, float] = (0.25, 0.35),
-                      stem_diameter: tuple[float, float] = (0.010, 0.015), stem_height: float = 2.2,
+                      stem_diameter: tuple[float, float] = (0.010, 0.015), stem_height: float = STEM_HEIGHT,
                       fruit_diameter: tuple[float, float] = (0.08, 0.09), fruits_per_stem: tuple[int, int] = (1, 3),
                       harvest_band: tuple[float, float] = (0.9, 1.3), leaves_per_stem: int = 6,
-                      leaf_length: tuple[float, float] = (0.15, 0.25), shoot_probability: float = 0.25,
+                      leaf_length: tuple[float, float] = LEAF_LENGTH, shoot_probability: float = 0.25,
                       cluster_spread: float = 0.08) -> CropRow:
     """A seeded double row of pepper plants centred on ``y = 0``.
+
+    Vectorized over plants (a reset draws a row every episode, so this is on the training loop's path). Parts
+    are ordered stems, peppers, petioles, leaf triangles (the two of a blade adjacent), shoots.
 
     Args:
         rng: the env's generator (every draw comes from it).
@@ -102,67 +123,78 @@ def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, r
         shoot_probability: chance per stem of a side shoot reaching into the path (occluding stem).
         cluster_spread: vertical spread of the peppers of one stem [m] (small = clustered fruit).
     """
-    parts: list[tuple[str, list[NDArray[np.float64]], float, int]] = []
-    bases, tops, near = [], [], []
     half = 0.5 * row_length
-    for row, x0 in enumerate((row_distance, row_distance + row_gap)):
-        y = -half + _uniform(rng, (0.0, stem_spacing[1]))
-        while y <= half:
-            base = np.array([x0 + rng.uniform(-0.02, 0.02), y, 0.3])
-            lean = rng.normal(0.0, 0.03, 2)
-            top = np.array([base[0] + lean[0], base[1] + lean[1], stem_height])
-            plant = len(bases)
-            bases.append(base)
-            tops.append(top)
-            near.append(row == 0)
-            parts.append(("stem", [base, top], 0.5 * _uniform(rng, stem_diameter), plant))
-            y += _uniform(rng, stem_spacing)
-    row_data = CropRow(np.array([]), np.array([]), np.zeros((0, 3, 3)), np.array([]), np.array([]), np.array([]),
-                       np.array(bases), np.array(tops), np.array(near))
+    n_max = int(np.ceil(row_length / stem_spacing[0])) + 2
+    ys, near = [], []
+    for row in range(2):
+        y = -half + rng.uniform(0.0, stem_spacing[1]) + np.concatenate(
+            [[0.0], np.cumsum(rng.uniform(stem_spacing[0], stem_spacing[1], n_max - 1))])
+        y = y[y <= half]
+        ys.append(y)
+        near.append(np.full(y.size, row == 0))
+    y = np.concatenate(ys)
+    near_row = np.concatenate(near)
+    n_stems = y.size
+    x0 = np.where(near_row, row_distance, row_distance + row_gap)
+    base = np.column_stack([x0 + rng.uniform(-0.02, 0.02, n_stems), y, np.full(n_stems, 0.3)])
+    top = base + np.column_stack([rng.normal(0.0, 0.03, (n_stems, 2)), stem_height - base[:, 2]])
+    stem_radius = 0.5 * rng.uniform(stem_diameter[0], stem_diameter[1], n_stems)
+    slope = (top - base) / (top[:, 2:3] - base[:, 2:3])  # stem point at height z: base + (z - base_z) * slope
+
+    def stem_point(plant: NDArray[np.int64], z: NDArray[np.float64]) -> NDArray[np.float64]:
+        return base[plant] + (z - base[plant, 2])[:, None] * slope[plant]
+
+    def horizontal(phi: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.column_stack([np.cos(phi), np.sin(phi), np.zeros_like(phi)])
+
     low, high = harvest_band
-    for plant in range(len(bases)):
-        n_fruit = int(rng.integers(fruits_per_stem[0], fruits_per_stem[1] + 1))
-        z_center = rng.uniform(low + 0.5 * cluster_spread, high - 0.5 * cluster_spread)
-        for _ in range(n_fruit):
-            z = float(np.clip(z_center + rng.uniform(-0.5, 0.5) * cluster_spread, low, high))
-            phi = rng.uniform(0.0, 2.0 * np.pi)
-            r = 0.5 * _uniform(rng, fruit_diameter)
-            radial = np.array([np.cos(phi), np.sin(phi), 0.0])
-            attach = row_data.stem_point(plant, z + r)
-            # the pepper hangs below its peduncle, its shoulder touching the stem's side
-            center = attach + (r + 0.012) * radial - np.array([0.0, 0.0, 0.8 * r])
-            parts.append(("fruit", [center], r, plant))
-        for _ in range(leaves_per_stem):
-            z = rng.uniform(low - 0.25, high + 0.25)
-            phi = rng.uniform(0.0, 2.0 * np.pi)
-            out = np.array([np.cos(phi), np.sin(phi), 0.0])
-            side = np.array([-out[1], out[0], 0.0])
-            start = row_data.stem_point(plant, z)
-            end = start + rng.uniform(0.05, 0.1) * out + np.array([0.0, 0.0, rng.uniform(0.0, 0.04)])
-            parts.append(("petiole", [start, end], 0.002, plant))
-            length = _uniform(rng, leaf_length)
-            droop = rng.uniform(0.1, 0.6)
-            direction = (out + np.array([0.0, 0.0, -droop])) / np.sqrt(1.0 + droop * droop)
-            tip = end + length * direction
-            width = rng.uniform(0.4, 0.5) * length
-            mid = end + 0.4 * length * direction
-            left, right = mid + 0.5 * width * side, mid - 0.5 * width * side
-            parts.append(("leaf", [end, left, tip], 0.002, plant))
-            parts.append(("leaf", [end, tip, right], 0.002, plant))
-        if rng.uniform() < shoot_probability:
-            z = rng.uniform(low, high)
-            phi = np.pi + rng.uniform(-0.8, 0.8)  # towards the path, where the arm works
-            start = row_data.stem_point(plant, z)
-            end = start + rng.uniform(0.12, 0.22) * np.array([np.cos(phi), np.sin(phi), 0.0]) \
-                + np.array([0.0, 0.0, rng.uniform(0.05, 0.2)])
-            parts.append(("shoot", [start, end], 0.5 * _uniform(rng, stem_diameter) * 0.8, plant))
-    n = len(parts)
-    vertices = np.empty((n, 3, 3))
-    for k, (_, pts, _, _) in enumerate(parts):
-        for i in range(3):
-            vertices[k, i] = pts[min(i, len(pts) - 1)]
-    category = np.array([p[0] for p in parts])
-    return CropRow(category, np.array([_KIND_CODE[c] for c in category], dtype=np.int64), vertices,
-                   np.array([p[2] for p in parts]), np.array([p[3] for p in parts], dtype=np.int64),
-                   np.array([_HARD[c] for c in category]), row_data.stem_base, row_data.stem_top,
-                   row_data.near_row)
+    # peppers: a cluster centre per plant, then each fruit hangs below its peduncle, its shoulder at the stem
+    n_fruit = rng.integers(fruits_per_stem[0], fruits_per_stem[1] + 1, n_stems)
+    z_center = rng.uniform(low + 0.5 * cluster_spread, high - 0.5 * cluster_spread, n_stems)
+    f_plant = np.repeat(np.arange(n_stems), n_fruit)
+    n_f = f_plant.size
+    f_z = np.clip(z_center[f_plant] + rng.uniform(-0.5, 0.5, n_f) * cluster_spread, low, high)
+    f_radius = 0.5 * rng.uniform(fruit_diameter[0], fruit_diameter[1], n_f)
+    f_center = (stem_point(f_plant, f_z + f_radius) + (f_radius + 0.012)[:, None] * horizontal(
+        rng.uniform(0.0, 2.0 * np.pi, n_f))) - np.column_stack([np.zeros((n_f, 2)), 0.8 * f_radius])
+    # leaves: a petiole out of the stem, then a drooping kite-shaped blade of two triangles
+    l_plant = np.repeat(np.arange(n_stems), leaves_per_stem)
+    n_l = l_plant.size
+    out = horizontal(rng.uniform(0.0, 2.0 * np.pi, n_l))
+    side = np.column_stack([-out[:, 1], out[:, 0], np.zeros(n_l)])
+    start = stem_point(l_plant, rng.uniform(low - 0.25, high + 0.25, n_l))
+    end = start + rng.uniform(0.05, 0.1, n_l)[:, None] * out
+    end[:, 2] += rng.uniform(0.0, 0.04, n_l)
+    length = rng.uniform(leaf_length[0], leaf_length[1], n_l)
+    droop = rng.uniform(0.1, 0.6, n_l)
+    direction = (out - np.column_stack([np.zeros((n_l, 2)), droop])) / np.sqrt(1.0 + droop * droop)[:, None]
+    tip = end + length[:, None] * direction
+    width = rng.uniform(0.4, 0.5, n_l) * length
+    mid = end + (0.4 * length)[:, None] * direction
+    left, right = mid + (0.5 * width)[:, None] * side, mid - (0.5 * width)[:, None] * side
+    blades = np.empty((2 * n_l, 3, 3))
+    blades[0::2] = np.stack([end, left, tip], axis=1)
+    blades[1::2] = np.stack([end, tip, right], axis=1)
+    # side shoots grow towards the path, where the arm works
+    s_plant = np.flatnonzero(rng.uniform(size=n_stems) < shoot_probability)
+    n_s = s_plant.size
+    s_start = stem_point(s_plant, rng.uniform(low, high, n_s))
+    s_end = s_start + rng.uniform(0.12, SHOOT_LENGTH, n_s)[:, None] * horizontal(np.pi + rng.uniform(-0.8, 0.8, n_s))
+    s_end[:, 2] += rng.uniform(0.05, 0.2, n_s)
+    s_radius = 0.4 * rng.uniform(stem_diameter[0], stem_diameter[1], n_s)
+
+    def segments(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.stack([a, b, b], axis=1)
+
+    counts = {"stem": n_stems, "fruit": n_f, "petiole": n_l, "leaf": 2 * n_l, "shoot": n_s}
+    category = np.repeat(np.array(list(counts)), list(counts.values()))
+    vertices = np.concatenate([segments(base, top), np.repeat(f_center[:, None], 3, axis=1), segments(start, end),
+                               blades, segments(s_start, s_end)])
+    radius = np.concatenate([stem_radius, f_radius, np.full(n_l, PETIOLE_RADIUS), np.full(2 * n_l, LEAF_RADIUS),
+                             s_radius])
+    plant = np.concatenate([np.arange(n_stems), f_plant, l_plant, np.repeat(l_plant, 2), s_plant])
+    blade = np.full(category.size, -1, dtype=np.int64)
+    blade[category == "leaf"] = np.repeat(np.arange(n_l), 2)
+    return CropRow(category, np.array([_KIND_CODE[c] for c in counts]).repeat(list(counts.values())), vertices,
+                   radius, plant, np.array([_HARD[c] for c in counts]).repeat(list(counts.values())), base, top,
+                   near_row, blade)

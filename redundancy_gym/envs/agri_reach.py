@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -20,7 +21,7 @@ from ..assets import (
     AGRI_ARM_XML,
 )
 from ..assets.agri_scene import PLANT_COLORS, POOL_CATEGORIES, TARGET_COLOR, agri_scene_xml, pool_geom_name
-from ..assets.crop_row import DIFFICULTIES, CropRow, crop_row_defaults, generate_crop_row
+from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaults, generate_crop_row
 from ..geometry import LSS, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
 from .validation import non_negative as _non_negative
@@ -66,7 +67,7 @@ def default_config() -> dict[str, Any]:
         "success_angle_tolerance": 10.0,
         "clearance_horizon": 0.1,
         "reset_noise_scale": 0.05,
-        "frame_skip": 2,
+        "frame_skip": 1,
     }
 
 
@@ -145,11 +146,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``success_bonus`` (>= 0): reward weights.
     - ``success_position_tolerance`` [m], ``success_angle_tolerance`` [deg].
     - ``clearance_horizon`` [m]: pairs farther than this (by bounding spheres) are not computed exactly.
-    - ``reset_noise_scale`` [m, rad]; ``frame_skip`` (physics steps of 5 ms per control step).
+    - ``reset_noise_scale`` [m, rad]; ``frame_skip`` (physics steps of 10 ms per control step).
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version (physics step 10 ms, ``frame_skip`` 1; leaf blades drawn as one ellipsoid each).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -167,7 +168,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                  orientation_weight: float = 0.2, energy_weight: float = 0.01, leaf_penalty: float = 0.1,
                  collision_penalty: float = 10.0, success_bonus: float = 10.0,
                  success_position_tolerance: float = 0.01, success_angle_tolerance: float = 10.0,
-                 clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 2,
+                 clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,
                  render_mode: str | None = None, width: int = 480, height: int = 480, camera_name: str = "side",
                  **kwargs: Any) -> None:
         if kwargs:
@@ -249,7 +250,13 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             self.observation_layout[name] = slice(start, start + size)
             start += size
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(start,), dtype=np.float64)
-        self._dynamic = np.empty(self.observation_layout["obstacles"].start)  # the per-step part of the observation
+        # _get_obs writes q, qdot, TCP pose and time by position: the layout and joint addresses must match
+        if [(v.start, v.stop) for v in list(self.observation_layout.values())[:4]] != [(0, 9), (9, 18), (18, 21),
+                                                                                       (21, 25)] \
+                or self.observation_layout["time"] != slice(34, 35) or list(self._qpos) != list(range(9)) \
+                or list(self._qvel) != list(range(9)):
+            raise EnvConfigError("AgriReach observation layout or joint addresses changed; update _get_obs")
+        self._obs = np.zeros(start)
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
         self._row: CropRow | None = None
@@ -262,10 +269,16 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         rng = self.np_random
         for _ in range(50):
             row = generate_crop_row(rng, **self._scene)
-            if self._prune:
-                row = row.subset(self._reachable(row))
             target = self._choose_target(row, rng)
-            if target is not None:
+            if target is None:
+                continue
+            if self._prune:
+                keep = row.whole_blades(self._reachable(row))
+                if not np.isin(target, keep):  # cannot happen for a reachable pre-grasp pose; guarded anyway
+                    continue
+                target = int(np.searchsorted(keep, target))
+                row = row.subset(keep)
+            if self._fits(row):
                 break
         else:
             raise EnvConfigError("no reachable pepper with a clear approach in 50 generated rows; loosen the scene "
@@ -274,7 +287,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._target = target
         self._place_scene(row, target)
         self._build_collision_pairs(row, target)
-        self._obstacle_block = self._observed_obstacles(row, target)
+        lay = self.observation_layout
+        self._obs[lay["obstacles"]] = self._observed_obstacles(row, target)
+        self._obs[lay["grasp_position"]] = self._grasp
+        self._obs[lay["approach"]] = self._approach
+        self._obs[lay["pregrasp_position"]] = self._pregrasp
         q = self._start_configuration(rng)
         mujoco.mj_resetData(self.model, self.data)
         self.data.qpos[self._qpos] = q
@@ -287,18 +304,23 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         action = np.asarray(action, dtype=np.float64)
         if action.shape != (9,):
             raise InvalidActionError(f"action must have shape (9,), got {action.shape}")
-        if not np.all(np.isfinite(action)):
+        # a finite sum proves every entry finite (the full check only runs when it is not)
+        if not math.isfinite(float(action.sum())) and not np.isfinite(action).all():
             raise InvalidActionError(f"action must be finite, got {action}")
         if self._row is None:
             raise gym.error.ResetNeeded("call reset() before step()")
-        qdot_cmd = self._speed_scale * np.clip(action, -1.0, 1.0)
-        self._ctrl[:9] = qdot_cmd
-        self._ctrl[9:] = qdot_cmd
-        self.data.ctrl[:] = self._ctrl
-        mujoco.mj_step(self.model, self.data, nstep=self.frame_skip)
-        mujoco.mj_kinematics(self.model, self.data)  # positions of the state after the last integration
+        qdot_cmd = self._speed_scale * action.clip(-1.0, 1.0)
+        ctrl = self.data.ctrl
+        ctrl[:9] = qdot_cmd  # servo set-points integrate the command; the feed-forwards apply it directly
+        ctrl[9:] = qdot_cmd
+        # mj_step1 of the current state ran at the end of the last step (or in reset): finish that step with
+        # mj_step2, then run the new state's position/velocity stages once, for the observation and next step
+        mujoco.mj_step2(self.model, self.data)
+        if self.frame_skip > 1:
+            mujoco.mj_step(self.model, self.data, nstep=self.frame_skip - 1)
+        mujoco.mj_step1(self.model, self.data)
         self._time += self.dt
-        metrics = self._metrics(self.data.qvel[self._qvel])
+        metrics = self._metrics(self.data.qvel[0:9])
         reward, terms = self._get_rew(metrics)
         metrics.update(terms)
         terminated = bool(metrics["collision"] or metrics["is_success"])
@@ -346,18 +368,14 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         return self._difficulty
 
     def _get_obs(self) -> NDArray[np.float64]:
-        d = self._dynamic
-        lay = self.observation_layout
-        d[lay["q"]] = self.data.qpos[self._qpos]
-        d[lay["qdot"]] = self.data.qvel[self._qvel]
-        d[lay["tcp_position"]] = self.data.site_xpos[self._tcp_site]
+        o = self._obs  # episode-constant entries (targets, obstacle block) were written at reset
+        o[0:9] = self.data.qpos[0:9]
+        o[9:18] = self.data.qvel[0:9]
+        o[18:21] = self.data.site_xpos[self._tcp_site]
         mujoco.mju_mat2Quat(self._quat, self.data.site_xmat[self._tcp_site])
-        d[lay["tcp_quaternion"]] = self._quat
-        d[lay["grasp_position"]] = self._grasp
-        d[lay["approach"]] = self._approach
-        d[lay["pregrasp_position"]] = self._pregrasp
-        d[lay["time"]] = self._time
-        return np.concatenate([d, self._obstacle_block])
+        o[21:25] = self._quat
+        o[34] = self._time
+        return o.copy()
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
@@ -374,56 +392,64 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
     def _metrics(self, qdot: NDArray[np.float64]) -> dict[str, Any]:
         """Step metrics for ``info``; also advances the episode's contact counters."""
-        tcp = self.data.site_xpos[self._tcp_site].copy()
-        axis = self.data.site_xmat[self._tcp_site][[0, 3, 6]]
-        error = float(np.linalg.norm(tcp - self._grasp))
-        angle = float(np.arccos(min(1.0, max(-1.0, float(axis @ self._approach)))))
+        # scalar math on Python floats: NumPy's per-call overhead on 3-vectors would dominate this function
+        x, y, z = self.data.site_xpos[self._tcp_site].tolist()
+        gx, gy, gz = self._grasp_tuple
+        error = math.sqrt((x - gx) ** 2 + (y - gy) ** 2 + (z - gz) ** 2)
+        m = self.data.site_xmat[self._tcp_site]
+        ax, ay, az = self._approach_tuple
+        cos_angle = float(m[0]) * ax + float(m[3]) * ay + float(m[6]) * az  # tool axis: the site's local x
+        angle = math.acos(min(1.0, max(-1.0, cos_angle)))
         clearance, leaves = self._contacts()
         collision = clearance <= 0.0
         self._collided = self._collided or collision
         self._leaf_total += leaves
-        q = self.data.qpos[self._qpos]
+        qd = qdot.tolist()
+        margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[0:9].tolist(), self._lower_list,
+                                                               self._upper_list))
         success = (not self._collided) and error <= self._success_position and angle <= self._success_angle
         return {
             "task_error": error,
             "orientation_error": angle,
-            "pseudoenergy": float(qdot @ qdot) * self.dt,
+            "pseudoenergy": sum(v * v for v in qd) * self.dt,
             "min_clearance": clearance,
-            "collision": bool(collision),
+            "collision": collision,
             "leaf_contacts": leaves,
             "leaf_contacts_total": self._leaf_total,
-            "joint_limit_margin": float(np.min(np.minimum(q - self._lower, self._upper - q))),
-            "peak_joint_speed": float(np.max(np.abs(qdot))),
-            "is_success": bool(success),
+            "joint_limit_margin": margin,
+            "peak_joint_speed": max(map(abs, qd)),
+            "is_success": success,
             "time": self._time,
-            "tcp": tcp,
+            "tcp": np.array((x, y, z)),
         }
 
     def _contacts(self) -> tuple[float, int]:
         """Smallest hard/self clearance (capped at the horizon) and the number of leaves touched."""
-        batch = self._batch
-        xpos = self.data.geom_xpos[self._arm_geoms]
-        axis = self.data.geom_xmat[self._arm_geoms][:, 2::3] * self._half_length[:, None]  # local z
-        v = batch.vertices
-        v[:self._n_arm, 0] = xpos - axis
-        v[:self._n_arm, 1] = xpos + axis
-        v[:self._n_arm, 2] = v[:self._n_arm, 1]
-        if batch.cull(self._horizon) == 0:
-            return self._horizon, 0
-        d = batch.compute().distance
-        n_hard = self._n_hard_pairs  # pairs are ordered hard (arm-plant, self) first, then soft
-        clearance = min(float(d[:n_hard].min()) if n_hard else np.inf, self._horizon)
-        touched = self._soft_part[d[n_hard:] <= 0.0]
+        clearance = min(self._hard_batch.compute_near(self._horizon), self._horizon)
+        if self._soft_batch.compute_near(0.0) > 0.0:  # leaves only count when touched
+            return clearance, 0
+        touched = self._soft_part[self._soft_batch.result.distance <= 0.0]
         return clearance, (int(np.unique(touched).size) if touched.size else 0)
 
     # ------------------------------------------------------------------ scene
     def _pool_capacity(self) -> dict[str, int]:
-        """Upper bounds of the number of parts per category the (pruned) scene can hold."""
+        """Upper bounds of the number of parts per category the (pruned) scene can hold (``leaf``: blades)."""
         s = self._scene
-        length = min(s["row_length"], 2.0 * (_REACH + _ARM_RADIUS) + 0.2) if self._prune else s["row_length"]
-        stems = 2 * (int(np.ceil(length / s["stem_spacing"][0])) + 2)
+        stems = 0
+        for x0 in (s["row_distance"], s["row_distance"] + s["row_gap"]):
+            length = s["row_length"]
+            if self._prune:  # the stretch of this row whose plants can reach into the pruning capsule
+                far = _REACH + _ARM_RADIUS + PART_REACH
+                length = min(length, 2.0 * np.sqrt(max(far * far - (x0 - 0.02) ** 2, 0.0)))
+            stems += int(np.floor(length / s["stem_spacing"][0])) + 1 if length > 0.0 else 0
         return {"stem": stems, "shoot": stems, "fruit": stems * s["fruits_per_stem"][1],
-                "petiole": stems * s["leaves_per_stem"], "leaf": 2 * stems * s["leaves_per_stem"]}
+                "petiole": stems * s["leaves_per_stem"], "leaf": stems * s["leaves_per_stem"]}
+
+    def _fits(self, row: CropRow) -> bool:
+        """Whether the row's parts fit the compiled geom pools (a row that would not is drawn again)."""
+        counts = {c: int(np.count_nonzero(row.category == c)) for c in POOL_CATEGORIES}
+        counts["leaf"] //= 2
+        return all(counts[c] <= self._pool[c].size for c in POOL_CATEGORIES)
 
     def _reachable(self, row: CropRow) -> NDArray[np.int64]:
         """Parts that can meet the arm: within its reach capsule around the lift column."""
@@ -433,76 +459,96 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     def _choose_target(self, row: CropRow, rng: np.random.Generator) -> int | None:
         """A pepper of the near row facing the arm, reachable, with a clear approach corridor (or None)."""
         fruits = np.flatnonzero((row.category == "fruit") & row.near_row[row.plant])
-        rng.shuffle(fruits)
+        center = row.vertices[fruits, 0]
+        plant = row.plant[fruits]
+        stem = row.stem_base[plant] + ((center[:, 2] - row.stem_base[plant, 2])
+                                       / (row.stem_top[plant, 2] - row.stem_base[plant, 2]))[:, None] \
+            * (row.stem_top[plant] - row.stem_base[plant])
+        radial = center[:, :2] - stem[:, :2]
+        radial /= np.maximum(np.linalg.norm(radial, axis=1), 1e-9)[:, None]
+        towards_arm = -center[:, :2] / np.maximum(np.linalg.norm(center[:, :2], axis=1), 1e-9)[:, None]
+        beta = rng.uniform(self._elevation[0], self._elevation[1], fruits.size)
+        approach = np.column_stack([-np.cos(beta)[:, None] * radial, np.sin(beta)])
+        pregrasp = center - self._pregrasp_distance * approach
+        ok = (np.sum(radial * towards_arm, axis=1) >= np.cos(np.deg2rad(50.0))) \
+            & (np.linalg.norm(pregrasp[:, :2], axis=1) <= _REACH - 0.35) & (pregrasp[:, 2] > 0.6) \
+            & (pregrasp[:, 2] < 1.5)
+        candidates = np.flatnonzero(ok)
+        rng.shuffle(candidates)
         hard = np.flatnonzero(row.hard)
-        for f in fruits:
-            center = row.vertices[f, 0]
-            stem = row.stem_point(int(row.plant[f]), float(center[2]))
-            radial = center - stem
-            radial[2] = 0.0
-            radial /= max(np.linalg.norm(radial), 1e-9)
-            towards_arm = -center[:2] / max(np.linalg.norm(center[:2]), 1e-9)
-            if radial[:2] @ towards_arm < np.cos(np.deg2rad(50.0)):
-                continue
-            beta = rng.uniform(*self._elevation)
-            approach = -np.cos(beta) * radial + np.array([0.0, 0.0, np.sin(beta)])
-            pregrasp = center - self._pregrasp_distance * approach
-            if np.linalg.norm(pregrasp[:2]) > _REACH - 0.35 or not (0.6 < pregrasp[2] < 1.5):
-                continue
-            corridor = LSS(center - _CORRIDOR[0] * approach, center - _CORRIDOR[1] * approach, _CORRIDOR[2])
+        for c in candidates:
+            f = fruits[c]
+            corridor = LSS(center[c] - _CORRIDOR[0] * approach[c], center[c] - _CORRIDOR[1] * approach[c],
+                           _CORRIDOR[2])
             others = hard[hard != f]
             if others.size and _distances_to(row, others, corridor).min() < 0.01:
                 continue
-            self._grasp = center.copy()
-            self._approach = approach
-            self._pregrasp = pregrasp
+            self._grasp = center[c].copy()
+            self._approach = approach[c].copy()
+            self._pregrasp = pregrasp[c].copy()
+            self._grasp_tuple = tuple(self._grasp.tolist())
+            self._approach_tuple = tuple(self._approach.tolist())
             return int(f)
         return None
 
     def _place_scene(self, row: CropRow, target: int) -> None:
-        """Move the pooled plant geoms onto the row's parts; hide the spare ones."""
+        """Move the pooled plant geoms onto the row's parts (vectorized per category); hide the spare ones."""
         m = self.model
-        used = dict.fromkeys(POOL_CATEGORIES, 0)
-        for ids in self._pool.values():
-            m.geom_rgba[ids] = 0.0
-            m.geom_pos[ids] = (0.0, 0.0, -10.0)
-        for k in range(len(row)):
-            category = str(row.category[k])
-            g = self._pool[category][used[category]]
-            used[category] += 1
-            v = row.vertices[k]
-            r = float(row.radius[k])
-            m.geom_rgba[g] = TARGET_COLOR if k == target else PLANT_COLORS[category]
-            if category == "fruit":
-                m.geom_pos[g] = v[0]
-                m.geom_size[g] = (r, r, r)
-            elif category == "leaf":
-                _place_box(m, g, v, r)
-            else:
-                _place_capsule(m, g, v[0], v[1], max(r, 1e-3))
-        _place_capsule(m, self._approach_line, self._pregrasp, self._grasp, 0.003)
+        m.geom_rgba[self._pool_all] = 0.0
+        m.geom_pos[self._pool_all] = (0.0, 0.0, -10.0)
+        v, r = row.vertices, row.radius
+        for category in ("stem", "shoot", "petiole"):
+            k = np.flatnonzero(row.category == category)
+            g = self._pool[category][: k.size]
+            m.geom_rgba[g] = PLANT_COLORS[category]
+            _place_capsules(m, g, v[k, 0], v[k, 1], np.maximum(r[k], 1e-3))
+        k = np.flatnonzero(row.category == "fruit")
+        g = self._pool["fruit"][: k.size]
+        m.geom_rgba[g] = PLANT_COLORS["fruit"]
+        m.geom_rgba[g[k == target]] = TARGET_COLOR
+        m.geom_pos[g] = v[k, 0]
+        m.geom_size[g] = r[k, None]
+        k = np.flatnonzero(row.category == "leaf")  # the two triangles of a blade are adjacent
+        g = self._pool["leaf"][: k.size // 2]
+        m.geom_rgba[g] = PLANT_COLORS["leaf"]
+        _place_blades(m, g, v[k[0::2]], v[k[1::2], 2], r[k[0::2]])
+        _place_capsules(m, np.array([self._approach_line]), self._pregrasp[None], self._grasp[None],
+                        np.array([0.003]))
 
     def _build_collision_pairs(self, row: CropRow, target: int) -> None:
-        """The pair batch of the episode: arm vs hard parts, arm vs leaves/petioles, non-adjacent arm pairs."""
-        n_arm = self._n_arm
-        parts = np.array([k for k in range(len(row)) if k != target], dtype=np.int64)
+        """The pair batches of the episode: arm vs hard parts plus non-adjacent arm pairs, and arm vs
+        leaves/petioles (only touching counts there, so it is culled at margin 0).
+
+        Volumes are ordered moving arm volumes, the fixed column, then the plant parts, so the broad phase only
+        refreshes the arm's bounding spheres, read from MuJoCo's geom frames inside the compiled call."""
+        n_moving = self._n_arm - 1
+        parts = np.flatnonzero(np.arange(len(row)) != target)
         m = self.model
-        arm = PackedVolumes(np.zeros((n_arm, 3, 3)), m.geom_size[self._arm_geoms, 0].copy(),
-                            np.where(self._half_length > 0.0, 1, 0).astype(np.int64))
-        volumes = PackedVolumes(np.concatenate([arm.vertices, row.vertices[parts]]),
-                                np.concatenate([arm.radii, row.radius[parts]]),
-                                np.concatenate([arm.kinds, row.kind[parts]]))
-        moving = np.arange(1, n_arm)  # the column (0) is fixed: it only meets the arm
-        hard = n_arm + np.flatnonzero(row.hard[parts])
-        soft = n_arm + np.flatnonzero(~row.hard[parts])
-        ia_h, ib_h = np.repeat(moving, hard.size), np.tile(hard, moving.size)
-        ia_s, ib_s = np.repeat(moving, soft.size), np.tile(soft, moving.size)
-        ia_r, ib_r = self._self_pairs[:, 0], self._self_pairs[:, 1]
-        ia = np.concatenate([ia_h, ia_r, ia_s])
-        ib = np.concatenate([ib_h, ib_r, ib_s])
-        self._batch = PairBatch(volumes, ia, ib)
-        self._n_hard_pairs = ia_h.size + ia_r.size
-        self._soft_part = ib_s  # leaves are counted per part
+        arm = self._arm_geoms[np.r_[1 : self._n_arm, 0]]  # the column (AGRI_ARM_GEOMS[0]) is fixed
+        vertices = np.zeros((self._n_arm, 3, 3))
+        vertices[-1, :2] = m.geom_pos[arm[-1]] + np.outer((-1.0, 1.0), self._column_half_axis)  # world geom
+        vertices[-1, 2] = vertices[-1, 1]
+        kinds = np.where(self._half_length[np.r_[1 : self._n_arm, 0]] > 0.0, 1, 0)
+        moving = np.arange(n_moving)
+        volume_of = np.r_[n_moving, 0:n_moving]  # AGRI_ARM_GEOMS index -> volume index
+        g0, g1 = self._moving_geoms
+        batches = []
+        for hard in (True, False):
+            k = parts[row.hard[parts] == hard]
+            volumes = PackedVolumes(np.concatenate([vertices, row.vertices[k]]),
+                                    np.concatenate([m.geom_size[arm, 0], row.radius[k]]),
+                                    np.concatenate([kinds, row.kind[k]]))
+            ia = np.repeat(moving, k.size)
+            ib = np.tile(self._n_arm + np.arange(k.size), n_moving)
+            if hard:
+                ia = np.concatenate([ia, volume_of[self._self_pairs[:, 0]]])
+                ib = np.concatenate([ib, volume_of[self._self_pairs[:, 1]]])
+            else:
+                self._soft_part = np.tile(k, n_moving)  # leaves are counted per part
+            batch = PairBatch(volumes, ia, ib, moving=n_moving)
+            batch.attach_frames(self.data.geom_xpos[g0:g1], self.data.geom_xmat[g0:g1], self._half_length[1:])
+            batches.append(batch)
+        self._hard_batch, self._soft_batch = batches
 
     def _observed_obstacles(self, row: CropRow, target: int) -> NDArray[np.float64]:
         """The static obstacle block of the observation: the K parts nearest to the approach corridor."""
@@ -535,7 +581,6 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._time = 0.0
         self._collided = False
         self._leaf_total = 0
-        self._ctrl = np.zeros(18)
         self._quat = np.zeros(4)
 
     def _resolve_names(self) -> None:
@@ -545,6 +590,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._qvel = np.array([j.dofadr[0] for j in joints])
         self._lower = np.array([j.range[0] for j in joints])
         self._upper = np.array([j.range[1] for j in joints])
+        self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()
         servo_ids = [m.actuator(n).id for n in AGRI_ARM_SERVOS]
         ff_ids = [m.actuator(n).id for n in AGRI_ARM_FEEDFORWARDS]
         if servo_ids + ff_ids != list(range(18)):
@@ -555,9 +601,18 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._n_arm = len(AGRI_ARM_GEOMS)
         self._half_length = np.where(m.geom_type[self._arm_geoms] == mujoco.mjtGeom.mjGEOM_CAPSULE,
                                      m.geom_size[self._arm_geoms, 1], 0.0)
+        moving = self._arm_geoms[1:]
+        if m.geom_bodyid[self._arm_geoms[0]] != 0 or np.any(np.diff(moving) != 1):
+            raise EnvConfigError("agri arm geoms must be the world-fixed column, then the moving geoms in id order")
+        # contiguous ids: the per-step contact check reads MuJoCo's geom frames through slices, not copies
+        self._moving_geoms = (int(moving[0]), int(moving[-1]) + 1)
+        column_frame = np.zeros(9)
+        mujoco.mju_quat2Mat(column_frame, m.geom_quat[self._arm_geoms[0]])
+        self._column_half_axis = column_frame[2::3] * self._half_length[0]
         self._self_pairs = _self_collision_pairs(m, self._arm_geoms)
         self._pool = {c: np.array([m.geom(pool_geom_name(c, k)).id for k in range(n)], dtype=np.int64)
                       for c, n in self._pool_capacity().items()}
+        self._pool_all = np.concatenate(list(self._pool.values()))
         self._approach_line = m.geom("approach_line").id
 
 
@@ -593,30 +648,45 @@ def _self_collision_pairs(m: mujoco.MjModel, geoms: NDArray[np.int64]) -> NDArra
     return np.array(pairs, dtype=np.int64).reshape(-1, 2)
 
 
-def _place_capsule(m: mujoco.MjModel, g: int, p0: NDArray[np.float64], p1: NDArray[np.float64], r: float) -> None:
+def _place_capsules(m: mujoco.MjModel, g: NDArray[np.int64], p0: NDArray[np.float64], p1: NDArray[np.float64],
+                    r: NDArray[np.float64]) -> None:
+    """Capsule geoms ``g`` from ``p0`` to ``p1`` (rows) with radii ``r``."""
     axis = p1 - p0
-    length = float(np.linalg.norm(axis))
+    length = np.linalg.norm(axis, axis=1)
+    z = np.where(length[:, None] > 0.0, axis / np.maximum(length, 1e-12)[:, None], (0.0, 0.0, 1.0))
     m.geom_pos[g] = 0.5 * (p0 + p1)
-    m.geom_size[g] = (r, max(0.5 * length, 1e-4), 0.0)
-    quat = np.zeros(4)
-    z = axis / length if length > 0.0 else np.array([0.0, 0.0, 1.0])
-    mujoco.mju_quatZ2Vec(quat, z)
-    m.geom_quat[g] = quat
+    m.geom_size[g] = np.column_stack([r, np.maximum(0.5 * length, 1e-4), np.zeros_like(r)])
+    m.geom_quat[g] = _quat_z_to(z)
 
 
-def _place_box(m: mujoco.MjModel, g: int, points: NDArray[np.float64], half_thickness: float) -> None:
-    """A thin box over a leaf triangle (principal axes of its vertices; drawn, not simulated)."""
-    center = points.mean(axis=0)
-    _, _, vt = np.linalg.svd(points - center)
-    frame = vt.T.copy()
-    if np.linalg.det(frame) < 0.0:
-        frame[:, 2] = -frame[:, 2]
-    extent = np.abs((points - center) @ frame).max(axis=0)
-    m.geom_pos[g] = center
-    m.geom_size[g] = (max(extent[0], 1e-3), max(0.6 * extent[1], 1e-3), max(half_thickness, 1e-3))
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, frame.reshape(-1))
-    m.geom_quat[g] = quat
+def _quat_z_to(z: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit quaternions (w, x, y, z) turning the z axis onto the unit rows of ``z`` (shortest arc)."""
+    q = np.column_stack([1.0 + z[:, 2], -z[:, 1], z[:, 0], np.zeros(len(z))])
+    flip = q[:, 0] < 1e-9  # z = -e_z: any half turn about a horizontal axis
+    q[flip] = (0.0, 1.0, 0.0, 0.0)
+    return q / np.linalg.norm(q, axis=1, keepdims=True)
+
+
+def _place_blades(m: mujoco.MjModel, g: NDArray[np.int64], first: NDArray[np.float64], right: NDArray[np.float64],
+                  half_thickness: NDArray[np.float64]) -> None:
+    """Flat ellipsoids over leaf blades (drawn, not simulated): ``first`` holds the (end, left, tip) triangle of
+    each blade, ``right`` its other side corner."""
+    end, left, tip = first[:, 0], first[:, 1], first[:, 2]
+    x = tip - end
+    length = np.linalg.norm(x, axis=1)
+    x /= np.maximum(length, 1e-12)[:, None]
+    y = left - right
+    y -= np.sum(y * x, axis=1)[:, None] * x
+    width = np.linalg.norm(y, axis=1)
+    y /= np.maximum(width, 1e-12)[:, None]
+    frame = np.stack([x, y, np.cross(x, y)], axis=2).reshape(-1, 9)  # columns: blade axis, side, normal
+    m.geom_pos[g] = 0.5 * (end + tip)
+    m.geom_size[g] = np.column_stack([np.maximum(0.5 * length, 1e-3), np.maximum(0.5 * width, 1e-3),
+                                      np.maximum(half_thickness, 1e-3)])
+    quat = np.empty(4)
+    for gi, f in zip(g, frame):
+        mujoco.mju_mat2Quat(quat, f)
+        m.geom_quat[gi] = quat
 
 
 def _count(value: int, name: str) -> int:

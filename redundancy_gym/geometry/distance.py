@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 from .primitives import SSV
-from .ssv_kernels import GROUP_OF, cull_pairs_at, ssv_pairs_at, ssv_pairs_grouped
+from .ssv_kernels import GROUP_OF, cull_pairs_at, near_pairs_at, ssv_pairs_at, ssv_pairs_grouped
 
 __all__ = ["PackedVolumes", "PairBatch", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
 
@@ -144,9 +144,12 @@ class PairBatch:
     Args:
         volumes: the volumes; their arrays are copied into buffers owned by the batch.
         index_a, index_b: (K,) volume indices of each pair.
+        moving: how many leading volumes move; :meth:`compute_near` takes the volumes from index ``moving`` on
+            as fixed (their bounding spheres are computed here, and by :meth:`cull`). Default: all move.
     """
 
-    def __init__(self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike) -> None:
+    def __init__(self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike,
+                 moving: int | None = None) -> None:
         packed = volumes if isinstance(volumes, PackedVolumes) else PackedVolumes.from_volumes(volumes)
         self.vertices = np.ascontiguousarray(packed.vertices, dtype=np.float64).copy()
         self.radii = np.ascontiguousarray(packed.radii, dtype=np.float64).copy()
@@ -154,6 +157,11 @@ class PairBatch:
         layout = _layout(self.kinds, index_a, index_b)
         self._slot = layout.slot
         m = len(packed)
+        if moving is None:
+            moving = m
+        if not isinstance(moving, (int, np.integer)) or not 0 <= moving <= m:
+            raise GeometryError(f"moving must be an int in [0, {m}], got {moving!r}")
+        self._moving = int(moving)
         k = layout.slot.size
         self._active = np.ones(k, dtype=np.int64)
         self.result = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
@@ -171,7 +179,11 @@ class PairBatch:
         self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
         cull_pairs_at(self._header_address, 0.0)
         self._cull_kernel = cull_pairs_at.overloads[cull_pairs_at.signatures[0]].entry_point
-        self._active[:] = 1  # compiling the broad phase above wrote the mask
+        near_pairs_at(self._header_address, 0.0, 0, 0)
+        self._frames: tuple[NDArray[np.float64], ...] | None = None
+        self._frames_address = 0
+        self._near_kernel = near_pairs_at.overloads[near_pairs_at.signatures[0]].entry_point
+        self._active[:] = 1  # compiling the broad phases above wrote the mask
 
     def __len__(self) -> int:
         return int(self._slot.size)
@@ -188,6 +200,39 @@ class PairBatch:
         apart, for the current :attr:`vertices`; returns how many. Culled pairs get +inf, and their SSV distance
         is known to exceed ``margin`` (a broad phase; replaces any :meth:`set_active` mask)."""
         return int(self._cull_kernel(self._header_address, float(margin)))
+
+    def attach_frames(self, positions: NDArray[np.float64], rotations: NDArray[np.float64],
+                      half_lengths: ArrayLike) -> None:
+        """Let :meth:`compute_near` place volumes ``0..n`` from frames first: volume ``i`` becomes the segment
+        ``positions[i] -/+ half_lengths[i] * z_i`` (``z_i`` the third column of the row-major rotation
+        ``rotations[i]``), or the point ``positions[i]`` where the half length is 0; radii and kinds stay.
+
+        The arrays are read in place on every call (for example row slices of MuJoCo's ``geom_xpos`` and
+        ``geom_xmat``), so they must be C-contiguous float64 of shapes (n, 3) and (n, 9), and stay alive and
+        at the same address while attached; the volumes' kinds must match (LSS where the half length is > 0).
+        """
+        p = np.asarray(positions)
+        r = np.asarray(rotations)
+        h = np.ascontiguousarray(half_lengths, dtype=np.float64).reshape(-1).copy()
+        n = h.size
+        for name, a, shape in (("positions", p, (n, 3)), ("rotations", r, (n, 9))):
+            if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
+                raise GeometryError(f"{name} must be a C-contiguous float64 array of shape {shape}, got "
+                                    f"{a.dtype} {a.shape}")
+        if n > self._moving or np.any(h < 0.0) or np.any((h > 0.0) != (self.kinds[:n] == 1)) \
+                or np.any((h == 0.0) != (self.kinds[:n] == 0)):
+            raise GeometryError(f"half_lengths must give an LSS (h > 0) or PSS (h = 0) for each of the first "
+                                f"volumes, at most moving={self._moving} of them")
+        self._frames = (p, r, h, np.array([p.ctypes.data, r.ctypes.data, h.ctypes.data, n], dtype=np.int64))
+        self._frames_address = int(self._frames[3].ctypes.data)
+
+    def compute_near(self, margin: float) -> float:
+        """Broad and narrow phase in one compiled pass: the pairs whose bounding spheres are at most ``margin``
+        [m] apart get their exact distance in :attr:`result`, the others +inf (their witnesses are stale);
+        returns the smallest distance [m] (+inf when no pair is near). Faster than :meth:`cull` + :meth:`compute` when few pairs are near.
+        Only the first ``moving`` volumes (constructor) may have moved since the last :meth:`cull` or
+        construction; attached frames (:meth:`attach_frames`) are read first."""
+        return float(self._near_kernel(self._header_address, float(margin), self._moving, self._frames_address))
 
     def compute(self) -> SSVDistances:
         """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""

@@ -556,47 +556,53 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
                                           out_n, todo)
         for kk in range(lo, hi):
             k = todo[kk - lo] if (g == 0 or g == 3) else kk
-            s = slot[k]
             if active[k] == 0:
-                out_d[s] = np.inf
-                continue
-            i = index_a[k]
-            j = index_b[k]
-            ox = v[i, 0, 0]
-            oy = v[i, 0, 1]
-            oz = v[i, 0, 2]
-            a0 = (0.0, 0.0, 0.0)
-            b0 = (v[j, 0, 0] - ox, v[j, 0, 1] - oy, v[j, 0, 2] - oz)
-            if g == 0:
-                d2 = _dist2(a0, b0)
-                pa = a0
-                pb = b0
-            elif g == 1:
-                d2, pb = point_segment(a0, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
-                pa = a0
-            elif g == 2:
-                _, b1, b2 = _load(v, j, ox, oy, oz)
-                d2, pb = point_triangle(a0, b0, b1, b2)
-                pa = a0
-            elif g == 3:
-                a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
-                d2, pa, pb = segment_segment(a0, a1, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
-            elif g == 4:
-                a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
-                _, b1, b2 = _load(v, j, ox, oy, oz)
-                d2, pa, pb = segment_triangle(a0, a1, b0, b1, b2)
+                out_d[slot[k]] = np.inf
             else:
-                _, a1, a2 = _load(v, i, ox, oy, oz)
-                _, b1, b2 = _load(v, j, ox, oy, oz)
-                d2, pa, pb = triangle_triangle(a0, a1, a2, b0, b1, b2)
-            if _store(s, d2, pa, pb, radii[i], radii[j], ox, oy, oz, swap[k], out_d, out_pa, out_pb, out_n) <= 0.0:
-                _, a1, a2 = _load(v, i, ox, oy, oz)
-                _, b1, b2 = _load(v, j, ox, oy, oz)
-                n = _fallback_normal(a0, a1, a2, kinds[i], b0, b1, b2, kinds[j])
-                sign = -1.0 if swap[k] else 1.0
-                out_n[s, 0] = sign * n[0]
-                out_n[s, 1] = sign * n[1]
-                out_n[s, 2] = sign * n[2]
+                _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n)
+
+
+@njit(**_JIT)
+def _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n):
+    """Pair ``k`` of group ``g`` by the general closest-point routines (every case exact)."""
+    s = slot[k]
+    i = index_a[k]
+    j = index_b[k]
+    ox = v[i, 0, 0]
+    oy = v[i, 0, 1]
+    oz = v[i, 0, 2]
+    a0 = (0.0, 0.0, 0.0)
+    b0 = (v[j, 0, 0] - ox, v[j, 0, 1] - oy, v[j, 0, 2] - oz)
+    if g == 0:
+        d2 = _dist2(a0, b0)
+        pa = a0
+        pb = b0
+    elif g == 1:
+        d2, pb = point_segment(a0, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
+        pa = a0
+    elif g == 2:
+        _, b1, b2 = _load(v, j, ox, oy, oz)
+        d2, pb = point_triangle(a0, b0, b1, b2)
+        pa = a0
+    elif g == 3:
+        a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
+        d2, pa, pb = segment_segment(a0, a1, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
+    elif g == 4:
+        a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
+        _, b1, b2 = _load(v, j, ox, oy, oz)
+        d2, pa, pb = segment_triangle(a0, a1, b0, b1, b2)
+    else:
+        _, a1, a2 = _load(v, i, ox, oy, oz)
+        _, b1, b2 = _load(v, j, ox, oy, oz)
+        d2, pa, pb = triangle_triangle(a0, a1, a2, b0, b1, b2)
+    if _store(s, d2, pa, pb, radii[i], radii[j], ox, oy, oz, swap[k], out_d, out_pa, out_pb, out_n) <= 0.0:
+        _, a1, a2 = _load(v, i, ox, oy, oz)
+        _, b1, b2 = _load(v, j, ox, oy, oz)
+        n = _fallback_normal(a0, a1, a2, kinds[i], b0, b1, b2, kinds[j])
+        sign = -1.0 if swap[k] else 1.0
+        out_n[s, 0] = sign * n[0]
+        out_n[s, 1] = sign * n[1]
+        out_n[s, 2] = sign * n[2]
 
 
 @njit(**_JIT)
@@ -622,15 +628,10 @@ def ssv_pairs_at(header):
 
 
 @njit(**_JIT)
-def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers, bounds):
-    """Activate exactly the pairs whose bounding spheres are at most ``margin`` apart; returns how many.
-
-    A volume's bounding sphere is centred on the mean of its vertices with radius the farthest vertex plus
-    the SSV radius, so the sphere distance is a lower bound of the SSV distance: a culled pair is farther
-    than ``margin``. ``centers`` (M, 3) and ``bounds`` (M,) are scratch.
-    """
-    m = radii.shape[0]
-    for i in range(m):
+def _bounding_spheres(vertices, radii, kinds, lo, hi, centers, bounds):
+    """Bounding spheres of volumes ``lo..hi``: centred on the mean vertex, radius the farthest vertex plus the
+    SSV radius (so a sphere distance is a lower bound of the SSV distance)."""
+    for i in range(lo, hi):
         nv = kinds[i] + 1
         cx = 0.0
         cy = 0.0
@@ -652,18 +653,57 @@ def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers
         centers[i, 1] = cy
         centers[i, 2] = cz
         bounds[i] = np.sqrt(far) + radii[i]
+
+
+@njit(**_JIT)
+def _near(centers, bounds, i, j, margin):
+    dx = centers[i, 0] - centers[j, 0]
+    dy = centers[i, 1] - centers[j, 1]
+    dz = centers[i, 2] - centers[j, 2]
+    reach = bounds[i] + bounds[j] + margin
+    return reach >= 0.0 and dx * dx + dy * dy + dz * dz <= reach * reach
+
+
+@njit(**_JIT)
+def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers, bounds):
+    """Activate exactly the pairs whose bounding spheres are at most ``margin`` apart; returns how many.
+
+    A culled pair is farther than ``margin``. ``centers`` (M, 3) and ``bounds`` (M,) are scratch (left holding
+    every volume's bounding sphere).
+    """
+    _bounding_spheres(vertices, radii, kinds, 0, radii.shape[0], centers, bounds)
     count = 0
     for k in range(index_a.shape[0]):
-        i = index_a[k]
-        j = index_b[k]
-        dx = centers[i, 0] - centers[j, 0]
-        dy = centers[i, 1] - centers[j, 1]
-        dz = centers[i, 2] - centers[j, 2]
-        reach = bounds[i] + bounds[j] + margin
-        near = dx * dx + dy * dy + dz * dz <= reach * reach
+        near = _near(centers, bounds, index_a[k], index_b[k], margin)
         active[k] = 1 if near else 0
         count += 1 if near else 0
     return count
+
+
+@njit(**_JIT)
+def near_pairs(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb, out_n,
+               todo, centers, bounds, margin, moving):
+    """Broad and narrow phase in one pass: the pairs whose bounding spheres are at most ``margin`` apart get
+    their exact SSV distance (general path), the others +inf; returns the smallest distance (+inf if none).
+
+    Only the bounding spheres of volumes ``0..moving`` are refreshed: the others must hold from an earlier
+    :func:`cull_pairs` on unchanged vertices. ``active`` is left marking the computed pairs.
+    """
+    _bounding_spheres(vertices, radii, kinds, 0, moving, centers, bounds)
+    out_d[:] = np.inf
+    smallest = np.inf
+    for g in range(6):
+        nt = 0
+        for k in range(starts[g], starts[g + 1]):
+            near = _near(centers, bounds, index_a[k], index_b[k], margin)
+            active[k] = 1 if near else 0
+            todo[nt] = k
+            nt += 1 if near else 0
+        for kk in range(nt):
+            k = todo[kk]
+            _general_pair(vertices, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n)
+            smallest = min(smallest, out_d[slot[k]])
+    return smallest
 
 
 @njit(**_JIT)
@@ -676,3 +716,41 @@ def cull_pairs_at(header, margin):
                       carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
                       carray(_int64_pointer(h[4]), (n,)), margin, carray(_int64_pointer(h[8]), (n,)),
                       carray(_float64_pointer(h[16]), (m, 3)), carray(_float64_pointer(h[17]), (m,)))
+
+
+@njit(**_JIT)
+def frames_to_volumes(positions, rotations, half_lengths, vertices):
+    """Volumes ``0..n`` from frames: a segment ``p -/+ h z`` (z: third column of the row-major rotation) where
+    ``h > 0``, else the point ``p``; the unused vertex rows repeat the last vertex."""
+    for i in range(half_lengths.shape[0]):
+        h = half_lengths[i]
+        for c in range(3):
+            p = positions[i, c]
+            a = h * rotations[i, 3 * c + 2]
+            vertices[i, 0, c] = p - a
+            vertices[i, 1, c] = p + a
+            vertices[i, 2, c] = p + a
+
+
+@njit(**_JIT)
+def near_pairs_at(header, margin, moving, frames):
+    """:func:`near_pairs` on the buffers of a :func:`cull_pairs_at` header; first, when ``frames`` is nonzero,
+    :func:`frames_to_volumes` from the int64 array at that address: positions, rotations, half lengths, count."""
+    h = carray(_int64_pointer(header), (18,))
+    m = h[14]
+    n = h[15]
+    vertices = carray(_float64_pointer(h[0]), (m, 3, 3))
+    if frames != 0:
+        f = carray(_int64_pointer(frames), (4,))
+        nf = f[3]
+        frames_to_volumes(carray(_float64_pointer(f[0]), (nf, 3)), carray(_float64_pointer(f[1]), (nf, 9)),
+                          carray(_float64_pointer(f[2]), (nf,)), vertices)
+    return near_pairs(vertices, carray(_float64_pointer(h[1]), (m,)),
+                      carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
+                      carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
+                      carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
+                      carray(_int64_pointer(h[8]), (n,)),
+                      carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
+                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
+                      carray(_int64_pointer(h[13]), (n,)), carray(_float64_pointer(h[16]), (m, 3)),
+                      carray(_float64_pointer(h[17]), (m,)), margin, moving)

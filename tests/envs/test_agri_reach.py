@@ -50,18 +50,37 @@ def test_difficulty_presets_change_the_crop() -> None:
         gym.make(ENV_ID, difficulty="extreme")
 
 
-def test_prune_keeps_only_parts_within_reach_and_far_parts_otherwise() -> None:
+def test_prune_keeps_exactly_the_parts_within_reach_with_whole_leaf_blades() -> None:
     pruned = gym.make(ENV_ID)
     full = gym.make(ENV_ID, prune=False)
     pruned.reset(seed=1)
-    full.reset(seed=1)
+    full.reset(seed=1)  # pruning draws nothing: the same row and target
     p_row, f_row = pruned.unwrapped.crop_row, full.unwrapped.crop_row
     assert len(p_row) < 0.6 * len(f_row)
     assert pruned.unwrapped.model.ngeom < full.unwrapped.model.ngeom
     reach = LSS([0, 0, 0.55], [0, 0, 1.35], 1.29 + 0.075)
-    assert all(distance(_part(p_row, k), reach).distance <= 0.0 for k in range(len(p_row)))
-    far = [k for k in range(len(f_row)) if distance(_part(f_row, k), reach).distance > 0.0]
-    assert far  # the unpruned row reaches beyond the arm
+    inside = [k for k in range(len(f_row)) if distance(_part(f_row, k), reach).distance <= 0.0]
+    assert len(inside) < len(f_row)  # the unpruned row reaches beyond the arm
+    expected = f_row.subset(np.array(inside))
+    np.testing.assert_array_equal(p_row.vertices, expected.vertices)
+    np.testing.assert_array_equal(p_row.category, expected.category)
+    # every part kept is within reach, or the other triangle of a blade that is
+    kept_in = {int(f_row.blade[k]) for k in inside if f_row.blade[k] >= 0}
+    for k in range(len(p_row)):
+        assert distance(_part(p_row, k), reach).distance <= 0.0 or int(p_row.blade[k]) in kept_in
+    target = pruned.unwrapped.target_index
+    np.testing.assert_array_equal(p_row.vertices[target], f_row.vertices[full.unwrapped.target_index])
+
+
+def test_leaf_blades_are_two_adjacent_triangles_of_one_kite() -> None:
+    row = generate_crop_row(np.random.default_rng(3), **crop_row_defaults("medium"))
+    leaves = np.flatnonzero(row.category == "leaf")
+    assert leaves.size % 2 == 0 and np.all(np.diff(leaves) == 1)
+    a, b = leaves[0::2], leaves[1::2]
+    np.testing.assert_array_equal(row.blade[a], row.blade[b])
+    np.testing.assert_array_equal(row.vertices[a, 0], row.vertices[b, 0])  # shared end (petiole tip)
+    np.testing.assert_array_equal(row.vertices[a, 2], row.vertices[b, 1])  # shared tip
+    assert np.all(row.blade[row.category != "leaf"] == -1)
 
 
 def test_target_pose_geometry() -> None:

@@ -285,3 +285,56 @@ def test_cull_keeps_every_pair_within_the_margin_and_only_lower_bounded_ones_out
     np.testing.assert_allclose(culled[active], exact[active], atol=1e-12)
     batch.set_active(np.ones(300, dtype=bool))
     np.testing.assert_allclose(batch.compute().distance, exact, atol=1e-12)
+
+
+def test_compute_near_equals_cull_then_compute_and_returns_the_minimum(rng: np.random.Generator) -> None:
+    """One-pass broad and narrow phase: the same pairs as cull + compute, the same distances, +inf elsewhere,
+    and after moving only the first ``moving`` volumes it still agrees with a fresh full evaluation."""
+    from redundancy_gym.geometry import PairBatch
+
+    volumes = [random_volume(rng, KINDS[i % 3], spread=1.5, size=0.3) for i in range(40)]
+    ia = rng.integers(0, 6, 300)  # the first 6 volumes move
+    ib = rng.integers(6, 40, 300)
+    batch = PairBatch(volumes, ia, ib, moving=6)
+    reference = PairBatch(volumes, ia, ib)
+    margin = 0.3
+    for step in range(3):
+        smallest = batch.compute_near(margin)
+        near = batch.result.distance.copy()
+        count = reference.cull(margin)
+        expected = reference.compute().distance
+        assert 0 < count < 300 and int(np.isfinite(near).sum()) == count
+        np.testing.assert_allclose(near, expected, atol=1e-12)  # inf where culled, exact elsewhere
+        assert smallest == pytest.approx(np.min(expected[np.isfinite(expected)]), abs=1e-12)
+        shift = rng.normal(0.0, 0.3, (6, 1, 3))
+        batch.vertices[:6] += shift
+        reference.vertices[:6] += shift
+    assert batch.compute_near(-10.0) == np.inf and np.all(batch.result.distance == np.inf)  # negative reach
+
+
+def test_attached_frames_place_segments_and_points(rng: np.random.Generator) -> None:
+    """compute_near reads attached frames in place: volume i becomes p_i -/+ h_i z_i (z: third rotation column)."""
+    from scipy.spatial.transform import Rotation
+
+    from redundancy_gym.geometry import PairBatch
+
+    volumes = [LSS([0, 0, 0], [0, 0, 1], 0.05), PSS([0, 0, 0], 0.04), LSS([1, 0, 0], [1, 1, 0], 0.03),
+               TSS([0, 1, 0], [1, 1, 1], [0, 1, 1], 0.01)]
+    batch = PairBatch(volumes, [0, 0, 1, 1], [2, 3, 2, 3], moving=2)
+    positions = np.zeros((2, 3))
+    rotations = np.zeros((2, 9))
+    batch.attach_frames(positions, rotations, [0.2, 0.0])
+    for _ in range(3):
+        positions[:] = rng.uniform(-0.5, 0.5, (2, 3))  # written in place, after attaching
+        rotations[:] = Rotation.random(2, random_state=rng.integers(1 << 30)).as_matrix().reshape(2, 9)
+        batch.compute_near(np.inf)
+        z = rotations[0].reshape(3, 3)[:, 2]
+        moved = [LSS(positions[0] - 0.2 * z, positions[0] + 0.2 * z, 0.05), PSS(positions[1], 0.04)]
+        for k, (a, b) in enumerate([(0, 2), (0, 3), (1, 2), (1, 3)]):
+            assert batch.result.distance[k] == pytest.approx(distance(moved[a], volumes[b]).distance, abs=1e-12)
+    with pytest.raises(GeometryError, match="C-contiguous float64"):
+        batch.attach_frames(positions[:, :2], rotations, [0.2, 0.0])
+    with pytest.raises(GeometryError, match="LSS"):
+        batch.attach_frames(positions, rotations, [0.0, 0.0])  # volume 0 is an LSS
+    with pytest.raises(GeometryError, match="moving"):
+        PairBatch(volumes, [0], [2], moving=5)
