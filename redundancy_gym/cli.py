@@ -58,8 +58,9 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--seed", type=int, default=0)
     re.add_argument("--env-kwargs", type=_json_object, default={})
     be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs"),
-                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid")
+    be.add_argument("name", choices=("ssv", "envs", "ik"),
+                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
+                         "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra)")
     be.add_argument("--json", dest="json_path", help="default: results/bench_<name>.json")
     be.add_argument("--seed", type=int, default=0)
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
@@ -112,6 +113,13 @@ def main(argv: Sequence[str] | None = None) -> int:
                 report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing)
                 print(format_ssv_bench(report))
                 print(f"wrote {write_ssv_bench(report, json_path)}")
+            elif args.name == "ik":
+                from .eval.bench_ik import format_ik_bench, run_ik_bench, write_ik_bench
+
+                kwargs = {"repeats": 1, "scaling": (10, 100)} if args.quick else {}
+                report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
+                print(format_ik_bench(report))
+                print(f"wrote {write_ik_bench(report, json_path)}")
             else:
                 from .eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
 

@@ -58,7 +58,7 @@ class GraspClikConfig:
     collision_avoidance: str = "on"
     collision_activation: float = 0.1
     collision_slope: float = 4.0
-    collision_weight: float = 1.0
+    collision_weight: float = 10.0
     avoid_leaves: bool = False
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
@@ -175,7 +175,9 @@ class GraspClikPolicy:
         self.controller: Clik | None = None  # built by the first observation, with the observed obstacles
         self.last_result: ClikResult | None = None
 
-    def _controller(self, environment: list[Segment]) -> Clik:
+    def build_controller(self, environment: list[Segment]) -> Clik:
+        """The CLIK controller of this configuration with ``environment`` (world-fixed obstacle segments) in its
+        collision model; also sets :attr:`collision`."""
         objectives: list[Any] = [self._joint_limits]
         self.collision = None
         if self.config.collision_avoidance == "on":
@@ -201,7 +203,7 @@ class GraspClikPolicy:
             if hard or c.avoid_leaves:
                 environment.append(Segment(f"obstacle_{k}", (volume,)))
         if self.controller is None or self.config.collision_avoidance == "on":
-            self.controller = self._controller(environment)
+            self.controller = self.build_controller(environment)
 
     def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:

@@ -260,6 +260,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
         self._row: CropRow | None = None
+        self._part_geoms = np.zeros(0, dtype=np.int64)
 
     # ------------------------------------------------------------------ gymnasium API
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -351,6 +352,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     def crop_row(self) -> CropRow | None:
         """The plant parts of the current episode (after pruning)."""
         return self._row
+
+    @property
+    def part_geoms(self) -> NDArray[np.int64]:
+        """MuJoCo geom id drawing each part of :attr:`crop_row` (both triangles of a leaf blade share one)."""
+        return self._part_geoms.copy()
 
     @property
     def target_index(self) -> int:
@@ -497,6 +503,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         m.geom_rgba[self._pool_all] = 0.0
         m.geom_pos[self._pool_all] = (0.0, 0.0, -10.0)
         v, r = row.vertices, row.radius
+        self._part_geoms = np.empty(len(row), dtype=np.int64)
+        for category in POOL_CATEGORIES:
+            k = np.flatnonzero(row.category == category)
+            self._part_geoms[k] = self._pool[category][np.arange(k.size) // 2 if category == "leaf" else
+                                                        np.arange(k.size)]
         for category in ("stem", "shoot", "petiole"):
             k = np.flatnonzero(row.category == category)
             g = self._pool[category][: k.size]

@@ -3,7 +3,9 @@
 Every env of ours and the peers (Gymnasium's ``Pusher-v5`` and ``Humanoid-v5``) is made with ``gym.make`` (so
 the same wrappers apply) and stepped with the zero action for a fixed wall time, resetting when an episode ends
 (resets count: they are part of what a training loop pays). Ratios ``<ours>_vs_<peer>`` compare rates measured
-in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5.
+in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5. Variants of our envs (by default
+AgriReach with ``prune=False``, the whole crop row in the scene and the collision model) are measured too, and
+``agri_prune_speedup`` is the pruned rate over the unpruned one.
 """
 
 from __future__ import annotations
@@ -21,9 +23,12 @@ from .. import ENV_IDS
 from .bench_ssv import write_ssv_bench as write_envs_bench
 from .exceptions import EvalError
 
-__all__ = ["PEERS", "format_envs_bench", "run_envs_bench", "write_envs_bench"]
+__all__ = ["PEERS", "VARIANTS", "format_envs_bench", "run_envs_bench", "write_envs_bench"]
 
 PEERS = ("Pusher-v5", "Humanoid-v5")
+VARIANTS = {"redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriReach-v0", {"prune": False},
+                                                           "agri_prune_speedup")}
+"""label -> (env id, gym.make kwargs, name of the ratio base rate / variant rate)."""
 _SHORT = {"redundancy_gym/PlanarReach-v0": "planar", "redundancy_gym/AgriReach-v0": "agri",
           "Pusher-v5": "pusher", "Humanoid-v5": "humanoid"}
 
@@ -54,6 +59,7 @@ def _steps_per_second(env_id: str, seconds: float, seed: int, env_kwargs: dict[s
 
 def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] = ENV_IDS,
                    peers: Sequence[str] = PEERS, env_kwargs: dict[str, dict[str, Any]] | None = None,
+                   variants: dict[str, tuple[str, dict[str, Any], str]] | None = None,
                    progress: bool = True) -> dict[str, Any]:
     """Steps per second of ``envs`` and ``peers`` (zero policy, ``seconds`` each); returns the report.
 
@@ -62,19 +68,26 @@ def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] =
         seed: reset seed.
         envs: our env ids; peers: Gymnasium ids measured in the same run.
         env_kwargs: optional ``gym.make`` kwargs per id.
+        variants: extra measurements ``label -> (id, kwargs, ratio name)`` (default :data:`VARIANTS`, those
+            whose id is in ``envs``); the ratio is the id's rate over the variant's.
         progress: show a progress bar.
     """
     if seconds <= 0:
         raise EvalError(f"seconds must be > 0, got {seconds}")
     env_kwargs = env_kwargs or {}
+    variants = {k: v for k, v in (VARIANTS if variants is None else variants).items() if v[0] in envs}
+    runs = [(i, i, env_kwargs.get(i, {})) for i in (*envs, *peers)]
+    runs += [(label, i, {**env_kwargs.get(i, {}), **kw}) for label, (i, kw, _) in variants.items()]
     rates: dict[str, dict[str, float]] = {}
-    for env_id in tqdm([*envs, *peers], desc="bench envs", disable=not progress):
-        rates[env_id] = _steps_per_second(env_id, seconds, seed, env_kwargs.get(env_id, {}))
+    for label, env_id, kwargs in tqdm(runs, desc="bench envs", disable=not progress):
+        rates[label] = _steps_per_second(env_id, seconds, seed, kwargs)
     ratios = {}
     for ours in envs:
         for peer in peers:
             name = f"{_SHORT.get(ours, ours)}_vs_{_SHORT.get(peer, peer)}"
             ratios[name] = rates[ours]["steps_per_second"] / rates[peer]["steps_per_second"]
+    for label, (env_id, _, name) in variants.items():
+        ratios[name] = rates[env_id]["steps_per_second"] / rates[label]["steps_per_second"]
     return {"benchmark": "envs", "seed": seed, "seconds_per_env": seconds, "policy": "zero",
             "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
             "envs": rates, "ratios": ratios, **ratios}

@@ -5,7 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 
 from .evaluate import evaluate, format_report
-from .plots import plot_clearance, plot_traces
+from .plots import plot_clearance, plot_point_to_point, plot_traces
+from .point_to_point import FIG_5_10, rollout_point_to_point
 from .speed_error import plot_speed_error, speed_error_markdown
 from .video import record_episode
 
@@ -49,7 +50,8 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
 
 
 def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
-    """The grasp-approach CLIK reference on AgriReach, medium and hard crops: JSON and one video."""
+    """The grasp-approach CLIK reference on AgriReach, medium and hard crops: JSON and one video; the fig. 5.10
+    self-collision plot."""
     written = []
     for difficulty in ("medium", "hard"):
         report = evaluate(_AGRI, "clik", episodes=episodes, seed=seed, env_kwargs={"difficulty": difficulty},
@@ -59,6 +61,10 @@ def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
     path, _ = record_episode(_AGRI, "clik", out / "agri_reach_clik_medium.mp4", seed=seed,
                              env_kwargs={"difficulty": "medium"})
     written.append(path)
+    traces = {label: rollout_point_to_point(FIG_5_10, collision_avoidance=on)
+              for label, on in (("without collision avoidance", False), ("with nullspace collision avoidance", True))}
+    written.append(plot_point_to_point(traces, out / "agri_self_collision_fig_5_10.png",
+                                       "9-DoF arm, point-to-point move (fig. 5.10 analogue), kinematic CLIK"))
     return written
 
 

@@ -12,6 +12,10 @@ from redundancy_gym.eval.bench_envs import format_envs_bench, run_envs_bench, wr
 def test_envs_bench_report(tmp_path) -> None:
     report = run_envs_bench(seconds=0.05, envs=("redundancy_gym/AgriReach-v0",), peers=("Pusher-v5",),
                             progress=False)
+    unpruned = report["envs"]["redundancy_gym/AgriReach-v0 (prune=False)"]
+    assert unpruned["steps"] > 0
+    assert report["agri_prune_speedup"] == pytest.approx(
+        report["envs"]["redundancy_gym/AgriReach-v0"]["steps_per_second"] / unpruned["steps_per_second"])
     agri = report["envs"]["redundancy_gym/AgriReach-v0"]
     pusher = report["envs"]["Pusher-v5"]
     assert agri["steps"] > 0 and pusher["steps"] > 0

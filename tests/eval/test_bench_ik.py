@@ -1,0 +1,27 @@
+"""bench ik: ours and mink are timed on the same states with the same collision geoms; the report is consistent."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+pytest.importorskip("mink")
+
+from redundancy_gym.eval.bench_ik import format_ik_bench, run_ik_bench, write_ik_bench  # noqa: E402
+
+
+def test_ik_bench_report(tmp_path) -> None:
+    report = run_ik_bench(repeats=1, scaling=(10, 30), progress=False)
+    ours, mink = report["ours"], report["mink"]
+    assert report["states"] > 50  # one clik episode of the medium scene
+    assert 0.0 < ours["step_us_median"] <= ours["step_us_p90"]
+    assert 0.0 < mink["step_us_median"] <= mink["step_us_p90"]
+    assert report["ratio_vs_mink"] == pytest.approx(ours["step_us_median"] / mink["step_us_median"])
+    # the same arm against the same observed hard obstacles: the pair counts differ only by mink's own
+    # adjacency rule (it also skips the column against the carriage's child, etc.)
+    assert abs(ours["volume_pairs"] - mink["geom_pairs"]) <= 10 and mink["geom_pairs"] > 20
+    assert [s["primitives"] for s in report["scaling"]] == [10, 30]
+    assert "ratio_vs_mink" in format_ik_bench(report)
+    written = json.loads(write_ik_bench(report, tmp_path / "ik.json").read_text())
+    assert written["ratio_vs_mink"] == report["ratio_vs_mink"]
