@@ -614,17 +614,23 @@ def ssv_pairs_at(header):
     about 0.4 us, as much as 50 sphere pairs take; one integer costs a few nanoseconds. Only
     :class:`~redundancy_gym.geometry.PairBatch` calls this, with C-contiguous buffers it owns and checked once.
     """
-    h = carray(_int64_pointer(header), (16,))
+    v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td = _header_buffers(carray(_int64_pointer(header), (16,)))
+    ssv_pairs_grouped(v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td)
+
+
+@njit(**_JIT)
+def _header_buffers(h):
+    """The 14 pair-batch buffers named by the addresses in a header (see :func:`ssv_pairs_at`)."""
     m = h[14]
     n = h[15]
-    ssv_pairs_grouped(carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
-                      carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
-                      carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
-                      carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
-                      carray(_int64_pointer(h[8]), (n,)),
-                      carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
-                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
-                      carray(_int64_pointer(h[13]), (n,)))
+    return (carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
+            carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
+            carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
+            carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
+            carray(_int64_pointer(h[8]), (n,)),
+            carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
+            carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
+            carray(_int64_pointer(h[13]), (n,)))
 
 
 @njit(**_JIT)
@@ -738,19 +744,11 @@ def near_pairs_at(header, margin, moving, frames):
     :func:`frames_to_volumes` from the int64 array at that address: positions, rotations, half lengths, count."""
     h = carray(_int64_pointer(header), (18,))
     m = h[14]
-    n = h[15]
-    vertices = carray(_float64_pointer(h[0]), (m, 3, 3))
+    v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td = _header_buffers(h)
     if frames != 0:
         f = carray(_int64_pointer(frames), (4,))
         nf = f[3]
         frames_to_volumes(carray(_float64_pointer(f[0]), (nf, 3)), carray(_float64_pointer(f[1]), (nf, 9)),
-                          carray(_float64_pointer(f[2]), (nf,)), vertices)
-    return near_pairs(vertices, carray(_float64_pointer(h[1]), (m,)),
-                      carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
-                      carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
-                      carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
-                      carray(_int64_pointer(h[8]), (n,)),
-                      carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
-                      carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
-                      carray(_int64_pointer(h[13]), (n,)), carray(_float64_pointer(h[16]), (m, 3)),
+                          carray(_float64_pointer(f[2]), (nf,)), v)
+    return near_pairs(v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td, carray(_float64_pointer(h[16]), (m, 3)),
                       carray(_float64_pointer(h[17]), (m,)), margin, moving)
