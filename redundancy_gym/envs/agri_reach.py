@@ -250,12 +250,6 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             self.observation_layout[name] = slice(start, start + size)
             start += size
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(start,), dtype=np.float64)
-        # _get_obs writes q, qdot, TCP pose and time by position: the layout and joint addresses must match
-        if [(v.start, v.stop) for v in list(self.observation_layout.values())[:4]] != [(0, 9), (9, 18), (18, 21),
-                                                                                       (21, 25)] \
-                or self.observation_layout["time"] != slice(34, 35) or list(self._qpos) != list(range(9)) \
-                or list(self._qvel) != list(range(9)):
-            raise EnvConfigError("AgriReach observation layout or joint addresses changed; update _get_obs")
         self._obs = np.zeros(start)
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
@@ -321,7 +315,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             mujoco.mj_step(self.model, self.data, nstep=self.frame_skip - 1)
         mujoco.mj_step1(self.model, self.data)
         self._time += self.dt
-        metrics = self._metrics(self.data.qvel[0:9])
+        metrics = self._metrics(self.data.qvel[self._qvel])
         reward, terms = self._get_rew(metrics)
         metrics.update(terms)
         terminated = bool(metrics["collision"] or metrics["is_success"])
@@ -375,12 +369,13 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
     def _get_obs(self) -> NDArray[np.float64]:
         o = self._obs  # episode-constant entries (targets, obstacle block) were written at reset
-        o[0:9] = self.data.qpos[0:9]
-        o[9:18] = self.data.qvel[0:9]
-        o[18:21] = self.data.site_xpos[self._tcp_site]
+        lay = self.observation_layout
+        o[lay["q"]] = self.data.qpos[self._qpos]
+        o[lay["qdot"]] = self.data.qvel[self._qvel]
+        o[lay["tcp_position"]] = self.data.site_xpos[self._tcp_site]
         mujoco.mju_mat2Quat(self._quat, self.data.site_xmat[self._tcp_site])
-        o[21:25] = self._quat
-        o[34] = self._time
+        o[lay["tcp_quaternion"]] = self._quat
+        o[lay["time"]] = self._time
         return o.copy()
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
@@ -411,7 +406,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._collided = self._collided or collision
         self._leaf_total += leaves
         qd = qdot.tolist()
-        margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[0:9].tolist(), self._lower_list,
+        margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list,
                                                                self._upper_list))
         success = (not self._collided) and error <= self._success_position and angle <= self._success_angle
         return {
@@ -597,8 +592,13 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     def _resolve_names(self) -> None:
         m = self.model
         joints = [m.joint(n) for n in AGRI_ARM_JOINTS]
-        self._qpos = np.array([j.qposadr[0] for j in joints])
-        self._qvel = np.array([j.dofadr[0] for j in joints])
+        qpos = np.array([j.qposadr[0] for j in joints])
+        qvel = np.array([j.dofadr[0] for j in joints])
+        if np.any(np.diff(qpos) != 1) or np.any(np.diff(qvel) != 1):
+            raise EnvConfigError("agri arm joints must have consecutive qpos and dof addresses")
+        # slices: views instead of fancy-indexed copies on the per-step path
+        self._qpos = slice(int(qpos[0]), int(qpos[-1]) + 1)
+        self._qvel = slice(int(qvel[0]), int(qvel[-1]) + 1)
         self._lower = np.array([j.range[0] for j in joints])
         self._upper = np.array([j.range[1] for j in joints])
         self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()

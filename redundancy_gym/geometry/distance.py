@@ -174,16 +174,20 @@ class PairBatch:
         self._header = np.array([b.ctypes.data for b in buffers] + [m, k, self._centers.ctypes.data,
                                                                     self._bounds.ctypes.data], dtype=np.int64)
         self._header_address = int(self._header.ctypes.data)
-        ssv_pairs_at(self._header_address)  # compile (or load from cache) now, not in the first control step
-        # the compiled entry point skips the dispatcher's type matching on every call
-        self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
+        # compile (or load from cache) once per process, not in the first control step
+        if not ssv_pairs_at.signatures:
+            ssv_pairs_at(self._header_address)
+        if not near_pairs_at.signatures:
+            near_pairs_at(self._header_address, 0.0, 0, 0)
+        # every volume's bounding sphere, which compute_near keeps for the fixed ones (and the compile, once)
         cull_pairs_at(self._header_address, 0.0)
+        self._active[:] = 1  # the broad phase above wrote the mask
+        # the compiled entry points skip the dispatcher's type matching on every call
+        self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
         self._cull_kernel = cull_pairs_at.overloads[cull_pairs_at.signatures[0]].entry_point
-        near_pairs_at(self._header_address, 0.0, 0, 0)
+        self._near_kernel = near_pairs_at.overloads[near_pairs_at.signatures[0]].entry_point
         self._frames: tuple[NDArray[np.float64], ...] | None = None
         self._frames_address = 0
-        self._near_kernel = near_pairs_at.overloads[near_pairs_at.signatures[0]].entry_point
-        self._active[:] = 1  # compiling the broad phases above wrote the mask
 
     def __len__(self) -> int:
         return int(self._slot.size)
