@@ -7,6 +7,7 @@ typing and is imported on demand (``redundancy_gym.make_policy``).
 from .acceleration_clik import AccelerationClik, AccelerationClikResult
 from .clik import Clik, ClikProblem, ClikResult
 from .collision_objective import CollisionObjective
+from .compiled_clik import CompiledClik
 from .exceptions import ControllerError, PolicyError
 from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
@@ -24,6 +25,7 @@ __all__ = [
     "ClikProblem",
     "ClikResult",
     "CollisionObjective",
+    "CompiledClik",
     "ControllerError",
     "FrameAxisTask",
     "FramePositionTask",

@@ -13,12 +13,14 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from ..geometry import LSS, PSS, SSV, TSS, Segment
 from ..model import RobotModel, collision_model_from_mjcf
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
+from .compiled_clik import CompiledClik
 from .exceptions import PolicyError
 from .frame_axis_task import FrameAxisTask
 from .joint_limit_objective import JointLimitObjective
@@ -27,6 +29,7 @@ from .policy_options import config_from_options, env_with_attributes
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
 _START_TIME = 1e-9  # an observation with time below this starts a new episode
+BACKENDS = ("compiled", "python")
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,8 @@ class GraspClikConfig:
         collision_activation: ``d_a`` [m]; collision_slope: ``|H'(0)|`` [1/m]; collision_weight: weight.
         avoid_leaves: also keep clear of observed leaves and petioles (soft obstacles).
         joint_limit_activation: ``d_a`` of the joint-limit potential [rad or m]; joint_limit_weight: its weight.
+        backend: ``"compiled"`` (:class:`CompiledClik`, one fused kernel per step) or ``"python"``
+            (:class:`Clik`); both give the same commands to round-off.
     """
 
     method: str = "dls"
@@ -62,6 +67,7 @@ class GraspClikConfig:
     avoid_leaves: bool = False
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
+    backend: str = "compiled"
 
 
 class GraspPath:
@@ -92,34 +98,58 @@ class GraspPath:
             if cos > 0.0:
                 self.turn_angle = 0.0
 
+        # the constants of __call__ in one buffer for the compiled sampler
+        k, a0 = self.turn_axis, self.start_axis
+        self._params = np.concatenate([self.start, self.pregrasp, self.grasp, self.approach, a0, np.cross(k, a0),
+                                       k * (k @ a0), k, [self.move_duration, self.approach_duration,
+                                                         self.turn_angle]])
+        self._out = np.empty(12)
+        if not _sample_path.signatures:
+            _sample_path.compile("void(float64[::1], float64, float64[::1])")
+        self._sampler = _sample_path.overloads[_sample_path.signatures[0]].entry_point
+
     @property
     def duration(self) -> float:
         """End of the approach [s]."""
         return self.move_duration + self.approach_duration
 
-    @staticmethod
-    def _law(t: float, duration: float) -> tuple[float, float]:
-        tau = min(max(t / duration, 0.0), 1.0)
-        s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-        sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration if tau < 1.0 else 0.0
-        return s, sdot
-
     def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Target ``[p, a]`` and target velocity ``[v, omega]`` at time ``t`` [s]."""
-        if t < self.move_duration:
-            s, sdot = self._law(t, self.move_duration)
-            angle = s * self.turn_angle
-            k = self.turn_axis
-            a0 = self.start_axis
-            axis = a0 * np.cos(angle) + np.cross(k, a0) * np.sin(angle) + k * (k @ a0) * (1.0 - np.cos(angle))
-            position = self.start + s * (self.pregrasp - self.start)
-            velocity = sdot * (self.pregrasp - self.start)
-            omega = sdot * self.turn_angle * k
-            return np.concatenate([position, axis]), np.concatenate([velocity, omega])
-        s, sdot = self._law(t - self.move_duration, self.approach_duration)
-        position = self.pregrasp + s * (self.grasp - self.pregrasp)
-        return np.concatenate([position, self.approach]), np.concatenate([sdot * (self.grasp - self.pregrasp),
-                                                                         np.zeros(3)])
+        self._sampler(self._params, float(t), self._out)
+        return self._out[:6].copy(), self._out[6:].copy()
+
+
+@njit(cache=True)
+def _law(t: float, duration: float) -> tuple[float, float]:
+    """Quintic rest-to-rest time law ``s(t)`` in [0, 1] and ``ds/dt`` [1/s]."""
+    tau = min(max(t / duration, 0.0), 1.0)
+    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+    sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration if tau < 1.0 else 0.0
+    return s, sdot
+
+
+@njit(cache=True)
+def _sample_path(params: NDArray[np.float64], t: float, out: NDArray[np.float64]) -> None:
+    """:meth:`GraspPath.__call__` on the path's constant buffer: ``[p, a, v, omega]`` into ``out`` (12)."""
+    start, pregrasp, grasp, approach = params[0:3], params[3:6], params[6:9], params[9:12]
+    a0, k_cross_a0, k_k_a0, k = params[12:15], params[15:18], params[18:21], params[21:24]
+    move, approach_time, turn = params[24], params[25], params[26]
+    if t < move:
+        s, sdot = _law(t, move)
+        angle = s * turn
+        c, sn = np.cos(angle), np.sin(angle)
+        for r in range(3):  # Rodrigues' rotation of the start axis about k
+            out[r] = start[r] + s * (pregrasp[r] - start[r])
+            out[3 + r] = a0[r] * c + k_cross_a0[r] * sn + k_k_a0[r] * (1.0 - c)
+            out[6 + r] = sdot * (pregrasp[r] - start[r])
+            out[9 + r] = sdot * turn * k[r]
+        return
+    s, sdot = _law(t - move, approach_time)
+    for r in range(3):
+        out[r] = pregrasp[r] + s * (grasp[r] - pregrasp[r])
+        out[3 + r] = approach[r]
+        out[6 + r] = sdot * (grasp[r] - pregrasp[r])
+        out[9 + r] = 0.0
 
 
 def _tool_axis(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -161,6 +191,8 @@ class GraspClikPolicy:
         self.config = config_from_options(GraspClikConfig, kwargs)
         if self.config.collision_avoidance not in ("on", "off"):
             raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: on, off")
+        if self.config.backend not in BACKENDS:
+            raise PolicyError(f"unknown backend {self.config.backend!r}; valid: {', '.join(BACKENDS)}")
         base = env_with_attributes(env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"),
                                    "grasp clik")
         self._layout = dict(base.observation_layout)
@@ -172,12 +204,12 @@ class GraspClikPolicy:
         self.task = FrameAxisTask(base.TCP_FRAME, axis=0)
         self.collision: CollisionObjective | None = None
         self.path: GraspPath | None = None
-        self.controller: Clik | None = None  # built by the first observation, with the observed obstacles
+        self.controller: Clik | CompiledClik | None = None  # built by the first observation (observed obstacles)
         self.last_result: ClikResult | None = None
 
-    def build_controller(self, environment: list[Segment]) -> Clik:
-        """The CLIK controller of this configuration with ``environment`` (world-fixed obstacle segments) in its
-        collision model; also sets :attr:`collision`."""
+    def build_controller(self, environment: list[Segment]) -> Clik | CompiledClik:
+        """The CLIK controller of this configuration (compiled unless ``backend="python"``) with ``environment``
+        (world-fixed obstacle segments) in its collision model; also sets :attr:`collision`."""
         objectives: list[Any] = [self._joint_limits]
         self.collision = None
         if self.config.collision_avoidance == "on":
@@ -185,8 +217,9 @@ class GraspClikPolicy:
             self.collision = CollisionObjective(model, activation_distance=self.config.collision_activation,
                                                 slope=self.config.collision_slope, weight=self.config.collision_weight)
             objectives.append(self.collision)
-        return Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
+        clik = Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
                     nullspace_gain=self.config.nullspace_gain, objectives=objectives)
+        return CompiledClik(clik) if self.config.backend == "compiled" else clik
 
     def _plan(self, obs: NDArray[np.float64]) -> None:
         lay = self._layout

@@ -3,7 +3,7 @@
 Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 """
 
-from .collision_model import CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
+from .collision_model import CollisionLayout, CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
 from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential
@@ -15,6 +15,7 @@ __all__ = [
     "PSS",
     "SSV",
     "TSS",
+    "CollisionLayout",
     "CollisionModel",
     "CollisionState",
     "CubicPotential",

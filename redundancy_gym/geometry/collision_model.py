@@ -21,7 +21,7 @@ from .distance import PackedVolumes, PairBatch
 from .exceptions import GeometryError
 from .primitives import LSS, SSV
 
-__all__ = ["CollisionModel", "CollisionState", "Kinematics", "Segment", "bounding_lss"]
+__all__ = ["CollisionLayout", "CollisionModel", "CollisionState", "Kinematics", "Segment", "bounding_lss"]
 
 
 class Kinematics(Protocol):
@@ -99,6 +99,32 @@ class CollisionState(NamedTuple):
     exact: NDArray[np.bool_]
 
 
+@dataclass(frozen=True)
+class CollisionLayout:
+    """A :class:`CollisionModel` as flat arrays, for compiled consumers (the fused CLIK step).
+
+    Attributes:
+        frames: (S,) each segment's robot frame, ``None`` for the environment; robot segments come first.
+        segment_starts: (S + 1,) segment ``s`` owns volumes ``segment_starts[s]:segment_starts[s + 1]``.
+        local: (M, 3, 3) volume vertices in their segment's frame (environment: before its placement) [m].
+        radii: (M,) volume radii [m] (environment radii can change later; see :meth:`CollisionModel.environment_volumes`).
+        kinds: (M,) volume kinds (0 PSS, 1 LSS, 2 TSS).
+        segment_pairs: (P, 2) segment indices of each collision pair, in :attr:`CollisionModel.pairs` order.
+        pair_starts: (P + 1,) pair ``p`` owns volume pairs ``pair_starts[p]:pair_starts[p + 1]``.
+        volume_a, volume_b: (V,) volume indices of each volume pair.
+    """
+
+    frames: tuple[str | None, ...]
+    segment_starts: NDArray[np.int64]
+    local: NDArray[np.float64]
+    radii: NDArray[np.float64]
+    kinds: NDArray[np.int64]
+    segment_pairs: NDArray[np.int64]
+    pair_starts: NDArray[np.int64]
+    volume_a: NDArray[np.int64]
+    volume_b: NDArray[np.int64]
+
+
 class CollisionModel:
     """Robot and environment segments with their collision pairs (5.33), (5.34).
 
@@ -163,10 +189,13 @@ class CollisionModel:
         self._local = PackedVolumes.from_volumes(volumes).vertices.copy()
         self._batch = PairBatch(volumes, ia, ib)
         self._owner = np.array(owner, dtype=np.int64)
+        self._volume_a = np.array(ia, dtype=np.int64)
+        self._volume_b = np.array(ib, dtype=np.int64)
         self._starts = np.searchsorted(self._owner, np.arange(len(pairs))).astype(np.int64)
         self._one_each = len(owner) == len(pairs)  # every segment pair is a single volume pair
         self._env_placement = {s.name: (np.eye(3), np.zeros(3)) for s in self.environment}
         self._env_dirty = True
+        self._version = 0
 
         # bounding capsules (one per segment with several volumes) and the pairs they can skip
         self.bounding = bool(bounding)
@@ -191,6 +220,29 @@ class CollisionModel:
         """Number of volume pairs behind the segment pairs."""
         return len(self._batch)
 
+    @property
+    def version(self) -> int:
+        """Counts the changes of environment placements and radii (compiled consumers re-read on a change)."""
+        return self._version
+
+    def layout(self) -> CollisionLayout:
+        """The segments, volumes and pairs as flat arrays (copies)."""
+        starts = np.array([sl.start for sl in self._slices] + [len(self._local)], dtype=np.int64)
+        return CollisionLayout(tuple(s.frame for s in self.segments), starts, self._local.copy(),
+                               self._batch.radii.copy(), self._batch.kinds.copy(), self._pairs.copy(),
+                               np.append(self._starts, len(self._owner)).astype(np.int64),
+                               self._volume_a.copy(), self._volume_b.copy())
+
+    def environment_volumes(self) -> PackedVolumes:
+        """The environment segments' volumes in world coordinates with their current radii, in segment order
+        (the volumes after the robot's in :meth:`layout`)."""
+        first = self._slices[len(self.robot)].start if self.environment else len(self._local)
+        vertices = np.empty((len(self._local) - first, 3, 3))
+        for s, sl in zip(self.environment, self._slices[len(self.robot):]):
+            rot, pos = self._env_placement[s.name]
+            vertices[sl.start - first:sl.stop - first] = self._local[sl] @ rot.T + pos
+        return PackedVolumes(vertices, self._batch.radii[first:].copy(), self._batch.kinds[first:].copy())
+
     def set_environment_placement(self, name: str, rotation: ArrayLike, translation: ArrayLike) -> None:
         """Move an environment segment: its volumes are mapped by ``x -> R x + p`` from their given coordinates."""
         if name not in self._env_placement:
@@ -201,6 +253,7 @@ class CollisionModel:
             raise GeometryError("rotation must be a finite 3 x 3 matrix and translation a finite 3-vector")
         self._env_placement[name] = (rot.copy(), pos.copy())
         self._env_dirty = True
+        self._version += 1
 
     def set_environment_radius(self, name: str, radius: float) -> None:
         """Change the radius of a single-volume environment segment (a sphere obstacle that grows or shrinks)."""
@@ -214,6 +267,7 @@ class CollisionModel:
             raise GeometryError(f"radius must be finite and >= 0, got {radius!r}")
         self._batch.radii[self._slices[k].start] = r
         self._bound_batch.radii[k] = r
+        self._version += 1
 
     def _place(self, kinematics: Kinematics) -> None:
         """World coordinates of every volume (and bounding capsule) into the batches' buffers."""

@@ -12,11 +12,12 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 
-__all__ = ["CubicPotential", "PiecewisePotential", "PotentialValue", "QuadraticPotential"]
+__all__ = ["CubicPotential", "PiecewisePotential", "PotentialValue", "QuadraticPotential", "piecewise_potential_kernel"]
 
 
 @dataclass(frozen=True)
@@ -94,6 +95,23 @@ class PiecewisePotential:
     def derivative(self, distance: ArrayLike) -> NDArray[np.float64]:
         """``dH_c23/dd`` (5.59)."""
         return self.evaluate(distance).slope
+
+
+@njit(cache=True, error_model="numpy")
+def piecewise_potential_kernel(d: float, activation_distance: float, slope: float,
+                               switch_ratio: float) -> tuple[float, float]:
+    """``(H_c23(d), H_c23'(d))`` of :class:`PiecewisePotential` for one distance, for use inside other kernels."""
+    da = activation_distance
+    t = switch_ratio
+    s0 = -slope
+    if d > da:
+        return 0.0, 0.0
+    if d < t * da:  # (5.58)/(5.59), quadratic branch
+        return (-s0 * d * d / (da * (t + 1.0)) + s0 * d - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0)),
+                -2.0 * s0 * d / (da * (t + 1.0)) + s0)
+    rest = da - d
+    denom = da * da * (t * t - 1.0)
+    return s0 * rest**3 / (3.0 * denom), -s0 * rest * rest / denom
 
 
 @dataclass(frozen=True)

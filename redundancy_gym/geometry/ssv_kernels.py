@@ -20,7 +20,8 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at", "ssv_pairs_grouped"]
+__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at",
+           "ssv_pairs_grouped", "volume_pair_distance"]
 
 KIND_PSS = 0
 KIND_LSS = 1
@@ -563,11 +564,9 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
 
 
 @njit(**_JIT)
-def _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n):
-    """Pair ``k`` of group ``g`` by the general closest-point routines (every case exact)."""
-    s = slot[k]
-    i = index_a[k]
-    j = index_b[k]
+def _closest(v, kinds, i, j, g):
+    """Closest points of the generating primitives of volumes ``i`` and ``j`` (``kinds[i] <= kinds[j]``, group
+    ``g``): ``(squared distance, point on i, point on j)`` relative to ``i``'s first vertex, and that vertex."""
     ox = v[i, 0, 0]
     oy = v[i, 0, 1]
     oz = v[i, 0, 2]
@@ -595,14 +594,54 @@ def _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, ou
         _, a1, a2 = _load(v, i, ox, oy, oz)
         _, b1, b2 = _load(v, j, ox, oy, oz)
         d2, pa, pb = triangle_triangle(a0, a1, a2, b0, b1, b2)
+    return d2, pa, pb, ox, oy, oz
+
+
+@njit(**_JIT)
+def _touching_normal(v, kinds, i, j, ox, oy, oz):
+    """:func:`_fallback_normal` of volumes ``i`` and ``j`` (vertices taken relative to the origin ``o``)."""
+    a0, a1, a2 = _load(v, i, ox, oy, oz)
+    b0, b1, b2 = _load(v, j, ox, oy, oz)
+    return _fallback_normal(a0, a1, a2, kinds[i], b0, b1, b2, kinds[j])
+
+
+@njit(**_JIT)
+def _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n):
+    """Pair ``k`` of group ``g`` by the general closest-point routines (every case exact)."""
+    s = slot[k]
+    i = index_a[k]
+    j = index_b[k]
+    d2, pa, pb, ox, oy, oz = _closest(v, kinds, i, j, g)
     if _store(s, d2, pa, pb, radii[i], radii[j], ox, oy, oz, swap[k], out_d, out_pa, out_pb, out_n) <= 0.0:
-        _, a1, a2 = _load(v, i, ox, oy, oz)
-        _, b1, b2 = _load(v, j, ox, oy, oz)
-        n = _fallback_normal(a0, a1, a2, kinds[i], b0, b1, b2, kinds[j])
+        n = _touching_normal(v, kinds, i, j, ox, oy, oz)
         sign = -1.0 if swap[k] else 1.0
         out_n[s, 0] = sign * n[0]
         out_n[s, 1] = sign * n[1]
         out_n[s, 2] = sign * n[2]
+
+
+@njit(**_JIT)
+def volume_pair_distance(v, radii, kinds, i, j):
+    """SSV distance of volumes ``i`` and ``j`` of ``(v, radii, kinds)``, for use inside other kernels:
+    ``(distance, point on i, point on j, unit normal from i to j)`` as float and 3-tuples (world) [m].
+
+    Same results as :func:`ssv_pairs_grouped` (the general path), including the normal of touching volumes.
+    """
+    swap = kinds[i] > kinds[j]
+    lo = j if swap else i
+    hi = i if swap else j
+    d2, pa, pb, ox, oy, oz = _closest(v, kinds, lo, hi, GROUP_OF[kinds[lo], kinds[hi]])
+    dist = np.sqrt(d2)
+    if d2 > 0.0:
+        inv = 1.0 / dist
+        n = ((pb[0] - pa[0]) * inv, (pb[1] - pa[1]) * inv, (pb[2] - pa[2]) * inv)
+    else:
+        n = _touching_normal(v, kinds, lo, hi, ox, oy, oz)
+    pa = (pa[0] + ox, pa[1] + oy, pa[2] + oz)
+    pb = (pb[0] + ox, pb[1] + oy, pb[2] + oz)
+    if swap:
+        return dist - radii[i] - radii[j], pb, pa, (-n[0], -n[1], -n[2])
+    return dist - radii[i] - radii[j], pa, pb, n
 
 
 @njit(**_JIT)

@@ -6,12 +6,14 @@ Never imports gymnasium, mujoco, envs or eval.
 from .collision_geometry import CollisionGeometry, collision_geometry_from_mjcf, collision_model_from_mjcf
 from .exceptions import ModelError, UnknownFrameError
 from .robot_model import JacobianKind, RobotModel
+from .serial_chain import SerialChain
 
 __all__ = [
     "CollisionGeometry",
     "JacobianKind",
     "ModelError",
     "RobotModel",
+    "SerialChain",
     "UnknownFrameError",
     "collision_geometry_from_mjcf",
     "collision_model_from_mjcf",

@@ -16,12 +16,20 @@ import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import ModelError, UnknownFrameError
+from .serial_chain import SerialChain
 
 __all__ = ["JacobianKind", "RobotModel"]
 
 JacobianKind = Literal["translational", "rotational", "full"]
 _JACOBIAN_ROWS: dict[str, slice] = {"translational": slice(0, 3), "rotational": slice(3, 6), "full": slice(0, 6)}
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+# 1-DoF joints the compiled kinematics handle: short name -> (prismatic, axis or None for "read it")
+_CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
+    "JointModelRX": (0, (1.0, 0.0, 0.0)), "JointModelRY": (0, (0.0, 1.0, 0.0)), "JointModelRZ": (0, (0.0, 0.0, 1.0)),
+    "JointModelRevoluteUnaligned": (0, None),
+    "JointModelPX": (1, (1.0, 0.0, 0.0)), "JointModelPY": (1, (0.0, 1.0, 0.0)), "JointModelPZ": (1, (0.0, 0.0, 1.0)),
+    "JointModelPrismaticUnaligned": (1, None),
+}
 
 
 class RobotModel:
@@ -106,6 +114,43 @@ class RobotModel:
             raise UnknownFrameError(
                 f"unknown frame {name!r} in {self.source}; valid frames: {', '.join(self._frame_ids)}"
             ) from None
+
+    def serial_chain(self) -> SerialChain:
+        """The joints as flat arrays for compiled kinematics (:mod:`redundancy_gym.model.chain_kernels`).
+
+        Raises :class:`ModelError` unless every joint is a 1-DoF revolute or prismatic joint.
+        """
+        m = self._model
+        names, parent, rot, pos, axes, prismatic, q_index, v_index = [], [], [], [], [], [], [], []
+        for j in range(1, m.njoints):
+            joint = m.joints[j]
+            kind = joint.shortname()
+            if kind not in _CHAIN_JOINTS or joint.nq != 1 or joint.nv != 1:
+                raise ModelError(f"joint {m.names[j]!r} is {kind}; compiled kinematics support "
+                                 f"{', '.join(_CHAIN_JOINTS)}")
+            is_prismatic, axis = _CHAIN_JOINTS[kind]
+            if axis is None:
+                axis = tuple(np.asarray(joint.extract().axis, dtype=np.float64))
+            names.append(m.names[j])
+            parent.append(int(m.parents[j]) - 1)
+            rot.append(m.jointPlacements[j].rotation)
+            pos.append(m.jointPlacements[j].translation)
+            axes.append(np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis))
+            prismatic.append(is_prismatic)
+            q_index.append(joint.idx_q)
+            v_index.append(joint.idx_v)
+        n = len(names)
+        return SerialChain(tuple(names), np.array(parent, dtype=np.int64).reshape(n),
+                           np.array(rot, dtype=np.float64).reshape(n, 3, 3),
+                           np.array(pos, dtype=np.float64).reshape(n, 3), np.array(axes).reshape(n, 3),
+                           np.array(prismatic, dtype=np.int64).reshape(n), np.array(q_index, dtype=np.int64),
+                           np.array(v_index, dtype=np.int64))
+
+    def frame_attachment(self, frame: str | int) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
+        """``(joint, R, p)``: the :meth:`serial_chain` joint a frame moves with (-1 for the world) and the
+        frame's fixed rotation and position [m] in that joint's frame."""
+        f = self._model.frames[self._resolve(frame)]
+        return int(f.parentJoint) - 1, np.array(f.placement.rotation), np.array(f.placement.translation)
 
     # ------------------------------------------------------------------ state
     def check_configuration(self, q: ArrayLike) -> NDArray[np.float64]:

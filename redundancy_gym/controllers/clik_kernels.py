@@ -1,0 +1,422 @@
+"""The fused, compiled CLIK control step behind :class:`~redundancy_gym.controllers.CompiledClik`.
+
+One kernel call does what :meth:`Clik.build` + :meth:`Clik.solve` do through some two hundred small NumPy and
+pinocchio calls: forward kinematics of the chain, the task error, Jacobian and feedforward, the joint-limit,
+posture and collision objectives with their gradients (5.58)-(5.61), and the weighted (damped) minimum-norm
+solution with nullspace projection of Algorithm 10 / (5.14) / (5.22).
+
+Everything the kernel reads or writes lives in two flat buffers, one float64 and one int64 (a NumPy array
+argument costs numba about 0.4 us to box, so a step passes two instead of thirty). :func:`pack_buffers` lays
+them out: the int64 buffer starts with an ``(offset, size)`` entry per field of :data:`FLOAT_FIELDS` and
+:data:`INT_FIELDS`; the kernel takes views by field index.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from ..geometry.potentials import piecewise_potential_kernel
+from ..geometry.ssv_kernels import volume_pair_distance
+from ..model.chain_kernels import chain_forward, chain_jacobian, chain_jacobian_transpose_times, place_frame
+
+__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "STATUS_NAMES", "clik_step", "pack_buffers"]
+
+FLOAT_FIELDS: tuple[str, ...] = (
+    "placement_rotation", "placement_translation", "axis", "rotation", "position", "world_axis",
+    "task_rotation", "task_translation", "gain", "inverse_weights", "scalars",
+    "limit_lower", "limit_upper", "limit_parameters", "posture_reference", "posture_weights",
+    "segment_rotation", "segment_translation", "segment_center", "segment_radius", "segment_world_center",
+    "local", "vertices", "radii", "collision_parameters",
+    "inputs", "outputs", "jacobian6", "jacobian", "gradient", "scratch",
+)
+INT_FIELDS: tuple[str, ...] = (
+    "dims", "parent", "prismatic", "q_index", "v_index", "task_rows", "segment_joint", "segment_starts", "kinds",
+    "segment_pairs", "pair_starts", "volume_a", "volume_b",
+)
+# entries of the "dims" field
+DIMS: tuple[str, ...] = ("joints", "nv", "nq", "task_dim", "limit_objectives", "posture_objectives", "segments",
+                         "volumes", "pairs", "volume_pairs", "task_kind", "task_joint", "task_axis", "method",
+                         "collision", "objectives")
+METHOD_CODES: dict[str, int] = {"pseudoinverse": 0, "dls": 1, "transpose": 2}
+STATUS_NAMES: tuple[str, ...] = ("ok", "damped", "singular")
+SCRATCH_SIZE = 160
+# result entries after qdot (nv) and the task error (task_dim) in "outputs"
+OUTPUT_EXTRA = 6  # |e|, sigma_min, damping, H, status code, smallest collision distance seen [m]
+
+_NF = len(FLOAT_FIELDS)
+(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS, _F_TASK_ROTATION,
+ _F_TASK_TRANSLATION, _F_GAIN, _F_INVERSE_WEIGHTS, _F_SCALARS, _F_LIMIT_LOWER, _F_LIMIT_UPPER, _F_LIMIT_PARAMETERS,
+ _F_POSTURE_REFERENCE, _F_POSTURE_WEIGHTS, _F_SEGMENT_ROTATION, _F_SEGMENT_TRANSLATION, _F_SEGMENT_CENTER,
+ _F_SEGMENT_RADIUS, _F_SEGMENT_WORLD_CENTER, _F_LOCAL, _F_VERTICES, _F_RADII, _F_COLLISION_PARAMETERS, _F_INPUTS,
+ _F_OUTPUTS, _F_JACOBIAN6, _F_JACOBIAN, _F_GRADIENT, _F_SCRATCH) = range(_NF)
+(_I_DIMS, _I_PARENT, _I_PRISMATIC, _I_Q_INDEX, _I_V_INDEX, _I_TASK_ROWS, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
+ _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B) = range(_NF, _NF + len(INT_FIELDS))
+
+# return codes of clik_step
+OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY = range(5)
+
+_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+
+
+def pack_buffers(floats: Mapping[str, NDArray[np.float64]],
+                 ints: Mapping[str, NDArray[np.int64]]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The kernel's two buffers from every field of :data:`FLOAT_FIELDS` and :data:`INT_FIELDS` (flattened)."""
+    header = 2 * (len(FLOAT_FIELDS) + len(INT_FIELDS))
+    fsizes = [np.asarray(floats[name]).size for name in FLOAT_FIELDS]
+    isizes = [np.asarray(ints[name]).size for name in INT_FIELDS]
+    f = np.zeros(max(sum(fsizes), 1))
+    i = np.zeros(header + sum(isizes), dtype=np.int64)
+    offset = 0
+    for k, (name, size) in enumerate(zip(FLOAT_FIELDS, fsizes)):
+        i[2 * k], i[2 * k + 1] = offset, size
+        f[offset:offset + size] = np.asarray(floats[name], dtype=np.float64).reshape(-1)
+        offset += size
+    offset = header
+    for k, (name, size) in enumerate(zip(INT_FIELDS, isizes), start=len(FLOAT_FIELDS)):
+        i[2 * k], i[2 * k + 1] = offset, size
+        i[offset:offset + size] = np.asarray(ints[name], dtype=np.int64).reshape(-1)
+        offset += size
+    return f, i
+
+
+@njit(**_JIT)
+def _fv(f, i, k):
+    o = i[2 * k]
+    return f[o:o + i[2 * k + 1]]
+
+
+@njit(**_JIT)
+def _iv(i, k):
+    o = i[2 * k]
+    return i[o:o + i[2 * k + 1]]
+
+
+@njit(**_JIT)
+def _min_eigenvalue(b, m, a):
+    """Smallest eigenvalue of the symmetric m x m matrix ``b`` by cyclic Jacobi rotations (``a``: m*m scratch)."""
+    for r in range(m):
+        for c in range(m):
+            a[r * m + c] = b[r, c]
+    scale = 0.0
+    for k in range(m * m):
+        scale += a[k] * a[k]
+    for _ in range(60):
+        off = 0.0
+        for r in range(m):
+            for c in range(r + 1, m):
+                off += a[r * m + c] * a[r * m + c]
+        if off <= 1e-32 * scale:
+            break
+        for p in range(m):
+            for q in range(p + 1, m):
+                apq = a[p * m + q]
+                if apq == 0.0:
+                    continue
+                theta = (a[q * m + q] - a[p * m + p]) / (2.0 * apq)
+                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + np.sqrt(theta * theta + 1.0))
+                c = 1.0 / np.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(m):  # columns p, q
+                    akp = a[k * m + p]
+                    akq = a[k * m + q]
+                    a[k * m + p] = c * akp - s * akq
+                    a[k * m + q] = s * akp + c * akq
+                for k in range(m):  # rows p, q
+                    apk = a[p * m + k]
+                    aqk = a[q * m + k]
+                    a[p * m + k] = c * apk - s * aqk
+                    a[q * m + k] = s * apk + c * aqk
+    smallest = a[0]
+    for r in range(1, m):
+        smallest = min(smallest, a[r * m + r])
+    return smallest
+
+
+@njit(**_JIT)
+def _cholesky_solve(b, m, rhs, low):
+    """Solve ``b x = rhs`` in place (``rhs`` becomes x) by a Cholesky factor in ``low`` (m*m scratch); False when
+    ``b`` is not positive definite."""
+    for r in range(m):
+        for c in range(r + 1):
+            acc = b[r, c]
+            for k in range(c):
+                acc -= low[r * m + k] * low[c * m + k]
+            if r == c:
+                if not acc > 0.0:
+                    return False
+                low[r * m + r] = np.sqrt(acc)
+            else:
+                low[r * m + c] = acc / low[c * m + c]
+    for r in range(m):  # L y = rhs
+        acc = rhs[r]
+        for k in range(r):
+            acc -= low[r * m + k] * rhs[k]
+        rhs[r] = acc / low[r * m + r]
+    for r in range(m - 1, -1, -1):  # L^T x = y
+        acc = rhs[r]
+        for k in range(r + 1, m):
+            acc -= low[k * m + r] * rhs[k]
+        rhs[r] = acc / low[r * m + r]
+    return True
+
+
+@njit(**_JIT)
+def _collision(f, i, dims, parent, prismatic, v_index, position, world_axis, q_rotation, gradient, scratch):
+    """Place the robot volumes, then ``H_c`` (5.49) and its gradient (5.61) over the pairs within ``d_a``:
+    ``(value, smallest distance computed)``. Pairs whose segments' bounding spheres are farther apart than
+    ``d_a`` contribute nothing and are skipped (their distance is at least the spheres')."""
+    ns, nvol, npairs = dims[6], dims[7], dims[8]
+    seg_joint = _iv(i, _I_SEGMENT_JOINT)
+    seg_starts = _iv(i, _I_SEGMENT_STARTS)
+    kinds = _iv(i, _I_KINDS)
+    seg_pairs = _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2))
+    pair_starts = _iv(i, _I_PAIR_STARTS)
+    vol_a = _iv(i, _I_VOLUME_A)
+    vol_b = _iv(i, _I_VOLUME_B)
+    seg_rot = _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3))
+    seg_pos = _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3))
+    seg_center = _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3))
+    seg_radius = _fv(f, i, _F_SEGMENT_RADIUS)
+    seg_world = _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3))
+    local = _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3))
+    vertices = _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3))
+    radii = _fv(f, i, _F_RADII)
+    params = _fv(f, i, _F_COLLISION_PARAMETERS)
+    da, slope, ratio, weight = params[0], params[1], params[2], params[3]
+    rot = scratch[0:9].reshape((3, 3))
+    pos = scratch[9:12]
+    for s in range(ns):
+        jnt = seg_joint[s]
+        if jnt < 0:  # environment: world vertices and centre are kept up to date by the owner
+            continue
+        place_frame(q_rotation, position, jnt, seg_rot[s], seg_pos[s], rot, pos)
+        for r in range(3):
+            seg_world[s, r] = pos[r] + rot[r, 0] * seg_center[s, 0] + rot[r, 1] * seg_center[s, 1] \
+                + rot[r, 2] * seg_center[s, 2]
+        for v in range(seg_starts[s], seg_starts[s + 1]):
+            for k in range(3):
+                for r in range(3):
+                    vertices[v, k, r] = pos[r] + rot[r, 0] * local[v, k, 0] + rot[r, 1] * local[v, k, 1] \
+                        + rot[r, 2] * local[v, k, 2]
+    value = 0.0
+    smallest = np.inf
+    for p in range(npairs):
+        a = seg_pairs[p, 0]
+        b = seg_pairs[p, 1]
+        dx = seg_world[a, 0] - seg_world[b, 0]
+        dy = seg_world[a, 1] - seg_world[b, 1]
+        dz = seg_world[a, 2] - seg_world[b, 2]
+        reach = seg_radius[a] + seg_radius[b] + da
+        if dx * dx + dy * dy + dz * dz > reach * reach:
+            continue
+        best = np.inf
+        best_pa = (0.0, 0.0, 0.0)
+        best_pb = (0.0, 0.0, 0.0)
+        best_n = (0.0, 0.0, 1.0)
+        for k in range(pair_starts[p], pair_starts[p + 1]):
+            d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
+            if d < best:
+                best, best_pa, best_pb, best_n = d, pa, pb, n
+        smallest = min(smallest, best)
+        if not best < da:
+            continue
+        h, dh = piecewise_potential_kernel(best, da, slope, ratio)
+        value += weight * h
+        # dd/dq = n^T (J_b(p_b) - J_a(p_a)) (5.61)
+        if seg_joint[b] >= 0:
+            chain_jacobian_transpose_times(parent, prismatic, v_index, position, world_axis, seg_joint[b],
+                                           best_pb[0], best_pb[1], best_pb[2], best_n[0], best_n[1], best_n[2],
+                                           weight * dh, gradient)
+        if seg_joint[a] >= 0:
+            chain_jacobian_transpose_times(parent, prismatic, v_index, position, world_axis, seg_joint[a],
+                                           best_pa[0], best_pa[1], best_pa[2], best_n[0], best_n[1], best_n[2],
+                                           -weight * dh, gradient)
+    return value, smallest
+
+
+@njit(**_JIT)
+def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, prismatic, v_index, error, rhs, jac,
+          scratch):
+    """Task error, Jacobian and effective velocity ``wdot_d + K e`` (5.5); returns a clik_step code."""
+    nv, m, kind, joint, ax = dims[1], dims[3], dims[10], dims[11], dims[12]
+    nq = dims[2]
+    inputs = _fv(f, i, _F_INPUTS)
+    target = inputs[nq:nq + 6]
+    velocity = inputs[nq + 6:nq + 12]
+    gain = _fv(f, i, _F_GAIN)
+    jac6 = _fv(f, i, _F_JACOBIAN6).reshape((6, nv))
+    rot = scratch[12:21].reshape((3, 3))
+    pos = scratch[21:24]
+    place_frame(q_rotation, position, joint, _fv(f, i, _F_TASK_ROTATION).reshape((3, 3)),
+                _fv(f, i, _F_TASK_TRANSLATION), rot, pos)
+    chain_jacobian(parent, prismatic, v_index, position, world_axis, joint, pos[0], pos[1], pos[2], jac6)
+    width = 6 if kind == 1 else m
+    for k in range(width):
+        if not np.isfinite(target[k]):
+            return BAD_TARGET
+        if has_velocity and not np.isfinite(velocity[k]):
+            return BAD_VELOCITY
+    if kind == 0:  # selected world coordinates of the frame origin
+        rows = _iv(i, _I_TASK_ROWS)
+        for r in range(m):
+            error[r] = target[r] - pos[rows[r]]
+            rhs[r] = gain[r] * error[r] + (velocity[r] if has_velocity else 0.0)
+            for c in range(nv):
+                jac[r, c] = jac6[rows[r], c]
+        return OK
+    # position and tool axis (FrameAxisTask): [p_d - p, u.(a x a_d), v.(a x a_d)]
+    norm = np.sqrt(target[3] * target[3] + target[4] * target[4] + target[5] * target[5])
+    if norm < 1e-9:
+        return ZERO_AXIS
+    u1 = (ax + 1) % 3
+    u2 = (ax + 2) % 3
+    a = (rot[0, ax], rot[1, ax], rot[2, ax])
+    u = (rot[0, u1], rot[1, u1], rot[2, u1])
+    v = (rot[0, u2], rot[1, u2], rot[2, u2])
+    g = (target[3] / norm, target[4] / norm, target[5] / norm)
+    cross = (a[1] * g[2] - a[2] * g[1], a[2] * g[0] - a[0] * g[2], a[0] * g[1] - a[1] * g[0])
+    for r in range(3):
+        error[r] = target[r] - pos[r]
+        rhs[r] = gain[r] * error[r] + (velocity[r] if has_velocity else 0.0)
+        for c in range(nv):
+            jac[r, c] = jac6[r, c]
+    error[3] = u[0] * cross[0] + u[1] * cross[1] + u[2] * cross[2]
+    error[4] = v[0] * cross[0] + v[1] * cross[1] + v[2] * cross[2]
+    rhs[3] = gain[3] * error[3]
+    rhs[4] = gain[4] * error[4]
+    if has_velocity:
+        rhs[3] += u[0] * velocity[3] + u[1] * velocity[4] + u[2] * velocity[5]
+        rhs[4] += v[0] * velocity[3] + v[1] * velocity[4] + v[2] * velocity[5]
+    for c in range(nv):
+        jac[3, c] = u[0] * jac6[3, c] + u[1] * jac6[4, c] + u[2] * jac6[5, c]
+        jac[4, c] = v[0] * jac6[3, c] + v[1] * jac6[4, c] + v[2] * jac6[5, c]
+    return OK
+
+
+@njit(**_JIT)
+def clik_step(f, i, has_velocity):
+    """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
+    (6)) and writes ``outputs`` (qdot, error, then :data:`OUTPUT_EXTRA` diagnostics); returns a code (0 ok,
+    1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target velocity)."""
+    dims = _iv(i, _I_DIMS)
+    nj, nv, nq, m = dims[0], dims[1], dims[2], dims[3]
+    n_limits, n_postures, method, collision, objectives = dims[4], dims[5], dims[13], dims[14], dims[15]
+    inputs = _fv(f, i, _F_INPUTS)
+    q = inputs[:nq]
+    for k in range(nq):
+        if not np.isfinite(q[k]):
+            return BAD_CONFIGURATION
+    parent = _iv(i, _I_PARENT)
+    prismatic = _iv(i, _I_PRISMATIC)
+    v_index = _iv(i, _I_V_INDEX)
+    rotation = _fv(f, i, _F_ROTATION).reshape((nj, 3, 3))
+    position = _fv(f, i, _F_POSITION).reshape((nj, 3))
+    world_axis = _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3))
+    chain_forward(parent, _fv(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
+                  _fv(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)), _fv(f, i, _F_AXIS).reshape((nj, 3)),
+                  prismatic, _iv(i, _I_Q_INDEX), q, rotation, position, world_axis)
+    scratch = _fv(f, i, _F_SCRATCH)
+    outputs = _fv(f, i, _F_OUTPUTS)
+    x = outputs[:nv]
+    error = outputs[nv:nv + m]
+    extra = outputs[nv + m:]
+    rhs = scratch[24:30]
+    jac = _fv(f, i, _F_JACOBIAN).reshape((m, nv))
+    code = _task(f, i, dims, has_velocity, rotation, position, world_axis, parent, prismatic, v_index, error, rhs,
+                 jac, scratch)
+    if code != OK:
+        return code
+    # nullspace objectives: H and (dH/dq)^T
+    gradient = _fv(f, i, _F_GRADIENT)
+    gradient[:] = 0.0
+    value = 0.0
+    lower = _fv(f, i, _F_LIMIT_LOWER)
+    upper = _fv(f, i, _F_LIMIT_UPPER)
+    lp = _fv(f, i, _F_LIMIT_PARAMETERS)
+    for o in range(n_limits):  # (5.58) on the distance to each limit
+        da, slope, ratio, weight = lp[4 * o], lp[4 * o + 1], lp[4 * o + 2], lp[4 * o + 3]
+        for k in range(nq):
+            h0, d0 = piecewise_potential_kernel(q[k] - lower[o * nq + k], da, slope, ratio)
+            h1, d1 = piecewise_potential_kernel(upper[o * nq + k] - q[k], da, slope, ratio)
+            value += weight * (h0 + h1)
+            gradient[k] += weight * (d0 - d1)
+    reference = _fv(f, i, _F_POSTURE_REFERENCE)
+    pw = _fv(f, i, _F_POSTURE_WEIGHTS)
+    for o in range(n_postures):
+        for k in range(nq):
+            delta = q[k] - reference[o * nq + k]
+            value += 0.5 * pw[o * nq + k] * delta * delta
+            gradient[k] += pw[o * nq + k] * delta
+    smallest = np.inf
+    if collision:
+        h, smallest = _collision(f, i, dims, parent, prismatic, v_index, position, world_axis, rotation, gradient,
+                                 scratch)
+        value += h
+    # weighted minimum norm with nullspace vector z = alpha dH/dq (Algorithm 10, (5.14), (5.22))
+    scalars = _fv(f, i, _F_SCALARS)
+    alpha, singular_threshold, dls_threshold, dls_max = scalars[0], scalars[1], scalars[2], scalars[3]
+    winv = _fv(f, i, _F_INVERSE_WEIGHTS)
+    b = scratch[30:66].reshape((6, 6))
+    for r in range(m):
+        for c in range(r + 1):
+            acc = 0.0
+            for k in range(nv):
+                acc += jac[r, k] * winv[k] * jac[c, k]
+            b[r, c] = acc
+            b[c, r] = acc
+    sigma = np.sqrt(max(_min_eigenvalue(b, m, scratch[66:102]), 0.0))
+    damping = 0.0
+    status = 0
+    e2 = 0.0
+    for r in range(m):
+        e2 += error[r] * error[r]
+    extra[0] = np.sqrt(e2)
+    extra[3] = value
+    extra[5] = smallest
+    x[:] = 0.0
+    if method == 2:  # transpose (5.24): x = W^-1 J^T rhs, objectives ignored
+        for k in range(nv):
+            acc = 0.0
+            for r in range(m):
+                acc += jac[r, k] * rhs[r]
+            x[k] = winv[k] * acc
+        extra[1], extra[2], extra[4] = sigma, 0.0, 0.0
+        return OK
+    if method == 1:
+        if sigma < dls_threshold:
+            damping = dls_max * (1.0 - (sigma / dls_threshold) ** 2)
+            status = 1
+        for r in range(m):
+            b[r, r] += damping
+    elif not sigma >= singular_threshold:
+        extra[1], extra[2], extra[4] = sigma, 0.0, 2.0
+        return OK
+    lam = scratch[102:108]
+    for r in range(m):
+        lam[r] = rhs[r]
+        if objectives:
+            acc = 0.0
+            for k in range(nv):
+                acc += jac[r, k] * winv[k] * alpha * gradient[k]
+            lam[r] += acc
+    if not _cholesky_solve(b, m, lam, scratch[108:144]):
+        extra[1], extra[2], extra[4] = sigma, damping, 2.0
+        return OK
+    finite = True
+    for k in range(nv):
+        acc = 0.0
+        for r in range(m):
+            acc += jac[r, k] * lam[r]
+        if objectives:
+            acc -= alpha * gradient[k]
+        x[k] = winv[k] * acc
+        finite = finite and np.isfinite(x[k])
+    if not finite:
+        x[:] = 0.0
+        status = 2
+    extra[1], extra[2], extra[4] = sigma, damping, float(status)
+    return OK

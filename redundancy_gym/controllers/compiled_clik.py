@@ -1,0 +1,258 @@
+"""A :class:`Clik` compiled into one fused kernel call per control step (same results, a fraction of the time)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..geometry import PackedVolumes
+from ..model import ModelError
+from .clik import Clik, ClikResult
+from .clik_kernels import (
+    BAD_CONFIGURATION,
+    BAD_TARGET,
+    BAD_VELOCITY,
+    DIMS,
+    FLOAT_FIELDS,
+    METHOD_CODES,
+    OUTPUT_EXTRA,
+    SCRATCH_SIZE,
+    STATUS_NAMES,
+    ZERO_AXIS,
+    clik_step,
+    pack_buffers,
+)
+from .collision_objective import CollisionObjective
+from .exceptions import ControllerError
+from .frame_axis_task import FrameAxisTask
+from .frame_position_task import FramePositionTask
+from .joint_limit_objective import JointLimitObjective
+from .posture_objective import PostureObjective
+
+__all__ = ["CompiledClik"]
+
+SUPPORTED_TASKS = (FrameAxisTask, FramePositionTask)
+SUPPORTED_OBJECTIVES = (JointLimitObjective, PostureObjective, CollisionObjective)
+
+
+def _bounding_spheres(local: NDArray[np.float64], kinds: NDArray[np.int64], radii: NDArray[np.float64],
+                      starts: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per segment a sphere (centre in the segment's coordinates, radius) holding all its volumes."""
+    n = starts.size - 1
+    centers, bounds = np.zeros((n, 3)), np.zeros(n)
+    for s in range(n):
+        points = np.concatenate([local[v, :kinds[v] + 1] for v in range(starts[s], starts[s + 1])])
+        reach = np.concatenate([np.full(kinds[v] + 1, radii[v]) for v in range(starts[s], starts[s + 1])])
+        centers[s] = points.mean(axis=0)
+        # a small relative margin so that rounding never culls a pair that is within reach
+        bounds[s] = float(np.max(np.linalg.norm(points - centers[s], axis=1) + reach)) * (1.0 + 1e-9) + 1e-12
+    return centers, bounds
+
+
+class CompiledClik:
+    """The step of a :class:`Clik` as one compiled kernel (:mod:`.clik_kernels`): kinematics of the robot's
+    serial chain (:meth:`~redundancy_gym.model.RobotModel.serial_chain`), the task, every objective and the
+    (damped) solve of Algorithm 10, (5.14), (5.22) with no Python in between.
+
+    It gives the :meth:`Clik.step` result to round-off (a test holds it to that) for
+    :class:`FrameAxisTask` or :class:`FramePositionTask`, diagonal weights, and any number of
+    :class:`JointLimitObjective` and :class:`PostureObjective` plus at most one :class:`CollisionObjective`.
+    Collision pairs are evaluated exactly wherever they can be closer than the activation distance (segment
+    bounding spheres skip the others, which contribute nothing); the collision model's environment is read
+    again whenever it changes (:attr:`~redundancy_gym.geometry.CollisionModel.version`). Build and solve are
+    fused here, so there is no separate ``build``; use :class:`Clik` to inspect a :class:`ClikProblem`.
+
+    Args:
+        clik: the controller to compile.
+
+    Raises:
+        ControllerError: for a task, weight or objective the kernel does not cover (the message lists what
+            it covers).
+        ModelError: when the robot is not a chain of 1-DoF revolute and prismatic joints.
+    """
+
+    def __init__(self, clik: Clik) -> None:
+        if not isinstance(clik, Clik):
+            raise ControllerError(f"CompiledClik compiles a Clik, got {type(clik).__name__}")
+        task = clik.task
+        if not isinstance(task, SUPPORTED_TASKS):
+            raise ControllerError(f"CompiledClik supports the tasks {', '.join(t.__name__ for t in SUPPORTED_TASKS)}"
+                                  f", got {type(task).__name__}")
+        if clik.weights.diagonal is None:
+            raise ControllerError("CompiledClik supports diagonal weights only; use Clik for a full W")
+        unknown = [type(o).__name__ for o in clik.objectives if not isinstance(o, SUPPORTED_OBJECTIVES)]
+        if unknown:
+            raise ControllerError(f"CompiledClik supports the objectives "
+                                  f"{', '.join(o.__name__ for o in SUPPORTED_OBJECTIVES)}, got {', '.join(unknown)}")
+        collisions = [o for o in clik.objectives if isinstance(o, CollisionObjective)]
+        if len(collisions) > 1:
+            raise ControllerError("CompiledClik supports at most one CollisionObjective")
+        self.clik = clik
+        self.model = clik.model
+        chain = clik.model.serial_chain()
+        nj = chain.num_joints
+        nq, nv, m = clik.model.nq, clik.model.nv, task.dim
+        self._nq, self._nv, self._m = nq, nv, m
+        joint, frame_rotation, frame_translation = clik.model.frame_attachment(task.frame)
+        limits = [o for o in clik.objectives if isinstance(o, JointLimitObjective)]
+        postures = [o for o in clik.objectives if isinstance(o, PostureObjective)]
+        for o in limits:
+            if o.lower.shape != (nq,):
+                raise ControllerError(f"joint-limit objective has {o.lower.size} joints, the model {nq}")
+        for o in postures:
+            if o.reference.shape != (nq,):
+                raise ControllerError(f"posture objective has {o.reference.size} joints, the model {nq}")
+        self.collision: CollisionObjective | None = collisions[0] if collisions else None
+        floats: dict[str, NDArray[np.float64]] = {
+            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
+            "axis": chain.axis, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)), "task_rotation": frame_rotation, "task_translation": frame_translation,
+            "gain": clik.gain, "inverse_weights": 1.0 / clik.weights.diagonal,
+            "scalars": np.array([clik.nullspace_gain, clik.singular_threshold, clik.dls_threshold,
+                                 clik.dls_max_damping]),
+            "limit_lower": np.array([o.lower for o in limits]), "limit_upper": np.array([o.upper for o in limits]),
+            "limit_parameters": np.array([(o.potential.activation_distance, o.potential.slope,
+                                           o.potential.switch_ratio, o.weight) for o in limits]),
+            "posture_reference": np.array([o.reference for o in postures]),
+            "posture_weights": np.array([o.weights for o in postures]),
+            "inputs": np.zeros(nq + 12), "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
+            "jacobian6": np.zeros((6, nv)), "jacobian": np.zeros((m, nv)), "gradient": np.zeros(nv),
+            "scratch": np.zeros(SCRATCH_SIZE),
+        }
+        ints: dict[str, NDArray[np.int64]] = {
+            "parent": chain.parent, "prismatic": chain.prismatic, "q_index": chain.q_index,
+            "v_index": chain.v_index,
+            "task_rows": task.rows if isinstance(task, FramePositionTask) else np.zeros(0, dtype=np.int64),
+        }
+        counts = self._collision_fields(floats, ints)
+        dims = {"joints": nj, "nv": nv, "nq": nq, "task_dim": m, "limit_objectives": len(limits),
+                "posture_objectives": len(postures), **counts,
+                "task_kind": 1 if isinstance(task, FrameAxisTask) else 0, "task_joint": joint,
+                "task_axis": task.axis if isinstance(task, FrameAxisTask) else 0,
+                "method": METHOD_CODES[clik.method], "collision": int(self.collision is not None),
+                "objectives": int(bool(clik.objectives))}
+        ints["dims"] = np.array([dims[name] for name in DIMS], dtype=np.int64)
+        self._f, self._i = pack_buffers(floats, ints)
+        self._inputs = self._field("inputs")
+        self._outputs = self._field("outputs")
+        self._version = -1
+        self._refresh_environment()
+        if not clik_step.signatures:  # compile (or load from numba's cache) once per process
+            clik_step.compile("int64(float64[::1], int64[::1], boolean)")
+        # the compiled entry point skips the dispatcher's type matching on every call
+        self._kernel = clik_step.overloads[clik_step.signatures[0]].entry_point
+
+    def _field(self, name: str) -> NDArray[np.float64]:
+        """The view of one float field of the kernel buffer (writes reach the kernel)."""
+        k = FLOAT_FIELDS.index(name)
+        offset, size = int(self._i[2 * k]), int(self._i[2 * k + 1])
+        return self._f[offset:offset + size]
+
+    def _collision_fields(self, floats: dict[str, NDArray[np.float64]],
+                          ints: dict[str, NDArray[np.int64]]) -> dict[str, int]:
+        """The collision model's segments, volumes and pairs into the kernel fields; returns their counts."""
+        if self.collision is None:
+            for name in ("segment_rotation", "segment_translation", "segment_center", "segment_radius",
+                         "segment_world_center", "local", "vertices", "radii", "collision_parameters"):
+                floats[name] = np.zeros(0)
+            for name in ("segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a",
+                         "volume_b"):
+                ints[name] = np.zeros(0, dtype=np.int64)
+            return {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
+        model = self.collision.collision_model
+        layout = model.layout()
+        ns = len(layout.frames)
+        joints, rotations, translations = [], [], []
+        for frame in layout.frames:
+            if frame is None:
+                joints.append(-1)
+                rotations.append(np.eye(3))
+                translations.append(np.zeros(3))
+            else:
+                j, r, p = self.model.frame_attachment(frame)
+                joints.append(j)
+                rotations.append(r)
+                translations.append(p)
+        self._robot_volumes = int(layout.segment_starts[sum(f is not None for f in layout.frames)])
+        self._robot_segments = sum(f is not None for f in layout.frames)
+        potential = self.collision.potential
+        floats.update({
+            "segment_rotation": np.array(rotations).reshape(ns, 3, 3),
+            "segment_translation": np.array(translations).reshape(ns, 3),
+            "segment_center": np.zeros((ns, 3)), "segment_radius": np.zeros(ns),
+            "segment_world_center": np.zeros((ns, 3)), "local": layout.local, "vertices": layout.local.copy(),
+            "radii": layout.radii,
+            "collision_parameters": np.array([potential.activation_distance, potential.slope,
+                                              potential.switch_ratio, self.collision.weight]),
+        })
+        ints.update({"segment_joint": np.array(joints, dtype=np.int64), "segment_starts": layout.segment_starts,
+                     "kinds": layout.kinds, "segment_pairs": layout.segment_pairs, "pair_starts": layout.pair_starts,
+                     "volume_a": layout.volume_a, "volume_b": layout.volume_b})
+        self._layout = layout
+        return {"segments": ns, "volumes": len(layout.kinds), "pairs": len(layout.segment_pairs),
+                "volume_pairs": len(layout.volume_a)}
+
+    def _refresh_environment(self) -> None:
+        """Environment volumes (world), all radii and every segment's bounding sphere from the collision model."""
+        if self.collision is None:
+            return
+        model = self.collision.collision_model
+        if model.version == self._version:
+            return
+        env: PackedVolumes = model.environment_volumes()
+        layout = self._layout
+        nr = self._robot_volumes
+        self._field("vertices").reshape(-1, 3, 3)[nr:] = env.vertices
+        radii = self._field("radii")
+        radii[nr:] = env.radii
+        # bounding spheres: robot segments in their frame, environment segments in the world
+        local = layout.local.copy()
+        local[nr:] = env.vertices
+        centers, bounds = _bounding_spheres(local, layout.kinds, radii, layout.segment_starts)
+        self._field("segment_center")[:] = centers.reshape(-1)
+        self._field("segment_radius")[:] = bounds
+        self._field("segment_world_center").reshape(-1, 3)[self._robot_segments:] = centers[self._robot_segments:]
+        self._version = model.version
+
+    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
+        """:meth:`Clik.step` (same arguments, same result to round-off) in one kernel call."""
+        if self.collision is not None and self.collision.collision_model.version != self._version:
+            self._refresh_environment()
+        nq = self._nq
+        inputs = self._inputs
+        q = np.asarray(q, dtype=np.float64)
+        target = np.asarray(target, dtype=np.float64)
+        width = 6 if self._m == 5 and isinstance(self.clik.task, FrameAxisTask) else self._m
+        if q.shape != (nq,):
+            raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
+        if target.shape != (width,):
+            raise ControllerError(f"target must have shape ({width},), got {target.shape}")
+        inputs[:nq] = q
+        inputs[nq:nq + width] = target
+        has_velocity = target_velocity is not None
+        if has_velocity:
+            velocity = np.asarray(target_velocity, dtype=np.float64)
+            if velocity.shape != (width,):
+                raise ControllerError(f"target_velocity must have shape ({width},), got {velocity.shape}")
+            inputs[nq + 6:nq + 6 + width] = velocity
+        code = self._kernel(self._f, self._i, has_velocity)
+        if code == BAD_CONFIGURATION:
+            raise ModelError("configuration contains non-finite values")
+        if code == BAD_TARGET:
+            raise ControllerError("target must be finite")
+        if code == ZERO_AXIS:
+            raise ControllerError("the target axis must not be zero")
+        if code == BAD_VELOCITY:
+            raise ControllerError("target_velocity must be finite")
+        out = self._outputs
+        nv, m = self._nv, self._m
+        norm, sigma, damping, value, status, _ = out[nv + m:].tolist()
+        name = STATUS_NAMES[int(status)]
+        return ClikResult(out[:nv].copy(), out[nv:nv + m].copy(), norm, sigma, damping, value, name != "singular",
+                          name)
+
+    @property
+    def last_min_distance(self) -> float:
+        """Smallest collision-pair distance [m] the last step computed exactly (+inf when every pair was
+        farther than the activation distance, or without a collision objective)."""
+        return float(self._outputs[self._nv + self._m + 5])
