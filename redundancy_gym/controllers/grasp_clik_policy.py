@@ -29,7 +29,6 @@ from .policy_options import config_from_options, env_with_attributes
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
 _START_TIME = 1e-9  # an observation with time below this starts a new episode
-BACKENDS = ("compiled", "python")
 
 
 @dataclass(frozen=True)
@@ -191,8 +190,6 @@ class GraspClikPolicy:
         self.config = config_from_options(GraspClikConfig, kwargs)
         if self.config.collision_avoidance not in ("on", "off"):
             raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: on, off")
-        if self.config.backend not in BACKENDS:
-            raise PolicyError(f"unknown backend {self.config.backend!r}; valid: {', '.join(BACKENDS)}")
         base = env_with_attributes(env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"),
                                    "grasp clik")
         self._layout = dict(base.observation_layout)

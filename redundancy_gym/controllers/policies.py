@@ -19,6 +19,7 @@ from ..model import RobotModel, collision_model_from_mjcf
 from ..sb3_import import import_stable_baselines3
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
+from .compiled_clik import CompiledClik
 from .exceptions import PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
@@ -97,6 +98,8 @@ class ClikPolicyConfig:
         collision_slope: slope of the collision potential at contact [1/m].
         collision_weight: weight of the collision objective.
         self_collision: also avoid robot-robot pairs (non-adjacent links).
+        backend: ``"compiled"`` (:class:`~redundancy_gym.controllers.CompiledClik`, one fused kernel per step)
+            or ``"python"`` (:class:`~redundancy_gym.controllers.Clik`); same commands to round-off.
     """
 
     method: str = "dls"
@@ -113,6 +116,7 @@ class ClikPolicyConfig:
     collision_slope: float = 5.0
     collision_weight: float = 1.0
     self_collision: bool = True
+    backend: str = "compiled"
 
 
 COLLISION_MODES = ("auto", "on", "off")
@@ -160,10 +164,10 @@ class ClikPolicy:
         if wanted:
             self.collision = self._collision_objective(base, has_obstacle)
             objectives.append(self.collision)
-        self.controller = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES),
-                               method=self.config.method, gain=self.config.gain,
-                               nullspace_gain=self.config.nullspace_gain, objectives=objectives,
-                               dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping)
+        clik = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES), method=self.config.method,
+                    gain=self.config.gain, nullspace_gain=self.config.nullspace_gain, objectives=objectives,
+                    dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping)
+        self.controller: Clik | CompiledClik = CompiledClik(clik) if self.config.backend == "compiled" else clik
         self.last_result: ClikResult | None = None
 
     def _collision_objective(self, base: Any, has_obstacle: bool) -> CollisionObjective:

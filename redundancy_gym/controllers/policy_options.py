@@ -8,9 +8,11 @@ from typing import Any, TypeVar
 from .exceptions import PolicyError
 from .redundancy_resolution import METHODS
 
-__all__ = ["config_from_options", "env_with_attributes"]
+__all__ = ["BACKENDS", "config_from_options", "env_with_attributes"]
 
 C = TypeVar("C")
+# how a CLIK policy runs its controller: one fused compiled kernel (CompiledClik) or the Python Clik
+BACKENDS: tuple[str, ...] = ("compiled", "python")
 
 
 def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
@@ -23,6 +25,9 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
     method = getattr(config, "method", METHODS[0])
     if method not in METHODS:
         raise PolicyError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
+    backend = getattr(config, "backend", BACKENDS[0])
+    if backend not in BACKENDS:
+        raise PolicyError(f"unknown backend {backend!r}; valid: {', '.join(BACKENDS)}")
     return config
 
 

@@ -6,7 +6,7 @@ Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 from .collision_model import CollisionLayout, CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
-from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential
+from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential, piecewise_potential_kernel
 from .primitives import KIND_NAMES, LSS, PSS, SSV, TSS
 
 __all__ = [
@@ -33,4 +33,5 @@ __all__ = [
     "distance",
     "distances",
     "indexed_distances",
+    "piecewise_potential_kernel",
 ]

@@ -35,6 +35,9 @@ _SINGULAR = 1e-10
 _WELL_CONDITIONED = 1e-6
 
 _INF = np.inf
+# Witness points closer than 1e-12 m [squared: m^2] count as touching: their difference is round-off, so its
+# direction would be noise; touching volumes get the centroid normal of _fallback_normal instead.
+_CONTACT_GAP2 = 1e-24
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # here is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
@@ -408,7 +411,7 @@ def _load(v, i, ox, oy, oz):
 @njit(**_JIT)
 def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n):
     dist = np.sqrt(d2)
-    if d2 > 0.0:
+    if d2 > _CONTACT_GAP2:
         inv = 1.0 / np.sqrt(d2)  # issued alongside the first square root, not after it
         nx, ny, nz = (pb[0] - pa[0]) * inv, (pb[1] - pa[1]) * inv, (pb[2] - pa[2]) * inv
     else:
@@ -426,7 +429,7 @@ def _store(k, d2, pa, pb, ra, rb, ox, oy, oz, swap, out_d, out_pa, out_pb, out_n
     out_n[k, 0] = nx
     out_n[k, 1] = ny
     out_n[k, 2] = nz
-    return dist
+    return dist if d2 > _CONTACT_GAP2 else 0.0
 
 
 @njit(**_JIT)
@@ -443,7 +446,7 @@ def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, 
         dy = v[j, 0, 1] - ay
         dz = v[j, 0, 2] - az
         q = dx * dx + dy * dy + dz * dz
-        apart = q > 0.0
+        apart = q > _CONTACT_GAP2
         inv = 1.0 / np.sqrt(q if apart else 1.0)
         r = slot[k]
         out_d[r] = np.sqrt(q) - radii[i] - radii[j]
@@ -507,7 +510,7 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
         dy = b0y + t * d2y - pay
         dz = b0z + t * d2z - paz
         q = dx * dx + dy * dy + dz * dz
-        apart = q > 0.0
+        apart = q > _CONTACT_GAP2
         inv = 1.0 / np.sqrt(q if apart else 1.0)
         r = slot[k]
         out_d[r] = np.sqrt(q) - radii[i] - radii[j]
@@ -632,7 +635,7 @@ def volume_pair_distance(v, radii, kinds, i, j):
     hi = i if swap else j
     d2, pa, pb, ox, oy, oz = _closest(v, kinds, lo, hi, GROUP_OF[kinds[lo], kinds[hi]])
     dist = np.sqrt(d2)
-    if d2 > 0.0:
+    if d2 > _CONTACT_GAP2:
         inv = 1.0 / dist
         n = ((pb[0] - pa[0]) * inv, (pb[1] - pa[1]) * inv, (pb[2] - pa[2]) * inv)
     else:

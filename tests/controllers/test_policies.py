@@ -53,3 +53,22 @@ def test_policy_errors(name: str, kwargs: dict, match: str) -> None:
 def test_clik_policy_rejects_unsupported_env() -> None:
     with pytest.raises(PolicyError, match="lacks"):
         redundancy_gym.make_policy("clik", gym.make("CartPole-v1"))
+
+
+@pytest.mark.parametrize("env_id", [ENV_ID, "redundancy_gym/AgriReach-v0"])
+def test_compiled_and_python_backends_give_the_same_episode(env_id: str) -> None:
+    """The default compiled controller and the Python Clik command the same actions along a whole episode."""
+    env = gym.make(env_id)
+    obs, _ = env.reset(seed=2)
+    compiled = redundancy_gym.make_policy("clik", env)
+    python = redundancy_gym.make_policy("clik", env, backend="python")
+    steps = 0
+    while True:
+        action = compiled.predict(obs)[0]
+        np.testing.assert_allclose(action, python.predict(obs)[0], atol=1e-5)  # float32 actions
+        assert compiled.last_result.status == python.last_result.status
+        obs, _, terminated, truncated, info = env.step(action)
+        steps += 1
+        if terminated or truncated:
+            break
+    assert steps > 50 and info["is_success"]

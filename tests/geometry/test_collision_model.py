@@ -108,3 +108,40 @@ def test_invalid_models_raise() -> None:
         CollisionModel([seg], exclude=[("a", "nope")])
     with pytest.raises(GeometryError, match="no volumes"):
         Segment("empty", ())
+
+
+def test_layout_and_environment_volumes_describe_the_model(planar_model: RobotModel) -> None:
+    """The flat layout (for compiled consumers) reproduces every pair distance; environment moves bump the version."""
+    from redundancy_gym.geometry import PackedVolumes
+    from redundancy_gym.geometry.ssv_kernels import volume_pair_distance
+
+    model = collision_model_from_mjcf(planar_model, [OBSTACLE])
+    layout = model.layout()
+    assert len(layout.frames) == len(model.segments) and layout.segment_pairs.shape == (model.num_pairs, 2)
+    version = model.version
+    model.set_environment_placement("obstacle", np.eye(3), [0.1, 0.0, 0.3])
+    model.set_environment_radius("obstacle", 0.05)
+    assert model.version == version + 2
+    q = np.array([0.3, -0.4, 0.5, 0.2])
+    planar_model.update(q)
+    state = model.evaluate(planar_model)
+    env = model.environment_volumes()
+    vertices = layout.local.copy()
+    first = len(vertices) - len(env)
+    vertices[first:] = env.vertices
+    radii = layout.radii.copy()
+    radii[first:] = env.radii
+    for s, frame in enumerate(layout.frames):
+        if frame is not None:
+            r, p = planar_model.frame_placement(frame)
+            sl = slice(layout.segment_starts[s], layout.segment_starts[s + 1])
+            vertices[sl] = layout.local[sl] @ r.T + p
+    packed = PackedVolumes(vertices, radii, layout.kinds)
+    for p in range(model.num_pairs):
+        ks = range(layout.pair_starts[p], layout.pair_starts[p + 1])
+        best = min(volume_pair_distance(packed.vertices, packed.radii, packed.kinds, layout.volume_a[k],
+                                        layout.volume_b[k])[0] for k in ks)
+        if state.exact[p]:
+            assert best == pytest.approx(state.distance[p], abs=1e-12)
+        else:  # skipped by its bounding capsule: the reported distance is a lower bound
+            assert best >= state.distance[p] - 1e-12

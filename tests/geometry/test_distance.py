@@ -338,3 +338,33 @@ def test_attached_frames_place_segments_and_points(rng: np.random.Generator) -> 
         batch.attach_frames(positions, rotations, [0.0, 0.0])  # volume 0 is an LSS
     with pytest.raises(GeometryError, match="moving"):
         PairBatch(volumes, [0], [2], moving=5)
+
+
+@pytest.mark.parametrize(("kind_a", "kind_b"), [*PAIR_TYPES, ("TSS", "PSS"), ("LSS", "PSS"), ("TSS", "LSS")])
+def test_in_kernel_pair_distance_matches_distance(kind_a: str, kind_b: str) -> None:
+    """``volume_pair_distance`` (used inside the fused CLIK kernel) gives ``distance``'s result, either order."""
+    from redundancy_gym.geometry import PackedVolumes
+    from redundancy_gym.geometry.ssv_kernels import volume_pair_distance
+
+    rng = np.random.default_rng(7)
+    for _ in range(100):
+        a, b = random_volume(rng, kind_a, spread=0.5), random_volume(rng, kind_b, spread=0.5)
+        packed = PackedVolumes.from_volumes((a, b))
+        d, pa, pb, n = volume_pair_distance(packed.vertices, packed.radii, packed.kinds, 0, 1)
+        ref = distance(a, b)
+        assert d == pytest.approx(ref.distance, abs=TOL)
+        np.testing.assert_allclose(pa, ref.point_a, atol=1e-9)
+        np.testing.assert_allclose(pb, ref.point_b, atol=1e-9)
+        np.testing.assert_allclose(n, ref.normal, atol=1e-9)
+
+
+def test_in_kernel_pair_distance_of_touching_volumes_has_a_unit_normal() -> None:
+    from redundancy_gym.geometry import PackedVolumes
+    from redundancy_gym.geometry.ssv_kernels import volume_pair_distance
+
+    a, b = LSS([-1, 0, 0], [1, 0, 0], 0.1), LSS([0, -1, 0], [0, 1, 0], 0.1)  # crossing axes: witnesses coincide
+    packed = PackedVolumes.from_volumes((a, b))
+    d, _, _, n = volume_pair_distance(packed.vertices, packed.radii, packed.kinds, 0, 1)
+    assert d == pytest.approx(-0.2)
+    assert np.linalg.norm(n) == pytest.approx(1.0)
+    np.testing.assert_allclose(n, distance(a, b).normal)

@@ -74,3 +74,15 @@ def test_only_h_c3_is_c2_at_the_activation_distance() -> None:
     inside = np.array([0.2 - 1e-9])
     assert abs(CubicPotential(0.2, 3.0).evaluate(inside).curvature[0]) < 1e-7
     assert QuadraticPotential(0.2, 3.0).evaluate(inside).curvature[0] == pytest.approx(6.0)
+
+
+def test_scalar_kernel_matches_the_vectorized_potential() -> None:
+    """``piecewise_potential_kernel`` (inside compiled controllers) is (5.58)/(5.59) on every branch."""
+    from redundancy_gym.geometry import piecewise_potential_kernel
+
+    pot = PiecewisePotential(activation_distance=0.25, slope=3.0, switch_ratio=0.4)
+    d = np.linspace(-0.1, 0.4, 501)
+    ref = pot.evaluate(d)
+    out = np.array([piecewise_potential_kernel(x, 0.25, 3.0, 0.4) for x in d])
+    np.testing.assert_allclose(out[:, 0], ref.value, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(out[:, 1], ref.slope, rtol=1e-12, atol=1e-15)
