@@ -35,5 +35,7 @@ $(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps
 	$(BIN)/pip install -q -e ".[test]"
 	touch $@ $(VENV)/.core-installed
 
+# numba's on-disk cache keys a kernel on its own file only: after editing a kernel that others call, clean
 clean:
 	rm -rf $(VENV) results runs .pytest_cache
+	find redundancy_gym -name '*.nbi' -delete -o -name '*.nbc' -delete
