@@ -93,6 +93,7 @@ class CompiledClik:
         nj = chain.num_joints
         nq, nv, m = clik.model.nq, clik.model.nv, task.dim
         self._nq, self._nv, self._m = nq, nv, m
+        self._width = 6 if isinstance(task, FrameAxisTask) else m  # target entries: [p_d, a_d] or the rows
         joint, frame_rotation, frame_translation = clik.model.frame_attachment(task.frame)
         limits = [o for o in clik.objectives if isinstance(o, JointLimitObjective)]
         postures = [o for o in clik.objectives if isinstance(o, PostureObjective)]
@@ -163,7 +164,8 @@ class CompiledClik:
         layout = model.layout()
         ns = len(layout.frames)
         joints, rotations, translations = [], [], []
-        for frame in layout.frames:
+        self._world_fixed: list[tuple[int, NDArray[np.float64], NDArray[np.float64]]] = []
+        for s, frame in enumerate(layout.frames):
             if frame is None:
                 joints.append(-1)
                 rotations.append(np.eye(3))
@@ -173,6 +175,8 @@ class CompiledClik:
                 joints.append(j)
                 rotations.append(r)
                 translations.append(p)
+                if j < 0:  # a robot segment on a world-fixed frame: placed once, like the environment
+                    self._world_fixed.append((s, r, p))
         self._robot_volumes = int(layout.segment_starts[sum(f is not None for f in layout.frames)])
         self._robot_segments = sum(f is not None for f in layout.frames)
         potential = self.collision.potential
@@ -211,7 +215,13 @@ class CompiledClik:
         centers, bounds = _bounding_spheres(local, layout.kinds, radii, layout.segment_starts)
         self._field("segment_center")[:] = centers.reshape(-1)
         self._field("segment_radius")[:] = bounds
-        self._field("segment_world_center").reshape(-1, 3)[self._robot_segments:] = centers[self._robot_segments:]
+        world = self._field("segment_world_center").reshape(-1, 3)
+        world[self._robot_segments:] = centers[self._robot_segments:]
+        vertices = self._field("vertices").reshape(-1, 3, 3)
+        for s, rotation, translation in self._world_fixed:
+            sl = slice(layout.segment_starts[s], layout.segment_starts[s + 1])
+            vertices[sl] = layout.local[sl] @ rotation.T + translation
+            world[s] = rotation @ centers[s] + translation
         self._version = model.version
 
     def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
@@ -222,7 +232,7 @@ class CompiledClik:
         inputs = self._inputs
         q = np.asarray(q, dtype=np.float64)
         target = np.asarray(target, dtype=np.float64)
-        width = 6 if self._m == 5 and isinstance(self.clik.task, FrameAxisTask) else self._m
+        width = self._width
         if q.shape != (nq,):
             raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
         if target.shape != (width,):
@@ -253,6 +263,6 @@ class CompiledClik:
 
     @property
     def last_min_distance(self) -> float:
-        """Smallest collision-pair distance [m] the last step computed exactly (+inf when every pair was
-        farther than the activation distance, or without a collision objective)."""
+        """Smallest distance [m] among the collision pairs the last step computed exactly (those whose
+        segments' bounding spheres came within the activation distance); +inf when there were none."""
         return float(self._outputs[self._nv + self._m + 5])

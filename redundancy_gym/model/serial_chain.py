@@ -47,29 +47,27 @@ class SerialChain:
 
     def forward(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """World rotations (J, 3, 3) and positions (J, 3) [m] of the joint frames at ``q``."""
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
-            raise ModelError(f"q must be finite with shape ({self.num_joints},), got {q.shape}")
-        rotation = np.empty((self.num_joints, 3, 3))
-        position = np.empty((self.num_joints, 3))
-        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.prismatic,
-                      self.q_index, q, rotation, position, np.empty((self.num_joints, 3)))
+        rotation, position, _ = self._forward(q)
         return rotation, position
 
     def point_jacobian(self, q: ArrayLike, joint: int, point: ArrayLike) -> NDArray[np.float64]:
         """World-aligned ``[J_T; J_R]`` (6 x nv) of the world point ``point`` [m] moving with ``joint`` at ``q``."""
         if not -1 <= int(joint) < self.num_joints:
             raise ModelError(f"joint must lie in [-1, {self.num_joints}), got {joint}")
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
-            raise ModelError(f"q must be finite with shape ({self.num_joints},), got {q.shape}")
-        rotation = np.empty((self.num_joints, 3, 3))
-        position = np.empty((self.num_joints, 3))
-        world_axis = np.empty((self.num_joints, 3))
-        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.prismatic,
-                      self.q_index, q, rotation, position, world_axis)
+        _, position, world_axis = self._forward(q)
         p = np.asarray(point, dtype=np.float64)
         out = np.zeros((6, self.num_joints))
         chain_jacobian(self.parent, self.prismatic, self.v_index, position, world_axis, int(joint), float(p[0]),
                        float(p[1]), float(p[2]), out)
         return out
+
+    def _forward(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Joint rotations, positions and world axes at a checked ``q``."""
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
+            raise ModelError(f"q must be finite with shape ({self.num_joints},), got {q.shape}")
+        n = self.num_joints
+        rotation, position, world_axis = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
+        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.prismatic,
+                      self.q_index, q, rotation, position, world_axis)
+        return rotation, position, world_axis

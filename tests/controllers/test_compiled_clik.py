@@ -176,3 +176,28 @@ def test_grasp_path_sampler_meets_its_boundary_conditions_and_derivatives() -> N
         # the axis turns with omega: da/dt = omega x a
         np.testing.assert_allclose((ahead[3:] - behind[3:]) / (2 * eps), np.cross(velocity[3:], target[3:]),
                                    atol=1e-6)
+
+
+def test_robot_segment_on_a_world_fixed_frame_is_placed_once(rng) -> None:
+    """A robot segment on a frame that does not move (a base plate, off the origin and turned) is checked like
+    the environment, at its world placement."""
+    import pinocchio as pin
+
+    from redundancy_gym.geometry import CollisionModel
+
+    pm = RobotModel.from_mjcf(PLANAR_ARM_XML).pinocchio_model.copy()
+    plate = pin.SE3(pin.utils.rpyToMatrix(0.3, -0.2, 0.5), np.array([0.4, 0.0, 0.1]))
+    pm.addFrame(pin.Frame("plate", 0, 0, plate, pin.FrameType.OP_FRAME))
+    model = RobotModel(pm)
+    assert model.frame_attachment("plate")[0] == -1
+    link3 = Segment("link3", (LSS([0.0, 0.0, 0.0], [0.3, 0.0, 0.0], 0.04),), frame="joint3")
+    base = Segment("base", (LSS([-0.1, 0.0, 0.0], [0.1, 0.0, 0.0], 0.05),), frame="plate")
+    collision = CollisionObjective(CollisionModel([base, link3]), activation_distance=0.3, weight=2.0)
+    clik = Clik(model, FramePositionTask(PLANAR_ARM_TCP, "xz"), method="dls", objectives=[collision])
+    compiled = CompiledClik(clik)
+    active = 0
+    for _ in range(60):
+        q = rng.uniform(model.lower_limits, model.upper_limits)
+        assert_same(clik.step(q, [0.5, 0.2]), compiled.step(q, [0.5, 0.2]))
+        active += int(compiled.last_min_distance < 0.3)
+    assert active > 5
