@@ -368,3 +368,27 @@ def test_in_kernel_pair_distance_of_touching_volumes_has_a_unit_normal() -> None
     assert d == pytest.approx(-0.2)
     assert np.linalg.norm(n) == pytest.approx(1.0)
     np.testing.assert_allclose(n, distance(a, b).normal)
+
+
+def test_crossing_segments_off_the_grid_get_the_centroid_normal() -> None:
+    """Two capsule axes crossing at a point that is not exactly representable: the witnesses differ by
+    round-off only, so the normal must be the centroid direction, not normalized noise (batch and in-kernel)."""
+    from redundancy_gym.geometry import PackedVolumes, PairBatch
+    from redundancy_gym.geometry.ssv_kernels import volume_pair_distance
+
+    rng = np.random.default_rng(11)
+    for _ in range(50):
+        a0, a1 = rng.normal(size=3), rng.normal(size=3)
+        p = a0 + rng.uniform(0.2, 0.8) * (a1 - a0)
+        d = rng.normal(size=3)
+        s = rng.uniform(0.2, 0.8)
+        a, b = LSS(a0, a1, 0.05), LSS(p - s * d, p + (1.0 - s) * d, 0.05)
+        centroid = 0.5 * (b.points[0] + b.points[1]) - 0.5 * (a.points[0] + a.points[1])
+        expected = centroid / np.linalg.norm(centroid)
+        ref = distance(a, b)
+        assert ref.distance == pytest.approx(-0.1, abs=1e-9)
+        np.testing.assert_allclose(ref.normal, expected, atol=1e-9)
+        packed = PackedVolumes.from_volumes((a, b))
+        np.testing.assert_allclose(volume_pair_distance(packed.vertices, packed.radii, packed.kinds, 0, 1)[3],
+                                   expected, atol=1e-9)
+        np.testing.assert_allclose(PairBatch((a, b), [0], [1]).compute().normal[0], expected, atol=1e-9)
