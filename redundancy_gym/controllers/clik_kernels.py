@@ -224,7 +224,7 @@ def _collision(f, i, dims, parent, prismatic, v_index, position, world_axis, q_r
         smallest = min(smallest, best)
         if not best < da:
             continue
-        h, dh = piecewise_potential_kernel(best, da, slope, ratio)
+        h, dh, _ = piecewise_potential_kernel(best, da, slope, ratio)
         value += weight * h
         # dd/dq = n^T (J_b(p_b) - J_a(p_a)) (5.61)
         if seg_joint[b] >= 0:
@@ -340,8 +340,8 @@ def clik_step(f, i, has_velocity):
     for o in range(n_limits):  # (5.58) on the distance to each limit
         da, slope, ratio, weight = lp[4 * o], lp[4 * o + 1], lp[4 * o + 2], lp[4 * o + 3]
         for k in range(nq):
-            h0, d0 = piecewise_potential_kernel(q[k] - lower[o * nq + k], da, slope, ratio)
-            h1, d1 = piecewise_potential_kernel(upper[o * nq + k] - q[k], da, slope, ratio)
+            h0, d0, _ = piecewise_potential_kernel(q[k] - lower[o * nq + k], da, slope, ratio)
+            h1, d1, _ = piecewise_potential_kernel(upper[o * nq + k] - q[k], da, slope, ratio)
             value += weight * (h0 + h1)
             gradient[k] += weight * (d0 - d1)
     reference = _fv(f, i, _F_POSTURE_REFERENCE)

@@ -17,7 +17,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ..geometry import LSS, PSS, SSV, TSS, Segment
-from ..model import RobotModel, collision_model_from_mjcf
+from ..model import RobotModel, collision_geometry_from_mjcf
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
@@ -195,6 +195,7 @@ class GraspClikPolicy:
         self._layout = dict(base.observation_layout)
         self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
+        self._geometry = collision_geometry_from_mjcf(self.model)  # the arm's own segments, read once
         self._joint_limits = JointLimitObjective.from_model(
             self.model, activation_distance=self.config.joint_limit_activation, slope=1.0,
             weight=self.config.joint_limit_weight)
@@ -210,7 +211,7 @@ class GraspClikPolicy:
         objectives: list[Any] = [self._joint_limits]
         self.collision = None
         if self.config.collision_avoidance == "on":
-            model = collision_model_from_mjcf(self.model, environment)
+            model = self._geometry.collision_model(environment)
             self.collision = CollisionObjective(model, activation_distance=self.config.collision_activation,
                                                 slope=self.config.collision_slope, weight=self.config.collision_weight)
             objectives.append(self.collision)

@@ -64,28 +64,15 @@ class PiecewisePotential:
         d = np.asarray(distance, dtype=np.float64)
         if not np.all(np.isfinite(d)):
             raise GeometryError("distances must be finite")
-        s0 = -self.slope
         da = self.activation_distance
-        t = self.switch_ratio
         if d.size == 0 or d.min() > da:  # the common case in a control loop: nothing is near
             zero = np.zeros_like(d)
             return PotentialValue(zero, zero.copy(), zero.copy())
-        quad = d < t * da
-        cubic = (~quad) & (d <= da)
-        value = np.zeros_like(d)
-        slope = np.zeros_like(d)
-        curvature = np.zeros_like(d)
-        # (5.58)/(5.59), quadratic branch
-        dq = d[quad]
-        value[quad] = -s0 * dq**2 / (da * (t + 1.0)) + s0 * dq - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0))
-        slope[quad] = -2.0 * s0 * dq / (da * (t + 1.0)) + s0
-        curvature[quad] = -2.0 * s0 / (da * (t + 1.0))
-        # cubic branch
-        rest = da - d[cubic]
-        denom = da * da * (t * t - 1.0)
-        value[cubic] = s0 * rest**3 / (3.0 * denom)
-        slope[cubic] = -s0 * rest**2 / denom
-        curvature[cubic] = 2.0 * s0 * rest / denom
+        if not d.flags.c_contiguous:  # flat views below, written in place (keeping a 0-d shape)
+            d = d.copy(order="C")
+        value, slope, curvature = np.empty(d.shape), np.empty(d.shape), np.empty(d.shape)
+        _piecewise_potential_many(d.reshape(-1), da, self.slope, self.switch_ratio, value.reshape(-1),
+                                  slope.reshape(-1), curvature.reshape(-1))
         return PotentialValue(value, slope, curvature)
 
     def value(self, distance: ArrayLike) -> NDArray[np.float64]:
@@ -99,19 +86,27 @@ class PiecewisePotential:
 
 @njit(cache=True, error_model="numpy")
 def piecewise_potential_kernel(d: float, activation_distance: float, slope: float,
-                               switch_ratio: float) -> tuple[float, float]:
-    """``(H_c23(d), H_c23'(d))`` of :class:`PiecewisePotential` for one distance, for use inside other kernels."""
+                               switch_ratio: float) -> tuple[float, float, float]:
+    """``H_c23(d)`` (5.58), ``H_c23'(d)`` (5.59) and ``H_c23''(d)`` for one distance: the one implementation of
+    :class:`PiecewisePotential`, also called inside compiled controllers."""
     da = activation_distance
     t = switch_ratio
     s0 = -slope
     if d > da:
-        return 0.0, 0.0
-    if d < t * da:  # (5.58)/(5.59), quadratic branch
+        return 0.0, 0.0, 0.0
+    if d < t * da:  # quadratic branch
         return (-s0 * d * d / (da * (t + 1.0)) + s0 * d - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0)),
-                -2.0 * s0 * d / (da * (t + 1.0)) + s0)
-    rest = da - d
+                -2.0 * s0 * d / (da * (t + 1.0)) + s0, -2.0 * s0 / (da * (t + 1.0)))
+    rest = da - d  # cubic branch
     denom = da * da * (t * t - 1.0)
-    return s0 * rest**3 / (3.0 * denom), -s0 * rest * rest / denom
+    return s0 * rest**3 / (3.0 * denom), -s0 * rest * rest / denom, 2.0 * s0 * rest / denom
+
+
+@njit(cache=True, error_model="numpy")
+def _piecewise_potential_many(d, activation_distance, slope, switch_ratio, value, first, second):  # noqa: ANN001, ANN202
+    """:func:`piecewise_potential_kernel` over a flat array."""
+    for k in range(d.shape[0]):
+        value[k], first[k], second[k] = piecewise_potential_kernel(d[k], activation_distance, slope, switch_ratio)
 
 
 @dataclass(frozen=True)

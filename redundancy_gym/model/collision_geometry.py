@@ -37,6 +37,14 @@ class CollisionGeometry:
     adjacent: tuple[tuple[str, str], ...]
     skipped: tuple[str, ...]
 
+    def collision_model(self, environment: tuple[Segment, ...] | list[Segment] = (),
+                        **kwargs: object) -> CollisionModel:
+        """A :class:`CollisionModel` of these robot segments (adjacent links excluded) plus the MJCF's world
+        geoms and ``environment``; ``kwargs`` go to :class:`CollisionModel`. Reading the MJCF once and calling
+        this per episode saves the parse."""
+        return CollisionModel(self.robot, tuple(self.environment) + tuple(environment), exclude=self.adjacent,
+                              **kwargs)  # type: ignore[arg-type]
+
 
 def _triangle(points: np.ndarray, name: str) -> tuple[np.ndarray, float]:
     """Mid-plane triangle and half thickness of a 3-vertex triangle or a 6-vertex triangular prism."""
@@ -134,6 +142,4 @@ def collision_model_from_mjcf(model: RobotModel, environment: tuple[Segment, ...
                               path: str | Path | None = None, **kwargs: object) -> CollisionModel:
     """A :class:`CollisionModel` of the MJCF's robot geoms (adjacent links excluded) plus ``environment``
     (and the MJCF's own world geoms); ``kwargs`` go to :class:`CollisionModel`."""
-    geometry = collision_geometry_from_mjcf(model, path)
-    return CollisionModel(geometry.robot, tuple(geometry.environment) + tuple(environment),
-                          exclude=geometry.adjacent, **kwargs)  # type: ignore[arg-type]
+    return collision_geometry_from_mjcf(model, path).collision_model(environment, **kwargs)

@@ -86,3 +86,4 @@ def test_scalar_kernel_matches_the_vectorized_potential() -> None:
     out = np.array([piecewise_potential_kernel(x, 0.25, 3.0, 0.4) for x in d])
     np.testing.assert_allclose(out[:, 0], ref.value, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(out[:, 1], ref.slope, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(out[:, 2], ref.curvature, rtol=1e-12, atol=1e-15)
