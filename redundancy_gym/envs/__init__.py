@@ -2,7 +2,8 @@
 :mod:`redundancy_gym.registration`)."""
 
 from .agri_reach import AgriReachEnv
+from .biped_walk import BipedWalkEnv
 from .exceptions import EnvConfigError, InvalidActionError
 from .planar_reach import PlanarReachEnv
 
-__all__ = ["AgriReachEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]
+__all__ = ["AgriReachEnv", "BipedWalkEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]

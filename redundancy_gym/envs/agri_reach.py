@@ -24,6 +24,7 @@ from ..assets.agri_scene import PLANT_COLORS, POOL_CATEGORIES, TARGET_COLOR, agr
 from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaults, generate_crop_row
 from ..geometry import LSS, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
+from .self_collision import self_collision_pairs as _self_collision_pairs
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
 
@@ -634,29 +635,6 @@ def _distances_to(row: CropRow, parts: NDArray[np.int64], volume: LSS) -> NDArra
                            np.concatenate([row.radius[parts], [volume.radius]]),
                            np.concatenate([row.kind[parts], [volume.kind]]))
     return indexed_distances(packed, np.arange(n), np.full(n, n)).distance
-
-
-def _self_collision_pairs(m: mujoco.MjModel, geoms: NDArray[np.int64]) -> NDArray[np.int64]:
-    """Index pairs (into ``geoms``) of arm volumes that can collide: not on one body, not on a body and its
-    nearest ancestor carrying geoms, and not excluded by an MJCF ``<exclude>``."""
-    body = m.geom_bodyid[geoms]
-    carriers = set(body.tolist())
-
-    def carrier_parent(b: int) -> int:
-        p = int(m.body_parentid[b])
-        while p > 0 and p not in carriers:
-            p = int(m.body_parentid[p])
-        return p
-
-    excluded = {frozenset((int(s >> 16), int(s & 0xFFFF))) for s in m.exclude_signature}
-    pairs = []
-    for i in range(len(geoms)):
-        for j in range(i + 1, len(geoms)):
-            a, b = int(body[i]), int(body[j])
-            if a == b or carrier_parent(a) == b or carrier_parent(b) == a or frozenset((a, b)) in excluded:
-                continue
-            pairs.append((i, j))
-    return np.array(pairs, dtype=np.int64).reshape(-1, 2)
 
 
 def _place_capsules(m: mujoco.MjModel, g: NDArray[np.int64], p0: NDArray[np.float64], p1: NDArray[np.float64],

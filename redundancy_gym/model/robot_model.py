@@ -8,6 +8,7 @@ frames and Jacobians pays for that pass once.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Literal
 
@@ -33,7 +34,12 @@ _CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
 
 
 class RobotModel:
-    """Kinematics and momentum of a fixed-base robot (frames, Jacobians, CoM, centroidal momentum, integration).
+    """Kinematics and momentum of a robot (frames, Jacobians, CoM, centroidal momentum, integration).
+
+    The base is fixed, or free-floating when the MJCF's root body has a ``freejoint`` (pinocchio then makes
+    its first joint a free flyer: 7 coordinates ``[x y z qx qy qz qw]`` and 6 velocities ``[v; omega]``, both
+    in the base frame). :meth:`from_mujoco_state` and :meth:`to_mujoco_qpos` convert from and to MuJoCo's
+    order, the one place where the two conventions meet.
 
     Frames are the MJCF bodies, joints and sites (pinocchio turns sites into frames). All Jacobians are
     expressed in the world-aligned frame at the frame origin (pinocchio's ``LOCAL_WORLD_ALIGNED``), so that
@@ -80,6 +86,16 @@ class RobotModel:
     def nv(self) -> int:
         """Number of generalized velocities."""
         return int(self._model.nv)
+
+    @property
+    def floating_base(self) -> bool:
+        """Whether the first joint is a free flyer (a free-floating base)."""
+        return self._model.njoints > 1 and self._model.joints[1].shortname() == "JointModelFreeFlyer"
+
+    @property
+    def base_dofs(self) -> tuple[int, int]:
+        """``(nq, nv)`` of the base joint: ``(7, 6)`` for a free-floating base, else ``(0, 0)``."""
+        return (7, 6) if self.floating_base else (0, 0)
 
     @property
     def joint_names(self) -> list[str]:
@@ -158,7 +174,7 @@ class RobotModel:
         q = np.asarray(q, dtype=np.float64)
         if q.shape != (self.nq,):
             raise ModelError(f"configuration must have shape ({self.nq},), got {q.shape}")
-        if not np.all(np.isfinite(q)):
+        if not math.isfinite(float(q.sum())):  # one reduction: NaN and inf survive a sum
             raise ModelError("configuration contains non-finite values")
         return q
 
@@ -250,6 +266,35 @@ class RobotModel:
         q = self._require_update()
         return np.array(pin.computeCentroidalMap(self._model, self._data, q), dtype=np.float64)
 
+    def com_and_centroidal_matrix(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(c, A_G)`` from one pass: CoM [m] and centroidal momentum matrix (6 x nv, linear rows first).
+
+        ``A_G[:3] / total_mass`` is the CoM Jacobian and ``A_G[5]`` the Jacobian ``J_Lz`` of the vertical
+        angular momentum about the CoM used by (5.62).
+        """
+        q = self._require_update()
+        ag = np.array(pin.computeCentroidalMap(self._model, self._data, q), dtype=np.float64)
+        return np.array(self._data.com[0], dtype=np.float64), ag
+
+    def measure(self, q: ArrayLike, v: ArrayLike, frames: tuple[str | int, ...] = ()
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(c, c_dot, R, p)`` of a measured state in one forward pass: CoM [m], its velocity [m/s] and the
+        world rotations (k, 3, 3) and positions (k, 3) [m] of ``frames``.
+
+        Cheaper than :meth:`update` (no Jacobians); it leaves the cache empty, so call :meth:`update` before
+        the next Jacobian query.
+        """
+        q = self.check_configuration(q)
+        v = self._check_velocity(v)
+        self._q = None
+        com = np.array(pin.centerOfMass(self._model, self._data, q, v, False), dtype=np.float64)
+        com_velocity = np.array(self._data.vcom[0], dtype=np.float64)
+        pin.updateFramePlacements(self._model, self._data)
+        placements = [self._data.oMf[self._resolve(f)] for f in frames]
+        rotations = np.array([m.rotation for m in placements], dtype=np.float64).reshape(len(frames), 3, 3)
+        positions = np.array([m.translation for m in placements], dtype=np.float64).reshape(len(frames), 3)
+        return com, com_velocity, rotations, positions
+
     def mass_matrix(self) -> NDArray[np.float64]:
         """Joint-space inertia matrix (nv x nv)."""
         q = self._require_update()
@@ -267,6 +312,34 @@ class RobotModel:
         """Tangent vector ``v`` with ``integrate(q0, v, 1) == q1``."""
         return np.array(pin.difference(self._model, self.check_configuration(q0), self.check_configuration(q1)))
 
+    def from_mujoco_state(self, qpos: ArrayLike, qvel: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(q, v)`` in pinocchio's convention from MuJoCo's ``qpos`` and ``qvel`` of the same MJCF.
+
+        MuJoCo's free joint is ``qpos = [x y z qw qx qy qz]`` and ``qvel = [v_world; omega_body]``; pinocchio's
+        free flyer is ``q = [x y z qx qy qz qw]`` and ``v = [v_body; omega_body]``. Fixed-base models pass
+        through unchanged.
+        """
+        q = np.array(qpos, dtype=np.float64)
+        v = np.array(qvel, dtype=np.float64)
+        if q.shape != (self.nq,) or v.shape != (self.nv,):
+            raise ModelError(f"qpos and qvel must have shapes ({self.nq},), ({self.nv},); got {q.shape}, {v.shape}")
+        if self.floating_base:
+            w, x, y, z = q[3:7]
+            norm = float(np.sqrt(w * w + x * x + y * y + z * z))
+            if not norm > 0.0:
+                raise ModelError("the base quaternion of qpos is zero")
+            q[3:7] = np.array([x, y, z, w]) / norm
+            rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+            v[:3] = rotation.T @ v[:3]
+        return q, v
+
+    def to_mujoco_qpos(self, q: ArrayLike) -> NDArray[np.float64]:
+        """MuJoCo's ``qpos`` for a pinocchio configuration (the inverse of :meth:`from_mujoco_state` for q)."""
+        q = self.check_configuration(q).copy()
+        if self.floating_base:
+            q[3:7] = q[[6, 3, 4, 5]]
+        return q
+
     def clamp(self, q: ArrayLike) -> NDArray[np.float64]:
         """``q`` clipped into the joint limits."""
         return np.clip(self.check_configuration(q), self.lower_limits, self.upper_limits)
@@ -276,7 +349,7 @@ class RobotModel:
         qdot = np.asarray(qdot, dtype=np.float64)
         if qdot.shape != (self.nv,):
             raise ModelError(f"velocity must have shape ({self.nv},), got {qdot.shape}")
-        if not np.all(np.isfinite(qdot)):
+        if not math.isfinite(float(qdot.sum())):
             raise ModelError("velocity contains non-finite values")
         return qdot
 

@@ -1,0 +1,84 @@
+"""Quintic polynomials between two states given to C2 (position, velocity, acceleration at both ends)."""
+
+from __future__ import annotations
+
+from bisect import bisect_right
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..exceptions import ControllerError
+
+__all__ = ["PiecewiseQuintic", "Quintic"]
+
+
+@dataclass(frozen=True)
+class Quintic:
+    """``p(s) = sum_k c_k s^k`` for ``s`` in ``[0, duration]`` meeting six boundary conditions.
+
+    Values may be vectors: every coefficient row has the shape of the boundary values.
+
+    Attributes:
+        duration: length of the interval [s], > 0.
+        coefficients: ``(6, ...)`` array, ``coefficients[k]`` multiplies ``s^k``.
+    """
+
+    duration: float
+    coefficients: NDArray[np.float64]
+
+    @classmethod
+    def from_boundary(cls, duration: float, start: ArrayLike, end: ArrayLike, start_velocity: ArrayLike = 0.0,
+                      end_velocity: ArrayLike = 0.0, start_acceleration: ArrayLike = 0.0,
+                      end_acceleration: ArrayLike = 0.0) -> Quintic:
+        """The unique quintic with the given position, velocity and acceleration at ``s = 0`` and ``s = duration``."""
+        if not np.isfinite(duration) or duration <= 0.0:
+            raise ControllerError(f"duration must be finite and > 0, got {duration!r}")
+        p0, p1, v0, v1, a0, a1 = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (
+            start, end, start_velocity, end_velocity, start_acceleration, end_acceleration)))
+        if not all(np.all(np.isfinite(x)) for x in (p0, p1, v0, v1, a0, a1)):
+            raise ControllerError("boundary values must be finite")
+        t = float(duration)
+        # the three top coefficients solve the end conditions after the first three absorb the start
+        d = p1 - p0 - v0 * t - 0.5 * a0 * t * t
+        e = v1 - v0 - a0 * t
+        f = a1 - a0
+        c3 = (10.0 * d - 4.0 * e * t + 0.5 * f * t * t) / t**3
+        c4 = (-15.0 * d + 7.0 * e * t - f * t * t) / t**4
+        c5 = (6.0 * d - 3.0 * e * t + 0.5 * f * t * t) / t**5
+        return cls(t, np.stack([p0, v0, 0.5 * a0, c3, c4, c5]))
+
+    def evaluate(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Position, velocity and acceleration at ``s`` [s], clamped into ``[0, duration]``."""
+        s = min(max(float(s), 0.0), self.duration)
+        c = self.coefficients
+        position = c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * (c[4] + s * c[5]))))
+        velocity = c[1] + s * (2.0 * c[2] + s * (3.0 * c[3] + s * (4.0 * c[4] + s * 5.0 * c[5])))
+        acceleration = 2.0 * c[2] + s * (6.0 * c[3] + s * (12.0 * c[4] + s * 20.0 * c[5]))
+        return position, velocity, acceleration
+
+
+class PiecewiseQuintic:
+    """Quintic pieces joined end to start; C2 wherever neighbouring pieces share their boundary states.
+
+    Args:
+        pieces: the pieces in time order.
+    """
+
+    def __init__(self, pieces: Sequence[Quintic]) -> None:
+        if not pieces:
+            raise ControllerError("a piecewise quintic needs at least one piece")
+        self.pieces = tuple(pieces)
+        self.breaks = np.concatenate([[0.0], np.cumsum([p.duration for p in self.pieces])])
+        self._inner = self.breaks[1:-1].tolist()
+
+    @property
+    def duration(self) -> float:
+        """Total duration [s]."""
+        return float(self.breaks[-1])
+
+    def evaluate(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Position, velocity and acceleration at ``s`` [s] (clamped into the whole interval)."""
+        index = bisect_right(self._inner, s)
+        return self.pieces[index].evaluate(s - float(self.breaks[index]))

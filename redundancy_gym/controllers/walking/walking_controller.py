@@ -1,0 +1,254 @@
+"""The walking controller: pattern, stabilizer and whole-body IK in one control step (monograph fig. 4.5).
+
+Layers, each testable alone: :class:`WalkingPattern` (footholds, swing quintics, LIPM/DCM CoM with the
+multi-body ZMP correction), :class:`Stabilizer` (measured ZMP and DCM -> CoM reference offset) and
+:class:`WholeBodyIk` (task references -> joint position targets, with the angular-momentum weight (5.62) and
+joint-limit and posture objectives in the nullspace). The IK integrates its own kinematic model; its joint
+angles are the position targets sent to the servos, as on Lola.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...model import RobotModel
+from ..actuated_objective import ActuatedObjective
+from ..exceptions import ControllerError
+from ..joint_limit_objective import JointLimitObjective
+from ..posture_objective import PostureObjective
+from .gait_config import GaitConfig
+from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
+from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
+from .whole_body_ik import WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .zmp_estimator import ZmpEstimate, estimate_zmp
+
+__all__ = ["WalkingCommand", "WalkingController", "WalkingIkConfig"]
+
+
+@dataclass(frozen=True)
+class WalkingIkConfig:
+    """Whole-body IK settings of :class:`WalkingController`.
+
+    Attributes:
+        gain: task feedback ``K`` [1/s].
+        gamma: ``gamma`` of (5.62).
+        beta: scale of (5.62) against the nullspace objectives.
+        momentum_minimization: ``W = gamma I + J_Lz^T J_Lz`` (True) or ``W = I``.
+        posture_weight: pull of the actuated joints towards the starting posture.
+        joint_limit_weight: weight of the joint-limit potential (5.58) on the soft limits.
+        joint_limit_activation: its ``d_a`` [rad].
+        joint_limit_slope: its slope at the soft limit.
+    """
+
+    gain: float = 100.0
+    gamma: float = 0.008
+    beta: float = 10.0
+    momentum_minimization: bool = True
+    posture_weight: float = 1.0
+    joint_limit_weight: float = 1.0
+    joint_limit_activation: float = 0.15
+    joint_limit_slope: float = 2.0
+
+
+class WalkingCommand(NamedTuple):
+    """One control step of :class:`WalkingController`.
+
+    Attributes:
+        joint_targets: position targets of the actuated joints [rad].
+        pattern: the pattern sample at the start of the period.
+        stabilizer: the stabilizer output.
+        contact: the ZMP estimate from the ankle sensors.
+        ik: the whole-body IK result (``ik.q`` is the kinematic model's configuration).
+    """
+
+    joint_targets: NDArray[np.float64]
+    pattern: PatternSample
+    stabilizer: StabilizerOutput
+    contact: ZmpEstimate
+    ik: WholeBodyIkResult
+
+
+class WalkingController:
+    """Walks straight ahead at a commanded speed from a standing start.
+
+    Args:
+        model: the floating-base model (from the robot's MJCF).
+        dt: control period [s].
+        soft_lower, soft_upper: joint limits [rad] the IK keeps inside (actuated joints, length ``nv - 6``).
+        gait: walking pattern parameters.
+        gains: stabilizer gains.
+        ik: whole-body IK settings.
+        feet_frames: sole frames (right, left); ``ankle_frames``: the force/torque sensor frames.
+        torso_frame: frame of the upper body whose orientation is kept upright.
+        correction_iterations: kinematic rollouts that estimate the multi-body ZMP correction (0: plain LIPM).
+        correction_samples: knots per step of the correction (``double_support_ratio`` must fall on one).
+    """
+
+    def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
+                 gait: GaitConfig | None = None, gains: StabilizerGains | None = None,
+                 ik: WalkingIkConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+                 ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
+                 correction_iterations: int = 3, correction_samples: int = 20) -> None:
+        if not np.isfinite(dt) or dt <= 0.0:
+            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        if not model.floating_base:
+            raise ControllerError("the walking controller needs a floating-base model")
+        if not isinstance(correction_iterations, (int, np.integer)) or correction_iterations < 0:
+            raise ControllerError(f"correction_iterations must be an int >= 0, got {correction_iterations!r}")
+        self.model = model
+        self.dt = float(dt)
+        self.gait = gait or GaitConfig()
+        self.gains = gains or StabilizerGains()
+        self.ik_config = ik or WalkingIkConfig()
+        ratio_knot = self.gait.double_support_ratio * correction_samples
+        if correction_iterations and abs(correction_samples - ratio_knot - round(correction_samples - ratio_knot)) > 1e-9:
+            raise ControllerError(f"correction_samples={correction_samples} puts no knot at the single-support end "
+                                  f"(double_support_ratio={self.gait.double_support_ratio})")
+        self._nq, self._nv = model.base_dofs
+        self.soft_lower = np.asarray(soft_lower, dtype=np.float64)
+        self.soft_upper = np.asarray(soft_upper, dtype=np.float64)
+        if self.soft_lower.shape != (model.nv - self._nv,) or self.soft_upper.shape != self.soft_lower.shape:
+            raise ControllerError(f"soft limits must have length {model.nv - self._nv}")
+        self._feet = tuple(model.frame_id(f) for f in feet_frames)
+        self._ankles = tuple(model.frame_id(f) for f in ankle_frames)
+        self.feet_frames, self.torso_frame = feet_frames, torso_frame
+        self.correction_iterations = int(correction_iterations)
+        self.correction_samples = int(correction_samples)
+        self._corrections: dict[tuple[float, bool], ZmpCorrection] = {}
+        self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
+        self._mass = model.total_mass
+        self.pattern: WalkingPattern | None = None
+        self.ik: WholeBodyIk | None = None
+        self.q_ref: NDArray[np.float64] | None = None
+        self.time = 0.0
+        self._next: PatternSample | None = None
+
+    # ------------------------------------------------------------------ start
+    def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
+        c = self.ik_config
+        objectives = []
+        if c.posture_weight > 0.0:
+            objectives.append(ActuatedObjective(PostureObjective(posture, c.posture_weight), self.model))
+        if c.joint_limit_weight > 0.0:
+            objectives.append(ActuatedObjective(JointLimitObjective(
+                self.soft_lower, self.soft_upper, activation_distance=c.joint_limit_activation,
+                slope=c.joint_limit_slope, weight=c.joint_limit_weight), self.model))
+        return WholeBodyIk(self.model, feet_frames=self.feet_frames, torso_frame=self.torso_frame, gain=c.gain,
+                           gamma=c.gamma, momentum_minimization=c.momentum_minimization, beta=c.beta,
+                           objectives=tuple(objectives))
+
+    def start(self, q: ArrayLike, speed: float) -> None:
+        """Begin a walk from the standing configuration ``q`` (pinocchio convention) at ``speed`` [m/s].
+
+        The kinematic model starts at ``q`` with the CoM lowered or raised to ``com_height`` above the soles;
+        the multi-body ZMP correction for ``speed`` is estimated by kinematic rollouts (cached per speed).
+        """
+        q = self.model.check_configuration(q)
+        self.ik = self._make_ik(q[self._nq:].copy())
+        self.model.update(q)
+        feet = np.array([self.model.frame_position(f) for f in self._feet])
+        rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
+        ground = float(feet[:, 2].mean())
+        com, _ = self.model.com_and_centroidal_matrix()
+        stand = self._standing_reference(np.array([com[0], com[1], ground + self.gait.com_height]), feet, rotations)
+        q_ref = q.copy()
+        for _ in range(20):
+            q_ref = self.ik.step(q_ref, stand, stand, self.dt).q
+        self.q_ref = q_ref
+        self._start = (feet, com[:2].copy())
+        key = (round(float(speed), 6), self.ik_config.momentum_minimization)
+        if key not in self._corrections and self.correction_iterations:
+            self._corrections[key] = self._estimate_correction(q_ref, speed)
+        self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, self._corrections.get(key))
+        self.stabilizer.reset()
+        self.time = 0.0
+        self._next: PatternSample | None = None
+
+    @staticmethod
+    def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],
+                            rotations: NDArray[np.float64]) -> WholeBodyReference:
+        yaw = np.eye(3)
+        return WholeBodyReference(com, np.zeros(3), feet, rotations, np.zeros((2, 6)), yaw, np.zeros(3))
+
+    def _estimate_correction(self, q_start: NDArray[np.float64], speed: float) -> ZmpCorrection:
+        """Kinematic rollouts: the ZMP shift ``(-Ldot_y, Ldot_x) / (m g)`` of the reference motion, per phase.
+
+        Iterates ``correction_iterations`` times (each plans with the previous estimate); steps 2 and 3 (the
+        first full steps of each foot) give the right- and left-swing tables.
+        """
+        assert self.ik is not None
+        feet, com = self._start
+        n = self.correction_samples
+        phases = np.arange(n) / n
+        correction: ZmpCorrection | None = None
+        for _ in range(self.correction_iterations):
+            pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
+            end = pattern.step_start(4)
+            q, t = q_start.copy(), 0.0
+            start_ref = self._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
+            times, momentum = [], []
+            while t < end:
+                end_ref = self._reference(pattern.sample(t + self.dt), np.zeros(2), np.zeros(2))
+                result = self.ik.step(q, start_ref, end_ref, self.dt)
+                q, start_ref, t = result.q, end_ref, t + self.dt
+                self.model.update(q)
+                _, centroidal = self.model.com_and_centroidal_matrix()
+                momentum.append(centroidal[3:5] @ result.qdot)
+                times.append(t - 0.5 * self.dt)
+            times_a, momentum_a = np.array(times), np.array(momentum)
+            rate = np.gradient(momentum_a, times_a, axis=0)
+            shift = np.stack([-rate[:, 1], rate[:, 0]], axis=1) / (self._mass * 9.81)
+            offsets = np.zeros((2, n, 2))
+            for side, k in ((0, 2), (1, 3)):
+                t0, duration = pattern.step_start(k), pattern.step_duration
+                for j, phase in enumerate(phases):
+                    window = (times_a >= t0 + (phase - 0.5 / n) * duration) & (times_a < t0 + (phase + 0.5 / n) * duration)
+                    offsets[side, j] = shift[window].mean(axis=0)
+            correction = ZmpCorrection(phases, offsets)
+        assert correction is not None
+        return correction
+
+    # ------------------------------------------------------------------ step
+    def _reference(self, sample: PatternSample, offset: NDArray[np.float64],
+                   rate: NDArray[np.float64]) -> WholeBodyReference:
+        rotations = np.empty((2, 3, 3))
+        velocity = np.zeros((2, 6))
+        for i in range(2):
+            c, s = np.cos(sample.feet_pitch[i]), np.sin(sample.feet_pitch[i])
+            rotations[i] = ((c, 0.0, s), (0.0, 1.0, 0.0), (-s, 0.0, c))
+            velocity[i, :3] = sample.feet_velocity[i]
+            velocity[i, 4] = sample.feet_pitch_rate[i]
+        com = sample.com.copy()
+        com[:2] += offset
+        com_velocity = sample.com_velocity.copy()
+        com_velocity[:2] += rate
+        return WholeBodyReference(com, com_velocity, sample.feet, rotations, velocity, np.eye(3), np.zeros(3))
+
+    def step(self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike) -> WalkingCommand:
+        """One control period from the measured state and the ankle wrenches (sensor frames, rows right/left).
+
+        Args:
+            q, v: measured configuration and velocity (pinocchio convention; the base from the IMU/estimator).
+            forces, torques: ankle force/torque sensor readings [N, N m] (2, 3).
+        """
+        if self.pattern is None or self.ik is None or self.q_ref is None:
+            raise ControllerError("call WalkingController.start(q, speed) before step()")
+        model = self.model
+        q = model.check_configuration(q)
+        v = np.asarray(v, dtype=np.float64)
+        com, com_velocity, rotations, positions = model.measure(q, v, self._ankles)
+        contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
+        start = self._next if self._next is not None and self._next.time == self.time else self.pattern.sample(self.time)
+        end = self.pattern.sample(self.time + self.dt)
+        self._next = end
+        feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
+        offset_end = feedback.offset + feedback.rate * self.dt
+        result = self.ik.step(self.q_ref, self._reference(start, feedback.offset, feedback.rate),
+                              self._reference(end, offset_end, feedback.rate), self.dt)
+        self.q_ref = result.q
+        self.time += self.dt
+        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result)

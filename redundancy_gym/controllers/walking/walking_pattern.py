@@ -1,0 +1,252 @@
+"""The walking pattern: footholds from the command, the ZMP reference, the LIPM/DCM CoM and the swing feet.
+
+Timeline: a double support of ``start_duration`` moves the weight onto the first stance foot (the left: the
+right foot swings first); then step ``k`` starts at ``t_k = start_duration + k T``. In step ``k`` foothold
+``h_k`` swings to ``h_{k+2}`` over the single support ``[t_k, t_k + (1 - ratio) T]`` while the robot stands on
+``h_{k+1}``; the double support that follows moves the ZMP from ``h_{k+1}`` to ``h_{k+2}``. ``h_0`` and ``h_1``
+are the starting right and left feet; the first swing is one step length, later ones two.
+
+The CoM is replanned at every step start over ``preview_steps`` steps ahead (the DCM of (4.5.1) backward from
+a stop), starting from the CoM of the previous plan, so the reference is continuous; the preview error
+decays as ``e^(-omega T)`` per step (about 5e-5 of a step after four 0.8 s steps).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..exceptions import ControllerError
+from .dcm_planner import DcmPlan, DcmPlanner
+from .gait_config import GaitConfig
+from .quintic import PiecewiseQuintic, Quintic
+
+__all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
+
+RIGHT, LEFT = 0, 1
+
+
+@dataclass(frozen=True)
+class PatternSample:
+    """Task-space references of the walking pattern at one instant (world frame, z up).
+
+    Attributes:
+        time: [s] since the start of the walk.
+        com: CoM position [m] (height ``com_height`` above the ground).
+        com_velocity: [m/s].
+        zmp: ZMP reference (x, y) [m].
+        dcm: DCM reference (x, y) [m].
+        feet: sole positions [m], rows right and left.
+        feet_velocity: [m/s], rows right and left.
+        feet_pitch: sole pitch about the lateral axis [rad] (positive: toes down), rows right and left.
+        feet_pitch_rate: [rad/s].
+        contact: which feet are planned on the ground (right, left).
+        right_load: share of the weight the right foot carries [0, 1] (the ZMP's place between the feet).
+        step: index of the current step (-1 during the start).
+    """
+
+    time: float
+    com: NDArray[np.float64]
+    com_velocity: NDArray[np.float64]
+    zmp: NDArray[np.float64]
+    dcm: NDArray[np.float64]
+    feet: NDArray[np.float64]
+    feet_velocity: NDArray[np.float64]
+    feet_pitch: NDArray[np.float64]
+    feet_pitch_rate: NDArray[np.float64]
+    contact: tuple[bool, bool]
+    right_load: float
+    step: int
+
+
+@dataclass(frozen=True)
+class ZmpCorrection:
+    """The multi-body ZMP shift of one step, by step phase, that the LIPM leaves out.
+
+    The LIPM puts all mass in the CoM; a swinging leg adds the rate of angular momentum about the CoM, which
+    moves the ZMP by ``delta = (-Ldot_y, Ldot_x) / (m g)``. Planning the LIPM on ``r_ref - delta`` instead of
+    ``r_ref`` puts the whole-body ZMP back on ``r_ref`` (the second stage of a two-stage pattern generator).
+
+    Attributes:
+        phases: step phases in [0, 1) at which the shift is given, increasing, shape (n,).
+        offsets: ZMP shifts [m], shape (2, n, 2): for steps swinging the right foot, then the left.
+    """
+
+    phases: NDArray[np.float64]
+    offsets: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        phases, offsets = np.asarray(self.phases), np.asarray(self.offsets)
+        if phases.ndim != 1 or offsets.shape != (2, phases.size, 2):
+            raise ControllerError(f"need phases (n,) and offsets (2, n, 2), got {phases.shape} and {offsets.shape}")
+        if not (np.all(np.isfinite(phases)) and np.all(np.isfinite(offsets))):
+            raise ControllerError("ZMP correction must be finite")
+        if phases.size and (phases[0] < 0.0 or phases[-1] >= 1.0 or np.any(np.diff(phases) <= 0.0)):
+            raise ControllerError("phases must increase within [0, 1)")
+
+
+class WalkingPattern:
+    """Walking straight ahead (+x) at a commanded speed from a standing start.
+
+    Args:
+        config: gait parameters.
+        right_foot, left_foot: starting sole positions [m] (x, y, z); the ground is at their height.
+        com: starting CoM (x, y) [m], at rest.
+        speed: commanded forward speed [m/s] (the step length and duration follow from :meth:`GaitConfig.timing`).
+        correction: the multi-body ZMP shift per step (None: the plain LIPM).
+    """
+
+    def __init__(self, config: GaitConfig, right_foot: ArrayLike, left_foot: ArrayLike, com: ArrayLike,
+                 speed: float, correction: ZmpCorrection | None = None) -> None:
+        self.config = config
+        self.correction = correction
+        start = np.array([right_foot, left_foot], dtype=np.float64)
+        if start.shape != (2, 3) or not np.all(np.isfinite(start)):
+            raise ControllerError(f"right_foot and left_foot must be finite 3-vectors, got {start.tolist()}")
+        com = np.asarray(com, dtype=np.float64)
+        if com.shape != (2,) or not np.all(np.isfinite(com)):
+            raise ControllerError(f"com must be a finite (x, y), got {com!r}")
+        self.step_length, self.step_duration = config.timing(speed)
+        self.speed = self.step_length / self.step_duration
+        self.ground = float(start[:, 2].mean())
+        self._start_feet = start
+        self._center = start[:, :2].mean(axis=0)
+        self._single = (1.0 - config.double_support_ratio) * self.step_duration
+        self.planner = DcmPlanner(config.com_height)
+        self._swing_cache: dict[int, tuple[PiecewiseQuintic, Quintic]] = {}
+        # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
+        # without the ankle bending past its dorsiflexion limit
+        peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
+        self._swing_pitch = PiecewiseQuintic([
+            Quintic.from_boundary(peak, 0.0, config.swing_pitch),
+            Quintic.from_boundary(flat - peak, config.swing_pitch, 0.0),
+            Quintic.from_boundary(self._single - flat, 0.0, 0.0)])
+        times, zmp = self._knots(-1)
+        zmp = self.planner.start_zmp(times, zmp, com)
+        self._plan: DcmPlan = self.planner.plan(times, zmp, com)
+        self._plan_step = -1
+
+    # ------------------------------------------------------------------ footholds and timing
+    def foothold(self, j: int) -> NDArray[np.float64]:
+        """Sole position of foothold ``h_j`` [m]: ``h_0``/``h_1`` the starting right/left feet, then alternating."""
+        if j < 2:
+            return self._start_feet[j].copy()
+        side = RIGHT if j % 2 == 0 else LEFT
+        y = self._center[1] + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
+        return np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
+
+    def step_start(self, k: int) -> float:
+        """Start time [s] of step ``k`` (its swing foot lifts off)."""
+        return self.config.start_duration + k * self.step_duration
+
+    def step_at(self, t: float) -> int:
+        """Index of the step under way at ``t`` (-1 during the starting double support)."""
+        if t < self.config.start_duration:
+            return -1
+        return int((t - self.config.start_duration) // self.step_duration)
+
+    def _zmp_point(self, j: int, along: float) -> NDArray[np.float64]:
+        h = self.foothold(j)
+        inward = 1.0 if j % 2 == 0 else -1.0  # right feet (even) shift towards +y
+        return np.array([h[0] + along, h[1] + inward * self.config.zmp_inset])
+
+    def _knots(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """ZMP knots from the start of ``first_step`` (-1: the standing start) to ``preview_steps`` steps ahead."""
+        a = self.config.heel_toe_shift
+        times, points = [], []
+        if first_step < 0:
+            times.append(0.0)
+            points.append(self._center.copy())  # replaced by DcmPlanner.start_zmp
+            first_step = 0
+        last = first_step + self.config.preview_steps
+        correction = self.correction
+        for k in range(first_step, last + 1):
+            t = self.step_start(k)
+            if correction is None:
+                times += [t, t + self._single]
+                points += [self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)]
+                continue
+            stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
+            landing = self._zmp_point(k + 2, -a)
+            ratio = self._single / self.step_duration
+            for phase, offset in zip(correction.phases, correction.offsets[k % 2]):
+                if phase < ratio:
+                    base = stance + (swing_to - stance) * (phase / ratio)
+                else:
+                    base = swing_to + (landing - swing_to) * ((phase - ratio) / (1.0 - ratio))
+                times.append(t + phase * self.step_duration)
+                points.append(base - offset)
+        times.append(self.step_start(last + 1))
+        points.append(self._zmp_point(last + 2, -a))
+        return np.array(times), np.array(points)
+
+    # ------------------------------------------------------------------ sampling
+    def sample(self, t: float) -> PatternSample:
+        """The references at time ``t`` [s] (non-decreasing between calls, except after :meth:`restart`)."""
+        if not t >= 0.0 or t == np.inf:
+            raise ControllerError(f"time must be finite and >= 0, got {t!r}")
+        k = self.step_at(t)
+        if k > self._plan_step:
+            self._replan(k)
+        state = self._plan.sample(t)
+        feet = np.array([self.foothold(0), self.foothold(1)])
+        feet_velocity = np.zeros((2, 3))
+        pitch, pitch_rate = np.zeros(2), np.zeros(2)
+        contact = [True, True]
+        if k >= 0:
+            swing_side = RIGHT if k % 2 == 0 else LEFT
+            feet[swing_side] = self.foothold(k + 2)
+            feet[1 - swing_side] = self.foothold(k + 1)
+            s = t - self.step_start(k)
+            if s < self._single:
+                position, velocity = self._swing(k, s)
+                angle, rate, _ = self._swing_pitch.evaluate(s)
+                angle, rate = float(angle), float(rate)
+                # the pitched foot turns about its toe tip, which follows the swing path: no toe scuffing
+                toe = self.config.toe_length
+                position += toe * np.array([1.0 - np.cos(angle), 0.0, np.sin(angle)])
+                velocity += toe * rate * np.array([np.sin(angle), 0.0, np.cos(angle)])
+                feet[swing_side], feet_velocity[swing_side] = position, velocity
+                pitch[swing_side], pitch_rate[swing_side] = angle, rate
+                contact[swing_side] = False
+        return PatternSample(
+            time=float(t), com=np.array([*state.position, self.ground + self.config.com_height]),
+            com_velocity=np.array([*state.velocity, 0.0]), zmp=state.zmp, dcm=state.dcm, feet=feet,
+            feet_velocity=feet_velocity, feet_pitch=pitch, feet_pitch_rate=pitch_rate, contact=(contact[0], contact[1]),
+            right_load=self._right_load(state.zmp, feet, contact), step=k)
+
+    def _replan(self, k: int) -> None:
+        start = self.step_start(k)
+        com = self._plan.sample(start).position
+        times, zmp = self._knots(k)
+        self._plan = self.planner.plan(times, zmp, com)
+        self._plan_step = k
+        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i >= k}
+
+    def _swing(self, k: int, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        if k not in self._swing_cache:
+            start, end = self.foothold(k), self.foothold(k + 2)
+            half = 0.5 * self._single
+            height = self.config.step_height
+            # apex acceleration of the parabola through the same apex: the two pieces join C2
+            apex_acceleration = -8.0 * height / self._single**2
+            lift = Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration)
+            land = Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)
+            self._swing_cache[k] = (PiecewiseQuintic([lift, land]),
+                                    Quintic.from_boundary(self._single, start[:2], end[:2]))
+        vertical, horizontal = self._swing_cache[k]
+        z, vz, _ = vertical.evaluate(s)
+        xy, vxy, _ = horizontal.evaluate(s)
+        return np.array([xy[0], xy[1], float(z)]), np.array([vxy[0], vxy[1], float(vz)])
+
+    @staticmethod
+    def _right_load(zmp: NDArray[np.float64], feet: NDArray[np.float64], contact: list[bool]) -> float:
+        if not contact[LEFT]:
+            return 1.0
+        if not contact[RIGHT]:
+            return 0.0
+        axis = feet[LEFT, :2] - feet[RIGHT, :2]
+        share = float(np.dot(zmp - feet[RIGHT, :2], axis) / np.dot(axis, axis))
+        return float(np.clip(1.0 - share, 0.0, 1.0))

@@ -1,0 +1,112 @@
+"""The ``walking`` reference policy: the walking controller reading the BipedWalk observation."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..model import RobotModel
+from .exceptions import PolicyError
+from .policy_options import config_from_options, env_with_attributes
+from .walking import GaitConfig, StabilizerGains, WalkingCommand, WalkingController, WalkingIkConfig
+
+__all__ = ["WalkingPolicy", "WalkingPolicyConfig"]
+
+
+@dataclass(frozen=True)
+class WalkingPolicyConfig:
+    """Options of the ``walking`` policy (defaults of :class:`GaitConfig`, :class:`StabilizerGains` and
+    :class:`WalkingIkConfig` otherwise).
+
+    Attributes:
+        momentum_minimization: ``W = gamma I + J_Lz^T J_Lz`` (5.62) in the IK (False: ``W = I``).
+        gamma: ``gamma`` of (5.62).
+        beta: scale of (5.62) against the nullspace objectives.
+        stabilizer: balance feedback on (False: the planned references only).
+        dcm_gain, zmp_gain, com_gain: stabilizer gains ``k_dcm`` [-], ``k_zmp``, ``k_com`` [1/s].
+        step_duration: nominal step duration [s].
+        com_height: LIPM CoM height [m].
+        correction_iterations: kinematic rollouts for the multi-body ZMP correction (0: plain LIPM).
+    """
+
+    momentum_minimization: bool = True
+    gamma: float = 0.008
+    beta: float = 10.0
+    stabilizer: bool = True
+    dcm_gain: float = 1.0
+    zmp_gain: float = 1.0
+    com_gain: float = 1.0
+    step_duration: float = 0.8
+    com_height: float = 0.91
+    correction_iterations: int = 3
+
+
+class WalkingPolicy:
+    """Walks at the observation's commanded speed with :class:`~redundancy_gym.controllers.walking.WalkingController`.
+
+    The controller restarts (a new walking pattern from the observed standing state) at every episode start.
+    The last :class:`WalkingCommand` is kept in :attr:`last_command` for diagnostics and plots.
+
+    Args:
+        env: an env exposing ``OBSERVATION_LAYOUT`` (base pose and velocity, ``q``, ``qdot``, ankle wrenches,
+            ``command``), ``ROBOT_XML``, ``SOFT_LIMIT_MARGIN``, ``joint_limits``, ``nominal_configuration``,
+            ``action_scale`` and ``dt`` (BipedWalk-v0).
+        **kwargs: fields of :class:`WalkingPolicyConfig`.
+    """
+
+    def __init__(self, env: Any, **kwargs: Any) -> None:
+        self.config = config_from_options(WalkingPolicyConfig, kwargs)
+        base = env_with_attributes(env, ("OBSERVATION_LAYOUT", "ROBOT_XML", "SOFT_LIMIT_MARGIN", "joint_limits",
+                                         "nominal_configuration", "action_scale", "dt"), "walking")
+        layout = base.OBSERVATION_LAYOUT
+        needed = ("base_position", "q", "qdot", "right_force", "left_torque", "command")
+        if any(k not in layout for k in needed):
+            raise PolicyError(f"the walking policy needs {', '.join(needed)} in OBSERVATION_LAYOUT")
+        self._qpos = slice(layout["base_position"].start, layout["q"].stop)
+        self._qvel = slice(layout["base_linear_velocity"].start, layout["qdot"].stop)
+        if self._qpos.stop != self._qvel.start:
+            raise PolicyError("the walking policy needs MuJoCo's qpos then qvel at the start of the observation")
+        self._wrench = slice(layout["right_force"].start, layout["left_torque"].stop)
+        self._command = layout["command"]
+        self._nominal = np.asarray(base.nominal_configuration, dtype=np.float64)
+        self._scale = np.asarray(base.action_scale, dtype=np.float64)
+        self.model = RobotModel.from_mjcf(base.ROBOT_XML)
+        lower, upper = base.joint_limits
+        c = self.config
+        try:
+            gait = GaitConfig(step_duration=c.step_duration, com_height=c.com_height,
+                              min_step_duration=min(GaitConfig.min_step_duration, c.step_duration))
+            gains = StabilizerGains(dcm=c.dcm_gain, zmp=c.zmp_gain, com=c.com_gain) if c.stabilizer \
+                else StabilizerGains(dcm=0.0, zmp=0.0, com=0.0)
+            ik = WalkingIkConfig(gamma=c.gamma, beta=c.beta, momentum_minimization=c.momentum_minimization)
+            self.controller = WalkingController(
+                self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
+                np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik,
+                correction_iterations=c.correction_iterations)
+        except ValueError as exc:  # ControllerError from the parts names the bad value
+            raise PolicyError(f"invalid walking option: {exc}") from exc
+        self.last_command: WalkingCommand | None = None
+
+    def _state(self, obs: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return self.model.from_mujoco_state(obs[self._qpos], obs[self._qvel])
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+        """Normalized joint position targets for one observation."""
+        obs = np.asarray(observation, dtype=np.float64)
+        q, v = self._state(obs)
+        starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])
+        if starting or self.controller.pattern is None:
+            self.controller.start(q, float(obs[self._command][0]))
+        wrench = obs[self._wrench].reshape(2, 6)
+        command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])
+        self.last_command = command
+        action = np.clip((command.joint_targets - self._nominal) / self._scale, -1.0, 1.0)
+        return action.astype(np.float32), state
+
+    def describe(self) -> dict[str, Any]:
+        """The configuration, for reports."""
+        return asdict(self.config)

@@ -1,0 +1,420 @@
+"""BipedWalk-v0: the Lola-like biped walks forward on flat ground at a commanded speed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+from gymnasium import spaces, utils
+from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+from numpy.typing import NDArray
+
+from ..assets import (
+    BIPED_ANKLE_SITES,
+    BIPED_JOINTS,
+    BIPED_SERVOS,
+    BIPED_SOFT_LIMIT_MARGIN,
+    BIPED_SOLE_GEOMS,
+    BIPED_XML,
+)
+from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
+from ..geometry import PackedVolumes, PairBatch
+from .exceptions import EnvConfigError, InvalidActionError
+from .self_collision import self_collision_pairs
+from .validation import non_negative as _non_negative
+from .validation import positive as _positive
+
+__all__ = ["NOMINAL_POSTURE", "BipedWalkEnv", "default_config"]
+
+_TIMESTEP = 0.002  # [s], the MJCF option
+_GRAVITY = 9.81
+NOMINAL_POSTURE: dict[str, float] = {
+    "r_hip_pitch": -0.5002, "r_knee": 0.9921, "r_ankle_pitch": -0.4919,
+    "l_hip_pitch": -0.5002, "l_knee": 0.9921, "l_ankle_pitch": -0.4919,
+    "r_shoulder_roll": -0.1835, "r_elbow": -0.2976, "l_shoulder_roll": 0.1835, "l_elbow": -0.2976,
+}
+"""Standing posture [rad] (joints not named are 0): knees bent so that the CoM is 0.91 m high, feet flat."""
+_UPPER_BODY = ("pelvis_roll", "pelvis_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_elbow", "l_shoulder_pitch",
+               "l_shoulder_roll", "l_elbow")
+
+
+def default_config() -> dict[str, Any]:
+    """Default keyword arguments of :class:`BipedWalkEnv` (a fresh dict each call)."""
+    return {
+        "target_speed": 0.5,
+        "speed_weight": 1.0,
+        "lateral_weight": 0.5,
+        "healthy_reward": 1.0,
+        "energy_weight": 0.001,
+        "fall_penalty": 10.0,
+        "min_base_height": 0.55,
+        "max_torso_tilt": 0.8,
+        "reset_noise_scale": 0.02,
+        "velocity_feedforward": True,
+        "floor_friction": 1.0,
+        "frame_skip": 2,
+    }
+
+
+class BipedWalkEnv(MujocoEnv, utils.EzPickle):
+    r"""## Description
+    The Lola-like biped of ``redundancy_gym/assets/biped.xml`` (1.80 m, 60 kg, 22 position-controlled joints
+    on a free-floating base: 7 per leg with an active toe, pelvis roll and yaw, 3 per arm) stands on flat
+    ground and must walk forward (+x) at ``target_speed``. The monograph's model-based walking controller
+    (policy ``walking``) is the reference; learned policies see the same observation.
+
+    ## Action Space
+    ``Box(-1, 1, (22,), float32)``: joint position targets normalized around the standing posture,
+    ``q_target = q_nominal + a * s`` with ``s`` per joint the larger distance from ``q_nominal`` to a joint
+    limit, then clipped into the joint range (the order is :data:`~redundancy_gym.assets.BIPED_JOINTS`).
+    The servos are MuJoCo position actuators (``kp``, ``kv``, torque limits of the MJCF); with
+    ``velocity_feedforward`` the servo also tracks the targets' rate (their difference over one control period),
+    as a servo drive interpolating its set points does: ``ctrl = q_target + (kv / kp) dq_target / dt``.
+    Non-finite actions raise :class:`~redundancy_gym.envs.InvalidActionError`.
+
+    ## Observation Space
+    ``Box(-inf, inf, (81,), float64)``; the slices are in :attr:`OBSERVATION_LAYOUT`:
+
+    | name | size | unit |
+    |------|------|------|
+    | ``base_position``: pelvis position (world) | 3 | m |
+    | ``base_quaternion``: pelvis orientation ``(w, x, y, z)`` | 4 | - |
+    | ``q``: joint angles | 22 | rad |
+    | ``base_linear_velocity``: world frame | 3 | m/s |
+    | ``base_angular_velocity``: pelvis frame | 3 | rad/s |
+    | ``qdot``: joint velocities | 22 | rad/s |
+    | ``right_force``, ``right_torque``: ankle sensor, sensor frame (what the foot exerts on the shank) | 3 + 3 | N, N m |
+    | ``left_force``, ``left_torque`` | 3 + 3 | N, N m |
+    | ``imu_acceleration``: torso accelerometer (includes gravity) | 3 | m/s^2 |
+    | ``imu_gyro``: torso angular velocity, IMU frame | 3 | rad/s |
+    | ``imu_orientation``: torso orientation ``(w, x, y, z)`` | 4 | - |
+    | ``command``: ``target_speed`` | 1 | m/s |
+    | ``time``: since the reset | 1 | s |
+
+    The first 29 + 28 entries are MuJoCo's ``qpos`` and ``qvel`` (free joint first, then the joints).
+
+    ## Rewards
+    The reward is the sum of the terms in ``info``:
+
+    - ``reward_speed = -speed_weight * (v_x - target_speed)^2`` (``v_x`` the pelvis velocity [m/s])
+    - ``reward_lateral = -lateral_weight * v_y^2``
+    - ``reward_healthy = healthy_reward`` while not fallen
+    - ``reward_energy = -energy_weight * qdot^T qdot * dt`` (the pseudoenergy increment)
+    - ``reward_fall = -fall_penalty`` on the step that ends the episode by a fall or a self-collision
+
+    ``info`` also holds ``forward_speed`` (``v_x``), ``distance`` [m] (pelvis x travelled since the reset),
+    ``time`` [s], ``cop`` (centre of pressure (x, y) per foot from the contact forces, rows right and left; NaN
+    for a foot off the ground), ``zmp`` ((x, y) of both feet; NaN in flight), ``normal_force`` [N] per foot,
+    ``contact_moments`` (ankle sensor moments in the world frame [N m], rows right and left),
+    ``angular_momentum`` (whole-body, about the CoM, world frame [kg m^2/s]), ``com`` [m],
+    ``min_self_clearance`` and ``min_clearance`` [m] (smallest swept-sphere distance between non-adjacent
+    robot volumes), ``self_collision``, ``collision`` (the same), ``fell``, ``torso_tilt`` [rad],
+    ``joint_limit_margin`` [rad], ``pseudoenergy``, ``peak_joint_speed`` [rad/s], ``task_error``
+    (``|v_x - target_speed|`` [m/s]) and ``is_success`` (no fall or self-collision so far and the mean speed
+    ``distance / time`` within 10 % of the command).
+
+    ## Starting State
+    The standing posture :data:`NOMINAL_POSTURE` with both soles flat on the ground and the pelvis at the
+    origin; the upper-body joints (pelvis, arms) get noise ``U(-reset_noise_scale, reset_noise_scale)`` [rad]
+    from the env's generator; velocities are zero and the servo targets equal the joint angles.
+
+    ## Episode End
+    - Termination: a fall (pelvis below ``min_base_height`` [m] or torso tilted more than ``max_torso_tilt``
+      [rad] from upright) or a self-collision (``min_self_clearance <= 0``).
+    - Truncation: the time limit of the registration, 2500 steps = 10 s at the default 250 Hz.
+
+    ## Arguments
+    - ``target_speed`` ([m/s], >= 0): commanded forward speed.
+    - ``speed_weight``, ``lateral_weight``, ``healthy_reward``, ``energy_weight``, ``fall_penalty`` (>= 0).
+    - ``min_base_height`` ([m], > 0), ``max_torso_tilt`` ([rad], > 0): the fall rule.
+    - ``reset_noise_scale`` ([rad], >= 0): upper-body joint noise of the starting posture.
+    - ``velocity_feedforward`` (bool): servo velocity feedforward from the target rate.
+    - ``floor_friction`` (> 0): sliding friction of the floor.
+    - ``frame_skip`` (int >= 1): physics steps of 2 ms per control step.
+    - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 250}
+    _SIZES = (("base_position", 3), ("base_quaternion", 4), ("q", 22), ("base_linear_velocity", 3),
+              ("base_angular_velocity", 3), ("qdot", 22), ("right_force", 3), ("right_torque", 3),
+              ("left_force", 3), ("left_torque", 3), ("imu_acceleration", 3), ("imu_gyro", 3),
+              ("imu_orientation", 4), ("command", 1), ("time", 1))
+    OBSERVATION_LAYOUT: dict[str, slice] = {}
+    _start = 0
+    for _name, _size in _SIZES:
+        OBSERVATION_LAYOUT[_name] = slice(_start, _start + _size)
+        _start += _size
+    OBSERVATION_SIZE = _start
+    del _name, _size, _start
+    ROBOT_XML = BIPED_XML
+    JOINTS = BIPED_JOINTS
+    SOFT_LIMIT_MARGIN = BIPED_SOFT_LIMIT_MARGIN
+
+    def __init__(self, target_speed: float = 0.5, speed_weight: float = 1.0, lateral_weight: float = 0.5,
+                 healthy_reward: float = 1.0, energy_weight: float = 0.001, fall_penalty: float = 10.0,
+                 min_base_height: float = 0.55, max_torso_tilt: float = 0.8, reset_noise_scale: float = 0.02,
+                 velocity_feedforward: bool = True, floor_friction: float = 1.0, frame_skip: int = 2,
+                 render_mode: str | None = None, width: int = 640, height: int = 480,
+                 camera_name: str | None = "track", **kwargs: Any) -> None:
+        if kwargs:
+            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
+            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
+        utils.EzPickle.__init__(self, target_speed, speed_weight, lateral_weight, healthy_reward, energy_weight,
+                                fall_penalty, min_base_height, max_torso_tilt, reset_noise_scale,
+                                velocity_feedforward, floor_friction, frame_skip, render_mode, width, height,
+                                camera_name)
+        self._target_speed = _non_negative(target_speed, "target_speed")
+        self._speed_weight = _non_negative(speed_weight, "speed_weight")
+        self._lateral_weight = _non_negative(lateral_weight, "lateral_weight")
+        self._healthy_reward = _non_negative(healthy_reward, "healthy_reward")
+        self._energy_weight = _non_negative(energy_weight, "energy_weight")
+        self._fall_penalty = _non_negative(fall_penalty, "fall_penalty")
+        self._min_base_height = _positive(min_base_height, "min_base_height")
+        self._max_torso_tilt = _positive(max_torso_tilt, "max_torso_tilt")
+        self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
+        self._velocity_feedforward = bool(velocity_feedforward)
+        self._floor_friction = _positive(floor_friction, "floor_friction")
+        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
+            raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
+        self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
+                         "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
+        observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
+        MujocoEnv.__init__(self, str(BIPED_XML), int(frame_skip), observation_space=observation_space,
+                           render_mode=render_mode, width=width, height=height,
+                           camera_name=camera_name if render_mode is not None else None)
+        self._resolve_names()
+        self._time = 0.0
+        self._start_x = 0.0
+        self._targets = self._nominal.copy()
+        self._fell = False
+        self._self_collided = False
+
+    # ------------------------------------------------------------------ gymnasium API
+    def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        model = mujoco.MjModel.from_xml_string(biped_scene_xml(floor_friction=self._floor_friction))
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
+        if abs(model.opt.timestep - _TIMESTEP) > 1e-12:
+            raise EnvConfigError(f"the biped MJCF must use a {_TIMESTEP} s timestep")
+        # the env clips targets into the joint range itself; the feedforward may take ctrl past it
+        model.actuator_ctrllimited[:] = 0
+        return model, mujoco.MjData(model)
+
+    def _set_action_space(self) -> spaces.Box:
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(len(BIPED_JOINTS),), dtype=np.float32)
+        return self.action_space
+
+    def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != (len(BIPED_JOINTS),):
+            raise InvalidActionError(f"action must have shape ({len(BIPED_JOINTS)},), got {action.shape}")
+        if not np.all(np.isfinite(action)):
+            raise InvalidActionError("action must be finite")
+        targets = self.targets_from_action(action)
+        ctrl = targets.copy()
+        if self._velocity_feedforward:
+            ctrl += self._servo_lead * (targets - self._targets) / self.dt
+        self._targets = targets
+        x_before = float(self.data.qpos[0])
+        self.do_simulation(ctrl, self.frame_skip)
+        self._time += self.dt
+        metrics = self._metrics((float(self.data.qpos[0]) - x_before) / self.dt)
+        reward, terms = self._get_rew(metrics)
+        terminated = bool(metrics["fell"] or metrics["self_collision"])
+        if self.render_mode == "human":
+            self.render()
+        return self._get_obs(), reward, terminated, False, {**terms, **metrics}
+
+    def reset_model(self) -> NDArray[np.float64]:
+        self._time = 0.0
+        self._fell = False
+        self._self_collided = False
+        q = self._nominal.copy()
+        q[self._upper_body] += self.np_random.uniform(-self._reset_noise_scale, self._reset_noise_scale,
+                                                      size=self._upper_body.size)
+        q = np.clip(q, self._lower, self._upper)
+        qpos = self.init_qpos.copy()
+        qpos[:7] = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
+        qpos[7:] = q
+        self.set_state(qpos, np.zeros(self.model.nv))
+        # stand the soles on the ground: lift the base by the lowest sole corner's depth
+        qpos[2] = -self._lowest_sole_point()
+        self.set_state(qpos, np.zeros(self.model.nv))
+        self._targets = q.copy()
+        self.data.ctrl[:] = q
+        self._start_x = float(self.data.qpos[0])
+        return self._get_obs()
+
+    def _get_reset_info(self) -> dict[str, Any]:
+        return self._metrics(0.0)
+
+    # ------------------------------------------------------------------ task
+    @property
+    def target_speed(self) -> float:
+        """Commanded forward speed [m/s]."""
+        return self._target_speed
+
+    @property
+    def nominal_configuration(self) -> NDArray[np.float64]:
+        """The standing posture of the joints [rad] (action 0)."""
+        return self._nominal.copy()
+
+    @property
+    def action_scale(self) -> NDArray[np.float64]:
+        """Target per unit action [rad] per joint."""
+        return self._scale.copy()
+
+    @property
+    def joint_limits(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Hardware joint limits [rad] (lower, upper) in :data:`BIPED_JOINTS` order."""
+        return self._lower.copy(), self._upper.copy()
+
+    def targets_from_action(self, action: NDArray[np.floating]) -> NDArray[np.float64]:
+        """Joint position targets [rad] of a normalized action (clipped into the joint range)."""
+        a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+        return np.clip(self._nominal + a * self._scale, self._lower, self._upper)
+
+    def action_from_targets(self, targets: NDArray[np.floating]) -> NDArray[np.float64]:
+        """The normalized action that commands ``targets`` [rad] (inverse of :meth:`targets_from_action`)."""
+        return np.clip((np.asarray(targets, dtype=np.float64) - self._nominal) / self._scale, -1.0, 1.0)
+
+    def _get_obs(self) -> NDArray[np.float64]:
+        d = self.data
+        return np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time]])
+
+    def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
+        """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
+        ended = metrics["fell"] or metrics["self_collision"]
+        terms = {
+            "reward_speed": -self._speed_weight * (metrics["forward_speed"] - self._target_speed) ** 2,
+            "reward_lateral": -self._lateral_weight * metrics["lateral_speed"] ** 2,
+            "reward_healthy": 0.0 if ended else self._healthy_reward,
+            "reward_energy": -self._energy_weight * metrics["pseudoenergy"],
+            "reward_fall": -self._fall_penalty if ended else 0.0,
+        }
+        return float(sum(terms.values())), terms
+
+    # ------------------------------------------------------------------ metrics
+    def _metrics(self, forward_speed: float) -> dict[str, Any]:
+        m, d = self.model, self.data
+        qdot = d.qvel[6:]
+        cop, zmp, normal = self._contact_pressure()
+        torso = d.xmat[self._torso].reshape(3, 3)
+        tilt = float(np.arccos(np.clip(torso[2, 2], -1.0, 1.0)))
+        fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
+        clearance = self._self_clearance()
+        self._fell = self._fell or fell
+        self._self_collided = self._self_collided or clearance <= 0.0
+        distance = float(d.qpos[0]) - self._start_x
+        mujoco.mj_subtreeVel(m, d)
+        mean_speed = distance / self._time if self._time > 0.0 else 0.0
+        ok = not (self._fell or self._self_collided)
+        moments = np.array([d.site_xmat[s].reshape(3, 3) @ -d.sensordata[a:a + 3]
+                            for s, a in zip(self._ankle_sites, self._torque_adr)])
+        return {
+            "time": self._time,
+            "forward_speed": float(forward_speed),
+            "lateral_speed": float(d.qvel[1]),
+            "distance": distance,
+            "cop": cop,
+            "zmp": zmp,
+            "normal_force": normal,
+            "contact_moments": moments,
+            "angular_momentum": d.subtree_angmom[self._pelvis].copy(),
+            "com": d.subtree_com[self._pelvis].copy(),
+            "min_self_clearance": clearance,
+            "min_clearance": clearance,
+            "self_collision": bool(clearance <= 0.0),
+            "collision": bool(clearance <= 0.0),
+            "fell": fell,
+            "torso_tilt": tilt,
+            "joint_limit_margin": float(np.min(np.minimum(d.qpos[7:] - self._lower, self._upper - d.qpos[7:]))),
+            "pseudoenergy": float(qdot @ qdot) * self.dt,
+            "peak_joint_speed": float(np.max(np.abs(qdot))),
+            "task_error": abs(float(forward_speed) - self._target_speed),
+            "is_success": bool(ok and self._time > 0.0
+                               and abs(mean_speed - self._target_speed) <= 0.1 * max(self._target_speed, 1e-9)),
+        }
+
+    def _contact_pressure(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Per-foot CoP, ZMP and normal forces from the floor contacts (world frame)."""
+        m, d = self.model, self.data
+        weighted = np.zeros((2, 2))
+        normal = np.zeros(2)
+        force = np.zeros(6)
+        for i in range(d.ncon):
+            contact = d.contact[i]
+            g1, g2 = int(contact.geom1), int(contact.geom2)
+            other = g2 if g1 == self._floor else g1 if g2 == self._floor else -1
+            foot = self._sole_side.get(other, -1)
+            if foot < 0:
+                continue
+            mujoco.mj_contactForce(m, d, i, force)
+            fz = float(contact.frame[2] * force[0] + contact.frame[5] * force[1] + contact.frame[8] * force[2])
+            normal[foot] += fz
+            weighted[foot] += fz * contact.pos[:2]
+        cop = np.full((2, 2), np.nan)
+        loaded = normal > 1e-9
+        cop[loaded] = weighted[loaded] / normal[loaded, None]
+        total = normal.sum()
+        zmp = weighted.sum(axis=0) / total if total > 1e-9 else np.full(2, np.nan)
+        return cop, zmp, normal
+
+    def _self_clearance(self) -> float:
+        """Smallest SSV distance between non-adjacent robot volumes [m] (capsules -> LSS, spheres -> PSS)."""
+        d = self.data
+        positions = d.geom_xpos[self._ssv_geoms]
+        axes = d.geom_xmat[self._ssv_geoms][:, [2, 5, 8]]  # the local z axis: capsules lie along it
+        offset = axes * self._half_length[:, None]
+        vertices = self._batch.vertices
+        vertices[:, 0] = positions - offset
+        vertices[:, 1] = positions + offset
+        vertices[:, 2] = vertices[:, 1]
+        return float(np.min(self._batch.compute().distance))
+
+    def _lowest_sole_point(self) -> float:
+        mujoco.mj_kinematics(self.model, self.data)
+        lowest = np.inf
+        for g in self._sole_geoms:
+            center, frame, half = self.data.geom_xpos[g], self.data.geom_xmat[g].reshape(3, 3), self.model.geom_size[g]
+            corners = center + (np.array(np.meshgrid(*[[-1, 1]] * 3)).reshape(3, -1).T * half) @ frame.T
+            lowest = min(lowest, float(corners[:, 2].min()))
+        return lowest
+
+    def _resolve_names(self) -> None:
+        m = self.model
+        joints = [m.joint(j).id for j in BIPED_JOINTS]
+        if [m.jnt_qposadr[j] for j in joints] != list(range(7, 7 + len(joints))):
+            raise EnvConfigError("the biped's hinge joints must follow the free joint in BIPED_JOINTS order")
+        if [m.actuator(s).id for s in BIPED_SERVOS] != list(range(len(BIPED_SERVOS))):
+            raise EnvConfigError("the biped's servos must be the first actuators in BIPED_SERVOS order")
+        self._lower = m.jnt_range[joints, 0].copy()
+        self._upper = m.jnt_range[joints, 1].copy()
+        self._nominal = np.array([NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS])
+        self._scale = np.maximum(self._nominal - self._lower, self._upper - self._nominal)
+        self._servo_lead = -m.actuator_biasprm[: len(BIPED_SERVOS), 2] / m.actuator_gainprm[: len(BIPED_SERVOS), 0]
+        self._upper_body = np.array([BIPED_JOINTS.index(j) for j in _UPPER_BODY])
+        names = ("r_ankle_force", "r_ankle_torque", "l_ankle_force", "l_ankle_torque", "imu_accelerometer",
+                 "imu_gyro", "imu_orientation")
+        self._sensors = np.concatenate([np.arange(m.sensor(n).adr[0], m.sensor(n).adr[0] + m.sensor(n).dim[0])
+                                        for n in names])
+        self._torque_adr = [int(m.sensor(n).adr[0]) for n in ("r_ankle_torque", "l_ankle_torque")]
+        self._ankle_sites = [m.site(s).id for s in BIPED_ANKLE_SITES]
+        self._pelvis = m.body("pelvis").id
+        self._torso = m.body("torso").id
+        self._floor = m.geom(BIPED_FLOOR_GEOM).id
+        self._sole_geoms = [m.geom(g).id for g in BIPED_SOLE_GEOMS]
+        self._sole_side = {g: (0 if BIPED_SOLE_GEOMS[k].startswith("r_") else 1) for k, g in enumerate(self._sole_geoms)}
+        robot = [g for g in range(m.ngeom) if m.geom_bodyid[g] != 0
+                 and int(m.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))]
+        self._ssv_geoms = np.array(robot, dtype=np.int64)
+        capsule = m.geom_type[self._ssv_geoms] == int(mujoco.mjtGeom.mjGEOM_CAPSULE)
+        self._half_length = np.where(capsule, m.geom_size[self._ssv_geoms, 1], 0.0)
+        pairs = self_collision_pairs(m, self._ssv_geoms)
+        volumes = PackedVolumes(np.zeros((len(robot), 3, 3)), m.geom_size[self._ssv_geoms, 0].copy(),
+                                capsule.astype(np.int64))
+        self._batch = PairBatch(volumes, pairs[:, 0], pairs[:, 1])
