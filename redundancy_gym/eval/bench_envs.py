@@ -1,9 +1,11 @@
 """``redundancy-gym bench envs``: env steps per second with a zero policy, ours against Gymnasium's MuJoCo envs.
 
 Every env of ours and the peers (Gymnasium's ``Pusher-v5`` and ``Humanoid-v5``) is made with ``gym.make`` (so
-the same wrappers apply) and stepped with the zero action for a fixed wall time, resetting when an episode ends
+the same wrappers apply) and stepped with the zero action (for BipedWalk-v0: stand in the nominal posture) for a fixed wall time, resetting when an episode ends
 (resets count: they are part of what a training loop pays). Ratios ``<ours>_vs_<peer>`` compare rates measured
-in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5. Variants of our envs (by default
+in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5, ``biped_vs_humanoid`` BipedWalk-v0 over
+Humanoid-v5 (per env step; ``sim_seconds_per_second`` also compares simulated time, since the two step
+different periods: 4 ms and 15 ms). Variants of our envs (by default
 AgriReach with ``prune=False``, the whole crop row in the scene and the collision model) are measured too, and
 ``agri_prune_speedup`` is the pruned rate over the unpruned one.
 """
@@ -30,6 +32,7 @@ VARIANTS = {"redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriRe
                                                            "agri_prune_speedup")}
 """label -> (env id, gym.make kwargs, name of the ratio base rate / variant rate)."""
 _SHORT = {"redundancy_gym/PlanarReach-v0": "planar", "redundancy_gym/AgriReach-v0": "agri",
+          "redundancy_gym/BipedWalk-v0": "biped",
           "Pusher-v5": "pusher", "Humanoid-v5": "humanoid"}
 
 
@@ -52,9 +55,11 @@ def _steps_per_second(env_id: str, seconds: float, seed: int, env_kwargs: dict[s
             if steps % 64 == 0 and time.perf_counter() - start >= seconds:
                 break
         elapsed = time.perf_counter() - start
+        dt = float(env.unwrapped.dt)
     finally:
         env.close()
-    return {"steps_per_second": steps / elapsed, "steps": steps, "resets": resets, "seconds": elapsed}
+    return {"steps_per_second": steps / elapsed, "steps": steps, "resets": resets, "seconds": elapsed,
+            "control_period": dt, "sim_seconds_per_second": steps * dt / elapsed}
 
 
 def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] = ENV_IDS,

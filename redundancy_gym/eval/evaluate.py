@@ -46,6 +46,8 @@ class EpisodeSummary:
     pseudoenergy: float
     peak_joint_speed: float
     min_clearance: float
+    fell: bool | None = None
+    forward_speed: float | None = None
 
 
 @dataclass
@@ -88,13 +90,22 @@ class EvalReport:
             "episode_return": float(returns.mean()),
             "episode_return_std": float(returns.std()),
             "episode_length": float(np.mean([e.length for e in s])),
+            **self._walking_metrics(),
             "per_episode": [
                 {"seed": e.seed, "length": e.length, "return": e.episode_return, "success": e.success,
                  "collision": e.collision, "task_error_max": e.task_error_max, "pseudoenergy": e.pseudoenergy,
-                 "peak_joint_speed": e.peak_joint_speed, "min_clearance": _finite_or_none(e.min_clearance)}
+                 "peak_joint_speed": e.peak_joint_speed, "min_clearance": _finite_or_none(e.min_clearance),
+                 **({} if e.fell is None else {"fell": e.fell, "forward_speed": e.forward_speed})}
                 for e in s
             ],
         }
+
+    def _walking_metrics(self) -> dict[str, float]:
+        """``fall_rate`` and ``forward_speed`` (mean of distance / time) for envs that report falls (the biped)."""
+        if any(e.fell is None for e in self.summaries):
+            return {}
+        return {"fall_rate": float(np.mean([bool(e.fell) for e in self.summaries])),
+                "forward_speed": float(np.mean([e.forward_speed for e in self.summaries]))}
 
     def write_json(self, path: str | Path) -> Path:
         """Write :meth:`to_json` to ``path`` (parents created)."""
@@ -147,6 +158,10 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
         collision=collision, task_error_max=float(np.max(trace.task_error)),
         task_error_sq_sum=float(np.sum(trace.task_error**2)), pseudoenergy=float(np.sum(trace.pseudoenergy)),
         peak_joint_speed=float(np.max(trace.joint_speed)), min_clearance=float(np.min(trace.min_clearance)))
+    if "fell" in info and "distance" in info:
+        elapsed = float(info.get("time", 0.0))
+        summary.fell = bool(info["fell"])
+        summary.forward_speed = float(info["distance"]) / elapsed if elapsed > 0.0 else 0.0
     return summary, trace
 
 
@@ -206,6 +221,7 @@ def format_report(report: dict[str, Any]) -> str:
     ]
     if "fall_rate" in report:
         rows.append(("fall rate", f"{report['fall_rate']:.3f}"))
+        rows.append(("forward speed [m/s]", f"{report['forward_speed']:.3f}"))
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
