@@ -4,16 +4,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from .evaluate import evaluate, format_report
 from .plots import plot_clearance, plot_point_to_point, plot_traces
 from .point_to_point import FIG_5_10, rollout_point_to_point
 from .speed_error import plot_speed_error, speed_error_markdown
 from .video import record_episode
+from .walking_plots import plot_angular_momentum, plot_com_zmp, record_walk
 
 __all__ = ["run_demo"]
 
 _PLANAR = "redundancy_gym/PlanarReach-v0"
 _AGRI = "redundancy_gym/AgriReach-v0"
+_BIPED = "redundancy_gym/BipedWalk-v0"
 
 
 def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
@@ -44,6 +48,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
+    written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
     for path in written:
         print(f"wrote {path}")
     return written
@@ -65,6 +70,32 @@ def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
               for label, on in (("without collision avoidance", False), ("with nullspace collision avoidance", True))}
     written.append(plot_point_to_point(traces, out / "agri_self_collision_fig_5_10.png",
                                        "9-DoF arm, point-to-point move (fig. 5.10 analogue), kinematic CLIK"))
+    return written
+
+
+def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+    """The walking reference on BipedWalk at 0.5 and 0.7 m/s: JSON, CoM/ZMP plot, L_z with and without (5.62),
+    one video."""
+    written = []
+    for speed in (0.5, 0.7):
+        report = evaluate(_BIPED, "walking", episodes=episodes, seed=seed, env_kwargs={"target_speed": speed},
+                          progress=progress)
+        written.append(report.write_json(out / f"biped_walk_walking_{speed:.1f}.json"))
+        print(f"\n== BipedWalk-v0, walking, target_speed={speed}\n{format_report(report.to_json())}")
+    trace = record_walk(0.7, 6.0, seed)
+    written.append(plot_com_zmp(trace, out / "biped_walk_com_zmp.png",
+                                "BipedWalk-v0 at 0.7 m/s: CoM and ZMP, planned and measured"))
+    walks = {}
+    for on in (False, True):
+        walk = trace if on else record_walk(0.7, 6.0, seed, momentum_minimization=False)
+        peak = float(np.max(np.abs(walk.lz[walk.time > 1.0])))
+        label = "W = gamma I + J_Lz^T J_Lz (5.62)" if on else "W = I (no minimization)"
+        walks[f"{label}: peak |L_z| {peak:.2f} kg m^2/s"] = walk
+    written.append(plot_angular_momentum(walks, out / "biped_walk_lz_fig_5_11.png",
+                                         "Vertical angular momentum, 0.7 m/s, MuJoCo (fig. 5.11 analogue)"))
+    path, _ = record_episode(_BIPED, "walking", out / "biped_walk_walking.mp4", seed=seed,
+                             env_kwargs={"target_speed": 0.7})
+    written.append(path)
     return written
 
 
