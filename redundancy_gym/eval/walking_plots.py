@@ -89,8 +89,6 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
         ax.plot(t, trace.com[:, axis], "--", color="navy", lw=1.0, label="CoM measured")
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    if trace.feet.size:
-        axes[0].set_ylim(None, None)
     axes[0].legend(loc="upper left", fontsize=8)
     axes[1].set_xlabel("time [s]")
     fig.suptitle(title)

@@ -63,7 +63,8 @@ class WholeBodyIkResult(NamedTuple):
     Attributes:
         q: the configuration at the end of the period (pinocchio convention, nq).
         qdot: the CLIK velocity of the period (nv) [m/s, rad/s].
-        task_error: largest remaining task error at the end of the period [m or rad].
+        task_error: largest task error at the end of the period before the Newton correction [m or rad]
+            (the correction removes it to second order).
         lz: vertical angular momentum about the CoM of ``qdot`` [kg m^2/s].
         sigma_min: smallest pivot of the Cholesky factor of ``J W^-1 J^T`` (falls to 0 at a task singularity).
         success: False when the step met a singular task (then ``q`` is the start configuration).
