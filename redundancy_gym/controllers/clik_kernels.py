@@ -20,8 +20,9 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ..geometry.potentials import piecewise_potential_kernel
-from ..geometry.ssv_kernels import volume_pair_distance
-from ..model.chain_kernels import chain_forward, chain_jacobian, chain_jacobian_transpose_times, place_frame
+from ..model.chain_kernels import chain_forward, chain_jacobian, place_frame
+from .collision_kernels import collision_potential
+from .kernel_buffers import float_field, int_field, pack_fields
 
 __all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "STATUS_NAMES", "clik_step", "pack_buffers"]
 
@@ -34,7 +35,7 @@ FLOAT_FIELDS: tuple[str, ...] = (
     "inputs", "outputs", "jacobian6", "jacobian", "gradient", "scratch",
 )
 INT_FIELDS: tuple[str, ...] = (
-    "dims", "parent", "prismatic", "q_index", "v_index", "task_rows", "segment_joint", "segment_starts", "kinds",
+    "dims", "parent", "joint_type", "q_index", "v_index", "task_rows", "segment_joint", "segment_starts", "kinds",
     "segment_pairs", "pair_starts", "volume_a", "volume_b",
 )
 # entries of the "dims" field
@@ -53,7 +54,7 @@ _NF = len(FLOAT_FIELDS)
  _F_POSTURE_REFERENCE, _F_POSTURE_WEIGHTS, _F_SEGMENT_ROTATION, _F_SEGMENT_TRANSLATION, _F_SEGMENT_CENTER,
  _F_SEGMENT_RADIUS, _F_SEGMENT_WORLD_CENTER, _F_LOCAL, _F_VERTICES, _F_RADII, _F_COLLISION_PARAMETERS, _F_INPUTS,
  _F_OUTPUTS, _F_JACOBIAN6, _F_JACOBIAN, _F_GRADIENT, _F_SCRATCH) = range(_NF)
-(_I_DIMS, _I_PARENT, _I_PRISMATIC, _I_Q_INDEX, _I_V_INDEX, _I_TASK_ROWS, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
+(_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_TASK_ROWS, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
  _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B) = range(_NF, _NF + len(INT_FIELDS))
 
 # return codes of clik_step
@@ -65,34 +66,11 @@ _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", 
 def pack_buffers(floats: Mapping[str, NDArray[np.float64]],
                  ints: Mapping[str, NDArray[np.int64]]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The kernel's two buffers from every field of :data:`FLOAT_FIELDS` and :data:`INT_FIELDS` (flattened)."""
-    header = 2 * (len(FLOAT_FIELDS) + len(INT_FIELDS))
-    fsizes = [np.asarray(floats[name]).size for name in FLOAT_FIELDS]
-    isizes = [np.asarray(ints[name]).size for name in INT_FIELDS]
-    f = np.zeros(max(sum(fsizes), 1))
-    i = np.zeros(header + sum(isizes), dtype=np.int64)
-    offset = 0
-    for k, (name, size) in enumerate(zip(FLOAT_FIELDS, fsizes)):
-        i[2 * k], i[2 * k + 1] = offset, size
-        f[offset:offset + size] = np.asarray(floats[name], dtype=np.float64).reshape(-1)
-        offset += size
-    offset = header
-    for k, (name, size) in enumerate(zip(INT_FIELDS, isizes), start=len(FLOAT_FIELDS)):
-        i[2 * k], i[2 * k + 1] = offset, size
-        i[offset:offset + size] = np.asarray(ints[name], dtype=np.int64).reshape(-1)
-        offset += size
-    return f, i
+    return pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
 
 
-@njit(**_JIT)
-def _fv(f, i, k):
-    o = i[2 * k]
-    return f[o:o + i[2 * k + 1]]
-
-
-@njit(**_JIT)
-def _iv(i, k):
-    o = i[2 * k]
-    return i[o:o + i[2 * k + 1]]
+_fv = float_field
+_iv = int_field
 
 
 @njit(**_JIT)
@@ -165,81 +143,22 @@ def _cholesky_solve(b, m, rhs, low):
 
 
 @njit(**_JIT)
-def _collision(f, i, dims, parent, prismatic, v_index, position, world_axis, q_rotation, gradient, scratch):
-    """Place the robot volumes, then ``H_c`` (5.49) and its gradient (5.61) over the pairs within ``d_a``:
-    ``(value, smallest distance computed)``. Pairs whose segments' bounding spheres are farther apart than
-    ``d_a`` contribute nothing and are skipped (their distance is at least the spheres')."""
+def _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, q_rotation, gradient, scratch):
+    """:func:`~.collision_kernels.collision_potential` on the buffer's collision fields."""
     ns, nvol, npairs = dims[6], dims[7], dims[8]
-    seg_joint = _iv(i, _I_SEGMENT_JOINT)
-    seg_starts = _iv(i, _I_SEGMENT_STARTS)
-    kinds = _iv(i, _I_KINDS)
-    seg_pairs = _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2))
-    pair_starts = _iv(i, _I_PAIR_STARTS)
-    vol_a = _iv(i, _I_VOLUME_A)
-    vol_b = _iv(i, _I_VOLUME_B)
-    seg_rot = _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3))
-    seg_pos = _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3))
-    seg_center = _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3))
-    seg_radius = _fv(f, i, _F_SEGMENT_RADIUS)
-    seg_world = _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3))
-    local = _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3))
-    vertices = _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3))
-    radii = _fv(f, i, _F_RADII)
-    params = _fv(f, i, _F_COLLISION_PARAMETERS)
-    da, slope, ratio, weight = params[0], params[1], params[2], params[3]
-    rot = scratch[0:9].reshape((3, 3))
-    pos = scratch[9:12]
-    for s in range(ns):
-        jnt = seg_joint[s]
-        if jnt < 0:  # environment: world vertices and centre are kept up to date by the owner
-            continue
-        place_frame(q_rotation, position, jnt, seg_rot[s], seg_pos[s], rot, pos)
-        for r in range(3):
-            seg_world[s, r] = pos[r] + rot[r, 0] * seg_center[s, 0] + rot[r, 1] * seg_center[s, 1] \
-                + rot[r, 2] * seg_center[s, 2]
-        for v in range(seg_starts[s], seg_starts[s + 1]):
-            for k in range(3):
-                for r in range(3):
-                    vertices[v, k, r] = pos[r] + rot[r, 0] * local[v, k, 0] + rot[r, 1] * local[v, k, 1] \
-                        + rot[r, 2] * local[v, k, 2]
-    value = 0.0
-    smallest = np.inf
-    for p in range(npairs):
-        a = seg_pairs[p, 0]
-        b = seg_pairs[p, 1]
-        dx = seg_world[a, 0] - seg_world[b, 0]
-        dy = seg_world[a, 1] - seg_world[b, 1]
-        dz = seg_world[a, 2] - seg_world[b, 2]
-        reach = seg_radius[a] + seg_radius[b] + da
-        if dx * dx + dy * dy + dz * dz > reach * reach:
-            continue
-        best = np.inf
-        best_pa = (0.0, 0.0, 0.0)
-        best_pb = (0.0, 0.0, 0.0)
-        best_n = (0.0, 0.0, 1.0)
-        for k in range(pair_starts[p], pair_starts[p + 1]):
-            d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
-            if d < best:
-                best, best_pa, best_pb, best_n = d, pa, pb, n
-        smallest = min(smallest, best)
-        if not best < da:
-            continue
-        h, dh, _ = piecewise_potential_kernel(best, da, slope, ratio)
-        value += weight * h
-        # dd/dq = n^T (J_b(p_b) - J_a(p_a)) (5.61)
-        if seg_joint[b] >= 0:
-            chain_jacobian_transpose_times(parent, prismatic, v_index, position, world_axis, seg_joint[b],
-                                           best_pb[0], best_pb[1], best_pb[2], best_n[0], best_n[1], best_n[2],
-                                           weight * dh, gradient)
-        if seg_joint[a] >= 0:
-            chain_jacobian_transpose_times(parent, prismatic, v_index, position, world_axis, seg_joint[a],
-                                           best_pa[0], best_pa[1], best_pa[2], best_n[0], best_n[1], best_n[2],
-                                           -weight * dh, gradient)
-    return value, smallest
+    return collision_potential(
+        _iv(i, _I_SEGMENT_JOINT), _iv(i, _I_SEGMENT_STARTS), _iv(i, _I_KINDS),
+        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)), _iv(i, _I_PAIR_STARTS), _iv(i, _I_VOLUME_A),
+        _iv(i, _I_VOLUME_B), _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
+        _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)), _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
+        _fv(f, i, _F_SEGMENT_RADIUS), _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
+        _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3)), _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
+        _fv(f, i, _F_RADII), _fv(f, i, _F_COLLISION_PARAMETERS), parent, joint_type, v_index, q_rotation, position,
+        world_axis, gradient, scratch)
 
 
 @njit(**_JIT)
-def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, prismatic, v_index, error, rhs, jac,
+def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac,
           scratch):
     """Task error, Jacobian and effective velocity ``wdot_d + K e`` (5.5); returns a clik_step code."""
     nv, m, kind, joint, ax = dims[1], dims[3], dims[10], dims[11], dims[12]
@@ -253,7 +172,7 @@ def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, pr
     pos = scratch[21:24]
     place_frame(q_rotation, position, joint, _fv(f, i, _F_TASK_ROTATION).reshape((3, 3)),
                 _fv(f, i, _F_TASK_TRANSLATION), rot, pos)
-    chain_jacobian(parent, prismatic, v_index, position, world_axis, joint, pos[0], pos[1], pos[2], jac6)
+    chain_jacobian(parent, joint_type, v_index, q_rotation, position, world_axis, joint, pos[0], pos[1], pos[2], jac6)
     width = 6 if kind == 1 else m
     for k in range(width):
         if not np.isfinite(target[k]):
@@ -311,14 +230,14 @@ def clik_step(f, i, has_velocity):
         if not np.isfinite(q[k]):
             return BAD_CONFIGURATION
     parent = _iv(i, _I_PARENT)
-    prismatic = _iv(i, _I_PRISMATIC)
+    joint_type = _iv(i, _I_JOINT_TYPE)
     v_index = _iv(i, _I_V_INDEX)
     rotation = _fv(f, i, _F_ROTATION).reshape((nj, 3, 3))
     position = _fv(f, i, _F_POSITION).reshape((nj, 3))
     world_axis = _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3))
     chain_forward(parent, _fv(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
                   _fv(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)), _fv(f, i, _F_AXIS).reshape((nj, 3)),
-                  prismatic, _iv(i, _I_Q_INDEX), q, rotation, position, world_axis)
+                  joint_type, _iv(i, _I_Q_INDEX), q, rotation, position, world_axis)
     scratch = _fv(f, i, _F_SCRATCH)
     outputs = _fv(f, i, _F_OUTPUTS)
     x = outputs[:nv]
@@ -326,7 +245,7 @@ def clik_step(f, i, has_velocity):
     extra = outputs[nv + m:]
     rhs = scratch[24:30]
     jac = _fv(f, i, _F_JACOBIAN).reshape((m, nv))
-    code = _task(f, i, dims, has_velocity, rotation, position, world_axis, parent, prismatic, v_index, error, rhs,
+    code = _task(f, i, dims, has_velocity, rotation, position, world_axis, parent, joint_type, v_index, error, rhs,
                  jac, scratch)
     if code != OK:
         return code
@@ -353,7 +272,7 @@ def clik_step(f, i, has_velocity):
             gradient[k] += pw[o * nq + k] * delta
     smallest = np.inf
     if collision:
-        h, smallest = _collision(f, i, dims, parent, prismatic, v_index, position, world_axis, rotation, gradient,
+        h, smallest = _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, rotation, gradient,
                                  scratch)
         value += h
     # weighted minimum norm with nullspace vector z = alpha dH/dq (Algorithm 10, (5.14), (5.22))

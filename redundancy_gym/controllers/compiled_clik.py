@@ -22,6 +22,7 @@ from .clik_kernels import (
     clik_step,
     pack_buffers,
 )
+from .collision_kernels import bounding_spheres, collision_fields
 from .collision_objective import CollisionObjective
 from .exceptions import ControllerError
 from .frame_axis_task import FrameAxisTask
@@ -33,20 +34,6 @@ __all__ = ["CompiledClik"]
 
 SUPPORTED_TASKS = (FrameAxisTask, FramePositionTask)
 SUPPORTED_OBJECTIVES = (JointLimitObjective, PostureObjective, CollisionObjective)
-
-
-def _bounding_spheres(local: NDArray[np.float64], kinds: NDArray[np.int64], radii: NDArray[np.float64],
-                      starts: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Per segment a sphere (centre in the segment's coordinates, radius) holding all its volumes."""
-    n = starts.size - 1
-    centers, bounds = np.zeros((n, 3)), np.zeros(n)
-    for s in range(n):
-        points = np.concatenate([local[v, :kinds[v] + 1] for v in range(starts[s], starts[s + 1])])
-        reach = np.concatenate([np.full(kinds[v] + 1, radii[v]) for v in range(starts[s], starts[s + 1])])
-        centers[s] = points.mean(axis=0)
-        # a small relative margin so that rounding never culls a pair that is within reach
-        bounds[s] = float(np.max(np.linalg.norm(points - centers[s], axis=1) + reach)) * (1.0 + 1e-9) + 1e-12
-    return centers, bounds
 
 
 class CompiledClik:
@@ -121,7 +108,7 @@ class CompiledClik:
             "scratch": np.zeros(SCRATCH_SIZE),
         }
         ints: dict[str, NDArray[np.int64]] = {
-            "parent": chain.parent, "prismatic": chain.prismatic, "q_index": chain.q_index,
+            "parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index,
             "v_index": chain.v_index,
             "task_rows": task.rows if isinstance(task, FramePositionTask) else np.zeros(0, dtype=np.int64),
         }
@@ -160,41 +147,14 @@ class CompiledClik:
                          "volume_b"):
                 ints[name] = np.zeros(0, dtype=np.int64)
             return {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
-        model = self.collision.collision_model
-        layout = model.layout()
-        ns = len(layout.frames)
-        joints, rotations, translations = [], [], []
-        self._world_fixed: list[tuple[int, NDArray[np.float64], NDArray[np.float64]]] = []
-        for s, frame in enumerate(layout.frames):
-            if frame is None:
-                joints.append(-1)
-                rotations.append(np.eye(3))
-                translations.append(np.zeros(3))
-            else:
-                j, r, p = self.model.frame_attachment(frame)
-                joints.append(j)
-                rotations.append(r)
-                translations.append(p)
-                if j < 0:  # a robot segment on a world-fixed frame: placed once, like the environment
-                    self._world_fixed.append((s, r, p))
-        self._robot_volumes = int(layout.segment_starts[sum(f is not None for f in layout.frames)])
-        self._robot_segments = sum(f is not None for f in layout.frames)
-        potential = self.collision.potential
-        floats.update({
-            "segment_rotation": np.array(rotations).reshape(ns, 3, 3),
-            "segment_translation": np.array(translations).reshape(ns, 3),
-            "segment_center": np.zeros((ns, 3)), "segment_radius": np.zeros(ns),
-            "segment_world_center": np.zeros((ns, 3)), "local": layout.local, "vertices": layout.local.copy(),
-            "radii": layout.radii,
-            "collision_parameters": np.array([potential.activation_distance, potential.slope,
-                                              potential.switch_ratio, self.collision.weight]),
-        })
-        ints.update({"segment_joint": np.array(joints, dtype=np.int64), "segment_starts": layout.segment_starts,
-                     "kinds": layout.kinds, "segment_pairs": layout.segment_pairs, "pair_starts": layout.pair_starts,
-                     "volume_a": layout.volume_a, "volume_b": layout.volume_b})
-        self._layout = layout
-        return {"segments": ns, "volumes": len(layout.kinds), "pairs": len(layout.segment_pairs),
-                "volume_pairs": len(layout.volume_a)}
+        fields = collision_fields(self.collision, self.model)
+        floats.update(fields.floats)
+        ints.update(fields.ints)
+        self._world_fixed = list(fields.world_fixed)
+        self._layout = fields.layout
+        self._robot_segments = fields.robot_segments
+        self._robot_volumes = int(fields.layout.segment_starts[fields.robot_segments])
+        return dict(fields.counts)
 
     def _refresh_environment(self) -> None:
         """Environment volumes (world), all radii and every segment's bounding sphere from the collision model."""
@@ -212,7 +172,7 @@ class CompiledClik:
         # bounding spheres: robot segments in their frame, environment segments in the world
         local = layout.local.copy()
         local[nr:] = env.vertices
-        centers, bounds = _bounding_spheres(local, layout.kinds, radii, layout.segment_starts)
+        centers, bounds = bounding_spheres(local, layout.kinds, radii, layout.segment_starts)
         self._field("segment_center")[:] = centers.reshape(-1)
         self._field("segment_radius")[:] = bounds
         world = self._field("segment_world_center").reshape(-1, 3)

@@ -30,6 +30,10 @@ class WalkingPolicyConfig:
         step_duration: nominal step duration [s].
         com_height: LIPM CoM height [m].
         correction_iterations: kinematic rollouts for the multi-body ZMP correction (0: plain LIPM).
+        self_collision_weight: weight of self-collision avoidance (5.49) in the IK's nullspace (0: off).
+        self_collision_activation: its activation distance ``d_a`` [m].
+        self_collision_slope: its slope at contact [1/m].
+        backend: whole-body IK implementation, ``"compiled"`` or ``"python"``.
     """
 
     momentum_minimization: bool = True
@@ -42,6 +46,10 @@ class WalkingPolicyConfig:
     step_duration: float = 0.8
     com_height: float = 0.91
     correction_iterations: int = 3
+    self_collision_weight: float = WalkingIkConfig.self_collision_weight
+    self_collision_activation: float = WalkingIkConfig.self_collision_activation
+    self_collision_slope: float = WalkingIkConfig.self_collision_slope
+    backend: str = WalkingIkConfig.backend
 
 
 class WalkingPolicy:
@@ -81,7 +89,10 @@ class WalkingPolicy:
                               min_step_duration=min(GaitConfig.min_step_duration, c.step_duration))
             gains = StabilizerGains(dcm=c.dcm_gain, zmp=c.zmp_gain, com=c.com_gain) if c.stabilizer \
                 else StabilizerGains(dcm=0.0, zmp=0.0, com=0.0)
-            ik = WalkingIkConfig(gamma=c.gamma, beta=c.beta, momentum_minimization=c.momentum_minimization)
+            ik = WalkingIkConfig(gamma=c.gamma, beta=c.beta, momentum_minimization=c.momentum_minimization,
+                                 self_collision_weight=c.self_collision_weight,
+                                 self_collision_activation=c.self_collision_activation,
+                                 self_collision_slope=c.self_collision_slope, backend=c.backend)
             self.controller = WalkingController(
                 self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
                 np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik,

@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from .chain_kernels import FREE, PRISMATIC, REVOLUTE
 from .exceptions import ModelError, UnknownFrameError
 from .serial_chain import SerialChain
 
@@ -24,12 +25,12 @@ __all__ = ["JacobianKind", "RobotModel"]
 JacobianKind = Literal["translational", "rotational", "full"]
 _JACOBIAN_ROWS: dict[str, slice] = {"translational": slice(0, 3), "rotational": slice(3, 6), "full": slice(0, 6)}
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-# 1-DoF joints the compiled kinematics handle: short name -> (prismatic, axis or None for "read it")
+# 1-DoF joints the compiled kinematics handle: short name -> (joint type, axis or None for "read it")
 _CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
-    "JointModelRX": (0, (1.0, 0.0, 0.0)), "JointModelRY": (0, (0.0, 1.0, 0.0)), "JointModelRZ": (0, (0.0, 0.0, 1.0)),
-    "JointModelRevoluteUnaligned": (0, None),
-    "JointModelPX": (1, (1.0, 0.0, 0.0)), "JointModelPY": (1, (0.0, 1.0, 0.0)), "JointModelPZ": (1, (0.0, 0.0, 1.0)),
-    "JointModelPrismaticUnaligned": (1, None),
+    "JointModelRX": (REVOLUTE, (1.0, 0.0, 0.0)), "JointModelRY": (REVOLUTE, (0.0, 1.0, 0.0)),
+    "JointModelRZ": (REVOLUTE, (0.0, 0.0, 1.0)), "JointModelRevoluteUnaligned": (REVOLUTE, None),
+    "JointModelPX": (PRISMATIC, (1.0, 0.0, 0.0)), "JointModelPY": (PRISMATIC, (0.0, 1.0, 0.0)),
+    "JointModelPZ": (PRISMATIC, (0.0, 0.0, 1.0)), "JointModelPrismaticUnaligned": (PRISMATIC, None),
 }
 
 
@@ -134,33 +135,43 @@ class RobotModel:
     def serial_chain(self) -> SerialChain:
         """The joints as flat arrays for compiled kinematics (:mod:`redundancy_gym.model.chain_kernels`).
 
-        Raises :class:`ModelError` unless every joint is a 1-DoF revolute or prismatic joint.
+        Raises :class:`ModelError` unless every joint is a 1-DoF revolute or prismatic joint, or a free flyer.
         """
         m = self._model
-        names, parent, rot, pos, axes, prismatic, q_index, v_index = [], [], [], [], [], [], [], []
+        names, parent, rot, pos, axes, types, q_index, v_index = [], [], [], [], [], [], [], []
         for j in range(1, m.njoints):
             joint = m.joints[j]
             kind = joint.shortname()
-            if kind not in _CHAIN_JOINTS or joint.nq != 1 or joint.nv != 1:
+            if kind == "JointModelFreeFlyer":
+                joint_type, axis = FREE, (0.0, 0.0, 0.0)
+            elif kind in _CHAIN_JOINTS and joint.nq == 1 and joint.nv == 1:
+                joint_type, axis = _CHAIN_JOINTS[kind]
+                if axis is None:
+                    axis = tuple(np.asarray(joint.extract().axis, dtype=np.float64))
+                axis = tuple(np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis))
+            else:
                 raise ModelError(f"joint {m.names[j]!r} is {kind}; compiled kinematics support "
-                                 f"{', '.join(_CHAIN_JOINTS)}")
-            is_prismatic, axis = _CHAIN_JOINTS[kind]
-            if axis is None:
-                axis = tuple(np.asarray(joint.extract().axis, dtype=np.float64))
+                                 f"{', '.join(_CHAIN_JOINTS)}, JointModelFreeFlyer")
             names.append(m.names[j])
             parent.append(int(m.parents[j]) - 1)
             rot.append(m.jointPlacements[j].rotation)
             pos.append(m.jointPlacements[j].translation)
-            axes.append(np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis))
-            prismatic.append(is_prismatic)
+            axes.append(axis)
+            types.append(joint_type)
             q_index.append(joint.idx_q)
             v_index.append(joint.idx_v)
         n = len(names)
+        inertias = [m.inertias[j] for j in range(1, m.njoints)]
         return SerialChain(tuple(names), np.array(parent, dtype=np.int64).reshape(n),
                            np.array(rot, dtype=np.float64).reshape(n, 3, 3),
-                           np.array(pos, dtype=np.float64).reshape(n, 3), np.array(axes).reshape(n, 3),
-                           np.array(prismatic, dtype=np.int64).reshape(n), np.array(q_index, dtype=np.int64),
-                           np.array(v_index, dtype=np.int64))
+                           np.array(pos, dtype=np.float64).reshape(n, 3),
+                           np.array(axes, dtype=np.float64).reshape(n, 3),
+                           np.array(types, dtype=np.int64).reshape(n), np.array(q_index, dtype=np.int64),
+                           np.array(v_index, dtype=np.int64),
+                           np.array([i.mass for i in inertias], dtype=np.float64).reshape(n),
+                           np.array([i.lever for i in inertias], dtype=np.float64).reshape(n, 3),
+                           np.array([i.inertia for i in inertias], dtype=np.float64).reshape(n, 3, 3),
+                           self.nq, self.nv)
 
     def frame_attachment(self, frame: str | int) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
         """``(joint, R, p)``: the :meth:`serial_chain` joint a frame moves with (-1 for the world) and the

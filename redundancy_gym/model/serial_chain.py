@@ -1,4 +1,4 @@
-"""A robot's kinematic tree of 1-DoF joints as flat arrays, for the compiled kernels of :mod:`.chain_kernels`."""
+"""A robot's kinematic tree as flat arrays, for the compiled kernels of :mod:`.chain_kernels`."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .chain_kernels import chain_forward, chain_jacobian
+from .chain_kernels import FREE, chain_centroidal, chain_forward, chain_integrate, chain_jacobian
 from .exceptions import ModelError
 
 __all__ = ["SerialChain"]
@@ -15,20 +15,26 @@ __all__ = ["SerialChain"]
 
 @dataclass(frozen=True)
 class SerialChain:
-    """Joints of a fixed-base tree of revolute and prismatic joints, exported once by
-    :meth:`~redundancy_gym.model.RobotModel.serial_chain` (indices are 0-based joints; the world is -1).
+    """Joints of a tree of revolute and prismatic joints, on a fixed base or a free-flying root, exported once
+    by :meth:`~redundancy_gym.model.RobotModel.serial_chain` (indices are 0-based joints; the world is -1).
 
     Joint ``j``'s world frame is ``M_parent[j] * (placement_rotation[j], placement_translation[j]) *
     exp(axis[j] q[q_index[j]])``, a rotation about ``axis`` for a revolute joint and a translation along it for
-    a prismatic one; its column in a Jacobian is ``v_index[j]``.
+    a prismatic one; a free flyer (:data:`~.chain_kernels.FREE`, the root of a floating-base robot) reads
+    ``q[q_index : q_index + 7] = [p; quat (x, y, z, w)]`` and has six velocity columns from ``v_index``
+    (``[v; omega]`` in its own frame, as pinocchio's free flyer).
 
     Attributes:
         joint_names: (J,) names, in model order (parents first).
         parent: (J,) parent joint, -1 for the world.
         placement_rotation: (J, 3, 3) and placement_translation: (J, 3) [m] of the joint frame in its parent's.
-        axis: (J, 3) unit axis in the joint frame.
-        prismatic: (J,) 1 for a prismatic joint, 0 for a revolute one.
-        q_index, v_index: (J,) index into the configuration and the velocity.
+        axis: (J, 3) unit axis in the joint frame (zero for a free flyer).
+        joint_type: (J,) :data:`~.chain_kernels.REVOLUTE`, :data:`~.chain_kernels.PRISMATIC` or
+            :data:`~.chain_kernels.FREE`.
+        q_index, v_index: (J,) first index into the configuration and the velocity.
+        body_mass: (J,) [kg], body_com: (J, 3) [m] and body_inertia: (J, 3, 3) [kg m^2] about the body's CoM,
+            of the body each joint carries, in the joint frame.
+        nq, nv: configuration and velocity sizes.
     """
 
     joint_names: tuple[str, ...]
@@ -36,14 +42,24 @@ class SerialChain:
     placement_rotation: NDArray[np.float64]
     placement_translation: NDArray[np.float64]
     axis: NDArray[np.float64]
-    prismatic: NDArray[np.int64]
+    joint_type: NDArray[np.int64]
     q_index: NDArray[np.int64]
     v_index: NDArray[np.int64]
+    body_mass: NDArray[np.float64]
+    body_com: NDArray[np.float64]
+    body_inertia: NDArray[np.float64]
+    nq: int
+    nv: int
 
     @property
     def num_joints(self) -> int:
-        """Number of joints ``J`` (= nq = nv)."""
+        """Number of joints ``J`` (= nq = nv on a fixed base)."""
         return len(self.joint_names)
+
+    @property
+    def floating_base(self) -> bool:
+        """Whether the root is a free flyer."""
+        return bool(np.any(self.joint_type == FREE))
 
     def forward(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """World rotations (J, 3, 3) and positions (J, 3) [m] of the joint frames at ``q``."""
@@ -54,20 +70,43 @@ class SerialChain:
         """World-aligned ``[J_T; J_R]`` (6 x nv) of the world point ``point`` [m] moving with ``joint`` at ``q``."""
         if not -1 <= int(joint) < self.num_joints:
             raise ModelError(f"joint must lie in [-1, {self.num_joints}), got {joint}")
-        _, position, world_axis = self._forward(q)
+        rotation, position, world_axis = self._forward(q)
         p = np.asarray(point, dtype=np.float64)
-        out = np.zeros((6, self.num_joints))
-        chain_jacobian(self.parent, self.prismatic, self.v_index, position, world_axis, int(joint), float(p[0]),
-                       float(p[1]), float(p[2]), out)
+        out = np.zeros((6, self.nv))
+        chain_jacobian(self.parent, self.joint_type, self.v_index, rotation, position, world_axis, int(joint),
+                       float(p[0]), float(p[1]), float(p[2]), out)
         return out
+
+    def centroidal(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """``(c, J_c, A_L)`` at ``q``: CoM [m], its Jacobian (3 x nv) and the angular rows of the centroidal
+        momentum matrix (3 x nv, ``L_G = A_L qdot`` [kg m^2/s] about the CoM)."""
+        rotation, position, world_axis = self._forward(q)
+        com, jac_com, jac_angular = np.zeros(3), np.zeros((3, self.nv)), np.zeros((3, self.nv))
+        chain_centroidal(self.parent, self.joint_type, self.v_index, rotation, position, world_axis,
+                         self.body_mass, self.body_com, self.body_inertia, np.zeros((self.num_joints, 13)), com,
+                         jac_com, jac_angular)
+        return com, jac_com, jac_angular
+
+    def integrate(self, q: ArrayLike, v: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """The configuration reached from ``q`` moving with ``v`` for ``dt`` [s] (as ``pinocchio.integrate``)."""
+        q = self._check(q, self.nq, "q")
+        v = self._check(v, self.nv, "v")
+        out = np.empty(self.nq)
+        chain_integrate(self.joint_type, self.q_index, self.v_index, q, v, float(dt), out)
+        return out
+
+    @staticmethod
+    def _check(x: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        if x.shape != (n,) or not np.all(np.isfinite(x)):
+            raise ModelError(f"{name} must be finite with shape ({n},), got {x.shape}")
+        return x
 
     def _forward(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Joint rotations, positions and world axes at a checked ``q``."""
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        if q.shape != (self.num_joints,) or not np.all(np.isfinite(q)):
-            raise ModelError(f"q must be finite with shape ({self.num_joints},), got {q.shape}")
+        q = self._check(q, self.nq, "q")
         n = self.num_joints
         rotation, position, world_axis = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
-        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.prismatic,
+        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.joint_type,
                       self.q_index, q, rotation, position, world_axis)
         return rotation, position, world_axis

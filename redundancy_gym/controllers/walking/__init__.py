@@ -1,16 +1,19 @@
 """Biped walking (monograph chapter 4 and 5.1-5.3): step planner, LIPM/DCM CoM planner, swing quintics,
 stabilizer and whole-body IK with angular-momentum minimization (5.62), each a separate layer."""
 
+from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
-from .walking_controller import WalkingCommand, WalkingController, WalkingIkConfig
+from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 __all__ = [
+    "BACKENDS",
+    "CompiledWholeBodyIk",
     "GRAVITY",
     "TASK_ROWS",
     "ComState",

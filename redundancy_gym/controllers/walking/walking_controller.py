@@ -15,18 +15,23 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ...model import RobotModel
+from ...model import RobotModel, collision_model_from_mjcf
 from ..actuated_objective import ActuatedObjective
+from ..collision_objective import CollisionObjective
 from ..exceptions import ControllerError
 from ..joint_limit_objective import JointLimitObjective
 from ..posture_objective import PostureObjective
+from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
-__all__ = ["WalkingCommand", "WalkingController", "WalkingIkConfig"]
+__all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
+
+BACKENDS = ("compiled", "python")
+"""Whole-body IK implementations of :class:`WalkingIkConfig`."""
 
 
 @dataclass(frozen=True)
@@ -42,6 +47,12 @@ class WalkingIkConfig:
         joint_limit_weight: weight of the joint-limit potential (5.58) on the soft limits.
         joint_limit_activation: its ``d_a`` [rad].
         joint_limit_slope: its slope at the soft limit.
+        self_collision_weight: weight of the self-collision potential (5.49) on the robot's swept-sphere
+            volumes (0: off).
+        self_collision_activation: its ``d_a`` [m].
+        self_collision_slope: its slope ``|H'(0)|`` [1/m] at contact.
+        backend: ``"compiled"`` (:class:`CompiledWholeBodyIk`, one kernel call a period) or ``"python"``
+            (:class:`WholeBodyIk` on pinocchio); both give the same result to round-off.
     """
 
     gain: float = 100.0
@@ -52,6 +63,14 @@ class WalkingIkConfig:
     joint_limit_weight: float = 1.0
     joint_limit_activation: float = 0.15
     joint_limit_slope: float = 2.0
+    self_collision_weight: float = 1.0
+    self_collision_activation: float = 0.04
+    self_collision_slope: float = 10.0
+    backend: str = "compiled"
+
+    def __post_init__(self) -> None:
+        if self.backend not in BACKENDS:
+            raise ControllerError(f"unknown backend {self.backend!r}; valid: {', '.join(BACKENDS)}")
 
 
 class WalkingCommand(NamedTuple):
@@ -123,6 +142,8 @@ class WalkingController:
         self._mass = model.total_mass
         self.pattern: WalkingPattern | None = None
         self.ik: WholeBodyIk | None = None
+        self.solver: WholeBodyIk | CompiledWholeBodyIk | None = None
+        self._collision_model = None
         self.q_ref: NDArray[np.float64] | None = None
         self.time = 0.0
         self._next: PatternSample | None = None
@@ -137,6 +158,11 @@ class WalkingController:
             objectives.append(ActuatedObjective(JointLimitObjective(
                 self.soft_lower, self.soft_upper, activation_distance=c.joint_limit_activation,
                 slope=c.joint_limit_slope, weight=c.joint_limit_weight), self.model))
+        if c.self_collision_weight > 0.0:
+            if self._collision_model is None:  # the MJCF's volumes, read once
+                self._collision_model = collision_model_from_mjcf(self.model)
+            objectives.append(CollisionObjective(self._collision_model, activation_distance=c.self_collision_activation,
+                                                 slope=c.self_collision_slope, weight=c.self_collision_weight))
         return WholeBodyIk(self.model, feet_frames=self.feet_frames, torso_frame=self.torso_frame, gain=c.gain,
                            gamma=c.gamma, momentum_minimization=c.momentum_minimization, beta=c.beta,
                            objectives=tuple(objectives))
@@ -149,6 +175,7 @@ class WalkingController:
         """
         q = self.model.check_configuration(q)
         self.ik = self._make_ik(q[self._nq:].copy())
+        self.solver = CompiledWholeBodyIk(self.ik) if self.ik_config.backend == "compiled" else self.ik
         self.model.update(q)
         feet = np.array([self.model.frame_position(f) for f in self._feet])
         rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
@@ -157,7 +184,7 @@ class WalkingController:
         stand = self._standing_reference(np.array([com[0], com[1], ground + self.gait.com_height]), feet, rotations)
         q_ref = q.copy()
         for _ in range(20):
-            q_ref = self.ik.step(q_ref, stand, stand, self.dt).q
+            q_ref = self.solver.step(q_ref, stand, stand, self.dt).q
         self.q_ref = q_ref
         self._start = (feet, com[:2].copy())
         key = (round(float(speed), 6), self.ik_config.momentum_minimization)
@@ -180,7 +207,7 @@ class WalkingController:
         Iterates ``correction_iterations`` times (each plans with the previous estimate); steps 2 and 3 (the
         first full steps of each foot) give the right- and left-swing tables.
         """
-        assert self.ik is not None
+        assert self.solver is not None
         feet, com = self._start
         n = self.correction_samples
         phases = np.arange(n) / n
@@ -193,7 +220,7 @@ class WalkingController:
             times, momentum = [], []
             while t < end:
                 end_ref = self._reference(pattern.sample(t + self.dt), np.zeros(2), np.zeros(2))
-                result = self.ik.step(q, start_ref, end_ref, self.dt)
+                result = self.solver.step(q, start_ref, end_ref, self.dt)
                 q, start_ref, t = result.q, end_ref, t + self.dt
                 self.model.update(q)
                 _, centroidal = self.model.com_and_centroidal_matrix()
@@ -235,7 +262,7 @@ class WalkingController:
             q, v: measured configuration and velocity (pinocchio convention; the base from the IMU/estimator).
             forces, torques: ankle force/torque sensor readings [N, N m] (2, 3).
         """
-        if self.pattern is None or self.ik is None or self.q_ref is None:
+        if self.pattern is None or self.solver is None or self.q_ref is None:
             raise ControllerError("call WalkingController.start(q, speed) before step()")
         model = self.model
         q = model.check_configuration(q)
@@ -247,7 +274,7 @@ class WalkingController:
         self._next = end
         feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         offset_end = feedback.offset + feedback.rate * self.dt
-        result = self.ik.step(self.q_ref, self._reference(start, feedback.offset, feedback.rate),
+        result = self.solver.step(self.q_ref, self._reference(start, feedback.offset, feedback.rate),
                               self._reference(end, offset_end, feedback.rate), self.dt)
         self.q_ref = result.q
         self.time += self.dt

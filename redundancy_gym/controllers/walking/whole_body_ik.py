@@ -68,6 +68,8 @@ class WholeBodyIkResult(NamedTuple):
         lz: vertical angular momentum about the CoM of ``qdot`` [kg m^2/s].
         sigma_min: smallest pivot of the Cholesky factor of ``J W^-1 J^T`` (falls to 0 at a task singularity).
         success: False when the step met a singular task (then ``q`` is the start configuration).
+        limited: True when the velocity or the correction was scaled down to ``max_velocity`` (an unreachable
+            or near-singular reference; tracking is then not exact).
     """
 
     q: NDArray[np.float64]
@@ -76,6 +78,7 @@ class WholeBodyIkResult(NamedTuple):
     lz: float
     sigma_min: float
     success: bool
+    limited: bool = False
 
 
 class WholeBodyIk:
@@ -93,16 +96,19 @@ class WholeBodyIk:
         objectives: nullspace objectives on the full configuration (their gradient has length nv).
         damping: Tikhonov damping added to ``J W^-1 J^T`` [-] (keeps the solve finite near singularities).
         singular_threshold: Cholesky pivot below which :attr:`WholeBodyIkResult.success` is False.
+        max_velocity: largest joint (or base) speed [rad/s or m/s] of a step; a larger solution is scaled down
+            as a whole (direction kept), and the Newton correction to ``max_velocity * dt``. Near a singularity
+            the weighted pseudoinverse grows without bound; this keeps the targets sent to the servos sane.
     """
 
     def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  torso_frame: str = "imu", gain: float = 100.0, gamma: float = 0.008,
                  momentum_minimization: bool = True, beta: float = 1.0, nullspace_gain: float = 1.0,
                  objectives: tuple[Objective, ...] = (), damping: float = 1e-10,
-                 singular_threshold: float = 1e-6) -> None:
+                 singular_threshold: float = 1e-6, max_velocity: float = 25.0) -> None:
         if not model.floating_base:
             raise ControllerError(f"the whole-body IK needs a floating-base model, {model.source} has a fixed base")
-        for name, value in (("gain", gain), ("gamma", gamma), ("beta", beta)):
+        for name, value in (("gain", gain), ("gamma", gamma), ("beta", beta), ("max_velocity", max_velocity)):
             if not np.isfinite(value) or value <= 0.0:
                 raise ControllerError(f"{name} must be finite and > 0, got {value!r}")
         for name, value in (("nullspace_gain", nullspace_gain), ("damping", damping),
@@ -110,6 +116,7 @@ class WholeBodyIk:
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         self.model = model
+        self.feet_frames, self.torso_frame = tuple(feet_frames), torso_frame
         self._feet = tuple(model.frame_id(f) for f in feet_frames)
         self._torso = model.frame_id(torso_frame)
         self.gain = float(gain)
@@ -120,6 +127,7 @@ class WholeBodyIk:
         self.objectives = tuple(objectives)
         self.damping = float(damping)
         self.singular_threshold = float(singular_threshold)
+        self.max_velocity = float(max_velocity)
         self._mass = model.total_mass
         self._jacobian = np.zeros((_M, model.nv))
 
@@ -184,6 +192,10 @@ class WholeBodyIk:
         qdot, sigma_min, ok = self.solve(jac, rhs, j_lz, self.objective_gradient(q))
         if not ok or not np.all(np.isfinite(qdot)):
             return WholeBodyIkResult(q, np.zeros(self.model.nv), float(np.max(np.abs(err))), 0.0, sigma_min, False)
+        peak = float(np.max(np.abs(qdot)))
+        limited = peak > self.max_velocity
+        if limited:
+            qdot = qdot * (self.max_velocity / peak)
         lz = float(j_lz @ qdot)
         q_next = self.model.integrate(q, qdot, dt)
         # Newton correction on the end-of-period error (no nullspace motion: it only removes the
@@ -191,5 +203,9 @@ class WholeBodyIk:
         jac, err, j_lz = self.build(q_next, end)
         correction, _, ok = self.solve(jac, err, j_lz, None)
         if ok and np.all(np.isfinite(correction)):
+            peak = float(np.max(np.abs(correction)))
+            if peak > self.max_velocity * dt:
+                correction = correction * (self.max_velocity * dt / peak)
+                limited = True
             q_next = self.model.integrate(q_next, correction, 1.0)
-        return WholeBodyIkResult(q_next, qdot, float(np.max(np.abs(err))), lz, sigma_min, True)
+        return WholeBodyIkResult(q_next, qdot, float(np.max(np.abs(err))), lz, sigma_min, True, limited)

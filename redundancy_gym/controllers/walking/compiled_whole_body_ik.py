@@ -1,0 +1,177 @@
+"""A :class:`WholeBodyIk` compiled into one fused kernel call per control period (same results, a fraction of
+the time)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...model import ModelError
+from ..actuated_objective import ActuatedObjective
+from ..collision_kernels import bounding_spheres, collision_fields
+from ..collision_objective import CollisionObjective
+from ..exceptions import ControllerError
+from ..joint_limit_objective import JointLimitObjective
+from ..kernel_buffers import pack_fields
+from ..posture_objective import PostureObjective
+from .whole_body_ik import WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .whole_body_kernels import (
+    BAD_INPUT,
+    DIMS,
+    FLOAT_FIELDS,
+    INT_FIELDS,
+    OUTPUT_EXTRA,
+    REFERENCE_LAYOUT,
+    REFERENCE_SIZE,
+    SCALARS,
+    SCRATCH_SIZE,
+    whole_body_step,
+)
+
+__all__ = ["CompiledWholeBodyIk"]
+
+_EMPTY_COLLISION_FLOATS = ("segment_rotation", "segment_translation", "segment_center", "segment_radius",
+                           "segment_world_center", "local", "vertices", "radii", "collision_parameters")
+_EMPTY_COLLISION_INTS = ("segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a",
+                         "volume_b")
+
+
+class CompiledWholeBodyIk:
+    """The step of a :class:`WholeBodyIk` as one compiled kernel (:mod:`.whole_body_kernels`).
+
+    It gives the :meth:`WholeBodyIk.step` result to round-off (a test holds it to that) for nullspace
+    objectives that are :class:`ActuatedObjective` of a :class:`JointLimitObjective` or
+    :class:`PostureObjective`, plus at most one self-collision :class:`CollisionObjective` (robot segments
+    only). The model's kinematics come from :meth:`~redundancy_gym.model.RobotModel.serial_chain` (a free
+    flyer and 1-DoF joints).
+
+    Args:
+        ik: the whole-body IK to compile.
+
+    Raises:
+        ControllerError: for an objective the kernel does not cover (the message lists what it covers).
+    """
+
+    def __init__(self, ik: WholeBodyIk) -> None:
+        if not isinstance(ik, WholeBodyIk):
+            raise ControllerError(f"CompiledWholeBodyIk compiles a WholeBodyIk, got {type(ik).__name__}")
+        model = ik.model
+        chain = model.serial_chain()
+        nj, nq, nv = chain.num_joints, model.nq, model.nv
+        base_nq, base_nv = model.base_dofs
+        na = nv - base_nv
+        limits, postures, collisions = [], [], []
+        for objective in ik.objectives:
+            inner = objective.objective if isinstance(objective, ActuatedObjective) else None
+            if isinstance(inner, JointLimitObjective) and inner.lower.shape == (na,):
+                limits.append(inner)
+            elif isinstance(inner, PostureObjective) and inner.reference.shape == (na,):
+                postures.append(inner)
+            elif isinstance(objective, CollisionObjective) and not objective.collision_model.environment:
+                collisions.append(objective)
+            else:
+                raise ControllerError(
+                    "CompiledWholeBodyIk supports ActuatedObjective(JointLimitObjective or PostureObjective over the "
+                    f"{na} actuated joints) and one CollisionObjective without environment segments; got "
+                    f"{type(objective).__name__}")
+        if len(collisions) > 1:
+            raise ControllerError("CompiledWholeBodyIk supports at most one CollisionObjective")
+        self.ik = ik
+        self.model = model
+        self._nq, self._nv = nq, nv
+        frames = [model.frame_attachment(f) for f in (*ik.feet_frames, ik.torso_frame)]
+        floats: dict[str, NDArray[np.float64]] = {
+            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
+            "axis": chain.axis, "body_mass": chain.body_mass, "body_com": chain.body_com,
+            "body_inertia": chain.body_inertia, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)), "composite": np.zeros((nj, 13)),
+            "frame_rotation": np.array([r for _, r, _ in frames]),
+            "frame_translation": np.array([p for _, _, p in frames]),
+            "limit_lower": np.array([o.lower for o in limits]), "limit_upper": np.array([o.upper for o in limits]),
+            "limit_parameters": np.array([(o.potential.activation_distance, o.potential.slope,
+                                           o.potential.switch_ratio, o.weight) for o in limits]),
+            "posture_reference": np.array([o.reference for o in postures]),
+            "posture_weights": np.array([o.weights for o in postures]),
+            "scalars": np.zeros(len(SCALARS)), "inputs": np.zeros(nq + 2 * REFERENCE_SIZE),
+            "outputs": np.zeros(nq + nv + OUTPUT_EXTRA), "jacobian": np.zeros((18, nv)),
+            "jacobian6": np.zeros((6, nv)), "jacobian_com": np.zeros((3, nv)), "jacobian_angular": np.zeros((3, nv)),
+            "error": np.zeros(18), "rhs": np.zeros(18), "gradient": np.zeros(nv), "scratch": np.zeros(SCRATCH_SIZE),
+        }
+        ints: dict[str, NDArray[np.int64]] = {
+            "parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index,
+            "v_index": chain.v_index, "frame_joint": np.array([j for j, _, _ in frames], dtype=np.int64),
+        }
+        self.collision: CollisionObjective | None = collisions[0] if collisions else None
+        if self.collision is None:
+            floats.update({name: np.zeros(0) for name in _EMPTY_COLLISION_FLOATS})
+            ints.update({name: np.zeros(0, dtype=np.int64) for name in _EMPTY_COLLISION_INTS})
+            counts = {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
+        else:
+            fields = collision_fields(self.collision, model)
+            if fields.world_fixed:
+                raise ControllerError("CompiledWholeBodyIk needs every collision segment on a moving joint")
+            layout = fields.layout
+            centers, bounds = bounding_spheres(layout.local, layout.kinds, layout.radii, layout.segment_starts)
+            fields.floats["segment_center"] = centers
+            fields.floats["segment_radius"] = bounds
+            floats.update(fields.floats)
+            ints.update(fields.ints)
+            counts = fields.counts
+        dims = {"joints": nj, "nq": nq, "nv": nv, "base_nq": base_nq, "base_nv": base_nv,
+                "limit_objectives": len(limits), "posture_objectives": len(postures), **counts,
+                "collision": int(self.collision is not None),
+                "momentum_minimization": int(ik.momentum_minimization)}
+        ints["dims"] = np.array([dims[name] for name in DIMS], dtype=np.int64)
+        self._f, self._i = pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
+        self._inputs = self._field("inputs")
+        self._outputs = self._field("outputs")
+        self._scalars = self._field("scalars")
+        self._scalars[:] = [ik.gain, ik.gamma, ik.beta, ik.nullspace_gain, ik.damping, ik.singular_threshold,
+                            ik.max_velocity, 0.0]
+        if not whole_body_step.signatures:  # compile (or load from numba's cache) once per process
+            whole_body_step.compile("int64(float64[::1], int64[::1])")
+        # the compiled entry point skips the dispatcher's type matching on every call
+        self._kernel = whole_body_step.overloads[whole_body_step.signatures[0]].entry_point
+
+    def _field(self, name: str) -> NDArray[np.float64]:
+        """The view of one float field of the kernel buffer (writes reach the kernel)."""
+        k = FLOAT_FIELDS.index(name)
+        offset, size = int(self._i[2 * k]), int(self._i[2 * k + 1])
+        return self._f[offset:offset + size]
+
+    @staticmethod
+    def pack_reference(reference: WholeBodyReference, out: NDArray[np.float64]) -> None:
+        """Write ``reference`` into ``out`` (:data:`~.whole_body_kernels.REFERENCE_SIZE`) in the kernel's layout."""
+        for name, rows in REFERENCE_LAYOUT.items():
+            out[rows] = np.ravel(getattr(reference, name))
+
+    def step(self, q: ArrayLike, start: WholeBodyReference, end: WholeBodyReference, dt: float) -> WholeBodyIkResult:
+        """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call."""
+        if not np.isfinite(dt) or dt <= 0.0:
+            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        nq, nv = self._nq, self._nv
+        q = np.asarray(q, dtype=np.float64)
+        if q.shape != (nq,):
+            raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
+        inputs = self._inputs
+        inputs[:nq] = q
+        try:
+            self.pack_reference(start, inputs[nq:nq + REFERENCE_SIZE])
+            self.pack_reference(end, inputs[nq + REFERENCE_SIZE:])
+        except ValueError as exc:
+            raise ControllerError(f"a reference has the wrong shape: {exc}") from exc
+        self._scalars[-1] = dt
+        if self._kernel(self._f, self._i) == BAD_INPUT:
+            if not np.all(np.isfinite(q)):
+                raise ModelError("configuration contains non-finite values")
+            raise ControllerError("the references must be finite")
+        out = self._outputs
+        error, lz, sigma, success, _, _, limited = out[nq + nv:].tolist()
+        return WholeBodyIkResult(out[:nq].copy(), out[nq:nq + nv].copy(), error, lz, sigma, bool(success),
+                                 bool(limited))
+
+    @property
+    def last_min_distance(self) -> float:
+        """Smallest self-collision distance [m] the last step computed exactly (pairs whose segments' bounding
+        spheres came within the activation distance); +inf when there were none or no collision objective."""
+        return float(self._outputs[self._nq + self._nv + 4])

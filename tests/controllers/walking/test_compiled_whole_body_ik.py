@@ -1,0 +1,177 @@
+"""CompiledWholeBodyIk against WholeBodyIk (round-off), self-collision avoidance in the nullspace, hard cases."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from redundancy_gym.assets import BIPED_JOINTS, BIPED_SOFT_LIMIT_MARGIN, BIPED_XML
+from redundancy_gym.controllers import CollisionObjective, ControllerError, PostureObjective
+from redundancy_gym.controllers.walking import (
+    CompiledWholeBodyIk,
+    WalkingController,
+    WalkingIkConfig,
+    WholeBodyIk,
+    WholeBodyReference,
+)
+from redundancy_gym.controllers.walking.ik_kernels import rotation_error
+from redundancy_gym.envs.biped_walk import NOMINAL_POSTURE
+from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
+
+
+@pytest.fixture(scope="module")
+def model() -> RobotModel:
+    return RobotModel.from_mjcf(BIPED_XML)
+
+
+def _standing(model: RobotModel, **joints: float) -> np.ndarray:
+    posture = {**NOMINAL_POSTURE, **joints}
+    q = np.zeros(model.nq)
+    q[6] = 1.0  # identity quaternion (x, y, z, w)
+    q[7:] = [posture.get(j, 0.0) for j in BIPED_JOINTS]
+    model.update(q)
+    q[2] = -min(model.frame_position(f)[2] for f in ("r_sole", "l_sole"))
+    return q
+
+
+def _controller(model: RobotModel, **ik: object) -> WalkingController:
+    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
+    return WalkingController(model, 0.004, lower + BIPED_SOFT_LIMIT_MARGIN, upper - BIPED_SOFT_LIMIT_MARGIN,
+                             ik=WalkingIkConfig(**ik), correction_iterations=1)
+
+
+def _hold(model: RobotModel, q: np.ndarray, com_lift: float = 0.0) -> WholeBodyReference:
+    """Keep the soles and the torso where they are at ``q`` and the CoM ``com_lift`` [m] higher."""
+    model.update(q)
+    feet = np.array([model.frame_position(f) for f in ("r_sole", "l_sole")])
+    rotations = np.array([model.frame_rotation(f) for f in ("r_sole", "l_sole")])
+    return WholeBodyReference(model.com() + [0.0, 0.0, com_lift], np.zeros(3), feet, rotations, np.zeros((2, 6)),
+                              model.frame_rotation("imu"), np.zeros(3))
+
+
+@pytest.mark.parametrize("momentum", [True, False], ids=("W_5_62", "W_identity"))
+def test_compiled_step_equals_python_step_while_walking(model: RobotModel, momentum: bool) -> None:
+    controller = _controller(model, momentum_minimization=momentum, backend="python")
+    controller.start(_standing(model), 0.7)
+    ik, pattern = controller.ik, controller.pattern
+    assert any(isinstance(o, CollisionObjective) for o in ik.objectives)
+    compiled = CompiledWholeBodyIk(ik)
+    q = controller.q_ref
+    start = controller._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
+    near = False
+    for k in range(int(round(pattern.step_start(2) / controller.dt))):
+        end = controller._reference(pattern.sample((k + 1) * controller.dt), np.zeros(2), np.zeros(2))
+        expected, result = ik.step(q, start, end, controller.dt), compiled.step(q, start, end, controller.dt)
+        np.testing.assert_allclose(result.q, expected.q, rtol=0.0, atol=1e-12)
+        np.testing.assert_allclose(result.qdot, expected.qdot, rtol=1e-9, atol=1e-10)
+        assert result.task_error == pytest.approx(expected.task_error, rel=1e-6, abs=1e-12)
+        assert result.lz == pytest.approx(expected.lz, rel=1e-9, abs=1e-12)
+        assert result.sigma_min == pytest.approx(expected.sigma_min, rel=1e-9)
+        assert result.success == expected.success and result.limited == expected.limited
+        near = near or compiled.last_min_distance < controller.ik_config.self_collision_activation
+        q, start = expected.q, end
+    assert near  # the self-collision term was active, so its gradient was compared too
+
+
+def test_self_collision_gradient_matches_finite_differences_on_the_floating_base(model: RobotModel) -> None:
+    objective = CollisionObjective(collision_model_from_mjcf(model), activation_distance=0.05, slope=10.0)
+    rng = np.random.default_rng(5)
+    q = _standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
+    q[3:7] = rng.normal(size=4)
+    q[3:7] /= np.linalg.norm(q[3:7])
+    model.update(q)
+    value, gradient = objective.evaluate(model, q)
+    assert value > 0.0
+    assert np.allclose(gradient[:6], 0.0, atol=1e-12)  # a rigid motion of the whole robot changes no distance
+    eps = 1e-6
+    for k in range(model.nv):
+        dv = np.zeros(model.nv)
+        dv[k] = eps
+        ends = []
+        for sign in (1.0, -1.0):
+            qk = model.integrate(q, sign * dv, 1.0)
+            model.update(qk)
+            ends.append(objective.evaluate(model, qk).value)
+        assert (ends[0] - ends[1]) / (2 * eps) == pytest.approx(gradient[k], abs=1e-6)
+
+
+def test_self_collision_avoidance_opens_the_closest_pair_in_the_nullspace(model: RobotModel) -> None:
+    """Arms pressed against the torso (13 mm): with only the self-collision objective in the nullspace the
+    clearance grows towards ``d_a`` while every task holds; without it the arms stay where they are."""
+    q0 = _standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
+    reference = _hold(model, q0)
+    collision_model = collision_model_from_mjcf(model)
+    clearance = {}
+    for weight in (0.0, 1.0):
+        objectives = (CollisionObjective(collision_model, activation_distance=0.04, slope=10.0, weight=weight),)
+        ik = WholeBodyIk(model, objectives=objectives, beta=10.0)
+        compiled = CompiledWholeBodyIk(ik)
+        q = q0.copy()
+        for _ in range(500):
+            result = compiled.step(q, reference, reference, 0.004)
+            assert result.success
+            q = result.q
+            _, error, _ = ik.build(q, reference)  # after the Newton correction
+            assert np.max(np.abs(error)) < 1e-8
+        clearance[weight] = float(np.min(collision_model.evaluate(model).distance))
+    model.update(q0)
+    before = float(np.min(collision_model.evaluate(model).distance))
+    assert before < 0.015
+    assert clearance[0.0] == pytest.approx(before, abs=1e-6)
+    assert clearance[1.0] > before + 0.01
+
+
+def test_unreachable_com_on_stretched_legs_stays_bounded(model: RobotModel) -> None:
+    """Hard case: knees straight and the CoM 5 cm above reach. The weighted pseudoinverse would ask for about
+    14000 rad/s; both backends bound the step to ``max_velocity`` and agree."""
+    q = _standing(model, r_hip_pitch=0.0, r_knee=0.0, r_ankle_pitch=0.0, l_hip_pitch=0.0, l_knee=0.0,
+                  l_ankle_pitch=0.0)
+    reference = _hold(model, q, com_lift=0.05)
+    ik = WholeBodyIk(model)
+    for solver in (ik, CompiledWholeBodyIk(ik)):
+        result = solver.step(q, reference, reference, 0.004)
+        assert result.success and result.limited
+        assert np.all(np.isfinite(result.q))
+        assert np.max(np.abs(result.qdot)) == pytest.approx(ik.max_velocity)
+        assert np.max(np.abs(model.difference(q, result.q))) <= 2.0 * ik.max_velocity * 0.004 + 1e-12
+    np.testing.assert_allclose(CompiledWholeBodyIk(ik).step(q, reference, reference, 0.004).q,
+                               ik.step(q, reference, reference, 0.004).q, atol=1e-10)
+
+
+def test_compiled_ik_rejects_what_it_cannot_compile_and_bad_inputs(model: RobotModel) -> None:
+    with pytest.raises(ControllerError, match="ActuatedObjective"):
+        CompiledWholeBodyIk(WholeBodyIk(model, objectives=(PostureObjective(np.zeros(model.nq)),)))
+    with pytest.raises(ControllerError, match="WholeBodyIk"):
+        CompiledWholeBodyIk(object())  # type: ignore[arg-type]
+    with pytest.raises(ControllerError, match="backend"):
+        WalkingIkConfig(backend="fortran")
+    compiled = CompiledWholeBodyIk(WholeBodyIk(model))
+    q = _standing(model)
+    reference = _hold(model, q)
+    with pytest.raises(ModelError, match="non-finite"):
+        compiled.step(np.full(model.nq, np.nan), reference, reference, 0.004)
+    with pytest.raises(ModelError, match="shape"):
+        compiled.step(q[:-1], reference, reference, 0.004)
+    bad = dataclasses.replace(reference, com=np.array([np.nan, 0.0, 0.0]))
+    with pytest.raises(ControllerError, match="finite"):
+        compiled.step(q, reference, bad, 0.004)
+    with pytest.raises(ControllerError, match="dt"):
+        compiled.step(q, reference, reference, 0.0)
+
+
+def test_rotation_error_is_log3(model: RobotModel) -> None:
+    rng = np.random.default_rng(2)
+    for angle in (0.0, 1e-8, 0.3, 2.0, np.pi - 1e-8, np.pi):
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        desired = pin.exp3(rng.normal(size=3))
+        actual = pin.exp3(-angle * axis) @ desired  # R_d R^T = exp(angle axis)
+        error = rotation_error(desired, actual)
+        expected = angle * axis
+        if angle > np.pi - 1e-6:  # +-axis are the same half turn
+            assert min(np.linalg.norm(error - expected), np.linalg.norm(error + expected)) < 1e-6
+        else:
+            np.testing.assert_allclose(error, expected, atol=1e-9)
