@@ -8,13 +8,15 @@ from .quintic import PiecewiseQuintic, Quintic
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
-from .whole_body_ik import TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .whole_body_ik import REFERENCE_LAYOUT, REFERENCE_SIZE, TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 __all__ = [
     "BACKENDS",
     "CompiledWholeBodyIk",
     "GRAVITY",
+    "REFERENCE_LAYOUT",
+    "REFERENCE_SIZE",
     "TASK_ROWS",
     "ComState",
     "DcmPlan",

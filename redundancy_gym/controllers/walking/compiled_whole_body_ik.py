@@ -14,14 +14,13 @@ from ..exceptions import ControllerError
 from ..joint_limit_objective import JointLimitObjective
 from ..kernel_buffers import pack_fields
 from ..posture_objective import PostureObjective
-from .whole_body_ik import WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .whole_body_ik import Reference, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .whole_body_kernels import (
     BAD_INPUT,
     DIMS,
     FLOAT_FIELDS,
     INT_FIELDS,
     OUTPUT_EXTRA,
-    REFERENCE_LAYOUT,
     REFERENCE_SIZE,
     SCALARS,
     SCRATCH_SIZE,
@@ -139,14 +138,9 @@ class CompiledWholeBodyIk:
         offset, size = int(self._i[2 * k]), int(self._i[2 * k + 1])
         return self._f[offset:offset + size]
 
-    @staticmethod
-    def pack_reference(reference: WholeBodyReference, out: NDArray[np.float64]) -> None:
-        """Write ``reference`` into ``out`` (:data:`~.whole_body_kernels.REFERENCE_SIZE`) in the kernel's layout."""
-        for name, rows in REFERENCE_LAYOUT.items():
-            out[rows] = np.ravel(getattr(reference, name))
-
-    def step(self, q: ArrayLike, start: WholeBodyReference, end: WholeBodyReference, dt: float) -> WholeBodyIkResult:
-        """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call."""
+    def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
+        """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call; the references
+        may be given packed (:meth:`WholeBodyReference.to_array`), which saves their conversion."""
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         nq, nv = self._nq, self._nv
@@ -155,11 +149,11 @@ class CompiledWholeBodyIk:
             raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
         inputs = self._inputs
         inputs[:nq] = q
-        try:
-            self.pack_reference(start, inputs[nq:nq + REFERENCE_SIZE])
-            self.pack_reference(end, inputs[nq + REFERENCE_SIZE:])
-        except ValueError as exc:
-            raise ControllerError(f"a reference has the wrong shape: {exc}") from exc
+        for k, reference in enumerate((start, end)):
+            packed = reference.to_array() if isinstance(reference, WholeBodyReference) else reference
+            if np.shape(packed) != (REFERENCE_SIZE,):
+                raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {np.shape(packed)}")
+            inputs[nq + k * REFERENCE_SIZE:nq + (k + 1) * REFERENCE_SIZE] = packed
         self._scalars[-1] = dt
         if self._kernel(self._f, self._i) == BAD_INPUT:
             if not np.all(np.isfinite(q)):

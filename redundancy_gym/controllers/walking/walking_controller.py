@@ -9,6 +9,7 @@ angles are the position targets sent to the servos, as on Lola.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -25,7 +26,7 @@ from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
-from .whole_body_ik import WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 __all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
@@ -216,10 +217,10 @@ class WalkingController:
             pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
             end = pattern.step_start(4)
             q, t = q_start.copy(), 0.0
-            start_ref = self._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
+            start_ref = self._reference_array(pattern.sample(0.0), np.zeros(2), np.zeros(2))
             times, momentum = [], []
             while t < end:
-                end_ref = self._reference(pattern.sample(t + self.dt), np.zeros(2), np.zeros(2))
+                end_ref = self._reference_array(pattern.sample(t + self.dt), np.zeros(2), np.zeros(2))
                 result = self.solver.step(q, start_ref, end_ref, self.dt)
                 q, start_ref, t = result.q, end_ref, t + self.dt
                 self.model.update(q)
@@ -240,20 +241,28 @@ class WalkingController:
         return correction
 
     # ------------------------------------------------------------------ step
+    @staticmethod
+    def _reference_array(sample: PatternSample, offset: NDArray[np.float64],
+                         rate: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The IK reference of a pattern sample, packed (:meth:`WholeBodyReference.to_array`): the CoM moved by the
+        stabilizer's ``offset`` [m] at ``rate`` [m/s], soles pitched about y, torso upright."""
+        a = np.zeros(REFERENCE_SIZE)
+        com, velocity = sample.com, sample.com_velocity
+        a[0:3] = com[0] + offset[0], com[1] + offset[1], com[2]
+        a[3:6] = velocity[0] + rate[0], velocity[1] + rate[1], velocity[2]
+        a[6:12] = sample.feet.ravel()
+        for i in range(2):
+            pitch = float(sample.feet_pitch[i])
+            c, s = math.cos(pitch), math.sin(pitch)
+            a[12 + 9 * i:21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
+            a[30 + 6 * i:33 + 6 * i] = sample.feet_velocity[i]
+            a[34 + 6 * i] = sample.feet_pitch_rate[i]
+        a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+        return a
+
     def _reference(self, sample: PatternSample, offset: NDArray[np.float64],
                    rate: NDArray[np.float64]) -> WholeBodyReference:
-        rotations = np.empty((2, 3, 3))
-        velocity = np.zeros((2, 6))
-        for i in range(2):
-            c, s = np.cos(sample.feet_pitch[i]), np.sin(sample.feet_pitch[i])
-            rotations[i] = ((c, 0.0, s), (0.0, 1.0, 0.0), (-s, 0.0, c))
-            velocity[i, :3] = sample.feet_velocity[i]
-            velocity[i, 4] = sample.feet_pitch_rate[i]
-        com = sample.com.copy()
-        com[:2] += offset
-        com_velocity = sample.com_velocity.copy()
-        com_velocity[:2] += rate
-        return WholeBodyReference(com, com_velocity, sample.feet, rotations, velocity, np.eye(3), np.zeros(3))
+        return WholeBodyReference.from_array(self._reference_array(sample, offset, rate))
 
     def step(self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike) -> WalkingCommand:
         """One control period from the measured state and the ankle wrenches (sensor frames, rows right/left).
@@ -274,8 +283,8 @@ class WalkingController:
         self._next = end
         feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         offset_end = feedback.offset + feedback.rate * self.dt
-        result = self.solver.step(self.q_ref, self._reference(start, feedback.offset, feedback.rate),
-                              self._reference(end, offset_end, feedback.rate), self.dt)
+        result = self.solver.step(self.q_ref, self._reference_array(start, feedback.offset, feedback.rate),
+                                  self._reference_array(end, offset_end, feedback.rate), self.dt)
         self.q_ref = result.q
         self.time += self.dt
         return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result)

@@ -28,8 +28,9 @@ from ...model import RobotModel
 from ..exceptions import ControllerError
 from ..objective import Objective
 from .ik_kernels import rotation_error, weighted_solve
+from .whole_body_kernels import REFERENCE_LAYOUT, REFERENCE_SIZE
 
-__all__ = ["TASK_ROWS", "WholeBodyIk", "WholeBodyIkResult", "WholeBodyReference"]
+__all__ = ["REFERENCE_LAYOUT", "REFERENCE_SIZE", "TASK_ROWS", "WholeBodyIk", "WholeBodyIkResult", "WholeBodyReference"]
 
 TASK_ROWS: dict[str, slice] = {"com": slice(0, 3), "right_foot": slice(3, 9), "left_foot": slice(9, 15),
                                "torso": slice(15, 18)}
@@ -55,6 +56,30 @@ class WholeBodyReference:
     feet_velocity: NDArray[np.float64]
     torso_rotation: NDArray[np.float64]
     torso_angular_velocity: NDArray[np.float64]
+
+    def to_array(self) -> NDArray[np.float64]:
+        """The fields flattened into one array of :data:`REFERENCE_SIZE` in the :data:`REFERENCE_LAYOUT` order."""
+        out = np.empty(REFERENCE_SIZE)
+        try:
+            for name, rows in REFERENCE_LAYOUT.items():
+                out[rows] = np.ravel(getattr(self, name))
+        except ValueError as exc:
+            raise ControllerError(f"a reference field has the wrong shape: {exc}") from exc
+        return out
+
+    @classmethod
+    def from_array(cls, packed: ArrayLike) -> WholeBodyReference:
+        """The reference of a :meth:`to_array` array."""
+        a = np.asarray(packed, dtype=np.float64)
+        if a.shape != (REFERENCE_SIZE,):
+            raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {a.shape}")
+        shapes = {"feet_position": (2, 3), "feet_rotation": (2, 3, 3), "feet_velocity": (2, 6),
+                  "torso_rotation": (3, 3)}
+        return cls(**{name: a[rows].reshape(shapes.get(name, (3,))) for name, rows in REFERENCE_LAYOUT.items()})
+
+
+Reference = WholeBodyReference | NDArray[np.float64]
+"""A reference or its :meth:`WholeBodyReference.to_array` array (the fast path of the compiled IK)."""
 
 
 class WholeBodyIkResult(NamedTuple):
@@ -182,10 +207,14 @@ class WholeBodyIk:
         return gradient
 
     # ------------------------------------------------------------------ step
-    def step(self, q: ArrayLike, start: WholeBodyReference, end: WholeBodyReference, dt: float) -> WholeBodyIkResult:
+    def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
         """Move the kinematic model over one control period ``dt`` [s] from the reference ``start`` to ``end``."""
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        if not isinstance(start, WholeBodyReference):
+            start = WholeBodyReference.from_array(start)
+        if not isinstance(end, WholeBodyReference):
+            end = WholeBodyReference.from_array(end)
         q = self.model.check_configuration(q)
         jac, err, j_lz = self.build(q, start)
         rhs = self.reference_velocity(start) + self.gain * err

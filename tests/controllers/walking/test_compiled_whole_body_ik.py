@@ -175,3 +175,24 @@ def test_rotation_error_is_log3(model: RobotModel) -> None:
             assert min(np.linalg.norm(error - expected), np.linalg.norm(error + expected)) < 1e-6
         else:
             np.testing.assert_allclose(error, expected, atol=1e-9)
+
+
+def test_packed_reference_round_trip_and_controller_packing(model: RobotModel) -> None:
+    controller = _controller(model)
+    controller.start(_standing(model), 0.7)
+    sample = controller.pattern.sample(1.234)  # mid-swing: a pitched foot with a pitch rate
+    offset, rate = np.array([0.01, -0.02]), np.array([0.1, 0.2])
+    packed = controller._reference_array(sample, offset, rate)
+    reference = WholeBodyReference.from_array(packed)
+    np.testing.assert_array_equal(reference.to_array(), packed)
+    np.testing.assert_allclose(reference.com[:2], sample.com[:2] + offset)
+    np.testing.assert_allclose(reference.com_velocity[:2], sample.com_velocity[:2] + rate)
+    np.testing.assert_array_equal(reference.feet_position, sample.feet)
+    for i in range(2):
+        np.testing.assert_allclose(reference.feet_rotation[i], pin.utils.rpyToMatrix(0.0, sample.feet_pitch[i], 0.0),
+                                   atol=1e-15)
+        np.testing.assert_array_equal(reference.feet_velocity[i], [*sample.feet_velocity[i], 0.0,
+                                                                   sample.feet_pitch_rate[i], 0.0])
+    assert np.any(sample.feet_pitch != 0.0)
+    with pytest.raises(ControllerError, match="shape"):
+        WholeBodyReference.from_array(np.zeros(5))
