@@ -58,9 +58,10 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--seed", type=int, default=0)
     re.add_argument("--env-kwargs", type=_json_object, default={})
     be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
-                         "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra)")
+                         "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
+                         "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's")
     be.add_argument("--json", dest="json_path", help="default: results/bench_<name>.json")
     be.add_argument("--seed", type=int, default=0)
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
@@ -120,6 +121,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                 report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
                 print(format_ik_bench(report))
                 print(f"wrote {write_ik_bench(report, json_path)}")
+            elif args.name == "walk":
+                from .eval.bench_ssv import write_ssv_bench as write_walk_bench
+                from .eval.bench_walk import format_walk_bench, run_walk_bench
+
+                kwargs = {"duration": 1.0, "repeats": 1} if args.quick else {}
+                report = run_walk_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
+                print(format_walk_bench(report))
+                print(f"wrote {write_walk_bench(report, json_path)}")
             else:
                 from .eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
 

@@ -113,7 +113,8 @@ def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
 
 
 def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
-    """Every PlanarReach reference variant and the trivial policies, obstacle off: time against error."""
+    """Time against error: every PlanarReach reference variant and the trivial policies (obstacle off), and the
+    walking reference's variants on BipedWalk."""
     candidates = {
         "clik (dls)": ("clik", {"method": "dls"}),
         "clik (pseudoinverse)": ("clik", {"method": "pseudoinverse"}),
@@ -127,7 +128,18 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
         reports[label] = evaluate(_PLANAR, policy, episodes=episodes, seed=seed, env_kwargs={"obstacle": False},
                                   policy_kwargs=kwargs, progress=progress).to_json()
     title = f"PlanarReach-v0 without obstacle, {episodes} episodes from seed {seed}"
+    walking = {
+        "walking (compiled IK)": {},
+        "walking (pinocchio IK, backend python)": {"backend": "python"},
+        "walking, W = I (no L_z minimization)": {"momentum_minimization": False},
+        "walking, no self-collision objective": {"self_collision_weight": 0.0},
+    }
+    biped = {label: evaluate(_BIPED, "walking", episodes=2, seed=seed, env_kwargs={"target_speed": 0.7},
+                             policy_kwargs=kwargs, progress=progress).to_json() for label, kwargs in walking.items()}
+    biped_title = f"BipedWalk-v0 at 0.7 m/s, 2 episodes from seed {seed} (task error: forward speed error)"
     markdown = out / "speed_vs_error.md"
-    markdown.write_text("# Speed vs error\n\n" + speed_error_markdown(reports, title))
-    print("\n" + speed_error_markdown(reports, title))
-    return [markdown, plot_speed_error(reports, out / "speed_vs_error.png", "PlanarReach-v0: time vs error")]
+    text = speed_error_markdown(reports, title) + "\n" + speed_error_markdown(biped, biped_title, "m/s")
+    markdown.write_text("# Speed vs error\n\n" + text)
+    print("\n" + text)
+    return [markdown, plot_speed_error(reports, out / "speed_vs_error.png", "PlanarReach-v0: time vs error"),
+            plot_speed_error(biped, out / "speed_vs_error_biped.png", "BipedWalk-v0: time vs speed error", "m/s")]

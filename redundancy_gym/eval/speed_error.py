@@ -16,10 +16,10 @@ from .plots import save_figure  # noqa: E402
 __all__ = ["plot_speed_error", "speed_error_markdown"]
 
 
-def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str) -> str:
-    """A markdown table of evaluation-contract objects, one row per labelled policy."""
+def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str, unit: str = "m") -> str:
+    """A markdown table of evaluation-contract objects, one row per labelled policy (task errors in ``unit``)."""
     lines = [f"## {title}", "",
-             "| policy | success | collision | task error rms [m] | task error max [m] | pseudoenergy | "
+             f"| policy | success | collision | task error rms [{unit}] | task error max [{unit}] | pseudoenergy | "
              "step median [us] | step p99 [us] |",
              "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for label, r in reports.items():
@@ -29,8 +29,8 @@ def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str) -> s
     return "\n".join(lines) + "\n"
 
 
-def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str) -> Path:
-    """Scatter of median step time [us] against max task error [m] (log-log), one point per policy."""
+def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str, unit: str = "m") -> Path:
+    """Scatter of median step time [us] against max task error [``unit``] (log-log), one point per policy."""
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for label, r in reports.items():
         x, y = r["step_time_us"]["median"], max(r["task_error_max"], 1e-9)
@@ -38,7 +38,7 @@ def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, ti
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("policy compute time per step, median [us]")
-    ax.set_ylabel("max task error [m]")
+    ax.set_ylabel(f"max task error [{unit}]")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best")

@@ -1,0 +1,154 @@
+"""``redundancy-gym bench walk``: the walking reference's control step on BipedWalk-v0, and its whole-body IK
+compiled against the same IK on pinocchio, on the same states.
+
+One walk of the ``walking`` policy (``target_speed`` 0.7 m/s by default) is timed per ``predict`` call (the
+whole controller: pattern sample, contact ZMP, stabilizer, IK). A second, identical walk records the IK's
+inputs at every period (the kinematic configuration and the start and end references); on those inputs
+
+- **compiled**: :class:`~redundancy_gym.controllers.walking.CompiledWholeBodyIk` (one kernel call),
+- **python**: :class:`~redundancy_gym.controllers.walking.WholeBodyIk` (pinocchio kinematics and Jacobians,
+  the same objectives and solve),
+
+are timed and compared: ``ik_compiled_vs_python`` is the ratio of the medians, ``ik_max_difference`` the
+largest difference of their configurations [rad or m]. ``controller_vs_lola`` relates our controller step to
+the 548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not
+measured here).
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
+
+from ..controllers import CollisionObjective
+from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
+from ..controllers.walking_policy import WalkingPolicy
+from .evaluate import make_env
+from .exceptions import EvalError
+
+__all__ = ["LOLA_CYCLE_US", "format_walk_bench", "run_walk_bench"]
+
+ENV_ID = "redundancy_gym/BipedWalk-v0"
+LOLA_CYCLE_US = 548.0
+"""Lola's whole controller per cycle [us] on a 2.33 GHz Core2 Duo (the issue's reference figure)."""
+
+_Call = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]
+
+
+class _Recorder:
+    """Stands in for the controller's IK and keeps each call's inputs."""
+
+    def __init__(self, solver: Any) -> None:
+        self.solver = solver
+        self.calls: list[_Call] = []
+
+    def step(self, q: NDArray[np.float64], start: Any, end: Any, dt: float) -> WholeBodyIkResult:
+        self.calls.append((np.array(q), np.array(start), np.array(end), float(dt)))
+        return self.solver.step(q, start, end, dt)
+
+
+def _walk(speed: float, steps: int, seed: int, record: bool) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
+    """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell."""
+    env = make_env(ENV_ID, {"target_speed": speed})
+    policy = WalkingPolicy(env)
+    times: list[float] = []
+    recorder: _Recorder | None = None
+    fell = False
+    try:
+        obs, _ = env.reset(seed=seed)
+        for k in range(steps):
+            if k == 1 and record:  # after start(), which builds the IK
+                recorder = _Recorder(policy.controller.solver)
+                policy.controller.solver = recorder  # type: ignore[assignment]
+            t0 = time.perf_counter()
+            action, _ = policy.predict(obs, episode_start=np.array([k == 0]))
+            times.append((time.perf_counter() - t0) * 1e6)
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                fell = bool(info["fell"])
+                break
+    finally:
+        env.close()
+    if recorder is not None:
+        policy.controller.solver = recorder.solver  # type: ignore[assignment]
+    return times, recorder.calls if recorder is not None else [], policy, fell
+
+
+def _time_calls(solver: Any, calls: list[_Call], repeats: int, label: str,
+                progress: bool) -> tuple[list[float], list[NDArray[np.float64]]]:
+    times, results = [], []
+    for q, start, end, dt in tqdm(calls, desc=f"bench walk {label}", disable=not progress):
+        runs = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            result = solver.step(q, start, end, dt)
+            runs.append((time.perf_counter() - t0) * 1e6)
+        times.append(float(np.median(runs)))
+        results.append(result.q)
+    return times, results
+
+
+def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 3,
+                   progress: bool = True) -> dict[str, Any]:
+    """Time the walking controller step, then its compiled IK against the pinocchio IK; returns the report.
+
+    Args:
+        speed: commanded walking speed [m/s].
+        duration: walk length [s].
+        seed: reset seed.
+        repeats: timed repetitions per IK state (the median is kept).
+        progress: show progress bars.
+    """
+    if repeats < 1:
+        raise EvalError(f"repeats must be >= 1, got {repeats}")
+    if not np.isfinite(duration) or duration <= 0.0:
+        raise EvalError(f"duration must be finite and > 0, got {duration!r}")
+    steps = int(round(duration / 0.004))
+    _walk(speed, min(steps, 50), seed, record=False)  # warm up compiled kernels and the per-speed start cache
+    controller_times, _, _, fell = _walk(speed, steps, seed, record=False)
+    _, calls, policy, _ = _walk(speed, steps, seed, record=True)
+    ik = policy.controller.ik
+    compiled = policy.controller.solver
+    if not isinstance(compiled, CompiledWholeBodyIk) or ik is None:
+        raise EvalError("bench walk needs the compiled IK backend (the policy default)")
+    compiled_times, compiled_q = _time_calls(compiled, calls, repeats, "compiled", progress)
+    python_times, python_q = _time_calls(ik, calls, repeats, "python", progress)
+    difference = max(float(np.max(np.abs(a - b))) for a, b in zip(compiled_q, python_q))
+    controller = controller_times[1:]  # the first call plans the walk
+    compiled_median, python_median = float(np.median(compiled_times)), float(np.median(python_times))
+    controller_median = float(np.median(controller))
+    return {
+        "benchmark": "walk", "env": ENV_ID, "target_speed": speed, "duration": duration, "seed": seed,
+        "states": len(calls), "repeats": repeats, "fell": fell,
+        "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
+        "controller": {"step_us_median": controller_median, "step_us_p99": float(np.percentile(controller, 99)),
+                       "start_ms": controller_times[0] * 1e-3},
+        "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": float(np.percentile(compiled_times, 90))},
+        "ik_python": {"step_us_median": python_median, "step_us_p90": float(np.percentile(python_times, 90))},
+        "ik_compiled_vs_python": compiled_median / python_median,
+        "ik_max_difference": difference,
+        "controller_vs_lola": controller_median / LOLA_CYCLE_US,
+        "self_collision_pairs": sum(len(o.collision_model.layout().segment_pairs) for o in ik.objectives
+                                    if isinstance(o, CollisionObjective)),
+    }
+
+
+def format_walk_bench(report: dict[str, Any]) -> str:
+    """A plain-text summary."""
+    c, k, p = report["controller"], report["ik_compiled"], report["ik_python"]
+    return "\n".join([
+        f"{report['env']} at {report['target_speed']} m/s, {report['duration']} s, seed {report['seed']}: "
+        f"{report['states']} IK states" + (" (fell)" if report["fell"] else ""),
+        f"controller step  median {c['step_us_median']:.1f} us  p99 {c['step_us_p99']:.1f} us  "
+        f"(start {c['start_ms']:.1f} ms)",
+        f"IK compiled      median {k['step_us_median']:.1f} us  p90 {k['step_us_p90']:.1f} us",
+        f"IK python        median {p['step_us_median']:.1f} us  p90 {p['step_us_p90']:.1f} us",
+        f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
+        f"(largest difference {report['ik_max_difference']:.1e})",
+        f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)",
+    ])

@@ -1,0 +1,31 @@
+"""bench walk: the compiled and the pinocchio whole-body IK are timed on the same recorded states and agree."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from redundancy_gym.eval.bench_ssv import write_ssv_bench
+from redundancy_gym.eval.bench_walk import LOLA_CYCLE_US, format_walk_bench, run_walk_bench
+from redundancy_gym.eval.exceptions import EvalError
+
+
+def test_walk_bench_report(tmp_path) -> None:
+    report = run_walk_bench(duration=0.4, repeats=1, progress=False)
+    assert report["states"] == 99 and not report["fell"]  # every period after the first records one IK call
+    assert report["ik_max_difference"] < 1e-9  # the same inputs give the same configuration in both backends
+    assert report["self_collision_pairs"] > 100
+    k, p = report["ik_compiled"], report["ik_python"]
+    assert report["ik_compiled_vs_python"] == pytest.approx(k["step_us_median"] / p["step_us_median"])
+    assert report["controller_vs_lola"] == pytest.approx(report["controller"]["step_us_median"] / LOLA_CYCLE_US)
+    assert "ik_compiled_vs_python" in format_walk_bench(report)
+    written = json.loads(write_ssv_bench(report, tmp_path / "walk.json").read_text())
+    assert written["ik_compiled_vs_python"] == report["ik_compiled_vs_python"]
+
+
+def test_walk_bench_rejects_bad_options() -> None:
+    with pytest.raises(EvalError, match="repeats"):
+        run_walk_bench(repeats=0, progress=False)
+    with pytest.raises(EvalError, match="duration"):
+        run_walk_bench(duration=-1.0, progress=False)
