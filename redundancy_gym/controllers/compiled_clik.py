@@ -25,6 +25,7 @@ from .clik_kernels import (
 from .collision_kernels import bounding_spheres, collision_fields
 from .collision_objective import CollisionObjective
 from .exceptions import ControllerError
+from .kernel_buffers import buffer_view, compiled_entry_point
 from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
@@ -125,16 +126,11 @@ class CompiledClik:
         self._outputs = self._field("outputs")
         self._version = -1
         self._refresh_environment()
-        if not clik_step.signatures:  # compile (or load from numba's cache) once per process
-            clik_step.compile("int64(float64[::1], int64[::1], boolean)")
-        # the compiled entry point skips the dispatcher's type matching on every call
-        self._kernel = clik_step.overloads[clik_step.signatures[0]].entry_point
+        self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean)")
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
-        k = FLOAT_FIELDS.index(name)
-        offset, size = int(self._i[2 * k]), int(self._i[2 * k + 1])
-        return self._f[offset:offset + size]
+        return buffer_view(self._f, self._i, FLOAT_FIELDS, name)
 
     def _collision_fields(self, floats: dict[str, NDArray[np.float64]],
                           ints: dict[str, NDArray[np.int64]]) -> dict[str, int]:

@@ -9,13 +9,14 @@ by field index with :func:`float_field` and :func:`int_field`.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["float_field", "int_field", "pack_fields"]
+__all__ = ["buffer_view", "compiled_entry_point", "float_field", "int_field", "pack_fields"]
 
 
 def pack_fields(floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, NDArray[np.int64]],
@@ -37,6 +38,22 @@ def pack_fields(floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, ND
         i[offset:offset + size] = np.asarray(ints[name], dtype=np.int64).reshape(-1)
         offset += size
     return f, i
+
+
+def buffer_view(f: NDArray[np.float64], i: NDArray[np.int64], float_fields: Sequence[str],
+                name: str) -> NDArray[np.float64]:
+    """The view of float field ``name`` of a packed buffer (writes reach the kernel)."""
+    k = float_fields.index(name)
+    offset, size = int(i[2 * k]), int(i[2 * k + 1])
+    return f[offset:offset + size]
+
+
+def compiled_entry_point(kernel: Any, signature: str) -> Callable[..., Any]:
+    """``kernel`` compiled for ``signature`` (or loaded from numba's cache) once per process; its entry point,
+    which skips the dispatcher's type matching on every call."""
+    if not kernel.signatures:
+        kernel.compile(signature)
+    return kernel.overloads[kernel.signatures[0]].entry_point
 
 
 @njit(cache=True)

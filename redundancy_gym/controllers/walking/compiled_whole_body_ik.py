@@ -12,7 +12,7 @@ from ..collision_kernels import bounding_spheres, collision_fields
 from ..collision_objective import CollisionObjective
 from ..exceptions import ControllerError
 from ..joint_limit_objective import JointLimitObjective
-from ..kernel_buffers import pack_fields
+from ..kernel_buffers import buffer_view, compiled_entry_point, pack_fields
 from ..posture_objective import PostureObjective
 from .whole_body_ik import Reference, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .whole_body_kernels import (
@@ -127,16 +127,11 @@ class CompiledWholeBodyIk:
         self._scalars = self._field("scalars")
         self._scalars[:] = [ik.gain, ik.gamma, ik.beta, ik.nullspace_gain, ik.damping, ik.singular_threshold,
                             ik.max_velocity, 0.0]
-        if not whole_body_step.signatures:  # compile (or load from numba's cache) once per process
-            whole_body_step.compile("int64(float64[::1], int64[::1])")
-        # the compiled entry point skips the dispatcher's type matching on every call
-        self._kernel = whole_body_step.overloads[whole_body_step.signatures[0]].entry_point
+        self._kernel = compiled_entry_point(whole_body_step, "int64(float64[::1], int64[::1])")
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
-        k = FLOAT_FIELDS.index(name)
-        offset, size = int(self._i[2 * k]), int(self._i[2 * k + 1])
-        return self._f[offset:offset + size]
+        return buffer_view(self._f, self._i, FLOAT_FIELDS, name)
 
     def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
         """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call; the references

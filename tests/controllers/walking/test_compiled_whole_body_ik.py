@@ -8,39 +8,18 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from redundancy_gym.assets import BIPED_JOINTS, BIPED_SOFT_LIMIT_MARGIN, BIPED_XML
+from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import CollisionObjective, ControllerError, PostureObjective
-from redundancy_gym.controllers.walking import (
-    CompiledWholeBodyIk,
-    WalkingController,
-    WalkingIkConfig,
-    WholeBodyIk,
-    WholeBodyReference,
-)
+from redundancy_gym.controllers.walking import CompiledWholeBodyIk, WalkingIkConfig, WholeBodyIk, WholeBodyReference
 from redundancy_gym.controllers.walking.ik_kernels import rotation_error
-from redundancy_gym.envs.biped_walk import NOMINAL_POSTURE
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
+
+from .biped_helpers import standing, walking_controller
 
 
 @pytest.fixture(scope="module")
 def model() -> RobotModel:
     return RobotModel.from_mjcf(BIPED_XML)
-
-
-def _standing(model: RobotModel, **joints: float) -> np.ndarray:
-    posture = {**NOMINAL_POSTURE, **joints}
-    q = np.zeros(model.nq)
-    q[6] = 1.0  # identity quaternion (x, y, z, w)
-    q[7:] = [posture.get(j, 0.0) for j in BIPED_JOINTS]
-    model.update(q)
-    q[2] = -min(model.frame_position(f)[2] for f in ("r_sole", "l_sole"))
-    return q
-
-
-def _controller(model: RobotModel, **ik: object) -> WalkingController:
-    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
-    return WalkingController(model, 0.004, lower + BIPED_SOFT_LIMIT_MARGIN, upper - BIPED_SOFT_LIMIT_MARGIN,
-                             ik=WalkingIkConfig(**ik), correction_iterations=1)
 
 
 def _hold(model: RobotModel, q: np.ndarray, com_lift: float = 0.0) -> WholeBodyReference:
@@ -54,8 +33,8 @@ def _hold(model: RobotModel, q: np.ndarray, com_lift: float = 0.0) -> WholeBodyR
 
 @pytest.mark.parametrize("momentum", [True, False], ids=("W_5_62", "W_identity"))
 def test_compiled_step_equals_python_step_while_walking(model: RobotModel, momentum: bool) -> None:
-    controller = _controller(model, momentum_minimization=momentum, backend="python")
-    controller.start(_standing(model), 0.7)
+    controller = walking_controller(model, momentum_minimization=momentum, backend="python")
+    controller.start(standing(model), 0.7)
     ik, pattern = controller.ik, controller.pattern
     assert any(isinstance(o, CollisionObjective) for o in ik.objectives)
     compiled = CompiledWholeBodyIk(ik)
@@ -79,7 +58,7 @@ def test_compiled_step_equals_python_step_while_walking(model: RobotModel, momen
 def test_self_collision_gradient_matches_finite_differences_on_the_floating_base(model: RobotModel) -> None:
     objective = CollisionObjective(collision_model_from_mjcf(model), activation_distance=0.05, slope=10.0)
     rng = np.random.default_rng(5)
-    q = _standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
+    q = standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
     q[3:7] = rng.normal(size=4)
     q[3:7] /= np.linalg.norm(q[3:7])
     model.update(q)
@@ -101,7 +80,7 @@ def test_self_collision_gradient_matches_finite_differences_on_the_floating_base
 def test_self_collision_avoidance_opens_the_closest_pair_in_the_nullspace(model: RobotModel) -> None:
     """Arms pressed against the torso (13 mm): with only the self-collision objective in the nullspace the
     clearance grows towards ``d_a`` while every task holds; without it the arms stay where they are."""
-    q0 = _standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
+    q0 = standing(model, r_shoulder_roll=-0.06, l_shoulder_roll=0.06)
     reference = _hold(model, q0)
     collision_model = collision_model_from_mjcf(model)
     clearance = {}
@@ -127,7 +106,7 @@ def test_self_collision_avoidance_opens_the_closest_pair_in_the_nullspace(model:
 def test_unreachable_com_on_stretched_legs_stays_bounded(model: RobotModel) -> None:
     """Hard case: knees straight and the CoM 5 cm above reach. The weighted pseudoinverse would ask for about
     14000 rad/s; both backends bound the step to ``max_velocity`` and agree."""
-    q = _standing(model, r_hip_pitch=0.0, r_knee=0.0, r_ankle_pitch=0.0, l_hip_pitch=0.0, l_knee=0.0,
+    q = standing(model, r_hip_pitch=0.0, r_knee=0.0, r_ankle_pitch=0.0, l_hip_pitch=0.0, l_knee=0.0,
                   l_ankle_pitch=0.0)
     reference = _hold(model, q, com_lift=0.05)
     ik = WholeBodyIk(model)
@@ -149,7 +128,7 @@ def test_compiled_ik_rejects_what_it_cannot_compile_and_bad_inputs(model: RobotM
     with pytest.raises(ControllerError, match="backend"):
         WalkingIkConfig(backend="fortran")
     compiled = CompiledWholeBodyIk(WholeBodyIk(model))
-    q = _standing(model)
+    q = standing(model)
     reference = _hold(model, q)
     with pytest.raises(ModelError, match="non-finite"):
         compiled.step(np.full(model.nq, np.nan), reference, reference, 0.004)
@@ -178,8 +157,8 @@ def test_rotation_error_is_log3(model: RobotModel) -> None:
 
 
 def test_packed_reference_round_trip_and_controller_packing(model: RobotModel) -> None:
-    controller = _controller(model)
-    controller.start(_standing(model), 0.7)
+    controller = walking_controller(model)
+    controller.start(standing(model), 0.7)
     sample = controller.pattern.sample(1.234)  # mid-swing: a pitched foot with a pitch rate
     offset, rate = np.array([0.01, -0.02]), np.array([0.1, 0.2])
     packed = controller._reference_array(sample, offset, rate)

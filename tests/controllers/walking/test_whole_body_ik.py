@@ -5,31 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from redundancy_gym.assets import BIPED_JOINTS, BIPED_SOFT_LIMIT_MARGIN, BIPED_XML
+from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.controllers.walking import WalkingController, WalkingIkConfig, WholeBodyIk
-from redundancy_gym.envs.biped_walk import NOMINAL_POSTURE
+from redundancy_gym.controllers.walking import WholeBodyIk
 from redundancy_gym.model import RobotModel
+
+from .biped_helpers import standing, walking_controller
 
 
 @pytest.fixture(scope="module")
 def model() -> RobotModel:
     return RobotModel.from_mjcf(BIPED_XML)
-
-
-def _standing(model: RobotModel) -> np.ndarray:
-    q = np.zeros(model.nq)
-    q[6] = 1.0  # identity quaternion (x, y, z, w)
-    q[7:] = [NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS]
-    model.update(q)
-    q[2] = -min(model.frame_position(f)[2] for f in ("r_sole", "l_sole"))
-    return q
-
-
-def _controller(model: RobotModel, **ik: object) -> WalkingController:
-    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
-    return WalkingController(model, 0.004, lower + BIPED_SOFT_LIMIT_MARGIN, upper - BIPED_SOFT_LIMIT_MARGIN,
-                             ik=WalkingIkConfig(**ik), correction_iterations=1)
 
 
 def test_smw_solve_equals_the_dense_weighted_pseudoinverse(model: RobotModel) -> None:
@@ -49,8 +35,8 @@ def test_smw_solve_equals_the_dense_weighted_pseudoinverse(model: RobotModel) ->
 
 
 def test_kinematic_rollout_tracks_the_pattern_to_1e6(model: RobotModel) -> None:
-    controller = _controller(model)
-    controller.start(_standing(model), 0.7)
+    controller = walking_controller(model)
+    controller.start(standing(model), 0.7)
     ik, pattern = controller.ik, controller.pattern
     q = controller.q_ref
     worst = 0.0
@@ -68,8 +54,8 @@ def test_kinematic_rollout_tracks_the_pattern_to_1e6(model: RobotModel) -> None:
 def test_momentum_minimization_lowers_peak_lz(model: RobotModel) -> None:
     peaks = {}
     for on in (False, True):
-        controller = _controller(model, momentum_minimization=on)
-        controller.start(_standing(model), 0.7)
+        controller = walking_controller(model, momentum_minimization=on)
+        controller.start(standing(model), 0.7)
         q, pattern = controller.q_ref, controller.pattern
         lz = []
         start = controller._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
@@ -90,4 +76,4 @@ def test_ik_rejects_fixed_base_and_bad_parameters(model: RobotModel) -> None:
     with pytest.raises(ControllerError, match="gamma"):
         WholeBodyIk(model, gamma=0.0)
     with pytest.raises(ControllerError, match="start"):
-        _controller(model).step(np.zeros(model.nq), np.zeros(model.nv), np.zeros((2, 3)), np.zeros((2, 3)))
+        walking_controller(model).step(np.zeros(model.nq), np.zeros(model.nv), np.zeros((2, 3)), np.zeros((2, 3)))
