@@ -142,4 +142,5 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
     markdown.write_text("# Speed vs error\n\n" + text)
     print("\n" + text)
     return [markdown, plot_speed_error(reports, out / "speed_vs_error.png", "PlanarReach-v0: time vs error"),
-            plot_speed_error(biped, out / "speed_vs_error_biped.png", "BipedWalk-v0: time vs speed error", "m/s")]
+            plot_speed_error(biped, out / "speed_vs_error_biped.png", "BipedWalk-v0: time vs forward speed error",
+                             "m/s", error="rms")]

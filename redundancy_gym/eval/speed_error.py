@@ -29,16 +29,20 @@ def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str, unit
     return "\n".join(lines) + "\n"
 
 
-def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str, unit: str = "m") -> Path:
-    """Scatter of median step time [us] against max task error [``unit``] (log-log), one point per policy."""
+def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str, unit: str = "m",
+                     error: str = "max") -> Path:
+    """Scatter of median step time [us] against the task error [``unit``] (log-log), one point per policy;
+    ``error`` picks ``"max"`` or ``"rms"``."""
+    if error not in ("max", "rms"):
+        raise ValueError(f"error must be 'max' or 'rms', got {error!r}")
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for label, r in reports.items():
-        x, y = r["step_time_us"]["median"], max(r["task_error_max"], 1e-9)
+        x, y = r["step_time_us"]["median"], max(r[f"task_error_{error}"], 1e-9)
         ax.scatter([x], [y], s=40, label=label)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("policy compute time per step, median [us]")
-    ax.set_ylabel(f"max task error [{unit}]")
+    ax.set_ylabel(f"task error {error} [{unit}]")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best")

@@ -352,8 +352,11 @@ class RobotModel:
         return q
 
     def clamp(self, q: ArrayLike) -> NDArray[np.float64]:
-        """``q`` clipped into the joint limits."""
-        return np.clip(self.check_configuration(q), self.lower_limits, self.upper_limits)
+        """``q`` clipped into the joint limits; a free-floating base's pose is left as it is (pinocchio's
+        placeholder limits of a free flyer are not limits)."""
+        q = self.check_configuration(q)
+        base = self.base_dofs[0]
+        return np.concatenate([q[:base], np.clip(q[base:], self.lower_limits[base:], self.upper_limits[base:])])
 
     # ------------------------------------------------------------------ helpers
     def _check_velocity(self, qdot: ArrayLike) -> NDArray[np.float64]:

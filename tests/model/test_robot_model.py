@@ -2,7 +2,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from redundancy_gym.assets import PLANAR_ARM_JOINTS, PLANAR_ARM_TCP, PLANAR_ARM_XML
+from redundancy_gym.assets import BIPED_XML, PLANAR_ARM_JOINTS, PLANAR_ARM_TCP, PLANAR_ARM_XML
 from redundancy_gym.model import ModelError, RobotModel, UnknownFrameError
 
 BODIES = ("link1", "link2", "link3", "link4")
@@ -183,3 +183,13 @@ def test_errors_name_the_valid_choices(planar_model: RobotModel) -> None:
         planar_model.update(np.array([0, np.nan, 0, 0]))
     with pytest.raises(ModelError, match="not found"):
         RobotModel.from_mjcf("/nonexistent.xml")
+
+
+def test_clamp_limits_the_joints_and_leaves_a_floating_base_alone(planar_model: RobotModel) -> None:
+    q = planar_model.upper_limits + 1.0
+    np.testing.assert_array_equal(planar_model.clamp(q), planar_model.upper_limits)
+    biped = RobotModel.from_mjcf(BIPED_XML)
+    q = np.concatenate([[3.0, -2.5, 0.9], [0.0, 0.0, 0.6, 0.8], biped.upper_limits[7:] + 0.2])
+    clamped = biped.clamp(q)
+    np.testing.assert_array_equal(clamped[:7], q[:7])  # 3 m away and turned: still the same base pose
+    np.testing.assert_array_equal(clamped[7:], biped.upper_limits[7:])

@@ -3,8 +3,9 @@
 Layers, each testable alone: :class:`WalkingPattern` (footholds, swing quintics, LIPM/DCM CoM with the
 multi-body ZMP correction), :class:`Stabilizer` (measured ZMP and DCM -> CoM reference offset) and
 :class:`WholeBodyIk` (task references -> joint position targets, with the angular-momentum weight (5.62) and
-joint-limit and posture objectives in the nullspace). The IK integrates its own kinematic model; its joint
-angles are the position targets sent to the servos, as on Lola.
+joint-limit, posture and self-collision objectives in the nullspace; run as one kernel call by
+:class:`CompiledWholeBodyIk`). The IK integrates its own kinematic model; its joint angles are the position
+targets sent to the servos, as on Lola.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...geometry import CollisionModel
 from ...model import RobotModel, collision_model_from_mjcf
 from ..actuated_objective import ActuatedObjective
 from ..collision_objective import CollisionObjective
@@ -144,7 +146,7 @@ class WalkingController:
         self.pattern: WalkingPattern | None = None
         self.ik: WholeBodyIk | None = None
         self.solver: WholeBodyIk | CompiledWholeBodyIk | None = None
-        self._collision_model = None
+        self._collision_model: CollisionModel | None = None
         self.q_ref: NDArray[np.float64] | None = None
         self.time = 0.0
         self._next: PatternSample | None = None

@@ -8,8 +8,9 @@ solution of (5.7) with the angular-momentum weight (5.62)
     W = gamma I + J_Lz^T J_Lz,     W^-1 = (I - J_Lz^T J_Lz / (gamma + |J_Lz|^2)) / gamma
 
 (Sherman-Morrison-Woodbury: ``W`` is a rank-one update of ``gamma I``, so ``W^-1`` costs two vector products),
-plus the gradient of nullspace objectives (joint limits (5.58), posture) projected as in (5.14). The scale
-``beta`` of (5.62) weighs ``W`` against those objectives: ``qdot = J#_W (wdot + K e) - (alpha / beta) N W^-1 dH/dq``.
+plus the gradient of nullspace objectives (joint limits (5.58), posture, self-collision (5.49)) projected as in
+(5.14). The scale ``beta`` of (5.62) weighs ``W`` against those objectives:
+``qdot = J#_W (wdot + K e) - (alpha / beta) N W^-1 dH/dq``.
 
 Each :meth:`WholeBodyIk.step` takes the reference at the start and the end of the control period: it
 integrates the CLIK velocity, then applies one Newton correction on the position error at the end of the
@@ -30,7 +31,8 @@ from ..objective import Objective
 from .ik_kernels import rotation_error, weighted_solve
 from .whole_body_kernels import REFERENCE_LAYOUT, REFERENCE_SIZE
 
-__all__ = ["REFERENCE_LAYOUT", "REFERENCE_SIZE", "TASK_ROWS", "WholeBodyIk", "WholeBodyIkResult", "WholeBodyReference"]
+__all__ = ["REFERENCE_LAYOUT", "REFERENCE_SIZE", "TASK_ROWS", "Reference", "WholeBodyIk", "WholeBodyIkResult",
+           "WholeBodyReference"]
 
 TASK_ROWS: dict[str, slice] = {"com": slice(0, 3), "right_foot": slice(3, 9), "left_foot": slice(9, 15),
                                "torso": slice(15, 18)}
