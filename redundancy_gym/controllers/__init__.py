@@ -14,10 +14,12 @@ from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .objective import Objective, ObjectiveValue, sum_objectives
 from .posture_objective import PostureObjective
+from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
 from .redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
 from .task import Task
 
 __all__ = [
+    "DESCENT_METHODS",
     "METHODS",
     "AccelerationClik",
     "AccelerationClikResult",
@@ -34,6 +36,9 @@ __all__ = [
     "ObjectiveValue",
     "PolicyError",
     "PostureObjective",
+    "PredictiveIk",
+    "PredictiveResult",
+    "PredictiveRollout",
     "Resolution",
     "Task",
     "WeightMatrix",

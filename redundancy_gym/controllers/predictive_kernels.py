@@ -1,0 +1,330 @@
+"""Compiled forward and adjoint integration of the predictive IK's optimal control problem (monograph 5.6).
+
+The nullspace input ``u_k`` (one per sample, held over the sample time ``dt``) drives the joint motion
+
+    qdot_k = f(q_k, u_k) = J# wdot_k + (I - J# J) u_k = u_k + J^T y_k,   y_k = A^-1 (wdot_k - J u_k),
+    A = J J^T + rho I,                                                                      (5.100), (5.102)
+
+integrated explicitly, ``q_{k+1} = q_k + dt qdot_k`` (5.112). The cost (5.101), (5.130) is
+``Phi = sum_k dt [w_v qdot_k^T qdot_k (5.131) + H_jl(q_k) (5.58) + H_c(q_k) (5.49)]``. Its exact gradient
+for this discretization comes from the adjoint recursion (5.113), (5.115)
+
+    lambda_N = 0,   lambda_k = lambda_{k+1} + dt [dH/dq + (df/dq)^T (lambda_{k+1} + 2 w_v qdot_k)],
+    dPhi/du_k = dt (df/du)^T (lambda_{k+1} + 2 w_v qdot_k) = dt N (lambda_{k+1} + 2 w_v qdot_k)   (5.119), (A.54)
+
+with ``(df/dq)^T v`` formed without the derivative of the pseudoinverse as a matrix (A.53), (A.59): with
+``mu = A^-1 J v``, ``[(df/dq)^T v]_i = y^T (dJ/dq_i) (v - J^T mu) - mu^T (dJ/dq_i) qdot + mu^T dwdot/dq_i``,
+and ``(dJ/dq_i) a`` = the derivative of the task velocity ``J a`` along joint ``i``, in closed form along the
+kinematic path (O(n) per joint).
+
+Tasks: selected rows of a frame's position (``kind`` 0, :class:`~redundancy_gym.controllers.FramePositionTask`)
+or a frame's position plus the direction of one of its axes (``kind`` 1,
+:class:`~redundancy_gym.controllers.FrameAxisTask`: rows ``u^T J_R``, ``v^T J_R`` and feedforward
+``u.omega_d``, ``v.omega_d`` in the axes ``u, v`` normal to the tool axis).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..geometry.potentials import piecewise_potential_kernel
+from ..model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian, place_frame
+from .collision_kernels import collision_potential
+
+__all__ = ["pik_gradient", "pik_rollout"]
+
+_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+
+
+@njit(**_JIT)
+def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_axis, jac6, jac, b, frame):
+    """Kinematics at ``q``; the task Jacobian ``jac`` (m x n), task velocity ``b`` (m) from the reference
+    ``wdot`` and the task frame's rotation and origin ``frame`` (12: R row-major, p)."""
+    placement_rotation, placement_translation, axis = chain_f
+    parent, joint_type, q_index, v_index = chain_i
+    kind, joint, tool_axis = task_i[0], task_i[1], task_i[2]
+    rows = task_i[3:]
+    chain_forward(parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation,
+                  position, world_axis)
+    rot = frame[:9].reshape((3, 3))
+    p = frame[9:12]
+    place_frame(rotation, position, joint, task_f[:9].reshape((3, 3)), task_f[9:12], rot, p)
+    chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, joint, p[0], p[1], p[2], jac6)
+    if kind == 0:
+        for r in range(rows.shape[0]):
+            jac[r, :] = jac6[rows[r], :]
+            b[r] = wdot[r]
+        return
+    for r in range(3):
+        jac[r, :] = jac6[r, :]
+        b[r] = wdot[r]
+    for s in range(2):
+        c = (tool_axis + 1 + s) % 3
+        ux, uy, uz = rot[0, c], rot[1, c], rot[2, c]
+        jac[3 + s, :] = ux * jac6[3, :] + uy * jac6[4, :] + uz * jac6[5, :]
+        b[3 + s] = ux * wdot[3] + uy * wdot[4] + uz * wdot[5]
+
+
+@njit(**_JIT)
+def _cholesky(a, m, low):
+    """Lower Cholesky factor of the m x m ``a`` into ``low``; False when not positive definite."""
+    for j in range(m):
+        s = a[j, j]
+        for k in range(j):
+            s -= low[j, k] * low[j, k]
+        if not s > 0.0:
+            return False
+        low[j, j] = np.sqrt(s)
+        for i in range(j + 1, m):
+            t = a[i, j]
+            for k in range(j):
+                t -= low[i, k] * low[j, k]
+            low[i, j] = t / low[j, j]
+    return True
+
+
+@njit(**_JIT)
+def _solve(low, m, x):
+    """``x <- A^-1 x`` with the factor of :func:`_cholesky`."""
+    for i in range(m):
+        t = x[i]
+        for k in range(i):
+            t -= low[i, k] * x[k]
+        x[i] = t / low[i, i]
+    for i in range(m - 1, -1, -1):
+        t = x[i]
+        for k in range(i + 1, m):
+            t -= low[k, i] * x[k]
+        x[i] = t / low[i, i]
+
+
+@njit(**_JIT)
+def _velocity(jac, b, u, rho, a, low, y, qdot):
+    """``qdot = u + J^T y`` with ``y = (J J^T + rho I)^-1 (b - J u)``; the factor stays in ``low``."""
+    m, n = jac.shape
+    for r in range(m):
+        for c in range(r + 1):
+            acc = 0.0
+            for k in range(n):
+                acc += jac[r, k] * jac[c, k]
+            a[r, c] = acc
+            a[c, r] = acc
+        a[r, r] += rho
+    if not _cholesky(a, m, low):
+        return False
+    for r in range(m):
+        acc = b[r]
+        for k in range(n):
+            acc -= jac[r, k] * u[k]
+        y[r] = acc
+    _solve(low, m, y)
+    for k in range(n):
+        acc = u[k]
+        for r in range(m):
+            acc += jac[r, k] * y[r]
+        qdot[k] = acc
+    return True
+
+
+@njit(**_JIT)
+def _limits(q, lower, upper, lp, gradient):
+    """(5.58) on the distance to each limit; adds the gradient (when given) and returns the value."""
+    da, slope, ratio, weight = lp[0], lp[1], lp[2], lp[3]
+    value = 0.0
+    if weight == 0.0:
+        return value
+    for k in range(q.shape[0]):
+        h0, d0, _ = piecewise_potential_kernel(q[k] - lower[k], da, slope, ratio)
+        h1, d1, _ = piecewise_potential_kernel(upper[k] - q[k], da, slope, ratio)
+        value += weight * (h0 + h1)
+        gradient[k] += weight * (d0 - d1)
+    return value
+
+
+@njit(**_JIT)
+def _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, gradient, scratch):
+    """(5.49) over the collision pairs, gradient added (the arrays of :func:`collision_fields`)."""
+    seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
+    seg_rot, seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii = coll_f
+    parent, joint_type, _, v_index = chain_i
+    value, _ = collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b, seg_rot,
+                                   seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii, coll_p,
+                                   parent, joint_type, v_index, rotation, position, world_axis, gradient, scratch)
+    return value
+
+
+@njit(**_JIT)
+def _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot, y, a1, mu, a2, out):
+    """``out[i] += y^T (dJ/dq_i) a1 - mu^T (dJ/dq_i) a2 + mu^T d wdot/dq_i`` along the task frame's path."""
+    parent, joint_type, _, v_index = chain_i
+    kind, joint, tool_axis = task_i[0], task_i[1], task_i[2]
+    rows = task_i[3:]
+    px, py, pz = frame[9], frame[10], frame[11]
+    # the path from the root to the task joint
+    path = np.empty(parent.shape[0], dtype=np.int64)
+    length = 0
+    k = joint
+    while k >= 0:
+        path[length] = k
+        length += 1
+        k = parent[k]
+    path[:length] = path[:length][::-1].copy()
+    # suffix sums of each joint's linear velocity contribution and angular velocities, for a1 and a2
+    vs = np.zeros((length + 1, 2, 3))
+    ws = np.zeros((length + 1, 2, 3))
+    for idx in range(length - 1, -1, -1):
+        j = path[idx]
+        c = v_index[j]
+        zx, zy, zz = world_axis[j, 0], world_axis[j, 1], world_axis[j, 2]
+        rx, ry, rz = px - position[j, 0], py - position[j, 1], pz - position[j, 2]
+        for s in range(2):
+            aj = a1[c] if s == 0 else a2[c]
+            if joint_type[j] == PRISMATIC:
+                vs[idx, s, 0] = vs[idx + 1, s, 0] + aj * zx
+                vs[idx, s, 1] = vs[idx + 1, s, 1] + aj * zy
+                vs[idx, s, 2] = vs[idx + 1, s, 2] + aj * zz
+                for r in range(3):
+                    ws[idx, s, r] = ws[idx + 1, s, r]
+            else:
+                vs[idx, s, 0] = vs[idx + 1, s, 0] + aj * (zy * rz - zz * ry)
+                vs[idx, s, 1] = vs[idx + 1, s, 1] + aj * (zz * rx - zx * rz)
+                vs[idx, s, 2] = vs[idx + 1, s, 2] + aj * (zx * ry - zy * rx)
+                ws[idx, s, 0] = ws[idx + 1, s, 0] + aj * zx
+                ws[idx, s, 1] = ws[idx + 1, s, 1] + aj * zy
+                ws[idx, s, 2] = ws[idx + 1, s, 2] + aj * zz
+    m = rows.shape[0] if kind == 0 else 5
+    dv = np.empty(3)
+    dw = np.empty(3)
+    for idx in range(length):
+        j = path[idx]
+        if joint_type[j] == FREE:
+            continue
+        c = v_index[j]
+        zx, zy, zz = world_axis[j, 0], world_axis[j, 1], world_axis[j, 2]
+        acc = 0.0
+        for s in range(2):
+            weights = y if s == 0 else mu
+            sign = 1.0 if s == 0 else -1.0
+            # angular velocity of the joints before j: total minus the suffix from j
+            ox = ws[0, s, 0] - ws[idx, s, 0]
+            oy = ws[0, s, 1] - ws[idx, s, 1]
+            oz = ws[0, s, 2] - ws[idx, s, 2]
+            if joint_type[j] == PRISMATIC:
+                # d v_p / dq_j = omega_before x z_j; the angular velocity does not change
+                dv[0], dv[1], dv[2] = oy * zz - oz * zy, oz * zx - ox * zz, ox * zy - oy * zx
+                dw[0] = dw[1] = dw[2] = 0.0
+            else:
+                # d v_p / dq_j = z_j x V_j + omega_before x (z_j x (p - o_j));
+                # d omega / dq_j = z_j x omega_after
+                rx, ry, rz = px - position[j, 0], py - position[j, 1], pz - position[j, 2]
+                cx, cy, cz = zy * rz - zz * ry, zz * rx - zx * rz, zx * ry - zy * rx
+                vx, vy, vz = vs[idx, s, 0], vs[idx, s, 1], vs[idx, s, 2]
+                dv[0] = zy * vz - zz * vy + oy * cz - oz * cy
+                dv[1] = zz * vx - zx * vz + oz * cx - ox * cz
+                dv[2] = zx * vy - zy * vx + ox * cy - oy * cx
+                ax, ay, az = ws[idx + 1, s, 0], ws[idx + 1, s, 1], ws[idx + 1, s, 2]
+                dw[0], dw[1], dw[2] = zy * az - zz * ay, zz * ax - zx * az, zx * ay - zy * ax
+            if kind == 0:
+                for r in range(m):
+                    acc += sign * weights[r] * dv[rows[r]]
+                continue
+            for r in range(3):
+                acc += sign * weights[r] * dv[r]
+            tx, ty, tz = ws[0, s, 0], ws[0, s, 1], ws[0, s, 2]  # the whole angular velocity J_R a
+            for t in range(2):
+                col = (tool_axis + 1 + t) % 3
+                ux, uy, uz = frame[col], frame[3 + col], frame[6 + col]
+                # d(u . omega)/dq_j = (z_j x u) . omega + u . d omega/dq_j (u turns with the frame)
+                du = 0.0
+                if joint_type[j] != PRISMATIC:
+                    du = (zy * uz - zz * uy) * tx + (zz * ux - zx * uz) * ty + (zx * uy - zy * ux) * tz
+                acc += sign * weights[3 + t] * (du + ux * dw[0] + uy * dw[1] + uz * dw[2])
+        if kind == 1 and joint_type[j] != PRISMATIC:
+            for t in range(2):  # d(u . omega_d)/dq_j of the feedforward
+                col = (tool_axis + 1 + t) % 3
+                ux, uy, uz = frame[col], frame[3 + col], frame[6 + col]
+                acc += mu[3 + t] * ((zy * uz - zz * uy) * wdot[3] + (zz * ux - zx * uz) * wdot[4]
+                                    + (zx * uy - zy * ux) * wdot[5])
+        out[c] += acc
+
+
+@njit(**_JIT)
+def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, u, wdot, dt,
+                q_out, qdot_out, cost_out):
+    """Integrate (5.112) from ``q0`` under the inputs ``u`` (N x n) and references ``wdot`` (N x 6) into
+    ``q_out`` (N + 1 x n) and ``qdot_out`` (N x n); the cost terms (velocity, joint limits, collision) into
+    ``cost_out`` (3). ``objective_f`` is ``[rho, w_v, lower (n), upper (n), d_a, slope, ratio, weight]``.
+    Returns False when ``J J^T + rho I`` is not positive definite somewhere (the outputs are then partial)."""
+    steps, n = u.shape
+    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
+    nj = chain_i[0].shape[0]
+    rho, wv = objective_f[0], objective_f[1]
+    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
+    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
+    a, low, y = np.empty((m, m)), np.zeros((m, m)), np.empty(m)
+    scratch, dummy = np.empty(16), np.zeros(n)
+    cost_out[:] = 0.0
+    q_out[0, :] = q0
+    for k in range(steps):
+        q = q_out[k]
+        _task(chain_f, chain_i, task_i, task_f, q, wdot[k], rotation, position, world_axis, jac6, jac, b, frame)
+        if not _velocity(jac, b, u[k], rho, a, low, y, qdot_out[k]):
+            return False
+        speed = 0.0
+        for i in range(n):
+            speed += qdot_out[k, i] * qdot_out[k, i]
+            q_out[k + 1, i] = q[i] + dt * qdot_out[k, i]
+        cost_out[0] += dt * wv * speed
+        cost_out[1] += dt * _limits(q, lower, upper, lp, dummy)
+        if collision:
+            cost_out[2] += dt * _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, dummy,
+                                           scratch)
+    return True
+
+
+@njit(**_JIT)
+def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q_traj, u, wdot,
+                 dt, grad_u, lam0):
+    """The adjoint recursion (5.113), (5.115) backward along ``q_traj`` (from :func:`pik_rollout`): the exact
+    gradient of the cost with respect to every ``u_k`` into ``grad_u`` (N x n), and ``lambda_0`` into ``lam0``.
+    Returns False when ``J J^T + rho I`` is not positive definite somewhere."""
+    steps, n = u.shape
+    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
+    nj = chain_i[0].shape[0]
+    rho, wv = objective_f[0], objective_f[1]
+    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
+    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
+    a, low, y, mu = np.empty((m, m)), np.zeros((m, m)), np.empty(m), np.empty(m)
+    qdot, v, nv, grad_q, scratch = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(16)
+    lam = np.zeros(n)
+    for k in range(steps - 1, -1, -1):
+        q = q_traj[k]
+        _task(chain_f, chain_i, task_i, task_f, q, wdot[k], rotation, position, world_axis, jac6, jac, b, frame)
+        if not _velocity(jac, b, u[k], rho, a, low, y, qdot):
+            return False
+        for i in range(n):
+            v[i] = lam[i] + 2.0 * wv * qdot[i]
+        for r in range(m):
+            acc = 0.0
+            for i in range(n):
+                acc += jac[r, i] * v[i]
+            mu[r] = acc
+        _solve(low, m, mu)
+        for i in range(n):
+            acc = v[i]
+            for r in range(m):
+                acc -= jac[r, i] * mu[r]
+            nv[i] = acc
+            grad_u[k, i] = dt * acc
+            grad_q[i] = 0.0
+        _limits(q, lower, upper, lp, grad_q)
+        if collision:
+            _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, grad_q, scratch)
+        _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot[k], y, nv, mu, qdot, grad_q)
+        for i in range(n):
+            lam[i] += dt * grad_q[i]
+    lam0[:] = lam
+    return True

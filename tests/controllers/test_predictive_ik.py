@@ -1,0 +1,142 @@
+"""Predictive IK (monograph 5.6): exact adjoint gradients against finite differences of the total cost, the
+task held along the rollout, conjugate gradient against steepest descent, bad inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from redundancy_gym.assets import AGRI_ARM_TCP, AGRI_ARM_XML, BIPED_XML, PLANAR_ARM_TCP, PLANAR_ARM_XML
+from redundancy_gym.controllers import (
+    CollisionObjective,
+    ControllerError,
+    FrameAxisTask,
+    FramePositionTask,
+    JointLimitObjective,
+)
+from redundancy_gym.controllers import PredictiveIk
+from redundancy_gym.geometry import PSS, Segment
+from redundancy_gym.model import RobotModel, collision_model_from_mjcf
+
+DT = 0.01
+
+
+def _planar(**kwargs: object) -> tuple[PredictiveIk, np.ndarray, np.ndarray]:
+    """The arm of fig. 5.30 with the default PlanarReach obstacle; the TCP moves down the line at 0.45 m/s."""
+    model = RobotModel.from_mjcf(PLANAR_ARM_XML)
+    obstacle = [Segment("obstacle", (PSS(np.array([0.7, 0.0, -0.12]), 0.1),))]
+    collision = CollisionObjective(collision_model_from_mjcf(model, obstacle), activation_distance=0.15, slope=5.0)
+    limits = JointLimitObjective.from_model(model, activation_distance=0.35, weight=0.6)
+    pik = PredictiveIk(model, FramePositionTask(PLANAR_ARM_TCP, "xz"), joint_limits=limits, collision=collision,
+                       **kwargs)
+    wdot = np.zeros((200, 6))
+    wdot[:, 1] = -0.45 * np.sin(np.linspace(0.0, np.pi, 200)) ** 2  # a rest-to-rest move of 0.45 m
+    return pik, np.array([-1.3, 1.0, 0.9, 0.5]), wdot
+
+
+def _finite_difference_error(pik: PredictiveIk, q0: np.ndarray, params: np.ndarray, wdot: np.ndarray,
+                             u_b: np.ndarray | None, rng: np.random.Generator) -> tuple[float, float]:
+    roll, gradient = pik.gradient(q0, params, wdot, DT, u_b)
+    eps, worst = 1e-6, 0.0
+    for _ in range(25):
+        k, i = int(rng.integers(params.shape[0])), int(rng.integers(params.shape[1]))
+        step = np.zeros_like(params)
+        step[k, i] = eps
+        cost = [pik.rollout(q0, params + s * step, wdot, DT, u_b).cost for s in (1.0, -1.0)]
+        worst = max(worst, abs((cost[0] - cost[1]) / (2 * eps) - gradient[k, i]))
+    return worst, float(np.max(np.abs(gradient)))
+
+
+@pytest.mark.parametrize("augmented", [False, True], ids=("velocity_level", "augmented"))
+def test_planar_gradient_matches_finite_differences(augmented: bool) -> None:
+    pik, q0, wdot = _planar(augmented=augmented, input_weight=0.01)
+    rng = np.random.default_rng(0)
+    params = rng.normal(size=(100, 4)) * 0.5
+    roll = pik.rollout(q0, params, wdot[:100], DT, rng.normal(size=4))
+    assert roll.terms["collision"] > 0.0  # the obstacle term is active along this rollout
+    error, scale = _finite_difference_error(pik, q0, params, wdot[:100], rng.normal(size=4) if augmented else None,
+                                            rng)
+    assert error < 1e-7 * max(scale, 1.0)
+
+
+def test_agri_axis_task_gradient_matches_finite_differences() -> None:
+    """The 5-D tool-axis task (its rows turn with the tool), self-collision and joint limits, prismatic lift."""
+    model = RobotModel.from_mjcf(AGRI_ARM_XML)
+    collision = CollisionObjective(collision_model_from_mjcf(model), activation_distance=0.1, slope=5.0)
+    limits = JointLimitObjective.from_model(model, activation_distance=0.3, weight=0.6)
+    pik = PredictiveIk(model, FrameAxisTask(AGRI_ARM_TCP, 0), joint_limits=limits, collision=collision)
+    rng = np.random.default_rng(0)
+    q0 = rng.uniform(model.lower_limits, model.upper_limits) * 0.5
+    wdot = rng.normal(size=(60, 6)) * 0.2
+    params = rng.normal(size=(60, model.nv)) * 0.3
+    roll = pik.rollout(q0, params, wdot, DT)
+    assert roll.terms["collision"] > 0.0 and roll.terms["joint_limits"] > 0.0
+    error, scale = _finite_difference_error(pik, q0, params, wdot, None, rng)
+    assert error < 1e-7 * max(scale, 1.0)
+
+
+def test_rollout_follows_the_task_velocity_and_the_input_only_moves_the_nullspace() -> None:
+    pik, q0, wdot = _planar(damping=0.0)
+    rng = np.random.default_rng(1)
+    model = pik.model
+    task = pik.task
+    for params in (np.zeros((50, 4)), rng.normal(size=(50, 4))):
+        roll = pik.rollout(q0, params, wdot[:50], DT)
+        for k in (0, 17, 49):
+            model.update(roll.q[k])
+            np.testing.assert_allclose(task.jacobian(model) @ roll.qdot[k], wdot[k, :2], atol=1e-12)
+    # the same TCP path for any input: only the redundant motion changes
+    a = pik.rollout(q0, np.zeros((50, 4)), wdot[:50], DT).q[-1]
+    b = pik.rollout(q0, rng.normal(size=(50, 4)), wdot[:50], DT).q[-1]
+    model.update(a)
+    tcp_a = task.value(model)
+    model.update(b)
+    assert np.max(np.abs(task.value(model) - tcp_a)) < 2e-3  # Euler drift of the two paths only
+    assert np.max(np.abs(a - b)) > 0.05
+
+
+def test_conjugate_gradient_reaches_a_tight_tolerance_in_fewer_iterations_than_steepest_descent() -> None:
+    """Fig. 5.32: from the minimum-norm solution (u = 0), iterations to come within 1e-4 of the cost decrease
+    both can reach."""
+    pik, q0, wdot = _planar()
+    costs = {}
+    for method in ("fletcher_reeves", "steepest_descent"):
+        result = pik.optimize(q0, wdot, DT, np.zeros((200, 4)), max_iterations=80, tolerance=0.0, method=method)
+        assert all(b <= a for a, b in zip(result.costs, result.costs[1:]))  # every step lowers the cost
+        costs[method] = np.array(result.costs)
+    best = min(c.min() for c in costs.values())
+    start = costs["fletcher_reeves"][0]
+    assert start > best
+
+    def reach(c: np.ndarray) -> int:
+        hit = np.flatnonzero((c - best) <= 1e-4 * (start - best))
+        return int(hit[0]) if hit.size else len(c)
+
+    assert reach(costs["fletcher_reeves"]) < reach(costs["steepest_descent"])
+
+
+def test_optimize_stops_by_the_printed_rules() -> None:
+    pik, q0, wdot = _planar()
+    result = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=3, tolerance=0.0)
+    assert result.status == "max_iterations" and result.iterations == 3
+    result = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=1e-3)
+    assert result.status == "converged" and result.iterations < 200
+    assert result.costs[-1] < result.costs[0]
+
+
+def test_predictive_ik_rejects_bad_inputs() -> None:
+    pik, q0, wdot = _planar()
+    with pytest.raises(ControllerError, match="fletcher_reeves"):
+        pik.optimize(q0, wdot, DT, np.zeros((200, 4)), method="newton")
+    with pytest.raises(ControllerError, match="shape"):
+        pik.rollout(q0[:3], np.zeros((200, 4)), wdot, DT)
+    with pytest.raises(ControllerError, match="wdot"):
+        pik.rollout(q0, np.zeros((200, 4)), wdot[:10], DT)
+    with pytest.raises(ControllerError, match="finite"):
+        pik.rollout(q0, np.full((200, 4), np.nan), wdot, DT)
+    with pytest.raises(ControllerError, match="dt"):
+        pik.rollout(q0, np.zeros((200, 4)), wdot, 0.0)
+    with pytest.raises(ControllerError, match="fixed-base"):
+        PredictiveIk(RobotModel.from_mjcf(BIPED_XML), FramePositionTask("r_sole"))
+    with pytest.raises(ControllerError, match="velocity_weight"):
+        PredictiveIk(pik.model, pik.task, velocity_weight=-1.0)
