@@ -28,7 +28,8 @@ def _parser() -> argparse.ArgumentParser:
 
     ev = sub.add_parser("eval", help="evaluate a policy; prints a table and writes the evaluation-contract JSON")
     ev.add_argument("env_id", help="e.g. redundancy_gym/PlanarReach-v0")
-    ev.add_argument("--policy", required=True, help="clik | zero | random | path to an SB3 .zip")
+    ev.add_argument("--policy", required=True,
+                    help="clik | walking | predictive | global | zero | random | path to an SB3 .zip")
     ev.add_argument("--episodes", type=int, default=10)
     ev.add_argument("--seed", type=int, default=0)
     ev.add_argument("--env-kwargs", type=_json_object, default={}, help="JSON object passed to gym.make")

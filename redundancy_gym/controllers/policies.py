@@ -29,7 +29,7 @@ from .posture_objective import PostureObjective
 __all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPolicy", "Sb3Policy", "ZeroPolicy",
            "make_policy"]
 
-POLICY_NAMES: tuple[str, ...] = ("clik", "walking", "zero", "random")
+POLICY_NAMES: tuple[str, ...] = ("clik", "walking", "predictive", "global", "zero", "random")
 _SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
 
 
@@ -259,7 +259,9 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
     Args:
         name: ``"clik"`` (reference controller: :class:`ClikPolicy`, or
             :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikPolicy` for grasp tasks), ``"walking"``
-            (:class:`~redundancy_gym.controllers.walking_policy.WalkingPolicy`, biped), ``"zero"``, ``"random"`` or the path of a stable-baselines3
+            (:class:`~redundancy_gym.controllers.walking_policy.WalkingPolicy`, biped), ``"predictive"`` or ``"global"``
+            (:class:`~redundancy_gym.controllers.predictive_policy.PredictivePolicy`, PlanarReach and AgriReach),
+            ``"zero"``, ``"random"`` or the path of a stable-baselines3
             ``.zip``.
         env: the environment the policy will act in.
         **kwargs: options of the policy (``ClikPolicyConfig`` fields for ``clik``, ``seed`` for ``random``,
@@ -272,6 +274,10 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
 
             return GraspClikPolicy(env, **kwargs)
         return ClikPolicy(env, **kwargs)
+    if name in ("predictive", "global"):
+        from .predictive_policy import PredictivePolicy
+
+        return PredictivePolicy(env, mode=name, **kwargs)
     if name == "walking":
         from .walking_policy import WalkingPolicy
 

@@ -28,7 +28,7 @@ from .exceptions import ControllerError
 from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
-from .predictive_kernels import pik_gradient, pik_rollout
+from .predictive_kernels import pik_command, pik_gradient, pik_rollout
 
 __all__ = ["DESCENT_METHODS", "PredictiveIk", "PredictiveResult", "PredictiveRollout"]
 
@@ -227,9 +227,13 @@ class PredictiveIk:
         return PredictiveRollout(q, qdot, u, float(terms.sum()) + rate, parts)
 
     def gradient(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float,
-                 u_b: ArrayLike | None = None) -> tuple[PredictiveRollout, NDArray[np.float64]]:
-        """The rollout and the exact gradient ``dPhi/dparams`` (N, n) by the adjoint (5.113), (5.119), (A.53)-(A.63)."""
-        roll = self.rollout(q0, params, wdot, dt, u_b)
+                 u_b: ArrayLike | None = None, rollout: PredictiveRollout | None = None
+                 ) -> tuple[PredictiveRollout, NDArray[np.float64]]:
+        """The rollout and the exact gradient ``dPhi/dparams`` (N, n) by the adjoint (5.113), (5.119), (A.53)-(A.63).
+
+        ``rollout`` may be the :meth:`rollout` of the same arguments, done already (it is not done again).
+        """
+        roll = rollout if rollout is not None else self.rollout(q0, params, wdot, dt, u_b)
         params = np.ascontiguousarray(params, dtype=np.float64)
         wdot = np.ascontiguousarray(wdot, dtype=np.float64)
         grad_u, lam0 = np.empty_like(roll.u), np.empty(self.n)
@@ -244,6 +248,36 @@ class PredictiveIk:
         tail = np.zeros_like(grad_u)
         tail[:-1] = np.cumsum(grad_u[:0:-1], axis=0)[::-1]
         return roll, dt * tail + 2.0 * dt * self.input_weight * params
+
+    def command(self, q: ArrayLike, u: ArrayLike, target: ArrayLike, target_velocity: ArrayLike,
+                gain: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(qdot, e)``: the CLIK command ``J# (wdot + K e) + N u`` at ``q`` with the nullspace input ``u``
+        (5.5), (5.100), and the task error ``e``.
+
+        ``target`` and ``target_velocity`` are the task's rows (:class:`FramePositionTask`) or ``[p_d, a_d]``
+        and ``[v_d, omega_d]`` (:class:`FrameAxisTask`), as for :meth:`Clik.step`.
+        """
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        width = self.m if isinstance(self.task, FramePositionTask) else 6
+        target = np.asarray(target, dtype=np.float64)
+        velocity = np.asarray(target_velocity, dtype=np.float64)
+        if q.shape != (self.n,) or u.shape != (self.n,) or target.shape != (width,) or velocity.shape != (width,):
+            raise ControllerError(f"q and u must have shape ({self.n},), the target and its velocity ({width},)")
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(u)) and np.all(np.isfinite(target))
+                and np.all(np.isfinite(velocity))):
+            raise ControllerError("q, u, the target and its velocity must be finite")
+        if width == 6 and not np.linalg.norm(target[3:]) > 1e-9:
+            raise ControllerError("the target axis must not be zero")
+        wdot = np.zeros(6)
+        wdot[:width] = velocity
+        padded = np.zeros(6)
+        padded[:width] = target
+        qdot, error = np.empty(self.n), np.empty(self.m)
+        if not pik_command(self._chain_f, self._chain_i, self._task_i, self._task_f, self.damping, q, u, wdot, padded,
+                           float(gain), qdot, error):
+            raise ControllerError("J J^T + rho I is singular; raise damping")
+        return qdot, error
 
     # ------------------------------------------------------------------ algorithm 11
     def optimize(self, q0: ArrayLike, wdot: ArrayLike, dt: float, initial: ArrayLike, *, u_b: ArrayLike | None = None,
@@ -303,10 +337,10 @@ class PredictiveIk:
                 if 0.0 < best < 4.0 * alpha and abs(best - alpha) > 1e-3 * alpha:
                     other = self.rollout(q0, params + best * direction, wdot, dt, u_b)
                     if other.cost < trial_cost:
-                        candidate, trial_cost, alpha = params + best * direction, other.cost, best
+                        candidate, trial, trial_cost, alpha = params + best * direction, other, other.cost, best
             decrease = (roll.cost - trial_cost) / max(abs(roll.cost), 1e-300)
             params = candidate
-            roll, grad = self.gradient(q0, params, wdot, dt, u_b)
+            roll, grad = self.gradient(q0, params, wdot, dt, u_b, rollout=trial)
             costs.append(roll.cost)
             alpha *= 2.0  # start the next search a little further out
             if decrease < tolerance:

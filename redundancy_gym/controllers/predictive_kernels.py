@@ -32,7 +32,7 @@ from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian, place_frame
 from .collision_kernels import collision_potential
 
-__all__ = ["pik_gradient", "pik_rollout"]
+__all__ = ["pik_command", "pik_gradient", "pik_rollout"]
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
@@ -328,3 +328,35 @@ def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
             lam[i] += dt * grad_q[i]
     lam0[:] = lam
     return True
+
+
+@njit(**_JIT)
+def pik_command(chain_f, chain_i, task_i, task_f, rho, q, u, wdot, target, gain, qdot_out, error_out):
+    """The CLIK command with the nullspace input ``u``: ``qdot = J# (wdot + K e) + N u`` at ``q`` (5.5), (5.100),
+    with the task error ``e`` into ``error_out`` (m). ``target`` is the task's rows (position task) or
+    ``[p_d, a_d]`` (tool-axis task). Returns False when ``J J^T + rho I`` is singular."""
+    n = q.shape[0]
+    m = error_out.shape[0]
+    nj = chain_i[0].shape[0]
+    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
+    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
+    a, low, y = np.empty((m, m)), np.zeros((m, m)), np.empty(m)
+    _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_axis, jac6, jac, b, frame)
+    if task_i[0] == 0:
+        rows = task_i[3:]
+        for r in range(m):
+            error_out[r] = target[r] - frame[9 + rows[r]]
+    else:
+        for r in range(3):
+            error_out[r] = target[r] - frame[9 + r]
+        ax, ay, az = target[3], target[4], target[5]
+        norm = np.sqrt(ax * ax + ay * ay + az * az)
+        col = task_i[2]
+        tx, ty, tz = frame[col], frame[3 + col], frame[6 + col]  # the tool axis
+        cx, cy, cz = (ty * az - tz * ay) / norm, (tz * ax - tx * az) / norm, (tx * ay - ty * ax) / norm
+        for s in range(2):
+            c = (col + 1 + s) % 3
+            error_out[3 + s] = frame[c] * cx + frame[3 + c] * cy + frame[6 + c] * cz
+    for r in range(m):
+        b[r] += gain * error_out[r]
+    return _velocity(jac, b, u, rho, a, low, y, qdot_out)

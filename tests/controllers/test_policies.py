@@ -42,7 +42,7 @@ def test_clik_policy_tracks_the_line() -> None:
 
 
 @pytest.mark.parametrize("name, kwargs, match", [
-    ("nope", {}, "clik, walking, zero, random"), ("clik", {"gian": 1}, "valid"), ("clik", {"method": "svd"}, "dls"),
+    ("nope", {}, "clik, walking, predictive, global, zero, random"), ("clik", {"gian": 1}, "valid"), ("clik", {"method": "svd"}, "dls"),
     ("zero", {"x": 1}, "no options"), ("missing.zip", {}, "not found"),
 ])
 def test_policy_errors(name: str, kwargs: dict, match: str) -> None:

@@ -47,7 +47,7 @@ def test_cli_errors_are_clear(capsys) -> None:
     assert main(["eval", "redundancy_gym/Nope-v0", "--policy", "clik", "--no-progress"]) == 2
     assert "PlanarReach-v0" in capsys.readouterr().err
     assert main(["eval", ENV_ID, "--policy", "nope", "--no-progress"]) == 2
-    assert "clik, walking, zero, random" in capsys.readouterr().err
+    assert "clik, walking, predictive, global, zero, random" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["eval", ENV_ID, "--policy", "clik", "--env-kwargs", "[1, 2]"])
 

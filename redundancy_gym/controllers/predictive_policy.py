@@ -1,0 +1,221 @@
+"""The ``predictive`` (receding horizon, algorithm 12) and ``global`` (whole-trajectory optimum) reference
+policies of PlanarReach and AgriReach (monograph 5.6).
+
+Both command the CLIK law with the optimized nullspace input, ``qdot = J# (wdot + K e) + N u`` (5.5),
+(5.100): the task is tracked with feedback, the redundancy follows the optimal control problem of
+:class:`PredictiveIk` (pseudoenergy (5.131), joint limits (5.58), collision (5.49)). ``predictive`` solves it
+over ``horizon`` seconds at every step, warm-started; ``global`` solves it once over the whole episode at the
+start and follows that plan. Like :mod:`.policies` they read the env by duck typing and import no simulator.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .collision_objective import CollisionObjective
+from .compiled_clik import CompiledClik
+from .exceptions import PolicyError
+from .grasp_clik_policy import GraspClikPolicy
+from .joint_limit_objective import JointLimitObjective
+from .policies import ClikPolicy
+from .policy_options import config_from_options
+from .predictive_ik import DESCENT_METHODS, PredictiveIk
+from .receding_horizon import HorizonUpdate, RecedingHorizon
+
+__all__ = ["MODES", "PredictivePolicy", "PredictivePolicyConfig"]
+
+MODES = ("predictive", "global")
+"""``predictive``: receding horizon (algorithm 12); ``global``: one optimization over the whole episode."""
+_START_TIME = 1e-9
+
+
+@dataclass(frozen=True)
+class PredictivePolicyConfig:
+    """Options of the predictive policies.
+
+    Attributes:
+        horizon: prediction horizon ``T_horizon`` [s] of ``predictive``.
+        sample_time: sample time of the prediction [s]; None: the env's control period.
+        iterations: conjugate gradient iterations per update (``predictive``).
+        augmented: optimize the input rate with the input as a state (5.120)-(5.129) (``predictive``).
+        input_weight: ``w_a`` of the input rate in the augmented cost.
+        descent: ``"fletcher_reeves"``, ``"polak_ribiere"`` or ``"steepest_descent"``.
+        tolerance: relative cost decrease that ends an update.
+        global_iterations: iterations of the one ``global`` optimization.
+        gain: task feedback ``K`` [1/s]; None: the env's ``clik`` reference gain.
+        velocity_weight: ``w_v`` of the pseudoenergy (5.131).
+        joint_limit_weight, collision_weight: weights of (5.58) and (5.49) (the ``clik`` reference's potentials,
+            scaled); the monograph's fig. 5.31 uses 1.0 velocity, 1.0 collision, 0.6 joint limits.
+        damping: ``rho`` of the prediction's pseudoinverse.
+    """
+
+    horizon: float = 1.0
+    sample_time: float | None = None
+    iterations: int = 2
+    augmented: bool = True
+    input_weight: float = 1e-3
+    descent: str = "fletcher_reeves"
+    tolerance: float = 1e-6
+    global_iterations: int = 300
+    gain: float | None = None
+    velocity_weight: float = 1.0
+    joint_limit_weight: float = 0.6
+    collision_weight: float = 1.0
+    damping: float = 1e-6
+
+
+class PredictivePolicy:
+    """Predictive IK as a policy on PlanarReach (the TCP line of fig. 5.30, reference from the env's
+    ``reference(t)``) or AgriReach (the grasp path of the ``clik`` reference, with its observed obstacles).
+
+    Args:
+        env: the environment.
+        mode: ``"predictive"`` or ``"global"``.
+        **kwargs: fields of :class:`PredictivePolicyConfig`.
+    """
+
+    def __init__(self, env: Any, mode: str = "predictive", **kwargs: Any) -> None:
+        if mode not in MODES:
+            raise PolicyError(f"unknown predictive mode {mode!r}; valid: {', '.join(MODES)}")
+        self.config = config_from_options(PredictivePolicyConfig, kwargs)
+        c = self.config
+        if c.descent not in DESCENT_METHODS:
+            raise PolicyError(f"unknown descent {c.descent!r}; valid: {', '.join(DESCENT_METHODS)}")
+        if not np.isfinite(c.horizon) or c.horizon <= 0.0:
+            raise PolicyError(f"horizon must be finite and > 0, got {c.horizon!r}")
+        if not isinstance(c.iterations, int) or c.iterations < 0:
+            raise PolicyError(f"iterations must be an int >= 0, got {c.iterations!r}")
+        self.mode = mode
+        base = getattr(env, "unwrapped", env)
+        self._dt = float(c.sample_time if c.sample_time is not None else base.dt)
+        if not np.isfinite(self._dt) or self._dt <= 0.0:
+            raise PolicyError(f"sample_time must be finite and > 0, got {self._dt!r}")
+        self._grasp = "grasp_position" in getattr(base, "observation_layout", {})
+        if self._grasp:
+            self._reference_policy: GraspClikPolicy | ClikPolicy = GraspClikPolicy(env)
+            self._gain = float(c.gain if c.gain is not None else self._reference_policy.config.gain)
+            self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
+            self._layout = dict(base.observation_layout)
+        else:
+            if not callable(getattr(base, "reference", None)):
+                raise PolicyError(f"the {mode} policy needs an env with reference(t) (PlanarReach) or a grasp task")
+            self._reference_policy = ClikPolicy(env)
+            self._reference = base.reference
+            self._gain = float(c.gain if c.gain is not None else self._reference_policy.config.gain)
+            self._speeds = np.full(self._reference_policy.model.nv, float(base.max_joint_speed))
+            self._layout = dict(base.OBSERVATION_LAYOUT)
+        spec = getattr(env, "spec", None)
+        self._episode_steps = int(getattr(spec, "max_episode_steps", 0) or 0)
+        self.model = self._reference_policy.model
+        self.pik: PredictiveIk | None = None
+        self.horizon: RecedingHorizon | None = None
+        self._plan_u: NDArray[np.float64] | None = None
+        self._table: NDArray[np.float64] | None = None  # per sample: target (6) and target velocity (6)
+        self._step = 0
+        self.last_update: HorizonUpdate | None = None
+        self.last_error: NDArray[np.float64] | None = None
+
+    # ------------------------------------------------------------------ episode start
+    def _problem(self) -> PredictiveIk:
+        """The optimal control problem on the reference policy's task, joint limits and collision model, with
+        the weights of this configuration."""
+        c = self.config
+        ref = self._reference_policy
+        if isinstance(ref, GraspClikPolicy):
+            task, limits = ref.task, ref._joint_limits
+        else:
+            clik = ref.controller.clik if isinstance(ref.controller, CompiledClik) else ref.controller
+            task = clik.task
+            limits = JointLimitObjective.from_model(self.model, activation_distance=ref.config.joint_limit_activation,
+                                                    slope=ref.config.joint_limit_slope)
+        limits = JointLimitObjective(limits.lower, limits.upper, activation_distance=limits.potential.activation_distance,
+                                     slope=limits.potential.slope, switch_ratio=limits.potential.switch_ratio,
+                                     weight=c.joint_limit_weight)
+        collision = ref.collision
+        if collision is not None:
+            p = collision.potential
+            collision = CollisionObjective(collision.collision_model, activation_distance=p.activation_distance,
+                                           slope=p.slope, switch_ratio=p.switch_ratio, weight=c.collision_weight)
+        return PredictiveIk(self.model, task, velocity_weight=c.velocity_weight, joint_limits=limits,
+                            collision=collision, augmented=c.augmented and self.mode == "predictive",
+                            input_weight=c.input_weight, damping=c.damping)
+
+    def _start(self, obs: NDArray[np.float64]) -> None:
+        """A new episode: plan the reference (and the obstacles), build the problem, solve it once (global)."""
+        c = self.config
+        ref = self._reference_policy
+        if isinstance(ref, GraspClikPolicy):
+            ref._plan(obs)
+            path = ref.path
+            assert path is not None
+            end = path.duration
+            sample = path
+        else:
+            ref._update_obstacle(obs)
+            end = float(self._episode_steps) * self._dt if self._episode_steps else 0.0
+
+            def sample(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+                position, velocity, _ = self._reference(t)
+                return position, velocity
+        horizon_steps = max(1, int(round(c.horizon / self._dt)))
+        total = int(np.ceil(end / self._dt)) + horizon_steps + 1
+        first = sample(0.0)
+        width = first[0].size
+        table = np.zeros((total, 12))
+        for k in range(total):
+            target, velocity = sample(k * self._dt)
+            table[k, :width], table[k, 6:6 + width] = target, velocity
+        self._table, self._width = table, width
+        self.pik = self._problem()
+        q = obs[self._layout["q"]]
+        if self.mode == "global":
+            steps = max(1, int(np.ceil(end / self._dt)))
+            result = self.pik.optimize(q, self._wdot(0, steps), self._dt, np.zeros((steps, self.model.nv)),
+                                       max_iterations=c.global_iterations, tolerance=1e-9, method=c.descent)
+            self._plan_u = result.rollout.u
+            self.global_result = result
+        else:
+            self.horizon = RecedingHorizon(self.pik, horizon_steps, self._dt, iterations=c.iterations,
+                                           tolerance=c.tolerance, method=c.descent)
+        self._step = 0
+
+    def _wdot(self, first: int, steps: int) -> NDArray[np.float64]:
+        """Task velocity references of ``steps`` samples from sample ``first`` (held at the end of the table)."""
+        assert self._table is not None
+        index = np.minimum(np.arange(first, first + steps), len(self._table) - 1)
+        wdot = np.zeros((steps, 6))
+        wdot[:, :self._width] = self._table[index, 6:6 + self._width]
+        return wdot
+
+    # ------------------------------------------------------------------ step
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+        """Normalized joint velocity command for one observation."""
+        obs = np.asarray(observation, dtype=np.float64)
+        starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])
+        if self._grasp:
+            starting = starting or float(obs[self._layout["time"]][0]) < _START_TIME
+        if starting or self.pik is None:
+            self._start(obs)
+        assert self.pik is not None and self._table is not None
+        q = obs[self._layout["q"]]
+        k = self._step
+        if self.mode == "global":
+            assert self._plan_u is not None
+            u = self._plan_u[k] if k < len(self._plan_u) else np.zeros(self.model.nv)
+        else:
+            assert self.horizon is not None
+            self.last_update = self.horizon.update(q, self._wdot(k, self.horizon.steps))
+            u = self.last_update.u
+        row = self._table[min(k, len(self._table) - 1)]
+        qdot, self.last_error = self.pik.command(q, u, row[:self._width], row[6:6 + self._width], self._gain)
+        self._step += 1
+        return np.clip(qdot / self._speeds, -1.0, 1.0).astype(np.float32), state
+
+    def describe(self) -> dict[str, Any]:
+        """The configuration, for reports."""
+        return {"mode": self.mode, **asdict(self.config)}

@@ -1,0 +1,81 @@
+"""Algorithm 12: the predictive IK in a receding horizon, warm-started from the last solution."""
+
+from __future__ import annotations
+
+import time
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .exceptions import ControllerError
+from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult
+
+__all__ = ["HorizonUpdate", "RecedingHorizon"]
+
+
+class HorizonUpdate(NamedTuple):
+    """One update of :class:`RecedingHorizon`.
+
+    Attributes:
+        u: the nullspace input to apply now (n).
+        result: the optimization of this update.
+        seconds: wall time of the update [s].
+    """
+
+    u: NDArray[np.float64]
+    result: PredictiveResult
+    seconds: float
+
+
+class RecedingHorizon:
+    """At every control step, optimize the nullspace input over ``[t_k, t_k + horizon]`` from the measured
+    configuration, starting from the last solution shifted by one sample, and apply its first input
+    (algorithm 12).
+
+    With the augmented problem (``pik.augmented``) the horizon starts from the input applied last (5.127), which
+    is also what is applied now; the optimized rate then sets the next step's input, so the applied input
+    changes by ``dt * udot`` per step and the joint velocity stays continuous.
+
+    Args:
+        pik: the optimal control problem.
+        steps: samples ``N`` of the horizon.
+        dt: sample time [s] (the control period).
+        iterations: conjugate gradient iterations per update (``j_max``).
+        tolerance: relative cost decrease that ends an update early.
+        method: descent direction (:data:`~redundancy_gym.controllers.DESCENT_METHODS`).
+    """
+
+    def __init__(self, pik: PredictiveIk, steps: int, dt: float, *, iterations: int = 2, tolerance: float = 1e-6,
+                 method: str = "fletcher_reeves") -> None:
+        if not isinstance(steps, (int, np.integer)) or steps < 1:
+            raise ControllerError(f"steps must be an int >= 1, got {steps!r}")
+        if not np.isfinite(dt) or dt <= 0.0:
+            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        if method not in DESCENT_METHODS:
+            raise ControllerError(f"unknown method {method!r}; valid: {', '.join(DESCENT_METHODS)}")
+        self.pik, self.steps, self.dt = pik, int(steps), float(dt)
+        self.iterations, self.tolerance, self.method = int(iterations), float(tolerance), method
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the last solution (a new episode): the next update starts from zero inputs."""
+        self._params = np.zeros((self.steps, self.pik.n))
+        self._u_b = np.zeros(self.pik.n)
+        self.last: HorizonUpdate | None = None
+
+    def update(self, q: ArrayLike, wdot: ArrayLike) -> HorizonUpdate:
+        """Optimize from ``q`` with the task velocity reference ``wdot`` (N, 6) of the horizon's samples."""
+        start = time.perf_counter()
+        result = self.pik.optimize(q, wdot, self.dt, self._params, u_b=self._u_b, max_iterations=self.iterations,
+                                   tolerance=self.tolerance, method=self.method)
+        params = result.params
+        u = result.rollout.u
+        applied = u[0].copy()
+        # warm start: the solution shifted by one sample, its last sample repeated
+        self._params = np.concatenate([params[1:], params[-1:]])
+        if self.pik.augmented:
+            self._u_b = u[1].copy() if self.steps > 1 else applied + self.dt * params[0]
+        update = HorizonUpdate(applied, result, time.perf_counter() - start)
+        self.last = update
+        return update

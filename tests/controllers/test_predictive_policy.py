@@ -1,0 +1,74 @@
+"""The ``predictive`` and ``global`` policies on PlanarReach and AgriReach: whole episodes, the receding
+horizon's warm start and continuity, bad options."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import redundancy_gym  # noqa: F401  (registers the env ids)
+from redundancy_gym.controllers import ControllerError, PolicyError
+from redundancy_gym.controllers.policies import make_policy
+from redundancy_gym.controllers.receding_horizon import RecedingHorizon
+from redundancy_gym.eval.evaluate import evaluate
+
+PLANAR = "redundancy_gym/PlanarReach-v0"
+AGRI = "redundancy_gym/AgriReach-v0"
+
+
+def test_planar_predictive_and_global_succeed_with_less_pseudoenergy_than_local_clik() -> None:
+    """Fig. 5.31 on the default obstacle scene, two episodes: global <= predictive(1 s) < local CLIK."""
+    reports = {name: evaluate(PLANAR, name, episodes=2, seed=0, progress=False).to_json()
+               for name in ("clik", "predictive", "global")}
+    for report in reports.values():
+        assert report["success_rate"] == 1.0 and report["collision_rate"] == 0.0
+    energy = {name: r["pseudoenergy"] for name, r in reports.items()}
+    assert energy["global"] <= energy["predictive"] * 1.01
+    assert energy["predictive"] < 0.9 * energy["clik"]
+
+
+def test_agri_predictive_runs_a_grasp_episode() -> None:
+    report = evaluate(AGRI, "predictive", episodes=1, seed=0, env_kwargs={"difficulty": "medium"},
+                      policy_kwargs={"horizon": 0.15}, progress=False).to_json()
+    assert report["success_rate"] == 1.0 and report["collision_rate"] == 0.0
+
+
+def test_augmented_horizon_applies_the_input_it_planned_one_step_earlier() -> None:
+    """(5.127): the input applied now is the one the previous update planned for now, so the nullspace
+    velocity does not jump when the horizon moves; the velocity-level horizon re-plans it freely."""
+    env = gym.make(PLANAR)
+    obs, _ = env.reset(seed=0)
+    for augmented in (True, False):
+        policy = make_policy("predictive", env, augmented=augmented)
+        obs, _ = env.reset(seed=0)
+        planned, gaps = None, []
+        for k in range(60):
+            action, _ = policy.predict(obs, episode_start=np.array([k == 0]))
+            update = policy.last_update
+            assert update is not None
+            if planned is not None:
+                gaps.append(float(np.max(np.abs(update.u - planned))))
+            planned = update.result.rollout.u[1].copy()
+            obs, *_ = env.step(action)
+        if augmented:
+            assert max(gaps) < 1e-12
+        else:
+            assert max(gaps) > 1e-6
+    env.close()
+
+
+def test_predictive_options_are_checked() -> None:
+    env = gym.make(PLANAR)
+    with pytest.raises(PolicyError, match="descent"):
+        make_policy("predictive", env, descent="newton")
+    with pytest.raises(PolicyError, match="horizon"):
+        make_policy("predictive", env, horizon=0.0)
+    with pytest.raises(PolicyError, match="valid"):
+        make_policy("global", env, horizon_steps=3)
+    with pytest.raises(PolicyError, match="reference"):
+        make_policy("predictive", gym.make("redundancy_gym/BipedWalk-v0"))
+    policy = make_policy("predictive", env)
+    with pytest.raises(ControllerError, match="steps"):
+        RecedingHorizon(policy.pik if policy.pik is not None else policy._problem(), 0, 0.01)
+    env.close()
