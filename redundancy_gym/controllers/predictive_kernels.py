@@ -250,6 +250,15 @@ def _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot, y, a1, mu
 
 
 @njit(**_JIT)
+def _workspace(chain_i, task_i, n):
+    """Task size and the per-step arrays: joint frames, Jacobians, task velocity, frame, ``A``, its factor, ``y``."""
+    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
+    nj = chain_i[0].shape[0]
+    return (m, np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3)), np.empty((6, n)), np.empty((m, n)),
+            np.empty(m), np.empty(12), np.empty((m, m)), np.zeros((m, m)), np.empty(m))
+
+
+@njit(**_JIT)
 def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, u, wdot, dt,
                 q_out, qdot_out, cost_out):
     """Integrate (5.112) from ``q0`` under the inputs ``u`` (N x n) and references ``wdot`` (N x 6) into
@@ -257,13 +266,9 @@ def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, c
     ``cost_out`` (3). ``objective_f`` is ``[rho, w_v, lower (n), upper (n), d_a, slope, ratio, weight]``.
     Returns False when ``J J^T + rho I`` is not positive definite somewhere (the outputs are then partial)."""
     steps, n = u.shape
-    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
-    nj = chain_i[0].shape[0]
+    m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
     lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
-    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
-    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
-    a, low, y = np.empty((m, m)), np.zeros((m, m)), np.empty(m)
     scratch, dummy = np.empty(16), np.zeros(n)
     cost_out[:] = 0.0
     q_out[0, :] = q0
@@ -291,13 +296,10 @@ def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
     gradient of the cost with respect to every ``u_k`` into ``grad_u`` (N x n), and ``lambda_0`` into ``lam0``.
     Returns False when ``J J^T + rho I`` is not positive definite somewhere."""
     steps, n = u.shape
-    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
-    nj = chain_i[0].shape[0]
+    m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
     lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
-    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
-    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
-    a, low, y, mu = np.empty((m, m)), np.zeros((m, m)), np.empty(m), np.empty(m)
+    mu = np.empty(m)
     qdot, v, nv, grad_q, scratch = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(16)
     lam = np.zeros(n)
     for k in range(steps - 1, -1, -1):
@@ -335,12 +337,7 @@ def pik_command(chain_f, chain_i, task_i, task_f, rho, q, u, wdot, target, gain,
     """The CLIK command with the nullspace input ``u``: ``qdot = J# (wdot + K e) + N u`` at ``q`` (5.5), (5.100),
     with the task error ``e`` into ``error_out`` (m). ``target`` is the task's rows (position task) or
     ``[p_d, a_d]`` (tool-axis task). Returns False when ``J J^T + rho I`` is singular."""
-    n = q.shape[0]
-    m = error_out.shape[0]
-    nj = chain_i[0].shape[0]
-    rotation, position, world_axis = np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3))
-    jac6, jac, b, frame = np.empty((6, n)), np.empty((m, n)), np.empty(m), np.empty(12)
-    a, low, y = np.empty((m, m)), np.zeros((m, m)), np.empty(m)
+    m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, q.shape[0])
     _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_axis, jac6, jac, b, frame)
     if task_i[0] == 0:
         rows = task_i[3:]
