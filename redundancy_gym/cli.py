@@ -59,10 +59,11 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--seed", type=int, default=0)
     re.add_argument("--env-kwargs", type=_json_object, default={})
     be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
-                         "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's")
+                         "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
+                         "pik: predictive IK against local CLIK and the global optimum")
     be.add_argument("--json", dest="json_path", help="default: results/bench_<name>.json")
     be.add_argument("--seed", type=int, default=0)
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
@@ -122,6 +123,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                 report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
                 print(format_ik_bench(report))
                 print(f"wrote {write_ik_bench(report, json_path)}")
+            elif args.name == "pik":
+                from .eval.bench_pik import format_pik_bench, run_pik_bench
+                from .eval.bench_ssv import write_ssv_bench as write_pik_bench
+
+                report = run_pik_bench(seed=args.seed, episodes=2 if args.quick else 10, quick=args.quick,
+                                       progress=not args.no_progress)
+                print(format_pik_bench(report))
+                print(f"wrote {write_pik_bench(report, json_path)}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

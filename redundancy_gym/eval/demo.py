@@ -49,6 +49,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
+    written.append(_predictive(out, seed=seed))
     for path in written:
         print(f"wrote {path}")
     return written
@@ -97,6 +98,16 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]
                              env_kwargs={"target_speed": 0.7})
     written.append(path)
     return written
+
+
+def _predictive(out: Path, *, seed: int) -> Path:
+    """Fig. 5.31 analogue: pseudoenergy over time of local CLIK, predictive IK (1 s horizon) and the global
+    optimum on the PlanarReach obstacle scene (kinematic rollouts)."""
+    from .bench_pik import planar_kinematic_traces, plot_pseudoenergy  # noqa: PLC0415 - imports the policies
+
+    traces = planar_kinematic_traces(seed=seed)
+    return plot_pseudoenergy(traces, out / "planar_reach_pseudoenergy_fig_5_31.png",
+                             "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)")
 
 
 def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:

@@ -1,0 +1,42 @@
+"""bench pik: every part runs and its figures are consistent (quick settings)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from redundancy_gym.eval.bench_pik import format_pik_bench, planar_kinematic_traces, plot_pseudoenergy, run_pik_bench
+from redundancy_gym.eval.bench_ssv import write_ssv_bench
+from redundancy_gym.eval.exceptions import EvalError
+
+
+def test_pik_bench_report(tmp_path) -> None:
+    report = run_pik_bench(episodes=1, quick=True, progress=False)
+    planar = report["planar"]
+    assert set(planar) == {"clik", "predictive", "global"}
+    assert report["planar_mpc_vs_local_pseudoenergy"] == pytest.approx(
+        planar["predictive"]["pseudoenergy"] / planar["clik"]["pseudoenergy"])
+    agri = report["agri_self_collision"]
+    assert set(agri) == {"local CLIK", "MPC 0.15 s", "MPC 2 s", "global"}
+    assert report["agri_horizon2s_update_ms_median"] == agri["MPC 2 s"]["update_ms_median"] > 0.0
+    descent = report["descent"]
+    assert descent["cg_costs"][0] == descent["sd_costs"][0] > descent["best_cost"]
+    # the augmented horizon applies what it planned a step earlier: no re-planning jump at all
+    assert report["planar_kinematic"]["MPC 1 s (augmented)"]["replan_jump_max"] < 1e-12
+    assert report["planar_kinematic"]["MPC 1 s (velocity level)"]["replan_jump_max"] > 0.0
+    assert "agri_horizon2s_update_ms_median" in format_pik_bench(report)
+    written = json.loads(write_ssv_bench(report, tmp_path / "pik.json").read_text())
+    assert written["agri_horizon2s_update_ms_median"] == report["agri_horizon2s_update_ms_median"]
+    with pytest.raises(EvalError, match="episodes"):
+        run_pik_bench(episodes=0, progress=False)
+
+
+def test_kinematic_traces_track_the_line_and_plot(tmp_path) -> None:
+    traces = planar_kinematic_traces(global_iterations=30, augmented=(True,))
+    for trace in traces.values():
+        assert np.max(trace.task_error) < 2e-3 and np.min(trace.clearance) > 0.0
+    assert traces["MPC 1 s (augmented)"].pseudoenergy() < traces["local CLIK"].pseudoenergy()
+    path = plot_pseudoenergy(traces, tmp_path / "p.png", "fig. 5.31")
+    assert path.stat().st_size > 1000
