@@ -196,7 +196,7 @@ class GraspClikPolicy:
         self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         self._geometry = collision_geometry_from_mjcf(self.model)  # the arm's own segments, read once
-        self._joint_limits = JointLimitObjective.from_model(
+        self.joint_limits = JointLimitObjective.from_model(
             self.model, activation_distance=self.config.joint_limit_activation, slope=1.0,
             weight=self.config.joint_limit_weight)
         self.task = FrameAxisTask(base.TCP_FRAME, axis=0)
@@ -208,7 +208,7 @@ class GraspClikPolicy:
     def build_controller(self, environment: list[Segment]) -> Clik | CompiledClik:
         """The CLIK controller of this configuration (compiled unless ``backend="python"``) with ``environment``
         (world-fixed obstacle segments) in its collision model; also sets :attr:`collision`."""
-        objectives: list[Any] = [self._joint_limits]
+        objectives: list[Any] = [self.joint_limits]
         self.collision = None
         if self.config.collision_avoidance == "on":
             model = self._geometry.collision_model(environment)
@@ -219,7 +219,9 @@ class GraspClikPolicy:
                     nullspace_gain=self.config.nullspace_gain, objectives=objectives)
         return CompiledClik(clik) if self.config.backend == "compiled" else clik
 
-    def _plan(self, obs: NDArray[np.float64]) -> None:
+    def plan(self, obs: NDArray[np.float64]) -> None:
+        """A new episode: the grasp path from the observed TCP pose and grasp, and the controller with the
+        observed obstacles (done by :meth:`predict` when the observation's time is 0)."""
         lay = self._layout
         start = obs[lay["tcp_position"]]
         axis = _tool_axis(obs[lay["tcp_quaternion"]])
@@ -242,7 +244,7 @@ class GraspClikPolicy:
         obs = np.asarray(observation, dtype=np.float64)
         t = float(obs[self._layout["time"]][0])
         if self.path is None or t < _START_TIME:
-            self._plan(obs)
+            self.plan(obs)
         assert self.path is not None and self.controller is not None
         target, velocity = self.path(t)
         result = self.controller.step(obs[self._layout["q"]], target, velocity)

@@ -184,7 +184,8 @@ class ClikPolicy:
         return CollisionObjective(model, activation_distance=self.config.collision_activation,
                                   slope=self.config.collision_slope, weight=self.config.collision_weight)
 
-    def _update_obstacle(self, obs: NDArray[np.float64]) -> None:
+    def update_obstacle(self, obs: NDArray[np.float64]) -> None:
+        """Place the collision model's obstacle where the observation says (done by :meth:`predict`)."""
         if self.collision is None or self._obstacle_slices is None:
             return
         center_slice, radius_slice = self._obstacle_slices
@@ -203,7 +204,7 @@ class ClikPolicy:
                 deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
         """Normalized joint velocity command for one observation."""
         obs = np.asarray(observation, dtype=np.float64)
-        self._update_obstacle(obs)
+        self.update_obstacle(obs)
         result = self.controller.step(obs[self._layout["q"]], obs[self._layout["tcp_ref"]],
                                       obs[self._layout["tcp_ref_vel"]])
         self.last_result = result

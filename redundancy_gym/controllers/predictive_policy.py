@@ -18,7 +18,10 @@ from numpy.typing import NDArray
 
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
+from ..model import RobotModel
 from .exceptions import PolicyError
+from .frame_axis_task import FrameAxisTask
+from .frame_position_task import FramePositionTask
 from .grasp_clik_policy import GraspClikPolicy
 from .joint_limit_objective import JointLimitObjective
 from .policies import ClikPolicy
@@ -26,7 +29,7 @@ from .policy_options import config_from_options
 from .predictive_ik import DESCENT_METHODS, PredictiveIk
 from .receding_horizon import HorizonUpdate, RecedingHorizon
 
-__all__ = ["MODES", "PredictivePolicy", "PredictivePolicyConfig"]
+__all__ = ["MODES", "PredictivePolicy", "PredictivePolicyConfig", "predictive_problem"]
 
 MODES = ("predictive", "global")
 """``predictive``: receding horizon (algorithm 12); ``global``: one optimization over the whole episode."""
@@ -68,6 +71,22 @@ class PredictivePolicyConfig:
     damping: float = 1e-6
 
 
+def predictive_problem(model: RobotModel, task: FramePositionTask | FrameAxisTask, joint_limits: JointLimitObjective,
+                       collision: CollisionObjective | None, config: PredictivePolicyConfig, *,
+                       augmented: bool) -> PredictiveIk:
+    """:class:`PredictiveIk` on a reference controller's potentials (their shapes kept) with the weights of
+    ``config``: ``joint_limit_weight`` on (5.58), ``collision_weight`` on (5.49), ``velocity_weight`` on (5.131)."""
+    p = joint_limits.potential
+    limits = JointLimitObjective(joint_limits.lower, joint_limits.upper, activation_distance=p.activation_distance,
+                                 slope=p.slope, switch_ratio=p.switch_ratio, weight=config.joint_limit_weight)
+    if collision is not None:
+        p = collision.potential
+        collision = CollisionObjective(collision.collision_model, activation_distance=p.activation_distance,
+                                       slope=p.slope, switch_ratio=p.switch_ratio, weight=config.collision_weight)
+    return PredictiveIk(model, task, velocity_weight=config.velocity_weight, joint_limits=limits, collision=collision,
+                        augmented=augmented, input_weight=config.input_weight, damping=config.damping)
+
+
 class PredictivePolicy:
     """Predictive IK as a policy on PlanarReach (the TCP line of fig. 5.30, reference from the env's
     ``reference(t)``) or AgriReach (the grasp path of the ``clik`` reference, with its observed obstacles).
@@ -91,9 +110,9 @@ class PredictivePolicy:
             raise PolicyError(f"iterations must be an int >= 0, got {c.iterations!r}")
         self.mode = mode
         base = getattr(env, "unwrapped", env)
-        self._dt = float(c.sample_time if c.sample_time is not None else base.dt)
-        if not np.isfinite(self._dt) or self._dt <= 0.0:
-            raise PolicyError(f"sample_time must be finite and > 0, got {self._dt!r}")
+        self.dt = float(c.sample_time if c.sample_time is not None else base.dt)
+        if not np.isfinite(self.dt) or self.dt <= 0.0:
+            raise PolicyError(f"sample_time must be finite and > 0, got {self.dt!r}")
         self._grasp = "grasp_position" in getattr(base, "observation_layout", {})
         if self._grasp:
             self._reference_policy: GraspClikPolicy | ClikPolicy = GraspClikPolicy(env)
@@ -113,77 +132,67 @@ class PredictivePolicy:
         self.model = self._reference_policy.model
         self.pik: PredictiveIk | None = None
         self.horizon: RecedingHorizon | None = None
-        self._plan_u: NDArray[np.float64] | None = None
+        self.plan_u: NDArray[np.float64] | None = None
         self._table: NDArray[np.float64] | None = None  # per sample: target (6) and target velocity (6)
         self._step = 0
         self.last_update: HorizonUpdate | None = None
         self.last_error: NDArray[np.float64] | None = None
 
     # ------------------------------------------------------------------ episode start
-    def _problem(self) -> PredictiveIk:
+    def problem(self) -> PredictiveIk:
         """The optimal control problem on the reference policy's task, joint limits and collision model, with
         the weights of this configuration."""
-        c = self.config
         ref = self._reference_policy
         if isinstance(ref, GraspClikPolicy):
-            task, limits = ref.task, ref._joint_limits
+            task, limits = ref.task, ref.joint_limits
         else:
             clik = ref.controller.clik if isinstance(ref.controller, CompiledClik) else ref.controller
             task = clik.task
             limits = JointLimitObjective.from_model(self.model, activation_distance=ref.config.joint_limit_activation,
                                                     slope=ref.config.joint_limit_slope)
-        limits = JointLimitObjective(limits.lower, limits.upper, activation_distance=limits.potential.activation_distance,
-                                     slope=limits.potential.slope, switch_ratio=limits.potential.switch_ratio,
-                                     weight=c.joint_limit_weight)
-        collision = ref.collision
-        if collision is not None:
-            p = collision.potential
-            collision = CollisionObjective(collision.collision_model, activation_distance=p.activation_distance,
-                                           slope=p.slope, switch_ratio=p.switch_ratio, weight=c.collision_weight)
-        return PredictiveIk(self.model, task, velocity_weight=c.velocity_weight, joint_limits=limits,
-                            collision=collision, augmented=c.augmented and self.mode == "predictive",
-                            input_weight=c.input_weight, damping=c.damping)
+        return predictive_problem(self.model, task, limits, ref.collision, self.config,
+                                  augmented=self.config.augmented and self.mode == "predictive")
 
-    def _start(self, obs: NDArray[np.float64]) -> None:
+    def start(self, obs: NDArray[np.float64]) -> None:
         """A new episode: plan the reference (and the obstacles), build the problem, solve it once (global)."""
         c = self.config
         ref = self._reference_policy
         if isinstance(ref, GraspClikPolicy):
-            ref._plan(obs)
+            ref.plan(obs)
             path = ref.path
             assert path is not None
             end = path.duration
             sample = path
         else:
-            ref._update_obstacle(obs)
-            end = float(self._episode_steps) * self._dt if self._episode_steps else 0.0
+            ref.update_obstacle(obs)
+            end = float(self._episode_steps) * self.dt if self._episode_steps else 0.0
 
             def sample(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
                 position, velocity, _ = self._reference(t)
                 return position, velocity
-        horizon_steps = max(1, int(round(c.horizon / self._dt)))
-        total = int(np.ceil(end / self._dt)) + horizon_steps + 1
+        horizon_steps = max(1, int(round(c.horizon / self.dt)))
+        total = int(np.ceil(end / self.dt)) + horizon_steps + 1
         first = sample(0.0)
         width = first[0].size
         table = np.zeros((total, 12))
         for k in range(total):
-            target, velocity = sample(k * self._dt)
+            target, velocity = sample(k * self.dt)
             table[k, :width], table[k, 6:6 + width] = target, velocity
         self._table, self._width = table, width
-        self.pik = self._problem()
+        self.pik = self.problem()
         q = obs[self._layout["q"]]
         if self.mode == "global":
-            steps = max(1, int(np.ceil(end / self._dt)))
-            result = self.pik.optimize(q, self._wdot(0, steps), self._dt, np.zeros((steps, self.model.nv)),
+            steps = max(1, int(np.ceil(end / self.dt)))
+            result = self.pik.optimize(q, self.wdot(0, steps), self.dt, np.zeros((steps, self.model.nv)),
                                        max_iterations=c.global_iterations, tolerance=1e-9, method=c.descent)
-            self._plan_u = result.rollout.u
+            self.plan_u = result.rollout.u
             self.global_result = result
         else:
-            self.horizon = RecedingHorizon(self.pik, horizon_steps, self._dt, iterations=c.iterations,
+            self.horizon = RecedingHorizon(self.pik, horizon_steps, self.dt, iterations=c.iterations,
                                            tolerance=c.tolerance, method=c.descent)
         self._step = 0
 
-    def _wdot(self, first: int, steps: int) -> NDArray[np.float64]:
+    def wdot(self, first: int, steps: int) -> NDArray[np.float64]:
         """Task velocity references of ``steps`` samples from sample ``first`` (held at the end of the table)."""
         assert self._table is not None
         index = np.minimum(np.arange(first, first + steps), len(self._table) - 1)
@@ -200,16 +209,16 @@ class PredictivePolicy:
         if self._grasp:
             starting = starting or float(obs[self._layout["time"]][0]) < _START_TIME
         if starting or self.pik is None:
-            self._start(obs)
+            self.start(obs)
         assert self.pik is not None and self._table is not None
         q = obs[self._layout["q"]]
         k = self._step
         if self.mode == "global":
-            assert self._plan_u is not None
-            u = self._plan_u[k] if k < len(self._plan_u) else np.zeros(self.model.nv)
+            assert self.plan_u is not None
+            u = self.plan_u[k] if k < len(self.plan_u) else np.zeros(self.model.nv)
         else:
             assert self.horizon is not None
-            self.last_update = self.horizon.update(q, self._wdot(k, self.horizon.steps))
+            self.last_update = self.horizon.update(q, self.wdot(k, self.horizon.steps))
             u = self.last_update.u
         row = self._table[min(k, len(self._table) - 1)]
         qdot, self.last_error = self.pik.command(q, u, row[:self._width], row[6:6 + self._width], self._gain)

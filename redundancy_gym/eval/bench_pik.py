@@ -31,10 +31,10 @@ from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ..assets import AGRI_ARM_TCP  # noqa: E402
-from ..controllers import CollisionObjective, JointLimitObjective, PredictiveIk  # noqa: E402
+from ..controllers import PredictiveIk  # noqa: E402
 from ..controllers.grasp_clik_policy import GraspClikPolicy, GraspPath  # noqa: E402
 from ..controllers.policies import make_policy  # noqa: E402
-from ..controllers.predictive_policy import PredictivePolicy, PredictivePolicyConfig  # noqa: E402
+from ..controllers.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
 from ..controllers.receding_horizon import RecedingHorizon  # noqa: E402
 from ..model import collision_model_from_mjcf  # noqa: E402
 from .evaluate import evaluate  # noqa: E402
@@ -142,7 +142,7 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
         dt, steps = float(base.dt), int(env.spec.max_episode_steps)
         q0 = obs[base.OBSERVATION_LAYOUT["q"]].copy()
         clik_policy = make_policy("clik", env)
-        clik_policy._update_obstacle(obs)  # noqa: SLF001 - the policy reads the obstacle from the observation
+        clik_policy.update_obstacle(obs)
         model = clik_policy.model
         monitor = clik_policy.collision.collision_model if clik_policy.collision is not None else None
 
@@ -172,15 +172,15 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
         gain = float(clik_policy.config.gain)
         for aug in augmented:
             policy = PredictivePolicy(env, horizon=horizon, augmented=aug)
-            policy._start(obs)  # noqa: SLF001 - the obstacle, the problem and the horizon of this episode
+            policy.start(obs)  # the obstacle, the problem and the horizon of this episode
             assert policy.pik is not None and policy.horizon is not None
             label = f"MPC {horizon:g} s" + (" (augmented)" if aug else " (velocity level)")
             traces[label] = _rollout(q0, steps, dt, _mpc_command(policy.pik, policy.horizon, wdot, target, gain),
                                      clearance)
         policy = PredictivePolicy(env, mode="global", global_iterations=global_iterations)
-        policy._start(obs)  # noqa: SLF001 - solves the whole episode
-        assert policy.pik is not None and policy._plan_u is not None  # noqa: SLF001
-        traces["global"] = _rollout(q0, steps, dt, _plan_command(policy.pik, policy._plan_u, target, gain),  # noqa: SLF001
+        policy.start(obs)
+        assert policy.pik is not None and policy.plan_u is not None
+        traces["global"] = _rollout(q0, steps, dt, _plan_command(policy.pik, policy.plan_u, target, gain),
                                     clearance)
     finally:
         env.close()
@@ -223,18 +223,9 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
         result = controller.step(q, position, velocity)
         return result.qdot, float(np.linalg.norm(result.error)), 0.0
 
-    config = PredictivePolicyConfig()
-    limits = grasp._joint_limits  # noqa: SLF001
-
     def problem(augmented: bool) -> PredictiveIk:
-        p = grasp.collision.potential
-        collision = CollisionObjective(grasp.collision.collision_model, activation_distance=p.activation_distance,
-                                       slope=p.slope, switch_ratio=p.switch_ratio, weight=config.collision_weight)
-        joint_limits = JointLimitObjective(limits.lower, limits.upper,
-                                           activation_distance=limits.potential.activation_distance,
-                                           slope=limits.potential.slope, weight=config.joint_limit_weight)
-        return PredictiveIk(model, grasp.task, joint_limits=joint_limits, collision=collision, augmented=augmented,
-                            input_weight=config.input_weight, damping=config.damping)
+        return predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision, PredictivePolicyConfig(),
+                                  augmented=augmented)
 
     traces = {"local CLIK": _rollout(q0, steps, dt, local, clearance)}
     gain = float(grasp.config.gain)
@@ -255,15 +246,15 @@ def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[st
     try:
         obs, _ = env.reset(seed=seed)
         policy = PredictivePolicy(env, mode="global")
-        policy._start(obs)  # noqa: SLF001 - builds the problem and the reference table of this episode
+        policy.start(obs)
         pik = policy.pik
         assert pik is not None
         steps = int(env.spec.max_episode_steps)
-        wdot = policy._wdot(0, steps)  # noqa: SLF001
-        q0 = obs[policy._layout["q"]]  # noqa: SLF001
+        wdot = policy.wdot(0, steps)
+        q0 = obs[env.unwrapped.OBSERVATION_LAYOUT["q"]]
         costs = {}
         for method in ("fletcher_reeves", "steepest_descent"):
-            result = pik.optimize(q0, wdot, policy._dt, np.zeros((steps, pik.n)), max_iterations=iterations,  # noqa: SLF001
+            result = pik.optimize(q0, wdot, policy.dt, np.zeros((steps, pik.n)), max_iterations=iterations,
                                   tolerance=0.0, method=method)
             costs[method] = np.array(result.costs)
     finally:

@@ -15,6 +15,7 @@ from numpy.typing import NDArray  # noqa: E402
 
 from .. import make_policy  # noqa: E402
 from .evaluate import make_env  # noqa: E402
+from .plots import save_figure  # noqa: E402
 
 __all__ = ["WalkTrace", "plot_angular_momentum", "plot_com_zmp", "record_walk"]
 
@@ -92,11 +93,7 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
     axes[0].legend(loc="upper left", fontsize=8)
     axes[1].set_xlabel("time [s]")
     fig.suptitle(title)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)
 
 
 def plot_angular_momentum(traces: dict[str, WalkTrace], path: str | Path, title: str) -> Path:
@@ -109,8 +106,4 @@ def plot_angular_momentum(traces: dict[str, WalkTrace], path: str | Path, title:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ax.set_title(title)
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path, dpi=120)

@@ -70,5 +70,5 @@ def test_predictive_options_are_checked() -> None:
         make_policy("predictive", gym.make("redundancy_gym/BipedWalk-v0"))
     policy = make_policy("predictive", env)
     with pytest.raises(ControllerError, match="steps"):
-        RecedingHorizon(policy.pik if policy.pik is not None else policy._problem(), 0, 0.01)
+        RecedingHorizon(policy.pik if policy.pik is not None else policy.problem(), 0, 0.01)
     env.close()
