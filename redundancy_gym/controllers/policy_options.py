@@ -20,7 +20,7 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
     valid = {f.name for f in fields(config_type)}  # type: ignore[arg-type]
     unknown = set(options) - valid
     if unknown:
-        raise PolicyError(f"unknown clik option(s) {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
+        raise PolicyError(f"unknown option(s) of {config_type.__name__}: {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
     config = config_type(**options)
     method = getattr(config, "method", METHODS[0])
     if method not in METHODS:

@@ -10,7 +10,7 @@ start and follows that plan. Like :mod:`.policies` they read the env by duck typ
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -26,10 +26,10 @@ from .grasp_clik_policy import GraspClikPolicy
 from .joint_limit_objective import JointLimitObjective
 from .policies import ClikPolicy
 from .policy_options import config_from_options
-from .predictive_ik import DESCENT_METHODS, PredictiveIk
+from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
 from .receding_horizon import HorizonUpdate, RecedingHorizon
 
-__all__ = ["MODES", "PredictivePolicy", "PredictivePolicyConfig", "predictive_problem"]
+__all__ = ["MODES", "TASK_DEFAULTS", "PredictivePolicy", "PredictivePolicyConfig", "predictive_problem"]
 
 MODES = ("predictive", "global")
 """``predictive``: receding horizon (algorithm 12); ``global``: one optimization over the whole episode."""
@@ -40,6 +40,11 @@ _START_TIME = 1e-9
 class PredictivePolicyConfig:
     """Options of the predictive policies.
 
+    The cost weights and the collision potential's shape default per task (``None`` below): they are not
+    those of local CLIK, since in the optimal control problem a potential is integrated over time and weighed
+    against the pseudoenergy, not added to a velocity (the monograph, fig. 5.35, uses 1 / 2 / 0.6 locally and
+    1 / 5000 / 80 for MPC). :data:`TASK_DEFAULTS` lists them.
+
     Attributes:
         horizon: prediction horizon ``T_horizon`` [s] of ``predictive``.
         sample_time: sample time of the prediction [s]; None: the env's control period.
@@ -49,10 +54,14 @@ class PredictivePolicyConfig:
         descent: ``"fletcher_reeves"``, ``"polak_ribiere"`` or ``"steepest_descent"``.
         tolerance: relative cost decrease that ends an update.
         global_iterations: iterations of the one ``global`` optimization.
-        gain: task feedback ``K`` [1/s]; None: the env's ``clik`` reference gain.
+        gain: task feedback ``K`` [1/s] (and the feedback to the planned joint path of ``global``); None: the
+            env's ``clik`` reference gain.
         velocity_weight: ``w_v`` of the pseudoenergy (5.131).
-        joint_limit_weight, collision_weight: weights of (5.58) and (5.49) (the ``clik`` reference's potentials,
-            scaled); the monograph's fig. 5.31 uses 1.0 velocity, 1.0 collision, 0.6 joint limits.
+        joint_limit_weight: weight of (5.58) on the ``clik`` reference's joint-limit potential.
+        collision_weight: weight of (5.49).
+        collision_activation: ``d_a`` of the collision potential [m]; None: the task default, or the
+            ``clik`` reference's.
+        collision_slope: ``|H'(0)|`` of the collision potential [1/m]; None as for ``collision_activation``.
         damping: ``rho`` of the prediction's pseudoinverse.
     """
 
@@ -66,23 +75,50 @@ class PredictivePolicyConfig:
     global_iterations: int = 300
     gain: float | None = None
     velocity_weight: float = 1.0
-    joint_limit_weight: float = 0.6
-    collision_weight: float = 1.0
+    joint_limit_weight: float | None = None
+    collision_weight: float | None = None
+    collision_activation: float | None = None
+    collision_slope: float | None = None
     damping: float = 1e-6
+
+    def for_task(self, task: str) -> PredictivePolicyConfig:
+        """This configuration with the ``None`` cost options of ``task`` (a key of :data:`TASK_DEFAULTS`)
+        filled in."""
+        if task not in TASK_DEFAULTS:
+            raise PolicyError(f"unknown task {task!r}; valid: {', '.join(TASK_DEFAULTS)}")
+        filled = {k: v for k, v in TASK_DEFAULTS[task].items() if getattr(self, k) is None}
+        return replace(self, **filled)
+
+
+TASK_DEFAULTS: dict[str, dict[str, float | None]] = {
+    "planar": {"joint_limit_weight": 0.6, "collision_weight": 1.0},
+    "grasp": {"joint_limit_weight": 0.6, "collision_weight": 100.0, "collision_activation": 0.02,
+              "collision_slope": 30.0},
+}
+"""Cost options of :class:`PredictivePolicyConfig` left at ``None``, per task. ``planar`` (PlanarReach): the
+weights of fig. 5.31 on the ``clik`` reference's potentials. ``grasp`` (AgriReach, 9 DoF): a collision
+barrier 2 cm deep, steep and strongly weighted, so that a plan passes close to an obstacle when that saves
+motion (the reference's 10 cm, 4/m potential made the optimum keep 5 cm away at any cost, and a weak
+weight let the short horizon collide); found on the fig. 5.10 move, ``redundancy-gym bench pik``."""
 
 
 def predictive_problem(model: RobotModel, task: FramePositionTask | FrameAxisTask, joint_limits: JointLimitObjective,
                        collision: CollisionObjective | None, config: PredictivePolicyConfig, *,
                        augmented: bool) -> PredictiveIk:
-    """:class:`PredictiveIk` on a reference controller's potentials (their shapes kept) with the weights of
-    ``config``: ``joint_limit_weight`` on (5.58), ``collision_weight`` on (5.49), ``velocity_weight`` on (5.131)."""
+    """:class:`PredictiveIk` on a reference controller's potentials with the weights of ``config``
+    (``joint_limit_weight`` on (5.58), ``collision_weight`` on (5.49), ``velocity_weight`` on (5.131)) and
+    its collision potential's shape where set; ``config`` must have its weights (:meth:`~PredictivePolicyConfig.for_task`)."""
+    if config.joint_limit_weight is None or config.collision_weight is None:
+        raise PolicyError("the configuration has no cost weights; fill them with for_task()")
     p = joint_limits.potential
     limits = JointLimitObjective(joint_limits.lower, joint_limits.upper, activation_distance=p.activation_distance,
                                  slope=p.slope, switch_ratio=p.switch_ratio, weight=config.joint_limit_weight)
     if collision is not None:
         p = collision.potential
-        collision = CollisionObjective(collision.collision_model, activation_distance=p.activation_distance,
-                                       slope=p.slope, switch_ratio=p.switch_ratio, weight=config.collision_weight)
+        activation = p.activation_distance if config.collision_activation is None else config.collision_activation
+        slope = p.slope if config.collision_slope is None else config.collision_slope
+        collision = CollisionObjective(collision.collision_model, activation_distance=activation, slope=slope,
+                                       switch_ratio=p.switch_ratio, weight=config.collision_weight)
     return PredictiveIk(model, task, velocity_weight=config.velocity_weight, joint_limits=limits, collision=collision,
                         augmented=augmented, input_weight=config.input_weight, damping=config.damping)
 
@@ -110,10 +146,16 @@ class PredictivePolicy:
             raise PolicyError(f"iterations must be an int >= 0, got {c.iterations!r}")
         self.mode = mode
         base = getattr(env, "unwrapped", env)
+        self.control_dt = float(base.dt)
         self.dt = float(c.sample_time if c.sample_time is not None else base.dt)
         if not np.isfinite(self.dt) or self.dt <= 0.0:
             raise PolicyError(f"sample_time must be finite and > 0, got {self.dt!r}")
+        self.substeps = int(round(self.dt / self.control_dt))
+        if self.substeps < 1 or abs(self.substeps * self.control_dt - self.dt) > 1e-9 * self.dt:
+            raise PolicyError(f"sample_time must be a whole multiple of the env's control period "
+                              f"{self.control_dt:g} s, got {self.dt!r}")
         self._grasp = "grasp_position" in getattr(base, "observation_layout", {})
+        self.config = c = c.for_task("grasp" if self._grasp else "planar")
         if self._grasp:
             self._reference_policy: GraspClikPolicy | ClikPolicy = GraspClikPolicy(env)
             self._gain = float(c.gain if c.gain is not None else self._reference_policy.config.gain)
@@ -132,8 +174,9 @@ class PredictivePolicy:
         self.model = self._reference_policy.model
         self.pik: PredictiveIk | None = None
         self.horizon: RecedingHorizon | None = None
-        self.plan_u: NDArray[np.float64] | None = None
-        self._table: NDArray[np.float64] | None = None  # per sample: target (6) and target velocity (6)
+        self.plan: PredictiveRollout | None = None
+        self._table: NDArray[np.float64] | None = None  # per control step: target (6) and its velocity (6)
+        self.global_result: PredictiveResult | None = None
         self._step = 0
         self.last_update: HorizonUpdate | None = None
         self.last_error: NDArray[np.float64] | None = None
@@ -165,27 +208,29 @@ class PredictivePolicy:
             sample = path
         else:
             ref.update_obstacle(obs)
-            end = float(self._episode_steps) * self.dt if self._episode_steps else 0.0
+            end = float(self._episode_steps) * self.control_dt if self._episode_steps else 0.0
 
             def sample(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
                 position, velocity, _ = self._reference(t)
                 return position, velocity
         horizon_steps = max(1, int(round(c.horizon / self.dt)))
-        total = int(np.ceil(end / self.dt)) + horizon_steps + 1
+        total = (int(np.ceil(end / self.dt)) + horizon_steps + 1) * self.substeps
         first = sample(0.0)
         width = first[0].size
-        table = np.zeros((total, 12))
+        table = np.zeros((total, 12))  # per control step
         for k in range(total):
-            target, velocity = sample(k * self.dt)
+            target, velocity = sample(k * self.control_dt)
             table[k, :width], table[k, 6:6 + width] = target, velocity
         self._table, self._width = table, width
         self.pik = self.problem()
         q = obs[self._layout["q"]]
+        self.plan = None
+        self.horizon = None
         if self.mode == "global":
             steps = max(1, int(np.ceil(end / self.dt)))
             result = self.pik.optimize(q, self.wdot(0, steps), self.dt, np.zeros((steps, self.model.nv)),
                                        max_iterations=c.global_iterations, tolerance=1e-9, method=c.descent)
-            self.plan_u = result.rollout.u
+            self.plan = result.rollout
             self.global_result = result
         else:
             self.horizon = RecedingHorizon(self.pik, horizon_steps, self.dt, iterations=c.iterations,
@@ -193,9 +238,9 @@ class PredictivePolicy:
         self._step = 0
 
     def wdot(self, first: int, steps: int) -> NDArray[np.float64]:
-        """Task velocity references of ``steps`` samples from sample ``first`` (held at the end of the table)."""
+        """Task velocity references of ``steps`` prediction samples from sample ``first`` (held at the end)."""
         assert self._table is not None
-        index = np.minimum(np.arange(first, first + steps), len(self._table) - 1)
+        index = np.minimum(np.arange(first, first + steps) * self.substeps, len(self._table) - 1)
         wdot = np.zeros((steps, 6))
         wdot[:, :self._width] = self._table[index, 6:6 + self._width]
         return wdot
@@ -213,13 +258,15 @@ class PredictivePolicy:
         assert self.pik is not None and self._table is not None
         q = obs[self._layout["q"]]
         k = self._step
+        sample, within = divmod(k, self.substeps)
         if self.mode == "global":
-            assert self.plan_u is not None
-            u = self.plan_u[k] if k < len(self.plan_u) else np.zeros(self.model.nv)
+            assert self.plan is not None
+            u = self.plan.follow(sample, q, self._gain, within / self.substeps)
         else:
             assert self.horizon is not None
-            self.last_update = self.horizon.update(q, self.wdot(k, self.horizon.steps))
-            u = self.last_update.u
+            if within == 0:  # a new prediction sample: re-plan (algorithm 12)
+                self.last_update = self.horizon.update(q, self.wdot(sample, self.horizon.steps))
+            u = self.horizon.input_at(within * self.control_dt)
         row = self._table[min(k, len(self._table) - 1)]
         qdot, self.last_error = self.pik.command(q, u, row[:self._width], row[6:6 + self._width], self._gain)
         self._step += 1

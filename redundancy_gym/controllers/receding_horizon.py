@@ -79,3 +79,19 @@ class RecedingHorizon:
         update = HorizonUpdate(applied, result, time.perf_counter() - start)
         self.last = update
         return update
+
+    def input_at(self, elapsed: float) -> NDArray[np.float64]:
+        """The nullspace input ``elapsed`` seconds after the last update, for control steps between updates
+        (a sample time longer than the control period).
+
+        Velocity level: the first input, held over the sample (the inputs are piecewise constant, so the joint
+        velocity jumps where the next update starts, fig. 5.33). Augmented: ``u_b + elapsed * udot_0``, which
+        reaches the next update's ``u_b`` at the end of the sample: the input is continuous (fig. 5.34).
+        """
+        if self.last is None:
+            raise ControllerError("no update yet: call update() first")
+        if not np.isfinite(elapsed) or elapsed < 0.0 or elapsed > self.dt * (1.0 + 1e-9):
+            raise ControllerError(f"elapsed must be in [0, dt = {self.dt:g}] s, got {elapsed!r}")
+        if not self.pik.augmented:
+            return self.last.u.copy()
+        return self.last.u + elapsed * self.last.result.params[0]

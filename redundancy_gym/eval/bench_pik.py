@@ -9,9 +9,12 @@
   smallest self-clearance and the median time per MPC update (``agri_horizon2s_update_ms_median``).
 - **Conjugate gradient against steepest descent** (fig. 5.32): the global PlanarReach problem from the
   minimum-norm solution; iterations until the cost is within ``1e-4`` of the decrease both reach.
-- **Velocity jumps** (figs. 5.33/5.34): PlanarReach MPC in a kinematic rollout with and without the augmented
-  state; the largest jump of the nullspace velocity from what the previous update planned for this step
-  (re-planning), and the largest change of the commanded velocity between control steps.
+- **Velocity jumps** (figs. 5.33/5.34): PlanarReach MPC (1 s horizon, control at 100 Hz) in kinematic rollouts
+  with and without the augmented state, for prediction sample times from the control period up: the largest
+  change between control steps of the nullspace joint velocity ``N u`` (the part the MPC sets; the task part
+  ``J# (wdot + K e)`` is common to all controllers) and of the whole joint velocity. Velocity-level inputs are
+  piecewise constant over a sample, so ``N u`` jumps where the next update starts; the augmented input is
+  continuous.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ..assets import AGRI_ARM_TCP  # noqa: E402
-from ..controllers import PredictiveIk  # noqa: E402
+from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
 from ..controllers.grasp_clik_policy import GraspClikPolicy, GraspPath  # noqa: E402
 from ..controllers.policies import make_policy  # noqa: E402
 from ..controllers.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
@@ -42,8 +45,8 @@ from .exceptions import EvalError  # noqa: E402
 from .plots import save_figure  # noqa: E402
 from .point_to_point import FIG_5_10, PointToPointScenario, _Robot  # noqa: E402
 
-__all__ = ["KinematicTrace", "agri_self_collision_traces", "format_pik_bench", "planar_kinematic_traces",
-           "plot_pseudoenergy", "run_pik_bench"]
+__all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "format_pik_bench",
+           "planar_kinematic_traces", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -57,8 +60,7 @@ class KinematicTrace(NamedTuple):
         task_error: (T,) norm of the task error before each step.
         clearance: (T,) smallest distance of the collision pairs after each step [m].
         update_seconds: (T,) compute time of each step [s].
-        replan_jump: (T,) largest difference of the applied nullspace input from what the previous update
-            planned for this step (MPC only; zeros otherwise).
+        nullspace_qdot: (T, n) the part of ``qdot`` beyond the task part ``J# (wdot + K e)``.
     """
 
     time: NDArray[np.float64]
@@ -67,7 +69,7 @@ class KinematicTrace(NamedTuple):
     task_error: NDArray[np.float64]
     clearance: NDArray[np.float64]
     update_seconds: NDArray[np.float64]
-    replan_jump: NDArray[np.float64]
+    nullspace_qdot: NDArray[np.float64]
 
     def pseudoenergy(self, joints: slice = slice(None)) -> float:
         """``integral of qdot^T qdot dt`` over ``joints``."""
@@ -80,61 +82,89 @@ class KinematicTrace(NamedTuple):
                 "task_error_max": float(np.max(self.task_error)), "min_clearance": float(np.min(self.clearance)),
                 "collision": bool(np.min(self.clearance) <= 0.0),
                 "update_ms_median": float(np.median(self.update_seconds) * 1e3),
-                "replan_jump_max": float(np.max(self.replan_jump)),
-                "velocity_change_max": float(np.max(np.abs(np.diff(self.qdot, axis=0)))) if len(self.qdot) > 1 else 0.0}
+                "velocity_jump_max": _largest_jump(self.qdot), "nullspace_jump_max": _largest_jump(self.nullspace_qdot)}
 
 
-def _rollout(q0: NDArray[np.float64], steps: int, dt: float,
-             command: Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, float]],
+def _largest_jump(qdot: NDArray[np.float64]) -> float:
+    """Largest change of one joint's velocity between consecutive control steps."""
+    return float(np.max(np.abs(np.diff(qdot, axis=0)))) if len(qdot) > 1 else 0.0
+
+
+Command = Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, NDArray[np.float64]]]
+"""``command(k, q) -> (qdot, task error norm, nullspace part of qdot)`` of one control step."""
+
+
+def _rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command,
              clearance: Callable[[NDArray[np.float64]], float]) -> KinematicTrace:
     q = np.array(q0, dtype=np.float64)
-    qs, qdots, errors, gaps, seconds, clear = [q.copy()], [], [], [], [], []
+    qs, qdots, errors, nulls, seconds, clear = [q.copy()], [], [], [], [], []
     for k in range(steps):
         start = time.perf_counter()
-        qdot, error, gap = command(k, q)
+        qdot, error, null = command(k, q)
         seconds.append(time.perf_counter() - start)
         q = q + dt * qdot
         qs.append(q.copy())
         qdots.append(qdot)
         errors.append(error)
-        gaps.append(gap)
+        nulls.append(null)
         clear.append(clearance(q))
     return KinematicTrace(dt * np.arange(1, steps + 1), np.array(qdots), np.array(qs), np.array(errors),
-                          np.array(clear), np.array(seconds), np.array(gaps))
+                          np.array(clear), np.array(seconds), np.array(nulls))
+
+
+def _with_input(pik: PredictiveIk, q: NDArray[np.float64], u: NDArray[np.float64],
+                target: tuple[NDArray[np.float64], NDArray[np.float64]], gain: float
+                ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+    """The CLIK command with nullspace input ``u``, its error norm and its nullspace part."""
+    qdot, error = pik.command(q, u, target[0], target[1], gain)
+    task_part, _ = pik.command(q, np.zeros_like(u), target[0], target[1], gain)
+    return qdot, float(np.linalg.norm(error)), qdot - task_part
 
 
 def _mpc_command(pik: PredictiveIk, horizon: RecedingHorizon, wdot: Callable[[int, int], NDArray[np.float64]],
-                 target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float
-                 ) -> Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, float]]:
-    planned: list[NDArray[np.float64]] = []
+                 target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float,
+                 substeps: int = 1) -> Command:
+    """Algorithm 12 every ``substeps`` control steps (``horizon.dt`` = ``substeps`` control periods); the
+    input between updates from :meth:`RecedingHorizon.input_at`. ``wdot(first, count)`` is in samples."""
+    control_dt = horizon.dt / substeps
 
-    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
-        update = horizon.update(q, wdot(k, horizon.steps))
-        gap = float(np.max(np.abs(update.u - planned[0]))) if planned else 0.0
-        planned[:] = [update.result.rollout.u[1].copy() if horizon.steps > 1 else update.u]
-        position, velocity = target(k)
-        qdot, error = pik.command(q, update.u, position, velocity, gain)
-        return qdot, float(np.linalg.norm(error)), gap
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+        sample, within = divmod(k, substeps)
+        if within == 0:
+            horizon.update(q, wdot(sample, horizon.steps))
+        return _with_input(pik, q, horizon.input_at(within * control_dt), target(k), gain)
 
     return command
 
 
-def _plan_command(pik: PredictiveIk, plan: NDArray[np.float64],
-                  target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float
-                  ) -> Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, float]]:
-    """Follow a global plan's nullspace inputs with task feedback."""
-    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
+def _plan_command(pik: PredictiveIk, plan: PredictiveRollout,
+                  target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float) -> Command:
+    """Follow a global plan: its nullspace inputs, the task with feedback, the planned joint path with
+    feedback in the nullspace (:meth:`~redundancy_gym.controllers.PredictiveRollout.follow`)."""
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+        return _with_input(pik, q, plan.follow(k, q, gain), target(k), gain)
+
+    return command
+
+
+def _local_command(controller: Any, pik: PredictiveIk,
+                   target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float) -> Command:
+    """Local CLIK (``controller.step``); its nullspace part measured against ``pik``'s task part."""
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
         position, velocity = target(k)
-        qdot, error = pik.command(q, plan[min(k, len(plan) - 1)], position, velocity, gain)
-        return qdot, float(np.linalg.norm(error)), 0.0
+        result = controller.step(q, position, velocity)
+        task_part, _ = pik.command(q, np.zeros(pik.n), position, velocity, gain)
+        return result.qdot, float(np.linalg.norm(result.error)), result.qdot - task_part
 
     return command
 
 
 def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_iterations: int = 300,
-                            augmented: tuple[bool, ...] = (True, False)) -> dict[str, KinematicTrace]:
-    """PlanarReach (default obstacle) in a kinematic rollout from the env's start at ``seed``: local CLIK
-    (the ``clik`` policy's controller), MPC (``horizon``, with and without the augmented state) and global."""
+                            augmented: tuple[bool, ...] = (True, False), sample_time: float | None = None,
+                            local: bool = True, global_plan: bool = True) -> dict[str, KinematicTrace]:
+    """PlanarReach (default obstacle) in kinematic rollouts at the env's control period from its start at
+    ``seed``: local CLIK (the ``clik`` policy's controller), MPC (``horizon``, prediction ``sample_time``,
+    with and without the augmented state) and global (each of the three only when asked)."""
     env = gym.make(PLANAR)
     try:
         obs, _ = env.reset(seed=seed)
@@ -156,35 +186,56 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
             position, velocity, _ = base.reference(k * dt)
             return position, velocity
 
-        table = np.array([np.concatenate(target(k)) for k in range(steps + int(round(horizon / dt)) + 2)])
-
-        def wdot(first: int, count: int) -> NDArray[np.float64]:
-            out = np.zeros((count, 6))
-            out[:, :2] = table[np.minimum(np.arange(first, first + count), len(table) - 1), 2:4]
-            return out
-
-        def local(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
-            position, velocity = target(k)
-            result = clik_policy.controller.step(q, position, velocity)
-            return result.qdot, float(np.linalg.norm(result.error)), 0.0
-
-        traces = {"local CLIK": _rollout(q0, steps, dt, local, clearance)}
+        traces: dict[str, KinematicTrace] = {}
         gain = float(clik_policy.config.gain)
+        reference = PredictivePolicy(env, mode="global", global_iterations=global_iterations)
+        reference.start(obs)  # the obstacle, the problem; the global plan
+        assert reference.pik is not None and reference.plan is not None
+        if local:
+            traces["local CLIK"] = _rollout(q0, steps, dt, _local_command(clik_policy.controller, reference.pik,
+                                                                          target, gain), clearance)
         for aug in augmented:
-            policy = PredictivePolicy(env, horizon=horizon, augmented=aug)
-            policy.start(obs)  # the obstacle, the problem and the horizon of this episode
+            policy = PredictivePolicy(env, horizon=horizon, augmented=aug, sample_time=sample_time)
+            policy.start(obs)
             assert policy.pik is not None and policy.horizon is not None
             label = f"MPC {horizon:g} s" + (" (augmented)" if aug else " (velocity level)")
-            traces[label] = _rollout(q0, steps, dt, _mpc_command(policy.pik, policy.horizon, wdot, target, gain),
-                                     clearance)
-        policy = PredictivePolicy(env, mode="global", global_iterations=global_iterations)
-        policy.start(obs)
-        assert policy.pik is not None and policy.plan_u is not None
-        traces["global"] = _rollout(q0, steps, dt, _plan_command(policy.pik, policy.plan_u, target, gain),
-                                    clearance)
+            command = _mpc_command(policy.pik, policy.horizon, policy.wdot, target, gain, policy.substeps)
+            traces[label] = _rollout(q0, steps, dt, command, clearance)
+        if global_plan:
+            traces["global"] = _rollout(q0, steps, dt, _plan_command(reference.pik, reference.plan, target, gain),
+                                        clearance)
     finally:
         env.close()
     return traces
+
+
+JUMP_SAMPLE_TIMES = (0.01, 0.05, 0.1, 0.2)
+"""Prediction sample times [s] of the velocity-jump comparison (the PlanarReach control period is 0.01 s)."""
+JUMP_SAMPLE_TIME = 0.2
+"""The one whose ratio the report names ``nullspace_jump_ratio`` (five samples over the 1 s horizon): the
+ratio grows with the sample time, and at the control period neither variant has jumps (see the README)."""
+
+
+def velocity_jumps(*, seed: int = 0, sample_times: tuple[float, ...] = JUMP_SAMPLE_TIMES,
+                   horizon: float = 1.0) -> list[dict[str, float]]:
+    """Figs. 5.33/5.34: PlanarReach MPC with and without the augmented state for each prediction sample time
+    (control at the env's period): the largest jump of the nullspace and of the whole joint velocity between
+    control steps, their ratios (velocity level / augmented) and the pseudoenergy."""
+    rows = []
+    for sample_time in sample_times:
+        traces = planar_kinematic_traces(seed=seed, horizon=horizon, sample_time=sample_time, local=False,
+                                         global_plan=False)
+        aug = traces[f"MPC {horizon:g} s (augmented)"].summary()
+        vel = traces[f"MPC {horizon:g} s (velocity level)"].summary()
+        rows.append({"sample_time": sample_time,
+                     "augmented_nullspace_jump": aug["nullspace_jump_max"],
+                     "velocity_level_nullspace_jump": vel["nullspace_jump_max"],
+                     "nullspace_jump_ratio": vel["nullspace_jump_max"] / max(aug["nullspace_jump_max"], 1e-300),
+                     "augmented_velocity_jump": aug["velocity_jump_max"],
+                     "velocity_level_velocity_jump": vel["velocity_jump_max"],
+                     "velocity_jump_ratio": vel["velocity_jump_max"] / max(aug["velocity_jump_max"], 1e-300),
+                     "augmented_pseudoenergy": aug["pseudoenergy"], "velocity_level_pseudoenergy": vel["pseudoenergy"]})
+    return rows
 
 
 def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
@@ -218,24 +269,20 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
         model.update(q)
         return float(np.min(monitor.evaluate(model).distance))
 
-    def local(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
-        position, velocity = target(k)
-        result = controller.step(q, position, velocity)
-        return result.qdot, float(np.linalg.norm(result.error)), 0.0
-
     def problem(augmented: bool) -> PredictiveIk:
-        return predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision, PredictivePolicyConfig(),
-                                  augmented=augmented)
+        config = PredictivePolicyConfig().for_task("grasp")
+        return predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision, config, augmented=augmented)
 
-    traces = {"local CLIK": _rollout(q0, steps, dt, local, clearance)}
     gain = float(grasp.config.gain)
+    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(controller, problem(False), target, gain),
+                                     clearance)}
     for horizon in horizons:
         pik = problem(True)
         mpc = RecedingHorizon(pik, max(1, int(round(horizon / dt))), dt, iterations=iterations)
         traces[f"MPC {horizon:g} s"] = _rollout(q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), clearance)
     pik = problem(False)
     plan = pik.optimize(q0, wdot(0, steps), dt, np.zeros((steps, pik.n)), max_iterations=global_iterations,
-                        tolerance=1e-9).rollout.u
+                        tolerance=1e-9).rollout
     traces["global"] = _rollout(q0, steps, dt, _plan_command(pik, plan, target, gain), clearance)
     return traces
 
@@ -292,10 +339,11 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, progress: bool = True, q
     report["agri_horizon2s_update_ms_median"] = report["agri_self_collision"]["MPC 2 s"]["update_ms_median"]
     report["descent"] = _descent_comparison(seed, 60 if quick else 200, 1e-4)
     kinematic = planar_kinematic_traces(seed=seed, global_iterations=iterations)
-    jumps = {label: trace.summary() for label, trace in kinematic.items()}
-    report["planar_kinematic"] = jumps
-    aug, vel = jumps["MPC 1 s (augmented)"]["replan_jump_max"], jumps["MPC 1 s (velocity level)"]["replan_jump_max"]
-    report["replan_jump_ratio"] = vel / max(aug, 1e-300)
+    report["planar_kinematic"] = {label: trace.summary() for label, trace in kinematic.items()}
+    rows = velocity_jumps(seed=seed, sample_times=(0.01, JUMP_SAMPLE_TIME) if quick else JUMP_SAMPLE_TIMES)
+    report["velocity_jumps"] = rows
+    headline = next(r for r in rows if r["sample_time"] == JUMP_SAMPLE_TIME)
+    report["nullspace_jump_ratio"] = headline["nullspace_jump_ratio"]
     return report
 
 
@@ -315,10 +363,18 @@ def format_pik_bench(report: dict[str, Any]) -> str:
     d = report["descent"]
     lines.append(f"descent to {d['tolerance']:g} of the decrease: CG {d['cg_iterations']} iterations, steepest "
                  f"descent {d['sd_iterations']} (of {d['max_iterations']})")
+    lines.append("PlanarReach kinematic: controller | pseudoenergy | largest jump between control steps of N u | "
+                 "of qdot [rad/s]")
     for name, r in report["planar_kinematic"].items():
-        lines.append(f"  {name}: largest re-planning jump {r['replan_jump_max']:.2e} rad/s, largest velocity "
-                     f"change per step {r['velocity_change_max']:.4f} rad/s")
-    lines.append(f"replan_jump_ratio (velocity level / augmented) = {report['replan_jump_ratio']:.3g}")
+        lines.append(f"  {name} | {r['pseudoenergy']:.4f} | {r['nullspace_jump_max']:.4f} | {r['velocity_jump_max']:.4f}")
+    lines.append("Velocity jumps, MPC 1 s: sample time [s] | N u jump velocity level / augmented (ratio) | "
+                 "qdot jump (ratio)")
+    for r in report["velocity_jumps"]:
+        lines.append(f"  {r['sample_time']:g} | {r['velocity_level_nullspace_jump']:.4f} / "
+                     f"{r['augmented_nullspace_jump']:.4f} ({r['nullspace_jump_ratio']:.1f}) | "
+                     f"{r['velocity_level_velocity_jump']:.4f} / {r['augmented_velocity_jump']:.4f} "
+                     f"({r['velocity_jump_ratio']:.1f})")
+    lines.append(f"nullspace_jump_ratio (sample time {JUMP_SAMPLE_TIME:g} s) = {report['nullspace_jump_ratio']:.3g}")
     return "\n".join(lines)
 
 

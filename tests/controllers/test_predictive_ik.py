@@ -140,3 +140,56 @@ def test_predictive_ik_rejects_bad_inputs() -> None:
         PredictiveIk(RobotModel.from_mjcf(BIPED_XML), FramePositionTask("r_sole"))
     with pytest.raises(ControllerError, match="velocity_weight"):
         PredictiveIk(pik.model, pik.task, velocity_weight=-1.0)
+
+
+def test_follow_is_the_plan_input_on_the_plan_and_pulls_back_to_it() -> None:
+    pik, q0, wdot = _planar()
+    plan = pik.optimize(q0, wdot[:50], DT, np.zeros((50, 4)), max_iterations=5).rollout
+    assert np.array_equal(plan.follow(10, plan.q[10], 3.0), plan.u[10])
+    off = plan.q[10] + np.array([0.01, 0.0, -0.02, 0.0])
+    assert np.allclose(plan.follow(10, off, 3.0) - plan.u[10], -3.0 * (off - plan.q[10]))
+    halfway = 0.5 * (plan.q[10] + plan.q[11])
+    assert np.allclose(plan.follow(10, halfway, 3.0, fraction=0.5), plan.u[10])
+    assert np.allclose(plan.follow(80, plan.q[-1], 3.0), 0.0)  # after the end: hold the last configuration
+    with pytest.raises(ControllerError, match="fraction"):
+        plan.follow(10, q0, 3.0, fraction=1.0)
+    with pytest.raises(ControllerError, match="gain"):
+        plan.follow(10, q0, -1.0)
+
+
+def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -> None:
+    """The whole fig. 5.10 move of the 9-DoF arm planned once (with the grasp reference's wide collision
+    potential, weight 1: the plan grazes the arm's own links): the plan's inputs alone, run with task feedback
+    from the same start, drift from the planned joint path (the nullspace has no restoring term) until the arm
+    whips through a different self-motion; following the plan with :meth:`PredictiveRollout.follow` keeps it
+    within 0.1 rad (open loop: more than 1 rad)."""
+    from redundancy_gym.controllers.grasp_clik_policy import GraspClikPolicy, GraspPath  # noqa: PLC0415
+    from redundancy_gym.controllers.predictive_policy import PredictivePolicyConfig, predictive_problem  # noqa: PLC0415
+    from redundancy_gym.eval.point_to_point import FIG_5_10, _Robot  # noqa: PLC0415
+
+    grasp = GraspClikPolicy(_Robot(), collision_avoidance="on")
+    grasp.build_controller([])
+    model = grasp.model
+    q0, steps = np.asarray(FIG_5_10.q_start), int(round((FIG_5_10.duration + FIG_5_10.hold) / DT))
+    model.update(np.asarray(FIG_5_10.q_goal))
+    goal, axis = model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy()
+    model.update(q0)
+    path = GraspPath(model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
+                     goal, goal, axis, FIG_5_10.duration, FIG_5_10.hold)
+    table = np.array([np.concatenate(path(k * DT)) for k in range(steps)])
+    pik = predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision,
+                             PredictivePolicyConfig(collision_weight=1.0, collision_activation=0.1,
+                                                    collision_slope=4.0).for_task("grasp"), augmented=False)
+    plan = pik.optimize(q0, table[:, 6:], DT, np.zeros((steps, 9)), max_iterations=300, tolerance=1e-9).rollout
+    deviation, speed = {}, {}
+    for gain in (0.0, float(grasp.config.gain)):
+        q, worst = q0.copy(), 0.0
+        for k in range(steps):
+            qdot, _ = pik.command(q, plan.follow(k, q, gain), table[k, :6], table[k, 6:], float(grasp.config.gain))
+            q = q + DT * qdot
+            worst = max(worst, float(np.max(np.abs(q - plan.q[k + 1]))))
+            speed[gain] = max(speed.get(gain, 0.0), float(np.max(np.abs(qdot))))
+        deviation[gain] = worst
+    gain = float(grasp.config.gain)
+    assert deviation[gain] < 0.1 < 1.0 < deviation[0.0]
+    assert speed[gain] < 1.5 * np.max(np.abs(plan.qdot)) < speed[0.0]
