@@ -46,7 +46,7 @@ from .plots import save_figure  # noqa: E402
 from .point_to_point import FIG_5_10, PointToPointScenario, _Robot  # noqa: E402
 
 __all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "format_pik_bench",
-           "planar_kinematic_traces", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
+           "planar_kinematic_traces", "plot_joint_velocity", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -389,4 +389,19 @@ def plot_pseudoenergy(traces: dict[str, KinematicTrace], path: Any, title: str, 
     ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8, title="pseudoenergy (integral)", title_fontsize=8)
+    return save_figure(fig, path)
+
+
+def plot_joint_velocity(traces: dict[str, KinematicTrace], joint: int, path: Any, title: str) -> Any:
+    """One joint's commanded velocity over time for each trace (figs. 5.33/5.34: the staircase of velocity-level
+    MPC, the continuous augmented MPC)."""
+    fig, ax = plt.subplots(figsize=(8.0, 4.0))
+    for label, trace in traces.items():
+        ax.step(trace.time - (trace.time[0] if len(trace.time) else 0.0), trace.qdot[:, joint], where="post",
+                label=f"{label}: largest jump {_largest_jump(trace.qdot[:, joint:joint + 1]):.4f} rad/s")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"qdot_{joint + 1} [rad/s]")
+    ax.set_title(title)
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=8)
     return save_figure(fig, path)

@@ -49,7 +49,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
-    written.append(_predictive(out, seed=seed))
+    written.extend(_predictive(out, seed=seed))
     for path in written:
         print(f"wrote {path}")
     return written
@@ -100,14 +100,24 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]
     return written
 
 
-def _predictive(out: Path, *, seed: int) -> Path:
-    """Fig. 5.31 analogue: pseudoenergy over time of local CLIK, predictive IK (1 s horizon) and the global
-    optimum on the PlanarReach obstacle scene (kinematic rollouts)."""
-    from .bench_pik import planar_kinematic_traces, plot_pseudoenergy  # noqa: PLC0415 - imports the policies
+def _predictive(out: Path, *, seed: int) -> list[Path]:
+    """Predictive IK against local CLIK and the global optimum, in kinematic rollouts: the fig. 5.31 analogue
+    (PlanarReach obstacle scene, 1 s horizon), the fig. 5.35 analogue (the fig. 5.10 self-collision move of the
+    9-DoF arm, 0.15 s and 2 s horizons) and the figs. 5.33/5.34 analogue (the second joint's velocity with and
+    without the augmented state at a 0.2 s prediction sample)."""
+    from .bench_pik import (JUMP_SAMPLE_TIME, agri_self_collision_traces, plot_joint_velocity,  # noqa: PLC0415
+                            planar_kinematic_traces, plot_pseudoenergy)
 
-    traces = planar_kinematic_traces(seed=seed)
-    return plot_pseudoenergy(traces, out / "planar_reach_pseudoenergy_fig_5_31.png",
-                             "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)")
+    written = [plot_pseudoenergy(planar_kinematic_traces(seed=seed), out / "planar_reach_pseudoenergy_fig_5_31.png",
+                                 "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)")]
+    written.append(plot_pseudoenergy(agri_self_collision_traces(), out / "agri_self_collision_pseudoenergy_fig_5_35.png",
+                                     "9-DoF arm, fig. 5.10 self-collision move: revolute joints (fig. 5.35 analogue)",
+                                     joints=slice(1, None)))
+    jumps = planar_kinematic_traces(seed=seed, sample_time=JUMP_SAMPLE_TIME, local=False)
+    written.append(plot_joint_velocity(jumps, 1, out / "planar_reach_velocity_jumps_fig_5_33.png",
+                                       f"PlanarReach, MPC 1 s with {JUMP_SAMPLE_TIME:g} s samples: joint 2 "
+                                       "(figs. 5.33/5.34 analogue)"))
+    return written
 
 
 def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
