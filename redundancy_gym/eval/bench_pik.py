@@ -12,7 +12,8 @@
 - **Velocity jumps** (figs. 5.33/5.34): PlanarReach MPC (1 s horizon, control at 100 Hz) in kinematic rollouts
   with and without the augmented state, for prediction sample times from the control period up: the largest
   change between control steps of the nullspace joint velocity ``N u`` (the part the MPC sets; the task part
-  ``J# (wdot + K e)`` is common to all controllers) and of the whole joint velocity. Velocity-level inputs are
+  ``J# (wdot + K e)`` is common to all controllers), of the whole joint velocity, and of the whole joint
+  velocity beyond its linear trend (second difference). Velocity-level inputs are
   piecewise constant over a sample, so ``N u`` jumps where the next update starts; the augmented input is
   continuous.
 """
@@ -82,12 +83,15 @@ class KinematicTrace(NamedTuple):
                 "task_error_max": float(np.max(self.task_error)), "min_clearance": float(np.min(self.clearance)),
                 "collision": bool(np.min(self.clearance) <= 0.0),
                 "update_ms_median": float(np.median(self.update_seconds) * 1e3),
-                "velocity_jump_max": _largest_jump(self.qdot), "nullspace_jump_max": _largest_jump(self.nullspace_qdot)}
+                "velocity_jump_max": _largest_jump(self.qdot), "nullspace_jump_max": _largest_jump(self.nullspace_qdot),
+                "velocity_kink_max": _largest_jump(self.qdot, order=2)}
 
 
-def _largest_jump(qdot: NDArray[np.float64]) -> float:
-    """Largest change of one joint's velocity between consecutive control steps."""
-    return float(np.max(np.abs(np.diff(qdot, axis=0)))) if len(qdot) > 1 else 0.0
+def _largest_jump(qdot: NDArray[np.float64], order: int = 1) -> float:
+    """Largest change of one joint's velocity between consecutive control steps (``order`` 1), or beyond
+    the linear trend of the two steps before (``order`` 2: ``qdot_{k+1} - 2 qdot_k + qdot_{k-1}``, small for
+    any smooth motion, the size of the jump at a jump)."""
+    return float(np.max(np.abs(np.diff(qdot, n=order, axis=0)))) if len(qdot) > order else 0.0
 
 
 Command = Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, NDArray[np.float64]]]
@@ -234,6 +238,9 @@ def velocity_jumps(*, seed: int = 0, sample_times: tuple[float, ...] = JUMP_SAMP
                      "augmented_velocity_jump": aug["velocity_jump_max"],
                      "velocity_level_velocity_jump": vel["velocity_jump_max"],
                      "velocity_jump_ratio": vel["velocity_jump_max"] / max(aug["velocity_jump_max"], 1e-300),
+                     "augmented_velocity_kink": aug["velocity_kink_max"],
+                     "velocity_level_velocity_kink": vel["velocity_kink_max"],
+                     "velocity_kink_ratio": vel["velocity_kink_max"] / max(aug["velocity_kink_max"], 1e-300),
                      "augmented_pseudoenergy": aug["pseudoenergy"], "velocity_level_pseudoenergy": vel["pseudoenergy"]})
     return rows
 
@@ -368,12 +375,13 @@ def format_pik_bench(report: dict[str, Any]) -> str:
     for name, r in report["planar_kinematic"].items():
         lines.append(f"  {name} | {r['pseudoenergy']:.4f} | {r['nullspace_jump_max']:.4f} | {r['velocity_jump_max']:.4f}")
     lines.append("Velocity jumps, MPC 1 s: sample time [s] | N u jump velocity level / augmented (ratio) | "
-                 "qdot jump (ratio)")
+                 "qdot jump (ratio) | qdot jump beyond the trend (ratio)")
     for r in report["velocity_jumps"]:
         lines.append(f"  {r['sample_time']:g} | {r['velocity_level_nullspace_jump']:.4f} / "
                      f"{r['augmented_nullspace_jump']:.4f} ({r['nullspace_jump_ratio']:.1f}) | "
                      f"{r['velocity_level_velocity_jump']:.4f} / {r['augmented_velocity_jump']:.4f} "
-                     f"({r['velocity_jump_ratio']:.1f})")
+                     f"({r['velocity_jump_ratio']:.1f}) | {r['velocity_level_velocity_kink']:.4f} / "
+                     f"{r['augmented_velocity_kink']:.4f} ({r['velocity_kink_ratio']:.1f})")
     lines.append(f"nullspace_jump_ratio (sample time {JUMP_SAMPLE_TIME:g} s) = {report['nullspace_jump_ratio']:.3g}")
     return "\n".join(lines)
 

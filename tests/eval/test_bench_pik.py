@@ -28,7 +28,9 @@ def test_pik_bench_report(tmp_path) -> None:
     # ones continuous
     coarse = next(r for r in report["velocity_jumps"] if r["sample_time"] == JUMP_SAMPLE_TIME)
     assert report["nullspace_jump_ratio"] == coarse["nullspace_jump_ratio"] >= 10.0
-    assert coarse["velocity_jump_ratio"] > 1.0
+    assert coarse["velocity_kink_ratio"] >= 10.0 and coarse["velocity_jump_ratio"] > 1.0
+    fine = next(r for r in report["velocity_jumps"] if r["sample_time"] == 0.01)
+    assert fine["velocity_kink_ratio"] < 2.0  # one sample per control period: neither variant jumps
     for name in ("local CLIK", "MPC 0.15 s", "MPC 2 s", "global"):  # fig. 5.35: the self-collision move stays clear
         assert not agri[name]["collision"]
     assert agri["MPC 2 s"]["pseudoenergy"] < agri["MPC 0.15 s"]["pseudoenergy"] < agri["local CLIK"]["pseudoenergy"]
