@@ -131,6 +131,14 @@ class PredictivePolicy:
         env: the environment.
         mode: ``"predictive"`` or ``"global"``.
         **kwargs: fields of :class:`PredictivePolicyConfig`.
+
+    Attributes:
+        config: the configuration with the task's cost defaults filled in.
+        control_dt: the env's control period [s]; dt: the prediction's sample time [s]; substeps: control
+            steps per sample (the horizon re-plans once per sample).
+        pik, horizon: the episode's problem and receding horizon (``predictive``).
+        plan, global_result: the episode's plan and its optimization (``global``).
+        last_update: the horizon's latest update; last_error: the task error of the latest command.
     """
 
     def __init__(self, env: Any, mode: str = "predictive", **kwargs: Any) -> None:
