@@ -134,8 +134,9 @@ def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
 
 
 def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
-    """Time against error: every PlanarReach reference variant and the trivial policies (obstacle off), and the
-    walking reference's variants on BipedWalk."""
+    """Time against error: every PlanarReach reference variant and the trivial policies (obstacle off), local
+    against predictive IK on PlanarReach with its obstacle and on AgriReach, and the walking reference's
+    variants on BipedWalk."""
     candidates = {
         "clik (dls)": ("clik", {"method": "dls"}),
         "clik (pseudoinverse)": ("clik", {"method": "pseudoinverse"}),
@@ -158,10 +159,33 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
     biped = {label: evaluate(_BIPED, "walking", episodes=2, seed=seed, env_kwargs={"target_speed": 0.7},
                              policy_kwargs=kwargs, progress=progress).to_json() for label, kwargs in walking.items()}
     biped_title = f"BipedWalk-v0 at 0.7 m/s, 2 episodes from seed {seed} (task error: forward speed error)"
+    predictive = {
+        "clik (local)": ("clik", {}),
+        "predictive (1 s, augmented)": ("predictive", {"horizon": 1.0}),
+        "predictive (1 s, velocity level)": ("predictive", {"horizon": 1.0, "augmented": False}),
+        "global (one solve at the episode start)": ("global", {}),
+    }
+    planar_obstacle = {label: evaluate(_PLANAR, policy, episodes=episodes, seed=seed, policy_kwargs=kwargs,
+                                       progress=progress).to_json() for label, (policy, kwargs) in predictive.items()}
+    planar_obstacle_title = f"PlanarReach-v0 with obstacle, local vs predictive IK, {episodes} episodes from seed {seed}"
+    horizons = {
+        "clik (local)": ("clik", {}),
+        "predictive (0.15 s)": ("predictive", {"horizon": 0.15}),
+        "predictive (2 s)": ("predictive", {"horizon": 2.0}),
+        "global (one solve at the episode start)": ("global", {}),
+    }
+    agri = {label: evaluate(_AGRI, policy, episodes=3, seed=seed, policy_kwargs=kwargs, progress=progress).to_json()
+            for label, (policy, kwargs) in horizons.items()}
+    agri_title = f"AgriReach-v0 (medium), local vs predictive IK, 3 episodes from seed {seed}"
     markdown = out / "speed_vs_error.md"
-    text = speed_error_markdown(reports, title) + "\n" + speed_error_markdown(biped, biped_title, "m/s")
+    text = "\n".join([speed_error_markdown(reports, title), speed_error_markdown(planar_obstacle, planar_obstacle_title),
+                      speed_error_markdown(agri, agri_title), speed_error_markdown(biped, biped_title, "m/s")])
     markdown.write_text("# Speed vs error\n\n" + text)
     print("\n" + text)
     return [markdown, plot_speed_error(reports, out / "speed_vs_error.png", "PlanarReach-v0: time vs error"),
+            plot_speed_error({**{f"PlanarReach {k}": v for k, v in planar_obstacle.items()},
+                              **{f"AgriReach {k}": v for k, v in agri.items()}},
+                             out / "speed_vs_error_predictive.png", "Local vs predictive IK: time vs pseudoenergy",
+                             error="pseudoenergy"),
             plot_speed_error(biped, out / "speed_vs_error_biped.png", "BipedWalk-v0: time vs forward speed error",
                              "m/s", error="rms")]

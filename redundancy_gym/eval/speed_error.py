@@ -32,17 +32,18 @@ def speed_error_markdown(reports: Mapping[str, dict[str, Any]], title: str, unit
 def plot_speed_error(reports: Mapping[str, dict[str, Any]], path: str | Path, title: str, unit: str = "m",
                      error: str = "max") -> Path:
     """Scatter of median step time [us] against the task error [``unit``] (log-log), one point per policy;
-    ``error`` picks ``"max"`` or ``"rms"``."""
-    if error not in ("max", "rms"):
-        raise ValueError(f"error must be 'max' or 'rms', got {error!r}")
+    ``error`` picks ``"max"`` or ``"rms"``, or ``"pseudoenergy"`` for the pseudoenergy [rad^2/s] instead."""
+    if error not in ("max", "rms", "pseudoenergy"):
+        raise ValueError(f"error must be 'max', 'rms' or 'pseudoenergy', got {error!r}")
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     for label, r in reports.items():
-        x, y = r["step_time_us"]["median"], max(r[f"task_error_{error}"], 1e-9)
+        value = r["pseudoenergy"] if error == "pseudoenergy" else r[f"task_error_{error}"]
+        x, y = r["step_time_us"]["median"], max(value, 1e-9)
         ax.scatter([x], [y], s=40, label=label)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("policy compute time per step, median [us]")
-    ax.set_ylabel(f"task error {error} [{unit}]")
+    ax.set_ylabel("pseudoenergy [rad^2/s]" if error == "pseudoenergy" else f"task error {error} [{unit}]")
     ax.set_title(title)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="best")

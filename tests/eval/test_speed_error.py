@@ -24,3 +24,5 @@ def test_plot_writes_a_png_and_rejects_an_unknown_error(tmp_path) -> None:
     assert path.stat().st_size > 1000
     with pytest.raises(ValueError, match="rms"):
         plot_speed_error({"a": _report(10.0, 0.1, 0.3)}, tmp_path / "t.png", "T", error="mean")
+    path = plot_speed_error({"a": _report(10.0, 0.1, 0.3)}, tmp_path / "p.png", "T", error="pseudoenergy")
+    assert path.stat().st_size > 1000
