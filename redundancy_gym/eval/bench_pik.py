@@ -34,17 +34,14 @@ import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
-from ..assets import AGRI_ARM_TCP  # noqa: E402
 from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
-from ..controllers.grasp_clik_policy import GraspClikPolicy, GraspPath  # noqa: E402
 from ..controllers.policies import make_policy  # noqa: E402
 from ..controllers.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
 from ..controllers.receding_horizon import RecedingHorizon  # noqa: E402
-from ..model import collision_model_from_mjcf  # noqa: E402
 from .evaluate import evaluate  # noqa: E402
 from .exceptions import EvalError  # noqa: E402
 from .plots import save_figure  # noqa: E402
-from .point_to_point import FIG_5_10, PointToPointScenario, _Robot  # noqa: E402
+from .point_to_point import FIG_5_10, PointToPointScenario, prepare_point_to_point  # noqa: E402
 
 __all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "format_pik_bench",
            "planar_kinematic_traces", "plot_joint_velocity", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
@@ -94,35 +91,45 @@ def _largest_jump(qdot: NDArray[np.float64], order: int = 1) -> float:
     return float(np.max(np.abs(np.diff(qdot, n=order, axis=0)))) if len(qdot) > order else 0.0
 
 
-Command = Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float, NDArray[np.float64]]]
-"""``command(k, q) -> (qdot, task error norm, nullspace part of qdot)`` of one control step."""
+Command = Callable[[int, NDArray[np.float64]], tuple[NDArray[np.float64], float]]
+"""``command(k, q) -> (qdot, task error norm)`` of one control step."""
+TaskPart = Callable[[int, NDArray[np.float64]], NDArray[np.float64]]
+"""``task_part(k, q) -> J# (wdot + K e)``: the joint velocity of the task alone."""
 
 
-def _rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command,
+def _rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command, task_part: TaskPart,
              clearance: Callable[[NDArray[np.float64]], float]) -> KinematicTrace:
+    """Run ``command`` (only it is timed); the nullspace part is ``qdot - task_part``."""
     q = np.array(q0, dtype=np.float64)
     qs, qdots, errors, nulls, seconds, clear = [q.copy()], [], [], [], [], []
     for k in range(steps):
         start = time.perf_counter()
-        qdot, error, null = command(k, q)
+        qdot, error = command(k, q)
         seconds.append(time.perf_counter() - start)
+        nulls.append(qdot - task_part(k, q))
         q = q + dt * qdot
         qs.append(q.copy())
         qdots.append(qdot)
         errors.append(error)
-        nulls.append(null)
         clear.append(clearance(q))
     return KinematicTrace(dt * np.arange(1, steps + 1), np.array(qdots), np.array(qs), np.array(errors),
                           np.array(clear), np.array(seconds), np.array(nulls))
 
 
 def _with_input(pik: PredictiveIk, q: NDArray[np.float64], u: NDArray[np.float64],
-                target: tuple[NDArray[np.float64], NDArray[np.float64]], gain: float
-                ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
-    """The CLIK command with nullspace input ``u``, its error norm and its nullspace part."""
+                target: tuple[NDArray[np.float64], NDArray[np.float64]], gain: float) -> tuple[NDArray[np.float64], float]:
+    """The CLIK command with nullspace input ``u`` and its error norm."""
     qdot, error = pik.command(q, u, target[0], target[1], gain)
-    task_part, _ = pik.command(q, np.zeros_like(u), target[0], target[1], gain)
-    return qdot, float(np.linalg.norm(error)), qdot - task_part
+    return qdot, float(np.linalg.norm(error))
+
+
+def _task_part(pik: PredictiveIk, target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]],
+               gain: float) -> TaskPart:
+    """``J# (wdot + K e)`` of ``pik``'s task (the command with ``u = 0``)."""
+    def part(k: int, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return _with_input(pik, q, np.zeros(pik.n), target(k), gain)[0]
+
+    return part
 
 
 def _mpc_command(pik: PredictiveIk, horizon: RecedingHorizon, wdot: Callable[[int, int], NDArray[np.float64]],
@@ -132,7 +139,7 @@ def _mpc_command(pik: PredictiveIk, horizon: RecedingHorizon, wdot: Callable[[in
     input between updates from :meth:`RecedingHorizon.input_at`. ``wdot(first, count)`` is in samples."""
     control_dt = horizon.dt / substeps
 
-    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
         sample, within = divmod(k, substeps)
         if within == 0:
             horizon.update(q, wdot(sample, horizon.steps))
@@ -145,20 +152,19 @@ def _plan_command(pik: PredictiveIk, plan: PredictiveRollout,
                   target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float) -> Command:
     """Follow a global plan: its nullspace inputs, the task with feedback, the planned joint path with
     feedback in the nullspace (:meth:`~redundancy_gym.controllers.PredictiveRollout.follow`)."""
-    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
         return _with_input(pik, q, plan.follow(k, q, gain), target(k), gain)
 
     return command
 
 
-def _local_command(controller: Any, pik: PredictiveIk,
-                   target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float) -> Command:
-    """Local CLIK (``controller.step``); its nullspace part measured against ``pik``'s task part."""
-    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+def _local_command(controller: Any,
+                   target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]]) -> Command:
+    """Local CLIK (``controller.step``)."""
+    def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
         position, velocity = target(k)
         result = controller.step(q, position, velocity)
-        task_part, _ = pik.command(q, np.zeros(pik.n), position, velocity, gain)
-        return result.qdot, float(np.linalg.norm(result.error)), result.qdot - task_part
+        return result.qdot, float(np.linalg.norm(result.error))
 
     return command
 
@@ -190,24 +196,31 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
             position, velocity, _ = base.reference(k * dt)
             return position, velocity
 
+        def started(**options: Any) -> PredictivePolicy:
+            policy = PredictivePolicy(env, **options)
+            policy.start(obs)  # the obstacle and the problem of this episode (global: and its solve)
+            assert policy.pik is not None
+            return policy
+
         traces: dict[str, KinematicTrace] = {}
         gain = float(clik_policy.config.gain)
-        reference = PredictivePolicy(env, mode="global", global_iterations=global_iterations)
-        reference.start(obs)  # the obstacle, the problem; the global plan
-        assert reference.pik is not None and reference.plan is not None
+        mpc = {aug: started(horizon=horizon, augmented=aug, sample_time=sample_time) for aug in augmented}
+        task_pik = mpc[augmented[0]].pik if augmented else started(horizon=horizon).pik  # no solve at start
+        assert task_pik is not None
+        task_part = _task_part(task_pik, target, gain)
         if local:
-            traces["local CLIK"] = _rollout(q0, steps, dt, _local_command(clik_policy.controller, reference.pik,
-                                                                          target, gain), clearance)
-        for aug in augmented:
-            policy = PredictivePolicy(env, horizon=horizon, augmented=aug, sample_time=sample_time)
-            policy.start(obs)
+            traces["local CLIK"] = _rollout(q0, steps, dt, _local_command(clik_policy.controller, target), task_part,
+                                            clearance)
+        for aug, policy in mpc.items():
             assert policy.pik is not None and policy.horizon is not None
             label = f"MPC {horizon:g} s" + (" (augmented)" if aug else " (velocity level)")
             command = _mpc_command(policy.pik, policy.horizon, policy.wdot, target, gain, policy.substeps)
-            traces[label] = _rollout(q0, steps, dt, command, clearance)
+            traces[label] = _rollout(q0, steps, dt, command, task_part, clearance)
         if global_plan:
+            reference = started(mode="global", global_iterations=global_iterations)
+            assert reference.pik is not None and reference.plan is not None
             traces["global"] = _rollout(q0, steps, dt, _plan_command(reference.pik, reference.plan, target, gain),
-                                        clearance)
+                                        task_part, clearance)
     finally:
         env.close()
     return traces
@@ -249,19 +262,12 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
                                iterations: int = 2, global_iterations: int = 300) -> dict[str, KinematicTrace]:
     """The fig. 5.10 move of the 9-DoF arm (fig. 5.35 analogue): local grasp CLIK with self-collision
     avoidance, MPC for each horizon (augmented) and the global optimum, in kinematic rollouts."""
-    grasp = GraspClikPolicy(_Robot(), collision_avoidance="on")
+    setup = prepare_point_to_point(scenario)
+    grasp, controller, monitor, path, q0, steps = (setup.policy, setup.controller, setup.monitor, setup.path,
+                                                   setup.q_start, setup.steps)
     model = grasp.model
-    controller = grasp.build_controller([])
     assert grasp.collision is not None
-    monitor = collision_model_from_mjcf(model, [])
-    q0 = np.asarray(scenario.q_start, dtype=np.float64)
-    model.update(np.asarray(scenario.q_goal, dtype=np.float64))
-    goal, goal_axis = model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy()
-    model.update(q0)
-    path = GraspPath(model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
-                     goal, goal, goal_axis, scenario.duration, scenario.hold)
     dt = scenario.dt
-    steps = int(round((scenario.duration + scenario.hold) / dt))
     longest = int(round(max(horizons, default=0.0) / dt))
     table = np.array([np.concatenate(path(k * dt)) for k in range(steps + longest + 2)])
 
@@ -281,16 +287,17 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
         return predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision, config, augmented=augmented)
 
     gain = float(grasp.config.gain)
-    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(controller, problem(False), target, gain),
-                                     clearance)}
+    velocity_level = problem(False)
+    task_part = _task_part(velocity_level, target, gain)
+    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(controller, target), task_part, clearance)}
     for horizon in horizons:
         pik = problem(True)
         mpc = RecedingHorizon(pik, max(1, int(round(horizon / dt))), dt, iterations=iterations)
-        traces[f"MPC {horizon:g} s"] = _rollout(q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), clearance)
-    pik = problem(False)
-    plan = pik.optimize(q0, wdot(0, steps), dt, np.zeros((steps, pik.n)), max_iterations=global_iterations,
-                        tolerance=1e-9).rollout
-    traces["global"] = _rollout(q0, steps, dt, _plan_command(pik, plan, target, gain), clearance)
+        traces[f"MPC {horizon:g} s"] = _rollout(q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), task_part,
+                                                clearance)
+    plan = velocity_level.optimize(q0, wdot(0, steps), dt, np.zeros((steps, velocity_level.n)),
+                                   max_iterations=global_iterations, tolerance=1e-9).rollout
+    traces["global"] = _rollout(q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part, clearance)
     return traces
 
 

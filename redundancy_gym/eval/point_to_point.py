@@ -11,6 +11,7 @@ every non-adjacent link pair apart while the task is tracked the same.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,7 +21,8 @@ from ..controllers.grasp_clik_policy import GraspClikPolicy, GraspPath
 from ..model import RobotModel, collision_model_from_mjcf
 from .exceptions import EvalError
 
-__all__ = ["FIG_5_10", "PointToPointScenario", "PointToPointTrace", "rollout_point_to_point"]
+__all__ = ["FIG_5_10", "PointToPointScenario", "PointToPointSetup", "PointToPointTrace", "prepare_point_to_point",
+           "rollout_point_to_point"]
 
 
 @dataclass(frozen=True)
@@ -79,10 +81,31 @@ class _Robot:
     max_joint_speeds = np.array([0.4] + [1.5] * 8)
 
 
-def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
-                           **policy_options: float | str) -> PointToPointTrace:
-    """Kinematic CLIK rollout of ``scenario``; ``policy_options`` are fields of
-    :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikConfig` (defaults otherwise)."""
+class PointToPointSetup(NamedTuple):
+    """What a rollout of a :class:`PointToPointScenario` starts from.
+
+    Attributes:
+        policy: the grasp CLIK reference (its model, task, joint limits and collision objective).
+        controller: its controller, built with no plant obstacles.
+        monitor: collision model of the arm's own non-adjacent segments, for the clearance.
+        path: the TCP reference ``path(t) -> (target, velocity)``.
+        q_start: start configuration; goal_position: TCP goal [m]; steps: control steps of move and hold.
+    """
+
+    policy: GraspClikPolicy
+    controller: Any
+    monitor: Any
+    path: GraspPath
+    q_start: NDArray[np.float64]
+    goal_position: NDArray[np.float64]
+    steps: int
+
+
+def prepare_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
+                           **policy_options: float | str) -> PointToPointSetup:
+    """The grasp CLIK reference (``policy_options``: fields of
+    :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikConfig`), its controller, the self-clearance
+    monitor and the TCP path of ``scenario``."""
     policy = GraspClikPolicy(_Robot(), collision_avoidance="on" if collision_avoidance else "off",
                              **policy_options)
     model: RobotModel = policy.model
@@ -99,19 +122,29 @@ def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collisi
     path = GraspPath(model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
                      goal_position, goal_position, goal_axis, scenario.duration, scenario.hold)
     steps = int(round((scenario.duration + scenario.hold) / scenario.dt))
+    return PointToPointSetup(policy, controller, monitor, path, q, goal_position, steps)
+
+
+def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
+                           **policy_options: float | str) -> PointToPointTrace:
+    """Kinematic CLIK rollout of ``scenario``; ``policy_options`` are fields of
+    :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikConfig` (defaults otherwise)."""
+    setup = prepare_point_to_point(scenario, collision_avoidance=collision_avoidance, **policy_options)
+    model: RobotModel = setup.policy.model
+    q = setup.q_start.copy()
     times, qs, clearance, pairs, errors = [], [], [], [], []
-    for k in range(steps):
-        target, velocity = path(k * scenario.dt)
-        result = controller.step(q, target, velocity)
+    for k in range(setup.steps):
+        target, velocity = setup.path(k * scenario.dt)
+        result = setup.controller.step(q, target, velocity)
         q = model.clamp(model.integrate(q, result.qdot, scenario.dt))
         model.update(q)
-        state = monitor.evaluate(model)
+        state = setup.monitor.evaluate(model)
         i = int(np.argmin(state.distance))
         times.append((k + 1) * scenario.dt)
         qs.append(q.copy())
         clearance.append(float(state.distance[i]))
         pairs.append("/".join(state.pairs[i]))
         errors.append(result.error_norm)
-    final = float(np.linalg.norm(model.frame_position(AGRI_ARM_TCP) - goal_position))
+    final = float(np.linalg.norm(model.frame_position(AGRI_ARM_TCP) - setup.goal_position))
     return PointToPointTrace(np.array(times), np.array(qs), np.array(clearance), tuple(pairs), np.array(errors),
                              collision_avoidance, final)

@@ -163,21 +163,13 @@ def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -
     from the same start, drift from the planned joint path (the nullspace has no restoring term) until the arm
     whips through a different self-motion; following the plan with :meth:`PredictiveRollout.follow` keeps it
     within 0.1 rad (open loop: more than 1 rad)."""
-    from redundancy_gym.controllers.grasp_clik_policy import GraspClikPolicy, GraspPath  # noqa: PLC0415
     from redundancy_gym.controllers.predictive_policy import PredictivePolicyConfig, predictive_problem  # noqa: PLC0415
-    from redundancy_gym.eval.point_to_point import FIG_5_10, _Robot  # noqa: PLC0415
+    from redundancy_gym.eval.point_to_point import FIG_5_10, prepare_point_to_point  # noqa: PLC0415
 
-    grasp = GraspClikPolicy(_Robot(), collision_avoidance="on")
-    grasp.build_controller([])
-    model = grasp.model
-    q0, steps = np.asarray(FIG_5_10.q_start), int(round((FIG_5_10.duration + FIG_5_10.hold) / DT))
-    model.update(np.asarray(FIG_5_10.q_goal))
-    goal, axis = model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy()
-    model.update(q0)
-    path = GraspPath(model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
-                     goal, goal, axis, FIG_5_10.duration, FIG_5_10.hold)
-    table = np.array([np.concatenate(path(k * DT)) for k in range(steps)])
-    pik = predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision,
+    setup = prepare_point_to_point(FIG_5_10)
+    grasp, q0, steps = setup.policy, setup.q_start, setup.steps
+    table = np.array([np.concatenate(setup.path(k * DT)) for k in range(steps)])
+    pik = predictive_problem(grasp.model, grasp.task, grasp.joint_limits, grasp.collision,
                              PredictivePolicyConfig(collision_weight=1.0, collision_activation=0.1,
                                                     collision_slope=4.0).for_task("grasp"), augmented=False)
     plan = pik.optimize(q0, table[:, 6:], DT, np.zeros((steps, 9)), max_iterations=300, tolerance=1e-9).rollout
