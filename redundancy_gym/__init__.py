@@ -2,14 +2,21 @@
 "Dynamics and Control of Redundant Robots" as reference policies.
 
 Importing the package registers the env ids (see :data:`ENV_IDS`) with gymnasium; the simulator, pinocchio and
-the controllers load only when used.
+the controllers load only when used. It also picks a headless OpenGL backend where the machine has no display and
+keeps torch's triton safe from Mesa's LLVM (:mod:`redundancy_gym.rendering_backend`), before MuJoCo is imported:
+scripts that train and render work in any import order.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from .registration import ENV_IDS, register_envs
+from .rendering_backend import configure_rendering, guard_triton
+
+configure_rendering()
+guard_triton()
+
+from .registration import ENV_IDS, register_envs  # noqa: E402
 
 __all__ = ["ENV_IDS", "__version__", "make_policy", "register_envs"]
 

@@ -1,23 +1,26 @@
-"""Importing stable-baselines3 safely next to MuJoCo's headless OSMesa renderer."""
+"""Importing stable-baselines3 (the ``learn`` extra) with a clear error when it is missing."""
 
 from __future__ import annotations
 
-import sys
 from types import ModuleType
 
-__all__ = ["import_stable_baselines3"]
+from .rendering_backend import guard_triton
+
+__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3"]
+
+LEARN_EXTRA_HINT = ("pip install -e '.[learn]' (from a clone of the repository) or "
+                    "pip install 'redundancy-gym[learn]'")
 
 
 def import_stable_baselines3() -> ModuleType:
-    """Return the ``stable_baselines3`` module (raises ImportError without the ``learn`` extra).
+    """Return the ``stable_baselines3`` module; raises ImportError naming the ``learn`` extra when it is missing.
 
-    With ``MUJOCO_GL=osmesa`` MuJoCo loads Mesa, whose bundled LLVM clashes with the LLVM inside triton: torch
-    imports triton lazily (when an optimizer is built) and the process segfaults. Triton only compiles GPU
-    kernels and our agents run on the CPU, so when Mesa is already loaded and triton is not, triton is marked
-    unavailable; torch then takes its no-triton path.
+    ``import redundancy_gym`` already keeps torch's triton safe from Mesa (:func:`guard_triton`); it is called
+    again here for a process that imported MuJoCo under a Mesa backend between the two.
     """
-    if "mujoco.osmesa" in sys.modules and "triton" not in sys.modules:
-        sys.modules["triton"] = None  # type: ignore[assignment]  # import raises ImportError from now on
-    import stable_baselines3
-
+    guard_triton()
+    try:
+        import stable_baselines3
+    except ImportError as exc:
+        raise ImportError(f"stable-baselines3 is not installed; {LEARN_EXTRA_HINT}") from exc
     return stable_baselines3
