@@ -13,10 +13,10 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from ..geometry import LSS, PSS, SSV, TSS, Segment
+from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
@@ -43,6 +43,9 @@ class GraspClikConfig:
         max_turn_rate: average tool-axis turn rate of that move [rad/s].
         min_duration: shortest move to the pre-grasp pose [s].
         approach_speed: average TCP speed of the straight approach [m/s].
+            These four, left ``None``, take the env's reference path timing (``reference_timing``, see
+            :class:`~redundancy_gym.geometry.GraspPathTiming`), so the policy follows the path that the env
+            measures ``tracking_error`` against.
         collision_avoidance: ``"on"`` or ``"off"``: the nullspace collision objective on self pairs and the
             observed hard obstacles.
         collision_activation: ``d_a`` [m]; collision_slope: ``|H'(0)|`` [1/m]; collision_weight: weight.
@@ -55,10 +58,10 @@ class GraspClikConfig:
     method: str = "dls"
     gain: float = 10.0
     nullspace_gain: float = 1.0
-    max_speed: float = 0.35
-    max_turn_rate: float = 0.8
-    min_duration: float = 1.0
-    approach_speed: float = 0.12
+    max_speed: float | None = None
+    max_turn_rate: float | None = None
+    min_duration: float | None = None
+    approach_speed: float | None = None
     collision_avoidance: str = "on"
     collision_activation: float = 0.1
     collision_slope: float = 4.0
@@ -67,88 +70,6 @@ class GraspClikConfig:
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
     backend: str = "compiled"
-
-
-class GraspPath:
-    """Quintic rest-to-rest move from the start pose to the pre-grasp pose (tool axis turned on the great
-    circle), then a straight quintic approach to the grasp pose along the fixed approach axis.
-
-    Args:
-        start, pregrasp, grasp: TCP positions [m]; start_axis, approach: unit tool axes.
-        move_duration, approach_duration: [s].
-    """
-
-    def __init__(self, start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
-                 grasp: NDArray[np.float64], approach: NDArray[np.float64], move_duration: float,
-                 approach_duration: float) -> None:
-        self.start, self.pregrasp, self.grasp = start.copy(), pregrasp.copy(), grasp.copy()
-        self.start_axis = start_axis / np.linalg.norm(start_axis)
-        self.approach = approach / np.linalg.norm(approach)
-        self.move_duration, self.approach_duration = float(move_duration), float(approach_duration)
-        cross = np.cross(self.start_axis, self.approach)
-        sin, cos = float(np.linalg.norm(cross)), float(self.start_axis @ self.approach)
-        self.turn_angle = float(np.arctan2(sin, cos))
-        if sin > 1e-9:
-            self.turn_axis = cross / sin
-        else:  # parallel or antiparallel: any axis orthogonal to the start axis
-            helper = np.array([0.0, 0.0, 1.0]) if abs(self.start_axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-            self.turn_axis = np.cross(self.start_axis, helper)
-            self.turn_axis /= np.linalg.norm(self.turn_axis)
-            if cos > 0.0:
-                self.turn_angle = 0.0
-
-        # the constants of __call__ in one buffer for the compiled sampler
-        k, a0 = self.turn_axis, self.start_axis
-        self._params = np.concatenate([self.start, self.pregrasp, self.grasp, self.approach, a0, np.cross(k, a0),
-                                       k * (k @ a0), k, [self.move_duration, self.approach_duration,
-                                                         self.turn_angle]])
-        self._out = np.empty(12)
-        if not _sample_path.signatures:
-            _sample_path.compile("void(float64[::1], float64, float64[::1])")
-        self._sampler = _sample_path.overloads[_sample_path.signatures[0]].entry_point
-
-    @property
-    def duration(self) -> float:
-        """End of the approach [s]."""
-        return self.move_duration + self.approach_duration
-
-    def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Target ``[p, a]`` and target velocity ``[v, omega]`` at time ``t`` [s]."""
-        self._sampler(self._params, float(t), self._out)
-        return self._out[:6].copy(), self._out[6:].copy()
-
-
-@njit(cache=True)
-def _law(t: float, duration: float) -> tuple[float, float]:
-    """Quintic rest-to-rest time law ``s(t)`` in [0, 1] and ``ds/dt`` [1/s]."""
-    tau = min(max(t / duration, 0.0), 1.0)
-    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration if tau < 1.0 else 0.0
-    return s, sdot
-
-
-@njit(cache=True)
-def _sample_path(params: NDArray[np.float64], t: float, out: NDArray[np.float64]) -> None:
-    """:meth:`GraspPath.__call__` on the path's constant buffer: ``[p, a, v, omega]`` into ``out`` (12)."""
-    start, pregrasp, grasp, approach = params[0:3], params[3:6], params[6:9], params[9:12]
-    a0, k_cross_a0, k_k_a0, k = params[12:15], params[15:18], params[18:21], params[21:24]
-    move, approach_time, turn = params[24], params[25], params[26]
-    if t < move:
-        s, sdot = _law(t, move)
-        angle = s * turn
-        c, sn = np.cos(angle), np.sin(angle)
-        for r in range(3):  # Rodrigues' rotation of the start axis about k
-            out[r] = start[r] + s * (pregrasp[r] - start[r])
-            out[3 + r] = a0[r] * c + k_cross_a0[r] * sn + k_k_a0[r] * (1.0 - c)
-            out[6 + r] = sdot * (pregrasp[r] - start[r])
-            out[9 + r] = sdot * turn * k[r]
-        return
-    s, sdot = _law(t - move, approach_time)
-    for r in range(3):
-        out[r] = pregrasp[r] + s * (grasp[r] - pregrasp[r])
-        out[3 + r] = approach[r]
-        out[6 + r] = sdot * (grasp[r] - pregrasp[r])
-        out[9 + r] = 0.0
 
 
 def _tool_axis(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -194,6 +115,11 @@ class GraspClikPolicy:
                                    "grasp clik")
         self._layout = dict(base.observation_layout)
         self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
+        env_timing = getattr(base, "reference_timing", None)
+        env_timing = env_timing if isinstance(env_timing, GraspPathTiming) else GraspPathTiming()
+        c = self.config
+        self.timing = GraspPathTiming(*(env if own is None else float(own) for own, env in zip(
+            (c.max_speed, c.max_turn_rate, c.min_duration, c.approach_speed), env_timing)))
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         self._geometry = collision_geometry_from_mjcf(self.model)  # the arm's own segments, read once
         self.joint_limits = JointLimitObjective.from_model(
@@ -227,10 +153,7 @@ class GraspClikPolicy:
         axis = _tool_axis(obs[lay["tcp_quaternion"]])
         pregrasp, grasp, approach = obs[lay["pregrasp_position"]], obs[lay["grasp_position"]], obs[lay["approach"]]
         c = self.config
-        turn = float(np.arccos(np.clip(axis @ approach / np.linalg.norm(approach), -1.0, 1.0)))
-        move = max(c.min_duration, float(np.linalg.norm(pregrasp - start)) / c.max_speed, turn / c.max_turn_rate)
-        approach_time = max(0.5, float(np.linalg.norm(grasp - pregrasp)) / c.approach_speed)
-        self.path = GraspPath(start, axis, pregrasp, grasp, approach, move, approach_time)
+        self.path = GraspPath.plan(start, axis, pregrasp, grasp, approach, self.timing)
         environment = []
         for k, (volume, hard) in enumerate(obstacle_volumes(obs[lay["obstacles"]])):
             if hard or c.avoid_leaves:

@@ -2,12 +2,36 @@
 
 from __future__ import annotations
 
+from typing import Any
+
+import gymnasium as gym
 import numpy as np
 
 from ..rendering_backend import require_render_backend
 from .exceptions import EnvConfigError
 
-__all__ = ["check_render_backend", "non_negative", "positive"]
+__all__ = ["check_render_backend", "non_negative", "positive", "warn_if_time_limit_short"]
+
+
+def warn_if_time_limit_short(env: Any, needed: float, what: str) -> bool:
+    """Warn (once per env) when the registered time limit ends episodes before ``needed`` seconds of env time.
+
+    ``gym.make`` wraps the env in a ``TimeLimit`` of the registered ``max_episode_steps``; a kwarg that lengthens
+    the task (a slower ``duration``, a longer path) would otherwise be cut silently. The env cannot see a limit
+    passed to ``gym.make`` itself (Gymnasium keeps it in the wrapper), so the warning names the registered one
+    and the value that fits. Returns whether it warned.
+    """
+    spec = getattr(env, "spec", None)
+    if spec is None or getattr(env, "_warned_time_limit", False) or spec.id not in gym.registry:
+        return False
+    limit = gym.registry[spec.id].max_episode_steps
+    if limit is None or limit * env.dt >= needed - 1e-9:
+        return False
+    env._warned_time_limit = True
+    steps = int(np.ceil(needed / env.dt - 1e-9))
+    gym.logger.warn(f"{spec.id}: {what} needs {needed:.2f} s, but the registered max_episode_steps={limit} ends "
+                    f"episodes at {limit * env.dt:.2f} s; pass max_episode_steps={steps} or more to gym.make")
+    return True
 
 
 def check_render_backend(render_mode: str | None) -> None:

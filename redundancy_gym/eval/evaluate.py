@@ -22,10 +22,21 @@ __all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env"
 
 @dataclass
 class EpisodeTrace:
-    """Per-step record of one episode (arrays over steps)."""
+    """Per-step record of one episode (arrays over steps; NaN where the env does not report the quantity).
+
+    Attributes:
+        time: env time after the step [s].
+        tracking_error: TCP distance to the env's reference path [m] (``info["tracking_error"]``).
+        goal_error: TCP distance to the goal [m] (``info["goal_error"]``).
+        speed_error: ``|v_x - target_speed|`` of the biped [m/s] (``info["speed_error"]``).
+        joint_speed: largest joint speed of the step [rad/s]; min_clearance: [m]; pseudoenergy: ``qdot^T qdot dt``.
+        step_time_us: the policy's compute time for the step [us].
+    """
 
     time: NDArray[np.float64]
-    task_error: NDArray[np.float64]
+    tracking_error: NDArray[np.float64]
+    goal_error: NDArray[np.float64]
+    speed_error: NDArray[np.float64]
     joint_speed: NDArray[np.float64]
     min_clearance: NDArray[np.float64]
     pseudoenergy: NDArray[np.float64]
@@ -34,18 +45,33 @@ class EpisodeTrace:
 
 @dataclass
 class EpisodeSummary:
-    """Metrics of one episode."""
+    """Metrics of one episode (``None`` where the env does not define the quantity).
+
+    Attributes:
+        tracking_error_max, tracking_error_sq_sum: largest and summed squared tracking error [m, m^2].
+        goal_error: TCP distance to the goal at the last step [m].
+        time_to_goal: first time ``info["goal_reached"]`` held [s] (``None``: never).
+        speed_error_sq_sum: summed squared instantaneous speed error [m^2/s^2] (biped).
+        mean_speed_error: ``|distance / time - target_speed|`` at the end [m/s] (biped).
+        first_step_us: the policy's compute time for the first step [us] (where a plan-once policy solves).
+    """
 
     seed: int
     length: int
     episode_return: float
     success: bool
     collision: bool
-    task_error_max: float
-    task_error_sq_sum: float
     pseudoenergy: float
     peak_joint_speed: float
     min_clearance: float
+    first_step_us: float
+    tracking_error_max: float | None = None
+    tracking_error_sq_sum: float | None = None
+    goal_error: float | None = None
+    goal_reached: bool | None = None
+    time_to_goal: float | None = None
+    speed_error_sq_sum: float | None = None
+    mean_speed_error: float | None = None
     fell: bool | None = None
     forward_speed: float | None = None
 
@@ -64,10 +90,12 @@ class EvalReport:
     traces: list[EpisodeTrace] = field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
-        """The evaluation-contract object (finite numbers or ``null``)."""
+        """The evaluation-contract object (finite numbers or ``null``; the README lists every field's unit)."""
         s = self.summaries
         steps = sum(e.length for e in s)
         returns = np.array([e.episode_return for e in s])
+        times = self.step_times_us
+        first = np.array([e.first_step_us for e in s])
         return {
             "env": self.env,
             "policy": self.policy,
@@ -76,36 +104,56 @@ class EvalReport:
             "env_kwargs": self.env_kwargs,
             "success_rate": float(np.mean([e.success for e in s])),
             "collision_rate": float(np.mean([e.collision for e in s])),
-            "task_error_rms": math.sqrt(sum(e.task_error_sq_sum for e in s) / max(steps, 1)),
-            "task_error_max": max(e.task_error_max for e in s),
+            **self._task_metrics(steps),
             "pseudoenergy": float(np.mean([e.pseudoenergy for e in s])),
             "peak_joint_speed": max(e.peak_joint_speed for e in s),
             "min_clearance": _finite_or_none(min(e.min_clearance for e in s)),
             "step_time_us": {
-                "median": float(np.median(self.step_times_us)),
-                "p99": float(np.percentile(self.step_times_us, 99)),
-                "mean": float(np.mean(self.step_times_us)),
-                "steps": int(self.step_times_us.size),
+                "median": float(np.median(times)),
+                "p99": float(np.percentile(times, 99)),
+                "mean": float(np.mean(times)),
+                "first_step_mean": float(first.mean()),
+                "steps": int(times.size),
             },
+            "compute_time_per_episode_ms": float(times.sum()) * 1e-3 / len(s),
             "episode_return": float(returns.mean()),
             "episode_return_std": float(returns.std()),
             "episode_length": float(np.mean([e.length for e in s])),
             **self._walking_metrics(),
-            "per_episode": [
-                {"seed": e.seed, "length": e.length, "return": e.episode_return, "success": e.success,
-                 "collision": e.collision, "task_error_max": e.task_error_max, "pseudoenergy": e.pseudoenergy,
-                 "peak_joint_speed": e.peak_joint_speed, "min_clearance": _finite_or_none(e.min_clearance),
-                 **({} if e.fell is None else {"fell": e.fell, "forward_speed": e.forward_speed})}
-                for e in s
-            ],
+            "per_episode": [_episode_row(e) for e in s],
+        }
+
+    def _task_metrics(self, steps: int) -> dict[str, float | None]:
+        """Tracking error (against the env's reference path), goal error and time to the goal; each ``None``
+        where the env does not define it."""
+        s = self.summaries
+        tracked = [e for e in s if e.tracking_error_max is not None]
+        goals = [e for e in s if e.goal_error is not None]
+        reached = [e.time_to_goal for e in goals if e.time_to_goal is not None]
+        return {
+            "tracking_error_rms": (math.sqrt(sum(e.tracking_error_sq_sum or 0.0 for e in tracked)
+                                             / max(sum(e.length for e in tracked), 1)) if tracked else None),
+            "tracking_error_max": max(e.tracking_error_max or 0.0 for e in tracked) if tracked else None,
+            "goal_error": float(np.mean([e.goal_error for e in goals])) if goals else None,
+            "goal_error_max": max(e.goal_error or 0.0 for e in goals) if goals else None,
+            "goal_reached_rate": float(np.mean([bool(e.goal_reached) for e in goals])) if goals else None,
+            "time_to_goal": float(np.mean(reached)) if reached else None,
         }
 
     def _walking_metrics(self) -> dict[str, float]:
-        """``fall_rate`` and ``forward_speed`` (mean of distance / time) for envs that report falls (the biped)."""
-        if any(e.fell is None for e in self.summaries):
+        """``fall_rate``, ``forward_speed`` (mean of distance / time), ``speed_error`` (mean over episodes of
+        ``|distance / time - target_speed|``) and ``speed_error_rms`` (instantaneous ``|v_x - target|``) [m/s]
+        for envs that report falls (the biped)."""
+        s = self.summaries
+        if any(e.fell is None for e in s):
             return {}
-        return {"fall_rate": float(np.mean([bool(e.fell) for e in self.summaries])),
-                "forward_speed": float(np.mean([e.forward_speed for e in self.summaries]))}
+        out = {"fall_rate": float(np.mean([bool(e.fell) for e in s])),
+               "forward_speed": float(np.mean([e.forward_speed for e in s]))}
+        if all(e.mean_speed_error is not None for e in s):
+            out["speed_error"] = float(np.mean([e.mean_speed_error for e in s]))
+            out["speed_error_rms"] = math.sqrt(sum(e.speed_error_sq_sum or 0.0 for e in s)
+                                               / max(sum(e.length for e in s), 1))
+        return out
 
     def write_json(self, path: str | Path) -> Path:
         """Write :meth:`to_json` to ``path`` (parents created)."""
@@ -134,6 +182,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
     rows: list[tuple[float, ...]] = []
     ret = 0.0
     collision = False
+    time_to_goal: float | None = None
     state = None
     episode_start = np.array([True])
     while True:
@@ -146,18 +195,31 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
             frames.append(env.render())
         ret += float(reward)
         collision = collision or bool(info.get("collision", False))
-        rows.append((float(info.get("time", len(rows) + 1)), float(info.get("task_error", np.nan)),
-                     float(info.get("peak_joint_speed", 0.0)), float(info.get("min_clearance", np.inf)),
-                     float(info.get("pseudoenergy", 0.0)), elapsed_us))
+        now = float(info.get("time", len(rows) + 1))
+        if time_to_goal is None and info.get("goal_reached", False):
+            time_to_goal = now
+        rows.append((now, float(info.get("tracking_error", np.nan)), float(info.get("goal_error", np.nan)),
+                     float(info.get("speed_error", np.nan)), float(info.get("peak_joint_speed", 0.0)),
+                     float(info.get("min_clearance", np.inf)), float(info.get("pseudoenergy", 0.0)), elapsed_us))
         if terminated or truncated:
             break
     data = np.asarray(rows, dtype=np.float64)
-    trace = EpisodeTrace(*(data[:, k].copy() for k in range(6)))
+    trace = EpisodeTrace(*(data[:, k].copy() for k in range(8)))
     summary = EpisodeSummary(
         seed=seed, length=len(rows), episode_return=ret, success=bool(info.get("is_success", False)),
-        collision=collision, task_error_max=float(np.max(trace.task_error)),
-        task_error_sq_sum=float(np.sum(trace.task_error**2)), pseudoenergy=float(np.sum(trace.pseudoenergy)),
-        peak_joint_speed=float(np.max(trace.joint_speed)), min_clearance=float(np.min(trace.min_clearance)))
+        collision=collision, pseudoenergy=float(np.sum(trace.pseudoenergy)),
+        peak_joint_speed=float(np.max(trace.joint_speed)), min_clearance=float(np.min(trace.min_clearance)),
+        first_step_us=float(trace.step_time_us[0]))
+    if "tracking_error" in info:
+        summary.tracking_error_max = float(np.max(trace.tracking_error))
+        summary.tracking_error_sq_sum = float(np.sum(trace.tracking_error**2))
+    if "goal_error" in info:
+        summary.goal_error = float(info["goal_error"])
+        summary.goal_reached = time_to_goal is not None
+        summary.time_to_goal = time_to_goal
+    if "speed_error" in info:
+        summary.speed_error_sq_sum = float(np.sum(trace.speed_error**2))
+        summary.mean_speed_error = float(info.get("mean_speed_error", np.nan))
     if "fell" in info and "distance" in info:
         elapsed = float(info.get("time", 0.0))
         summary.fell = bool(info["fell"])
@@ -212,11 +274,24 @@ def format_report(report: dict[str, Any]) -> str:
         ("episodes (seed)", f"{report['episodes']} ({report['seed']})"),
         ("success rate", f"{report['success_rate']:.3f}"),
         ("collision rate", f"{report['collision_rate']:.3f}"),
-        ("task error rms / max [m]", f"{report['task_error_rms']:.3e} / {report['task_error_max']:.3e}"),
+    ]
+    if report.get("tracking_error_rms") is not None:
+        rows.append(("tracking error rms / max [mm]",
+                     f"{1e3 * report['tracking_error_rms']:.2f} / {1e3 * report['tracking_error_max']:.2f}"))
+    if report.get("goal_error") is not None:
+        reached = report["time_to_goal"]
+        rows.append(("goal error at end mean / max [mm]",
+                     f"{1e3 * report['goal_error']:.2f} / {1e3 * report['goal_error_max']:.2f}"))
+        rows.append(("goal reached rate, time to goal [s]",
+                     f"{report['goal_reached_rate']:.3f}, " + ("n/a" if reached is None else f"{reached:.2f}")))
+    if "speed_error" in report:
+        rows.append(("speed error mean / rms [m/s]", f"{report['speed_error']:.3f} / {report['speed_error_rms']:.3f}"))
+    rows += [
         ("pseudoenergy [rad^2/s]", f"{report['pseudoenergy']:.4f}"),
         ("peak joint speed [rad/s]", f"{report['peak_joint_speed']:.3f}"),
         ("min clearance [m]", "n/a" if report["min_clearance"] is None else f"{report['min_clearance']:.4f}"),
-        ("step time median / p99 [us]", f"{step['median']:.1f} / {step['p99']:.1f}"),
+        ("step time median / p99 / mean [us]", f"{step['median']:.1f} / {step['p99']:.1f} / {step['mean']:.1f}"),
+        ("first step (plan) mean [us]", f"{step['first_step_mean']:.1f}"),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
     ]
     if "fall_rate" in report:
@@ -224,6 +299,23 @@ def format_report(report: dict[str, Any]) -> str:
         rows.append(("forward speed [m/s]", f"{report['forward_speed']:.3f}"))
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+def _episode_row(e: EpisodeSummary) -> dict[str, Any]:
+    """One episode's entry of ``per_episode`` (fields the env does not define are left out)."""
+    row: dict[str, Any] = {"seed": e.seed, "length": e.length, "return": e.episode_return, "success": e.success,
+                           "collision": e.collision, "pseudoenergy": e.pseudoenergy,
+                           "peak_joint_speed": e.peak_joint_speed, "min_clearance": _finite_or_none(e.min_clearance),
+                           "first_step_us": e.first_step_us}
+    if e.tracking_error_max is not None:
+        row["tracking_error_max"] = e.tracking_error_max
+    if e.goal_error is not None:
+        row.update(goal_error=e.goal_error, time_to_goal=e.time_to_goal)
+    if e.fell is not None:
+        row.update(fell=e.fell, forward_speed=e.forward_speed)
+    if e.mean_speed_error is not None:
+        row["speed_error"] = e.mean_speed_error
+    return row
 
 
 def _finite_or_none(value: float) -> float | None:

@@ -19,7 +19,8 @@ __all__ = ["plot_clearance", "plot_point_to_point", "plot_traces", "save_figure"
 
 def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "",
                 error_tolerance: float | None = 1e-3) -> Path:
-    """TCP error, peak joint speed and obstacle clearance over time, one line per labelled episode.
+    """TCP tracking error (against the env's reference path), peak joint speed and obstacle clearance over time,
+    one line per labelled episode.
 
     Args:
         traces: label -> episode trace.
@@ -29,14 +30,14 @@ def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: 
     """
     fig, axes = plt.subplots(3, 1, figsize=(8, 8.5), sharex=True)
     for label, trace in traces.items():
-        axes[0].semilogy(trace.time, np.maximum(trace.task_error, 1e-9), label=label)
+        axes[0].semilogy(trace.time, np.maximum(trace.tracking_error, 1e-9), label=label)
         axes[1].plot(trace.time, trace.joint_speed, label=label)
         clearance = np.where(np.isfinite(trace.min_clearance), trace.min_clearance, np.nan)
         axes[2].plot(trace.time, clearance, label=label)
     if error_tolerance is not None:
         axes[0].axhline(error_tolerance, color="k", ls="--", lw=0.8, label=f"tolerance {error_tolerance:g} m")
     axes[2].axhline(0.0, color="r", ls="--", lw=0.8, label="contact")
-    axes[0].set_ylabel("TCP error [m]")
+    axes[0].set_ylabel("TCP tracking error [m]")
     axes[1].set_ylabel("max |joint speed| [rad/s]")
     axes[2].set_ylabel("obstacle clearance [m]")
     axes[2].set_xlabel("time [s]")

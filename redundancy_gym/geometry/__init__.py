@@ -6,6 +6,7 @@ Plain numpy and numba: never imports gymnasium, mujoco, envs or eval.
 from .collision_model import CollisionLayout, CollisionModel, CollisionState, Kinematics, Segment, bounding_lss
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
+from .grasp_path import GraspPath, GraspPathTiming, grasp_path_durations
 from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential, piecewise_potential_kernel
 from .primitives import KIND_NAMES, LSS, PSS, SSV, TSS
 
@@ -20,6 +21,8 @@ __all__ = [
     "CollisionState",
     "CubicPotential",
     "GeometryError",
+    "GraspPath",
+    "GraspPathTiming",
     "Kinematics",
     "PackedVolumes",
     "PairBatch",
@@ -32,6 +35,7 @@ __all__ = [
     "bounding_lss",
     "distance",
     "distances",
+    "grasp_path_durations",
     "indexed_distances",
     "piecewise_potential_kernel",
 ]

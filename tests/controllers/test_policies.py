@@ -38,7 +38,7 @@ def test_clik_policy_tracks_the_line() -> None:
         assert policy.last_result is not None and policy.last_result.success
         if terminated or truncated:
             break
-    assert info["is_success"] and info["max_task_error"] <= 1e-3
+    assert info["is_success"] and info["max_tracking_error"] <= 1e-3
 
 
 @pytest.mark.parametrize("name, kwargs, match", [

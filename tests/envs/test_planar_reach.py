@@ -1,4 +1,5 @@
 import inspect
+import warnings
 
 import gymnasium as gym
 import numpy as np
@@ -23,7 +24,7 @@ def test_start_on_line_with_varied_posture() -> None:
     for seed in range(5):
         obs, info = env.reset(seed=seed)
         assert np.allclose(obs[layout["tcp"]], default_config()["line_start"], atol=1e-9)
-        assert info["task_error"] < 1e-9
+        assert info["tracking_error"] < 1e-9 and not info["goal_reached"]
         assert np.all(obs[layout["qdot"]] == 0)
         postures.append(obs[layout["q"]])
     assert np.ptp(np.array(postures), axis=0).max() > 0.01  # the redundant posture varies with the seed
@@ -50,7 +51,9 @@ def test_zero_action_holds_posture_and_accumulates_error() -> None:
         obs, reward, terminated, truncated, info = env.step(np.zeros(4))
     assert np.allclose(obs[:4], obs0[:4], atol=1e-3)  # gravity compensated, servo holds
     assert info["min_clearance"] == float("inf") and not info["collision"]
-    assert info["task_error"] > 0.1 and not info["is_success"]
+    assert info["tracking_error"] > 0.1 and not info["is_success"]
+    assert info["goal_error"] == pytest.approx(np.linalg.norm(np.subtract(default_config()["line_end"],
+                                                                          default_config()["line_start"])), abs=2e-3)
 
 
 def test_collision_terminates() -> None:
@@ -79,3 +82,13 @@ def test_collision_terminates() -> None:
 def test_invalid_kwargs(kwargs: dict, match: str) -> None:
     with pytest.raises(EnvConfigError, match=match):
         gym.make(ENV_ID, **kwargs)
+
+
+def test_a_task_longer_than_the_time_limit_warns_at_reset() -> None:
+    env = gym.make(ENV_ID, duration=3.0)  # 3 s line, registered limit 250 steps = 2.5 s
+    with pytest.warns(UserWarning, match="max_episode_steps=300"):
+        env.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env.reset(seed=1)  # once per env
+        gym.make(ENV_ID, duration=2.4).reset(seed=0)  # fits

@@ -6,8 +6,9 @@ from redundancy_gym.cli import main
 from redundancy_gym.eval import EvalError, evaluate, format_report
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
-CONTRACT = {"env", "policy", "episodes", "success_rate", "collision_rate", "task_error_rms", "task_error_max",
-            "pseudoenergy", "peak_joint_speed", "min_clearance", "step_time_us", "episode_return"}
+CONTRACT = {"env", "policy", "episodes", "success_rate", "collision_rate", "tracking_error_rms", "tracking_error_max",
+            "goal_error", "goal_error_max", "goal_reached_rate", "time_to_goal", "pseudoenergy", "peak_joint_speed",
+            "min_clearance", "step_time_us", "compute_time_per_episode_ms", "episode_return"}
 
 
 def test_json_contract_and_clik_success() -> None:
@@ -17,7 +18,9 @@ def test_json_contract_and_clik_success() -> None:
     assert set(data["step_time_us"]) >= {"median", "p99"}
     assert data["step_time_us"]["median"] > 0 and data["step_time_us"]["p99"] >= data["step_time_us"]["median"]
     assert data["success_rate"] == 1.0 and data["collision_rate"] == 0.0
-    assert data["task_error_max"] <= 1e-3 and data["task_error_rms"] <= data["task_error_max"]
+    assert data["tracking_error_max"] <= 1e-3 and data["tracking_error_rms"] <= data["tracking_error_max"]
+    assert data["goal_error"] <= 1e-3 and data["goal_reached_rate"] == 1.0
+    assert 1.7 <= data["time_to_goal"] <= 2.5  # within 1 mm of the end of the 2 s quintic line
     assert data["min_clearance"] is None  # no obstacle: null, never inf in JSON
     assert data["pseudoenergy"] > 0 and data["peak_joint_speed"] > 0
     assert [e["seed"] for e in data["per_episode"]] == [0, 1, 2]
@@ -27,7 +30,8 @@ def test_json_contract_and_clik_success() -> None:
 
 def test_zero_policy_fails_and_collision_is_counted() -> None:
     data = evaluate(ENV_ID, "zero", episodes=2, seed=0, progress=False).to_json()
-    assert data["success_rate"] == 0.0 and data["task_error_max"] > 0.1
+    assert data["success_rate"] == 0.0 and data["tracking_error_max"] > 0.1
+    assert data["goal_reached_rate"] == 0.0 and data["time_to_goal"] is None
     blocked = evaluate(ENV_ID, "clik", episodes=2, seed=0, progress=False,
                        env_kwargs={"obstacle_center": (0.9, 0.2), "obstacle_radius": 0.05}).to_json()
     assert blocked["collision_rate"] == 1.0 and blocked["min_clearance"] <= 0.0
@@ -55,3 +59,27 @@ def test_cli_errors_are_clear(capsys) -> None:
 def test_episode_count_validated() -> None:
     with pytest.raises(EvalError):
         evaluate(ENV_ID, "zero", episodes=0)
+
+
+def test_agri_tracking_error_separates_the_reference_from_holding_still() -> None:
+    """Tracking error is against the env's reference path, not the distance to the goal during the approach: mm for
+    the clik reference, tenths of a metre for the zero policy; the goal error says where each one ended."""
+    agri = "redundancy_gym/AgriReach-v0"
+    clik = evaluate(agri, "clik", episodes=2, seed=0, progress=False).to_json()
+    zero = evaluate(agri, "zero", episodes=2, seed=0, progress=False).to_json()
+    assert clik["success_rate"] == 1.0 and clik["tracking_error_rms"] < 0.005 and clik["tracking_error_max"] < 0.015
+    assert zero["tracking_error_rms"] > 0.1 and zero["tracking_error_rms"] > 20 * clik["tracking_error_rms"]
+    assert clik["goal_error"] <= 0.01 and zero["goal_error"] > 0.2 and clik["time_to_goal"] > 1.0
+    assert zero["time_to_goal"] is None and "speed_error" not in clik
+    step = clik["step_time_us"]
+    # the plan (collision model, path) is made at the first step: counted in the mean, shown on its own
+    assert step["first_step_mean"] > step["median"] and step["mean"] >= step["median"]
+
+
+def test_biped_reports_speed_error_not_tracking_error() -> None:
+    data = evaluate("redundancy_gym/BipedWalk-v0", "zero", episodes=1, seed=0, progress=False,
+                    env_kwargs={"target_speed": 0.5}).to_json()
+    assert data["tracking_error_rms"] is None and data["goal_error"] is None
+    # standing still (or falling) at a 0.5 m/s command: the mean speed error is about the command
+    assert data["speed_error"] == pytest.approx(0.5, abs=0.1) and data["speed_error_rms"] > 0.3
+    assert "speed error mean / rms [m/s]" in format_report(data)
