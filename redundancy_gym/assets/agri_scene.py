@@ -15,9 +15,9 @@ from collections.abc import Mapping
 from dm_control import mjcf
 
 from . import AGRI_ARM_XML
-from .backdrop import add_backdrop
+from .backdrop import add_backdrop, look_at_xyaxes
 
-__all__ = ["PLANT_COLORS", "POOL_CATEGORIES", "TARGET_COLOR", "agri_scene_xml", "pool_geom_name"]
+__all__ = ["CAMERAS", "PLANT_COLORS", "POOL_CATEGORIES", "TARGET_COLOR", "agri_scene_xml", "pool_geom_name"]
 
 POOL_CATEGORIES = ("stem", "shoot", "fruit", "petiole", "leaf")
 PLANT_COLORS = {
@@ -28,6 +28,14 @@ PLANT_COLORS = {
     "fruit": (0.8, 0.12, 0.08, 1.0),
 }
 TARGET_COLOR = (1.0, 0.75, 0.05, 1.0)
+CAMERAS = {
+    "side": ((-0.35, -1.6, 2.3), (0.55, 0.0, 1.05)),
+    "front": ((-0.6, 1.35, 2.4), (0.6, 0.0, 1.05)),
+}
+"""World-fixed cameras of the scene: (position, point looked at) [m]. Both look down from the path onto the
+region a target can lie in (the near row's harvest band within the arm's reach: x about 1 m, |y| < 0.5 m,
+z 0.9-1.3 m) and frame the arm, the target and the plants around it; ``side`` from the arm's right (-y), the
+default render camera, ``front`` from its left (+y)."""
 _POOL_TYPE = {"stem": "capsule", "shoot": "capsule", "petiole": "capsule", "fruit": "sphere", "leaf": "ellipsoid"}
 
 
@@ -39,7 +47,7 @@ def pool_geom_name(category: str, index: int) -> str:
 def agri_scene_xml(capacity: Mapping[str, int]) -> str:
     """MJCF text of the arm with ``capacity[category]`` hidden plant geoms per category of :data:`POOL_CATEGORIES`.
 
-    Also adds a floor, cameras ``side`` and ``front``, and the (non-colliding) ``approach_line`` marker.
+    Also adds a floor, the cameras of :data:`CAMERAS`, and the (non-colliding) ``approach_line`` marker.
     """
     unknown = set(capacity) - set(POOL_CATEGORIES)
     if unknown:
@@ -47,8 +55,10 @@ def agri_scene_xml(capacity: Mapping[str, int]) -> str:
     root = mjcf.from_path(str(AGRI_ARM_XML))
     add_backdrop(root, floor_size=5.0, floor_colors=((0.55, 0.5, 0.42), (0.5, 0.45, 0.38)), floor_repeat=8)
     world = root.worldbody
-    world.add("camera", name="side", pos=[-0.9, -2.3, 2.0], xyaxes=[0.93, -0.37, 0, 0.2, 0.5, 0.85])
-    world.add("camera", name="front", pos=[-1.4, 0.0, 1.5], xyaxes=[0, -1, 0, 0.3, 0, 0.95])
+    headlight = root.visual.headlight
+    headlight.ambient, headlight.diffuse, headlight.specular = [0.3, 0.3, 0.3], [0.4, 0.4, 0.4], [0.1, 0.1, 0.1]
+    for name, (position, target) in CAMERAS.items():
+        world.add("camera", name=name, pos=list(position), xyaxes=look_at_xyaxes(position, target))
     for category in POOL_CATEGORIES:
         for k in range(int(capacity.get(category, 0))):
             world.add("geom", name=pool_geom_name(category, k), type=_POOL_TYPE[category], size=[0.01, 0.01, 0.01],

@@ -5,28 +5,43 @@ from __future__ import annotations
 from dm_control import mjcf
 
 from . import BIPED_XML
-from .backdrop import add_backdrop
+from .backdrop import add_backdrop, look_at_xyaxes
 
-__all__ = ["BIPED_FLOOR_GEOM", "biped_scene_xml"]
+__all__ = ["BIPED_CAMERA", "BIPED_FLOOR_GEOM", "biped_scene_xml"]
 
 BIPED_FLOOR_GEOM = "ground"
 """The colliding floor plane (contype/conaffinity 1 against the robot's 2/1)."""
+BIPED_CAMERA = "track"
+"""The default render camera: follows the robot's centre of mass (``mode="trackcom"``), looking at the whole body
+from ahead and to its right (-y), so the walk goes left to right across the image."""
+_CAMERA_OFFSET = (1.6, -2.9, 0.4)  # [m] camera position relative to the centre of mass (world axes)
+_CAMERA_AIM = (0.15, 0.0, -0.05)  # [m] the point it looks at, relative to the centre of mass
 
 
 def biped_scene_xml(*, floor_friction: float = 1.0, floor_size: float = 60.0) -> str:
     """MJCF text of the flat-ground walking scene.
+
+    Rendering: a contrasting checker floor of 0.5 m squares with marked edges (the walk shows against it), a
+    directional light that follows the robot in place of the robot file's fixed spot light (which left the floor
+    dark a few metres on), a brighter headlight, and the tracking camera :data:`BIPED_CAMERA`.
 
     Args:
         floor_friction: sliding friction of the floor [-] (MuJoCo takes the larger of the two geoms').
         floor_size: half size of the floor [m].
     """
     root = mjcf.from_path(str(BIPED_XML))
-    add_backdrop(root, floor_size=floor_size, floor_colors=((0.82, 0.84, 0.86), (0.72, 0.74, 0.78)),
-                 floor_repeat=int(floor_size))
+    add_backdrop(root, floor_size=floor_size, floor_colors=((0.86, 0.87, 0.89), (0.55, 0.6, 0.66)),
+                 floor_repeat=int(2 * floor_size), floor_lines=(0.3, 0.33, 0.38))
     world = root.worldbody
     world.add("geom", name=BIPED_FLOOR_GEOM, type="plane", size=[floor_size, floor_size, 0.1], contype=1,
               conaffinity=1, friction=[floor_friction, 0.02, 0.001], rgba=[0, 0, 0, 0])
-    # a camera that follows the pelvis from the side, as in Gymnasium's Humanoid
+    headlight = root.visual.headlight
+    headlight.ambient, headlight.diffuse, headlight.specular = [0.35, 0.35, 0.35], [0.45, 0.45, 0.45], [0.1, 0.1, 0.1]
+    # the robot file's spot light lights a fixed patch of floor the robot walks out of
+    root.find("light", "key_light").remove()
     pelvis = root.find("body", "pelvis")
-    pelvis.add("camera", name="track", mode="trackcom", pos=[0.4, -3.2, 0.1], xyaxes=[1, 0, 0, 0, 0.1, 1])
+    pelvis.add("light", name="key_light", mode="trackcom", directional="true", castshadow="true",
+               pos=[-1.0, -1.5, 4.0], dir=[0.25, 0.35, -1.0], diffuse=[0.55, 0.55, 0.55], specular=[0.2, 0.2, 0.2])
+    pelvis.add("camera", name=BIPED_CAMERA, mode="trackcom", pos=list(_CAMERA_OFFSET),
+               xyaxes=look_at_xyaxes(_CAMERA_OFFSET, _CAMERA_AIM))
     return root.to_xml_string()

@@ -44,7 +44,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
         path, _ = record_episode(_PLANAR, "clik", out / f"planar_reach_clik_{tag}.mp4", seed=seed,
-                                 env_kwargs={"obstacle": obstacle})
+                                 env_kwargs={"obstacle": obstacle}, progress=progress)
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
@@ -65,7 +65,7 @@ def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
         written.append(report.write_json(out / f"agri_reach_clik_{difficulty}.json"))
         print(f"\n== AgriReach-v0, clik, difficulty={difficulty}\n{format_report(report.to_json())}")
     path, _ = record_episode(_AGRI, "clik", out / "agri_reach_clik_medium.mp4", seed=seed,
-                             env_kwargs={"difficulty": "medium"})
+                             env_kwargs={"difficulty": "medium"}, progress=progress)
     written.append(path)
     traces = {label: rollout_point_to_point(FIG_5_10, collision_avoidance=on)
               for label, on in (("without collision avoidance", False), ("with nullspace collision avoidance", True))}
@@ -95,7 +95,7 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]
     written.append(plot_angular_momentum(walks, out / "biped_walk_lz_fig_5_11.png",
                                          "Vertical angular momentum, 0.7 m/s, MuJoCo (fig. 5.11 analogue)"))
     path, _ = record_episode(_BIPED, "walking", out / "biped_walk_walking.mp4", seed=seed,
-                             env_kwargs={"target_speed": 0.7})
+                             env_kwargs={"target_speed": 0.7}, progress=progress)
     written.append(path)
     return written
 
