@@ -1,4 +1,9 @@
-"""The ``redundancy-gym`` command: ``eval``, ``train``, ``demo``, ``render``, ``bench``."""
+"""redundancy-gym: Gymnasium environments on MuJoCo for redundant robots, with model-based reference policies.
+
+Subcommands: list (the envs and the policies each accepts), eval (a policy over episodes: table and JSON),
+train (a stable-baselines3 agent), render (one episode as a video), bench (benchmarks) and demo (everything
+into one folder). Run "redundancy-gym <subcommand> --help" for its options.
+"""
 
 from __future__ import annotations
 
@@ -9,7 +14,19 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+from . import __version__
+
 __all__ = ["main"]
+
+EPILOG = """examples:
+  redundancy-gym list
+  redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy clik --episodes 20 --env-kwargs '{"obstacle": false}'
+  redundancy-gym train redundancy_gym/PlanarReach-v0 --config configs/ppo_planar_reach.yaml --steps 100000
+  redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy runs/ppo_PlanarReach-v0.zip
+"""
+ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
+POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip "
+               "(redundancy-gym list shows which envs each accepts)")
 
 
 def _json_object(text: str) -> dict[str, Any]:
@@ -22,53 +39,163 @@ def _json_object(text: str) -> dict[str, Any]:
     return value
 
 
+class _HelpFormatter(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows each option's default, except the empty ones (None, False), whose help says what happens."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        if action.default is None or action.default is False:
+            return action.help
+        return super()._get_help_string(action)
+
+
+class _RawHelpFormatter(_HelpFormatter, argparse.RawDescriptionHelpFormatter):
+    """The top-level help: description and examples as written."""
+
+
+def _add_parser(sub: Any, name: str, help_text: str, **kwargs: Any) -> argparse.ArgumentParser:
+    return sub.add_parser(name, help=help_text, description=help_text, formatter_class=_HelpFormatter, **kwargs)
+
+
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="redundancy-gym", description=__doc__)
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser = argparse.ArgumentParser(prog="redundancy-gym", description=__doc__, epilog=EPILOG,
+                                     formatter_class=_RawHelpFormatter)
+    parser.add_argument("--version", action="version", version=f"redundancy-gym {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{list,eval,train,render,bench,demo}")
 
-    ev = sub.add_parser("eval", help="evaluate a policy; prints a table and writes the evaluation-contract JSON")
-    ev.add_argument("env_id", help="e.g. redundancy_gym/PlanarReach-v0")
-    ev.add_argument("--policy", required=True,
-                    help="clik | walking | predictive | global | zero | random | path to an SB3 .zip")
-    ev.add_argument("--episodes", type=int, default=10)
-    ev.add_argument("--seed", type=int, default=0)
-    ev.add_argument("--env-kwargs", type=_json_object, default={}, help="JSON object passed to gym.make")
-    ev.add_argument("--policy-kwargs", type=_json_object, default={}, help="JSON object of policy options")
-    ev.add_argument("--json", dest="json_path", help="write the report here")
-    ev.add_argument("--no-progress", action="store_true")
+    ls = _add_parser(sub, "list", "list the registered envs: spaces, control period, episode length, policies")
+    ls.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
-    tr = sub.add_parser("train", help="train a stable-baselines3 agent and save a .zip that eval loads")
-    tr.add_argument("env_id")
-    tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo")
-    tr.add_argument("--steps", type=int, required=True)
-    tr.add_argument("--out", required=True, help="output .zip path")
-    tr.add_argument("--seed", type=int, default=0)
-    tr.add_argument("--env-kwargs", type=_json_object, default={})
-    tr.add_argument("--config", help="YAML of SB3 keyword arguments (see configs/)")
-    tr.add_argument("--no-progress", action="store_true")
+    ev = _add_parser(sub, "eval", "evaluate a policy; prints a table and writes the evaluation-contract JSON")
+    ev.add_argument("env_id", help=ENV_HELP)
+    ev.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
+    ev.add_argument("--episodes", type=int, default=10, metavar="N", help="number of episodes")
+    ev.add_argument("--seed", type=int, default=0, metavar="N", help="episode i is reset with seed + i")
+    ev.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object passed to gym.make")
+    ev.add_argument("--policy-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object of policy options")
+    ev.add_argument("--json", dest="json_path", metavar="PATH",
+                    help="write the report to this file (default: no file)")
+    ev.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
-    de = sub.add_parser("demo", help="reference controllers on every env: JSON, plots, video into a folder")
-    de.add_argument("--out", default="results")
-    de.add_argument("--episodes", type=int, default=20)
-    de.add_argument("--seed", type=int, default=0)
+    tr = _add_parser(sub, "train", "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
+                                   "return, success rate and length of recent episodes as it goes")
+    tr.add_argument("env_id", help=ENV_HELP)
+    tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="stable-baselines3 algorithm")
+    tr.add_argument("--config", metavar="YAML",
+                    help="rl-zoo3 style YAML keyed by env id (see configs/); its n_timesteps and n_envs are the "
+                         "defaults of --steps and --n-envs (default: none, SB3's own defaults)")
+    tr.add_argument("--steps", type=int, metavar="N",
+                    help="total environment steps (default: n_timesteps of --config)")
+    tr.add_argument("--n-envs", type=int, metavar="N",
+                    help="envs stepped together (default: n_envs of --config, else 1)")
+    tr.add_argument("--vec-env", choices=("dummy", "subproc"), default="dummy",
+                    help="dummy: all envs in this process; subproc: one process per env")
+    tr.add_argument("--out", metavar="ZIP", help="output .zip path (default: runs/<algo>_<env name>.zip)")
+    tr.add_argument("--seed", type=int, default=0, metavar="N",
+                    help="seed of the agent; env i is reset with seed + i first")
+    tr.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object passed to gym.make (over the config's env_kwargs)")
+    tr.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (default: none)")
+    tr.add_argument("--print-every", type=int, metavar="STEPS",
+                    help="steps between printed statistics lines (default: steps / 20, at least 1000)")
+    tr.add_argument("--torch-threads", type=int, default=1, metavar="N",
+                    help="torch CPU threads (more pay off only for networks larger than the default MLP)")
+    tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
-    re = sub.add_parser("render", help="record one episode as .mp4 or .gif")
-    re.add_argument("env_id")
-    re.add_argument("--policy", required=True)
-    re.add_argument("--out", required=True)
-    re.add_argument("--seed", type=int, default=0)
-    re.add_argument("--env-kwargs", type=_json_object, default={})
-    be = sub.add_parser("bench", help="run a benchmark against its peers and write its figures")
+    re = _add_parser(sub, "render", "record one episode as .mp4 or .gif")
+    re.add_argument("env_id", help=ENV_HELP)
+    re.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
+    re.add_argument("--out", required=True, metavar="PATH", help="output .mp4 or .gif path")
+    re.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the episode")
+    re.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object passed to gym.make")
+
+    be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
     be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
                          "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
                          "pik: predictive IK against local CLIK and the global optimum")
-    be.add_argument("--json", dest="json_path", help="default: results/bench_<name>.json")
-    be.add_argument("--seed", type=int, default=0)
+    be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
+    be.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the benchmark's scenes")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
-    be.add_argument("--no-progress", action="store_true")
+    be.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
+    de.add_argument("--out", default="results", metavar="DIR", help="output folder")
+    de.add_argument("--episodes", type=int, default=20, metavar="N", help="episodes per evaluation")
+    de.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the first episode")
     return parser
+
+
+def _format_shape(shape: Any) -> str:
+    return str(tuple(shape))
+
+
+def list_envs() -> list[dict[str, Any]]:
+    """One row per registered env id: spaces, control period, episode length and the policies it accepts."""
+    import gymnasium as gym
+
+    from . import ENV_IDS
+    from .controllers.policies import supported_policies
+
+    rows = []
+    for env_id in ENV_IDS:
+        spec = gym.spec(env_id)
+        env = gym.make(env_id)
+        try:
+            dt = getattr(env.unwrapped, "dt", None)
+            steps = spec.max_episode_steps
+            rows.append({
+                "id": env_id,
+                "observation_shape": list(env.observation_space.shape or ()),
+                "action_shape": list(env.action_space.shape or ()),
+                "control_period_s": None if dt is None else float(dt),
+                "max_episode_steps": steps,
+                "episode_s": None if dt is None or steps is None else round(float(dt) * steps, 6),
+                "policies": [*supported_policies(env), "SB3 .zip"],
+            })
+        finally:
+            env.close()
+    return rows
+
+
+def format_env_list(rows: list[dict[str, Any]]) -> str:
+    """The rows of :func:`list_envs` as a text table."""
+    header = ("env id", "observation", "action", "control period", "max steps", "policies")
+    table = [header]
+    for row in rows:
+        dt = row["control_period_s"]
+        steps = row["max_episode_steps"]
+        episode = f" ({row['episode_s']:g} s)" if row["episode_s"] is not None else ""
+        table.append((row["id"], _format_shape(row["observation_shape"]), _format_shape(row["action_shape"]),
+                      "-" if dt is None else f"{dt * 1e3:g} ms", "-" if steps is None else f"{steps}{episode}",
+                      ", ".join(row["policies"])))
+    widths = [max(len(r[i]) for r in table) for i in range(len(header) - 1)]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r[:-1], widths)) + "  " + r[-1] for r in table]
+    return "\n".join(lines)
+
+
+def _train(args: argparse.Namespace) -> None:
+    from .eval.exceptions import EvalError
+    from .eval.training import TrainingConfig, load_config, train
+
+    config = load_config(args.config, args.env_id) if args.config else TrainingConfig(hyperparameters={})
+    steps = args.steps if args.steps is not None else config.n_timesteps
+    if steps is None:
+        raise EvalError("give --steps, or a --config whose section has n_timesteps")
+    n_envs = args.n_envs if args.n_envs is not None else (config.n_envs or 1)
+    out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
+    source = f" from {args.config}" if args.config else ""
+    print(f"training {args.algo.upper()} ({config.policy}{source}) on {args.env_id}: {steps} steps, {n_envs} "
+          f"env(s) ({args.vec_env}), seed {args.seed}")
+    path = train(args.env_id, args.algo, steps, out, seed=args.seed,
+                 env_kwargs={**config.env_kwargs, **args.env_kwargs}, hyperparameters=config.hyperparameters,
+                 progress_bar=not args.no_progress, tensorboard_log=args.tensorboard, n_envs=n_envs,
+                 vec_env=args.vec_env, policy=config.policy, print_every=args.print_every,
+                 torch_threads=args.torch_threads)
+    print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -80,7 +207,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .eval.exceptions import EvalError
 
     try:
-        if args.command == "eval":
+        if args.command == "list":
+            rows = list_envs()
+            print(json.dumps(rows, indent=2) if args.json else format_env_list(rows))
+        elif args.command == "eval":
             from .eval.evaluate import evaluate, format_report
 
             report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
@@ -91,12 +221,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.json_path:
                 print(f"wrote {report.write_json(args.json_path)}")
         elif args.command == "train":
-            from .eval.training import load_hyperparameters, train
-
-            hyper = load_hyperparameters(args.config) if args.config else None
-            path = train(args.env_id, args.algo, args.steps, args.out, seed=args.seed, env_kwargs=args.env_kwargs,
-                         hyperparameters=hyper, progress_bar=not args.no_progress)
-            print(f"wrote {path}")
+            _train(args)
         elif args.command == "demo":
             from .eval.demo import run_demo
 

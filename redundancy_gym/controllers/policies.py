@@ -2,12 +2,15 @@
 
 This module joins controllers and environments (DESIGN.md): it reads what it needs from the env by duck
 typing (``OBSERVATION_LAYOUT``, ``ROBOT_XML``, ``TCP_FRAME``, ``TASK_AXES``, ``max_joint_speed``) and never
-imports gymnasium or mujoco, so the same policy object can drive a robot fed with the same observation.
+imports mujoco, so the same policy object can drive a robot fed with the same observation. Only the error for an
+unsupported env reaches the simulation side: it builds the registered envs (gymnasium, lazily) to name those the
+policy supports.
 """
 
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
@@ -27,10 +30,22 @@ from .policy_options import config_from_options, env_with_attributes
 from .posture_objective import PostureObjective
 
 __all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPolicy", "Sb3Policy", "ZeroPolicy",
-           "make_policy"]
+           "env_name", "make_policy", "missing_capabilities", "policy_supports", "supported_env_ids",
+           "supported_policies"]
 
 POLICY_NAMES: tuple[str, ...] = ("clik", "walking", "predictive", "global", "zero", "random")
 _SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
+LEARN_EXTRA_HINT = (
+    "pip install -e '.[learn]' (in a clone, from the repository root) or pip install 'redundancy-gym[learn]'")
+
+# What each reference policy reads from the (unwrapped) env; mirrors the checks of the policy constructors
+# (ClikPolicy, GraspClikPolicy, WalkingPolicy, PredictivePolicy) so that a policy's support for an env is known
+# without building it.
+_CLIK_NEEDS = ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES", "max_joint_speed")
+_GRASP_CLIK_NEEDS = ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds")
+_WALKING_NEEDS = ("OBSERVATION_LAYOUT", "ROBOT_XML", "SOFT_LIMIT_MARGIN", "joint_limits", "nominal_configuration",
+                  "action_scale", "dt")
+_WALKING_LAYOUT = ("base_position", "q", "base_linear_velocity", "qdot", "right_force", "left_torque", "command")
 
 
 @runtime_checkable
@@ -232,7 +247,7 @@ class Sb3Policy:
         try:
             sb3 = import_stable_baselines3()
         except ImportError as exc:  # the 'learn' extra
-            raise PolicyError("loading a .zip policy needs stable-baselines3: pip install 'redundancy-gym[learn]'") from exc
+            raise PolicyError(f"loading a .zip policy needs stable-baselines3: {LEARN_EXTRA_HINT}") from exc
         names = (algo,) if algo else _SB3_ALGOS
         errors = []
         for name in names:
@@ -254,6 +269,103 @@ class Sb3Policy:
         return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
 
 
+def _is_grasp_task(base: Any) -> bool:
+    return "grasp_position" in getattr(base, "observation_layout", {})
+
+
+def missing_capabilities(name: str, env: Any) -> list[str]:
+    """What ``env`` lacks for the policy ``name`` (empty when the policy supports it), without building the policy.
+
+    Args:
+        name: a name of :data:`POLICY_NAMES` or the path of an SB3 ``.zip`` (which only needs matching spaces,
+            checked when it is loaded).
+        env: the environment (wrapped or not).
+
+    Raises:
+        PolicyError: for an unknown policy name.
+    """
+    base = getattr(env, "unwrapped", env)
+    if name in ("clik", "predictive", "global"):
+        if _is_grasp_task(base):
+            return [a for a in _GRASP_CLIK_NEEDS if not hasattr(base, a)]
+        missing = [a for a in _CLIK_NEEDS if not hasattr(base, a)]
+        if name != "clik":
+            missing += [a for a in ("dt",) if not hasattr(base, a)]
+            if not callable(getattr(base, "reference", None)):
+                missing.append("reference(t) or a grasp task")
+        return missing
+    if name == "walking":
+        missing = [a for a in _WALKING_NEEDS if not hasattr(base, a)]
+        if not missing:
+            keys = [k for k in _WALKING_LAYOUT if k not in base.OBSERVATION_LAYOUT]
+            if keys:
+                missing.append(f"OBSERVATION_LAYOUT entries {', '.join(keys)}")
+        return missing
+    if name == "zero":
+        return [] if getattr(getattr(env, "action_space", None), "shape", None) is not None else ["action_space"]
+    if name == "random":
+        space = getattr(env, "action_space", None)
+        low, high = getattr(space, "low", None), getattr(space, "high", None)
+        if low is None or high is None or not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))):
+            return ["a bounded action space"]
+        return []
+    if name.endswith(".zip") or Path(name).is_file():
+        return []
+    raise PolicyError(f"unknown policy {name!r}; valid: {', '.join(POLICY_NAMES)} or the path of an SB3 .zip")
+
+
+def policy_supports(name: str, env: Any) -> bool:
+    """Whether :func:`make_policy` can build the policy ``name`` for ``env`` (its options aside)."""
+    return not missing_capabilities(name, env)
+
+
+def supported_policies(env: Any) -> tuple[str, ...]:
+    """The names of :data:`POLICY_NAMES` that support ``env`` (an SB3 ``.zip`` fits any env with its spaces)."""
+    return tuple(name for name in POLICY_NAMES if policy_supports(name, env))
+
+
+def env_name(env: Any) -> str:
+    """The env's registered id (``env.spec.id``) when it has one, else its class name."""
+    spec = getattr(env, "spec", None) or getattr(getattr(env, "unwrapped", env), "spec", None)
+    env_id = getattr(spec, "id", None)
+    return str(env_id) if env_id else type(getattr(env, "unwrapped", env)).__name__
+
+
+@lru_cache(maxsize=1)
+def _registered_support() -> dict[str, tuple[str, ...]]:
+    """Supported policies of every env id redundancy_gym registers (each env is built once, with its defaults)."""
+    try:  # the join layer reads the registry only here, for messages and `redundancy-gym list`
+        import gymnasium as gym
+
+        from ..registration import ENV_IDS
+    except ImportError:
+        return {}
+    support = {}
+    for env_id in ENV_IDS:
+        try:
+            env = gym.make(env_id)
+        except Exception:  # an env that cannot be built here (a missing optional dependency) is left out
+            continue
+        try:
+            support[env_id] = supported_policies(env)
+        finally:
+            env.close()
+    return support
+
+
+def supported_env_ids(name: str) -> tuple[str, ...]:
+    """The registered env ids on which the policy ``name`` can be built."""
+    return tuple(env_id for env_id, names in _registered_support().items() if name in names)
+
+
+def _unsupported(name: str, env: Any, missing: list[str]) -> PolicyError:
+    ids = supported_env_ids(name)
+    supports = ", ".join(ids) if ids else "no registered env"
+    base = getattr(env, "unwrapped", env)
+    return PolicyError(f"policy {name!r} supports {supports}; got {env_name(env)} "
+                       f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})")
+
+
 def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
     """Build a policy for ``env``.
 
@@ -267,7 +379,14 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
         env: the environment the policy will act in.
         **kwargs: options of the policy (``ClikPolicyConfig`` fields for ``clik``, ``seed`` for ``random``,
             ``algo`` for a ``.zip``).
+
+    Raises:
+        PolicyError: unknown name or options, or an env the policy does not support (the message names the
+            registered env ids it supports).
     """
+    missing = missing_capabilities(name, env)
+    if missing:
+        raise _unsupported(name, env, missing)
     if name == "clik":
         base = getattr(env, "unwrapped", env)
         if "grasp_position" in getattr(base, "observation_layout", {}):

@@ -32,9 +32,16 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
 
 
 def env_with_attributes(env: Any, required: tuple[str, ...], policy: str) -> Any:
-    """The unwrapped env, after checking that it has every attribute in ``required``."""
+    """The unwrapped env, after checking that it has every attribute in ``required``.
+
+    :func:`~redundancy_gym.controllers.policies.make_policy` checks support first and names the registered envs a
+    policy supports; this is the check of a policy class built directly.
+    """
     base = getattr(env, "unwrapped", env)
     missing = [name for name in required if not hasattr(base, name)]
     if missing:
-        raise PolicyError(f"the {policy} policy does not support {type(base).__name__}: it lacks {', '.join(missing)}")
+        spec = getattr(env, "spec", None) or getattr(base, "spec", None)
+        name = getattr(spec, "id", None) or type(base).__name__
+        raise PolicyError(f"policy {policy!r} does not support {name} "
+                          f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})")
     return base
