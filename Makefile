@@ -2,7 +2,6 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
-export MUJOCO_GL ?= osmesa
 
 .PHONY: demo test system-deps clean
 
@@ -12,7 +11,8 @@ demo: $(VENV)/.core-installed
 test: $(VENV)/.test-installed
 	$(BIN)/python -m pytest -q
 
-# libosmesa6 renders headless (MUJOCO_GL=osmesa); installed when missing and run as root
+# libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
+# missing and run as root
 system-deps:
 	@if ! ldconfig -p 2>/dev/null | grep -q libOSMesa; then \
 	  if [ "$$(id -u)" = 0 ]; then \

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from collections.abc import Sequence
 from typing import Any
@@ -110,6 +109,9 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the episode")
     re.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
                     help="JSON object passed to gym.make")
+    re.add_argument("--policy-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object of policy options")
+    re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
     be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik"),
@@ -201,7 +203,6 @@ def _train(args: argparse.Namespace) -> None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     args = _parser().parse_args(argv)
-    os.environ.setdefault("MUJOCO_GL", "osmesa")
     from .controllers.exceptions import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
@@ -230,7 +231,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             from .eval.video import record_episode
 
             path, summary = record_episode(args.env_id, args.policy, args.out, seed=args.seed,
-                                           env_kwargs=args.env_kwargs)
+                                           env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
+                                           progress=not args.no_progress)
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
             json_path = args.json_path or f"results/bench_{args.name}.json"

@@ -6,10 +6,15 @@ from types import ModuleType
 
 from .rendering_backend import guard_triton
 
-__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3"]
+__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint"]
 
-LEARN_EXTRA_HINT = ("pip install -e '.[learn]' (from a clone of the repository) or "
-                    "pip install 'redundancy-gym[learn]'")
+
+def install_hint(extra: str) -> str:
+    """How to install an optional extra, for a clone and for an installed package."""
+    return f"pip install -e '.[{extra}]' (in a clone, from the repository root) or pip install 'redundancy-gym[{extra}]'"
+
+
+LEARN_EXTRA_HINT = install_hint("learn")
 
 
 def import_stable_baselines3() -> ModuleType:

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from ..geometry import PSS, Segment
 from ..model import RobotModel, collision_model_from_mjcf
-from ..sb3_import import import_stable_baselines3
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
@@ -35,8 +35,6 @@ __all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPo
 
 POLICY_NAMES: tuple[str, ...] = ("clik", "walking", "predictive", "global", "zero", "random")
 _SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
-LEARN_EXTRA_HINT = (
-    "pip install -e '.[learn]' (in a clone, from the repository root) or pip install 'redundancy-gym[learn]'")
 
 # What each reference policy reads from the (unwrapped) env; mirrors the checks of the policy constructors
 # (ClikPolicy, GraspClikPolicy, WalkingPolicy, PredictivePolicy) so that a policy's support for an env is known

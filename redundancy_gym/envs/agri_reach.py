@@ -22,11 +22,13 @@ from ..assets import (
 )
 from ..assets.agri_scene import PLANT_COLORS, POOL_CATEGORIES, TARGET_COLOR, agri_scene_xml, pool_geom_name
 from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaults, generate_crop_row
-from ..geometry import LSS, PackedVolumes, PairBatch, indexed_distances
+from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
+from .validation import check_render_backend
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
+from .validation import warn_if_time_limit_short
 
 __all__ = ["AgriReachEnv", "default_config"]
 
@@ -69,6 +71,10 @@ def default_config() -> dict[str, Any]:
         "clearance_horizon": 0.1,
         "reset_noise_scale": 0.05,
         "frame_skip": 1,
+        "reference_speed": 0.35,
+        "reference_turn_rate": 0.8,
+        "reference_min_duration": 1.0,
+        "reference_approach_speed": 0.12,
     }
 
 
@@ -116,12 +122,17 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     -energy_weight * qdot^T qdot dt``, ``reward_leaf = -leaf_penalty * (leaves touched this step)``,
     ``reward_collision = -collision_penalty`` on a collision, ``reward_success = success_bonus`` on success.
 
-    ``info`` also holds ``task_error`` (position error [m]), ``orientation_error`` [rad], ``pseudoenergy``
+    ``info`` also holds ``goal_error`` (TCP distance to the grasp point [m]), ``orientation_error`` [rad]
+    (tool axis against the approach direction), ``goal_reached`` (both within the success tolerances),
+    ``tracking_error`` (TCP distance [m] to the env's reference path at the current time: a quintic move from
+    the start pose to the pre-grasp pose, then a straight approach, timed by the ``reference_*`` arguments; the
+    ``clik`` reference follows this path, a learned policy need not), ``pseudoenergy``
     [rad^2/s], ``min_clearance`` [m] (smallest swept-sphere distance to a hard obstacle or between non-adjacent
     links; values beyond ``clearance_horizon`` are reported as the horizon), ``collision``, ``leaf_contacts``
     (this step), ``leaf_contacts_total``, ``joint_limit_margin`` (smallest distance to a limit [m or rad]),
     ``peak_joint_speed``, ``is_success`` (TCP within ``success_position_tolerance`` and
-    ``success_angle_tolerance`` of the grasp pose, no collision), ``time`` [s] and ``tcp``.
+    ``success_angle_tolerance`` of the grasp pose, no collision), ``time`` [s], ``tcp`` and ``tcp_ref`` (the
+    reference path's point) [m].
 
     ## Starting State
     A new crop row is drawn from the env's generator at every reset (difficulty presets plus explicit
@@ -148,6 +159,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     - ``success_position_tolerance`` [m], ``success_angle_tolerance`` [deg].
     - ``clearance_horizon`` [m]: pairs farther than this (by bounding spheres) are not computed exactly.
     - ``reset_noise_scale`` [m, rad]; ``frame_skip`` (physics steps of 10 ms per control step).
+    - ``reference_speed`` [m/s], ``reference_turn_rate`` [rad/s], ``reference_min_duration`` [s],
+      ``reference_approach_speed`` [m/s]: the timing of the reference path (average TCP speed and tool-axis turn
+      rate of the move to the pre-grasp pose, its shortest duration, the approach speed).
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
@@ -170,7 +184,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                  collision_penalty: float = 10.0, success_bonus: float = 10.0,
                  success_position_tolerance: float = 0.01, success_angle_tolerance: float = 10.0,
                  clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,
-                 render_mode: str | None = None, width: int = 480, height: int = 480, camera_name: str = "side",
+                 reference_speed: float = 0.35, reference_turn_rate: float = 0.8, reference_min_duration: float = 1.0,
+                 reference_approach_speed: float = 0.12, render_mode: str | None = None, width: int = 480, height: int = 480, camera_name: str = "side",
                  **kwargs: Any) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
@@ -181,6 +196,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                                 max_joint_speed, max_lift_speed, position_weight, orientation_weight, energy_weight,
                                 leaf_penalty, collision_penalty, success_bonus, success_position_tolerance,
                                 success_angle_tolerance, clearance_horizon, reset_noise_scale, frame_skip,
+                                reference_speed, reference_turn_rate, reference_min_duration, reference_approach_speed,
                                 render_mode, width, height, camera_name)
         if difficulty not in DIFFICULTIES:
             raise EnvConfigError(f"unknown difficulty {difficulty!r}; valid: {', '.join(DIFFICULTIES)}")
@@ -222,6 +238,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._success_position = _positive(success_position_tolerance, "success_position_tolerance")
         self._success_angle = np.deg2rad(_positive(success_angle_tolerance, "success_angle_tolerance"))
         self._horizon = _positive(clearance_horizon, "clearance_horizon")
+        self.reference_timing = GraspPathTiming(
+            _positive(reference_speed, "reference_speed"), _positive(reference_turn_rate, "reference_turn_rate"),
+            _non_negative(reference_min_duration, "reference_min_duration"),
+            _positive(reference_approach_speed, "reference_approach_speed"))
+        self._path: GraspPath | None = None
         self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
         if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
             raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
@@ -230,6 +251,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             raise EnvConfigError(f"unknown render_mode {render_mode!r}; valid: {', '.join(self.metadata['render_modes'])}")
         if camera_name not in ("side", "front"):
             raise EnvConfigError(f"unknown camera_name {camera_name!r}; valid: side, front")
+        check_render_backend(render_mode)
         self.render_mode = render_mode
         self.width, self.height, self.camera_name = int(width), int(height), camera_name
 
@@ -293,6 +315,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self.data.qpos[self._qpos] = q
         self.data.act[self._servo_act] = q
         mujoco.mj_forward(self.model, self.data)
+        self._path = GraspPath.plan(self.data.site_xpos[self._tcp_site].copy(),
+                                    self.data.site_xmat[self._tcp_site].reshape(3, 3)[:, 0].copy(), self._pregrasp,
+                                    self._grasp, self._approach, self.reference_timing)
+        warn_if_time_limit_short(self, self._path.duration, "this episode's reference path")
         metrics = self._metrics(np.zeros(9))
         return self._get_obs(), metrics
 
@@ -383,7 +409,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
         w = self._weights
         terms = {
-            "reward_position": -w["position_weight"] * metrics["task_error"],
+            "reward_position": -w["position_weight"] * metrics["goal_error"],
             "reward_orientation": -w["orientation_weight"] * metrics["orientation_error"],
             "reward_energy": -w["energy_weight"] * metrics["pseudoenergy"],
             "reward_leaf": -w["leaf_penalty"] * metrics["leaf_contacts"],
@@ -398,6 +424,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         x, y, z = self.data.site_xpos[self._tcp_site].tolist()
         gx, gy, gz = self._grasp_tuple
         error = math.sqrt((x - gx) ** 2 + (y - gy) ** 2 + (z - gz) ** 2)
+        rx, ry, rz = self._path.position(self._time)  # type: ignore[union-attr]  # planned at reset
+        tracking = math.sqrt((x - rx) ** 2 + (y - ry) ** 2 + (z - rz) ** 2)
         m = self.data.site_xmat[self._tcp_site]
         ax, ay, az = self._approach_tuple
         cos_angle = float(m[0]) * ax + float(m[3]) * ay + float(m[6]) * az  # tool axis: the site's local x
@@ -409,9 +437,12 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         qd = qdot.tolist()
         margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list,
                                                                self._upper_list))
-        success = (not self._collided) and error <= self._success_position and angle <= self._success_angle
+        at_goal = error <= self._success_position and angle <= self._success_angle
+        success = (not self._collided) and at_goal
         return {
-            "task_error": error,
+            "tracking_error": tracking,
+            "goal_error": error,
+            "goal_reached": at_goal,
             "orientation_error": angle,
             "pseudoenergy": sum(v * v for v in qd) * self.dt,
             "min_clearance": clearance,
@@ -423,6 +454,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             "is_success": success,
             "time": self._time,
             "tcp": np.array((x, y, z)),
+            "tcp_ref": np.array((rx, ry, rz)),
         }
 
     def _contacts(self) -> tuple[float, int]:

@@ -22,6 +22,7 @@ from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs
+from .validation import check_render_backend
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
 
@@ -110,8 +111,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     ``angular_momentum`` (whole-body, about the CoM, world frame [kg m^2/s]), ``com`` [m],
     ``min_self_clearance`` and ``min_clearance`` [m] (smallest swept-sphere distance between non-adjacent
     robot volumes), ``self_collision``, ``collision`` (the same), ``fell``, ``torso_tilt`` [rad],
-    ``joint_limit_margin`` [rad], ``pseudoenergy``, ``peak_joint_speed`` [rad/s], ``task_error``
-    (``|v_x - target_speed|`` [m/s]) and ``is_success`` (no fall or self-collision so far and the mean speed
+    ``joint_limit_margin`` [rad], ``pseudoenergy``, ``peak_joint_speed`` [rad/s], ``speed_error``
+    (``|v_x - target_speed|`` [m/s], instantaneous: it swings within every step), ``mean_speed_error``
+    (``|distance / time - target_speed|`` [m/s], the episode so far) and ``is_success`` (no fall or self-collision so far and the mean speed
     ``distance / time`` within 10 % of the command).
 
     ## Starting State
@@ -183,6 +185,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
+        check_render_backend(render_mode)
         MujocoEnv.__init__(self, str(BIPED_XML), int(frame_skip), observation_space=observation_space,
                            render_mode=render_mode, width=width, height=height,
                            camera_name=camera_name if render_mode is not None else None)
@@ -335,7 +338,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "joint_limit_margin": float(np.min(np.minimum(d.qpos[7:] - self._lower, self._upper - d.qpos[7:]))),
             "pseudoenergy": float(qdot @ qdot) * self.dt,
             "peak_joint_speed": float(np.max(np.abs(qdot))),
-            "task_error": abs(float(forward_speed) - self._target_speed),
+            "speed_error": abs(float(forward_speed) - self._target_speed),
+            "mean_speed_error": abs(mean_speed - self._target_speed),
             "is_success": bool(ok and self._time > 0.0
                                and abs(mean_speed - self._target_speed) <= 0.1 * max(self._target_speed, 1e-9)),
         }

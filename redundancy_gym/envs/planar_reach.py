@@ -22,8 +22,10 @@ from ..assets import (
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .exceptions import EnvConfigError, InvalidActionError
+from .validation import check_render_backend
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
+from .validation import warn_if_time_limit_short
 
 __all__ = ["PlanarReachEnv", "default_config"]
 
@@ -90,12 +92,14 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - ``reward_energy = -energy_weight * qdot^T qdot * dt`` (the pseudoenergy increment)
     - ``reward_collision = -collision_penalty`` on the step that collides, else 0
 
-    ``info`` also holds ``task_error`` [m], ``pseudoenergy`` (``qdot^T qdot dt`` of the step, [rad^2/s]),
+    ``info`` also holds ``tracking_error`` [m] (``|tcp - tcp_ref|``: the TCP against the reference point on the
+    line at the current time), ``goal_error`` [m] (TCP to ``line_end``), ``goal_reached`` (``goal_error <=
+    success_tolerance``), ``pseudoenergy`` (``qdot^T qdot dt`` of the step, [rad^2/s]),
     ``min_clearance`` [m] (smallest distance between a link capsule and the obstacle; ``inf`` without
     obstacle), ``collision`` (bool), ``joint_limit_margin`` [rad] (smallest distance of a joint to a limit),
     ``line_finished`` (the reference has reached ``line_end``), ``peak_joint_speed`` (``max |qdot_i|``
-    [rad/s]), ``max_task_error`` (largest ``task_error`` of the episode so far), ``is_success`` (line finished,
-    no collision, ``max_task_error <= success_tolerance``), ``time`` [s], ``tcp`` and ``tcp_ref``.
+    [rad/s]), ``max_tracking_error`` (largest ``tracking_error`` of the episode so far), ``is_success`` (line
+    finished, no collision, ``max_tracking_error <= success_tolerance``), ``time`` [s], ``tcp`` and ``tcp_ref``.
 
     ## Starting State
     ``q = q_0 + u`` with ``u ~ U(-reset_noise_scale, reset_noise_scale)^4`` drawn from the env's generator,
@@ -183,12 +187,13 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
+        check_render_backend(render_mode)
         MujocoEnv.__init__(self, str(PLANAR_ARM_XML), int(frame_skip), observation_space=observation_space,
                            render_mode=render_mode, width=width, height=height,
                            camera_name=camera_name if render_mode is not None else None)
         self._resolve_names()
         self._time = 0.0
-        self._max_task_error = 0.0
+        self._max_tracking_error = 0.0
         self._collided = False
         self._nominal_q = self._project_to_line_start(np.clip(seed_q, self._lower, self._upper))
         if self._nominal_q is None:
@@ -234,8 +239,9 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         return observation, reward, bool(metrics["collision"]), False, info
 
     def reset_model(self) -> NDArray[np.float64]:
+        warn_if_time_limit_short(self, self._duration, f"the line (duration={self._duration:g})")
         self._time = 0.0
-        self._max_task_error = 0.0
+        self._max_tracking_error = 0.0
         self._collided = False
         q = None
         for _ in range(20):
@@ -292,7 +298,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
         terms = {
-            "reward_tracking": -self._tracking_weight * metrics["task_error"],
+            "reward_tracking": -self._tracking_weight * metrics["tracking_error"],
             "reward_energy": -self._energy_weight * metrics["pseudoenergy"],
             "reward_collision": -self._collision_penalty if metrics["collision"] else 0.0,
         }
@@ -305,19 +311,22 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         clearance = self._min_clearance()
         q = self.data.qpos[self._qpos]
         error = float(np.linalg.norm(tcp - ref_pos))
-        self._max_task_error = max(self._max_task_error, error)
+        self._max_tracking_error = max(self._max_tracking_error, error)
         self._collided = self._collided or clearance <= 0.0
         finished = bool(phase >= 1.0)
+        goal = float(np.linalg.norm(tcp - self._line_end))
         return {
-            "task_error": error,
+            "tracking_error": error,
+            "goal_error": goal,
+            "goal_reached": goal <= self._success_tolerance,
             "pseudoenergy": float(qdot @ qdot) * self.dt,
             "min_clearance": clearance,
             "collision": bool(clearance <= 0.0),
             "joint_limit_margin": float(np.min(np.minimum(q - self._lower, self._upper - q))),
             "line_finished": finished,
             "peak_joint_speed": float(np.max(np.abs(qdot))),
-            "max_task_error": self._max_task_error,
-            "is_success": finished and not self._collided and self._max_task_error <= self._success_tolerance,
+            "max_tracking_error": self._max_tracking_error,
+            "is_success": finished and not self._collided and self._max_tracking_error <= self._success_tolerance,
             "time": self._time,
             "tcp": tcp,
             "tcp_ref": ref_pos,

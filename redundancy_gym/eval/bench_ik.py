@@ -6,7 +6,7 @@ reference, and at every visited configuration
 - **ours**: :class:`~redundancy_gym.controllers.GraspClikPolicy.predict` (path sample, kinematics, every
   collision pair of the arm against itself and the observed hard obstacles, DLS solve with nullspace collision
   and joint-limit avoidance), timed per call;
-- **mink** (benchmark-only dependency, ``pip install redundancy-gym[bench]``): ``Configuration.update(q)``
+- **mink** (benchmark-only dependency, ``pip install -e '.[bench]'``): ``Configuration.update(q)``
   plus ``solve_ik`` with daqp on ``FrameTask`` (TCP pose towards the same path sample; the orientation target
   turns the current tool axis onto the path's axis) + ``PostureTask`` + ``ConfigurationLimit`` +
   ``CollisionAvoidanceLimit`` over the same geoms: the arm's capsules and spheres against each other and
@@ -31,6 +31,7 @@ from tqdm.auto import tqdm
 
 from ..controllers.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..geometry import LSS, PSS, Segment, distance
+from ..sb3_import import install_hint
 from .bench_ssv import write_ssv_bench as write_ik_bench
 from .exceptions import EvalError
 
@@ -186,7 +187,7 @@ def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 5,
         try:
             mink_times, mink_pairs = _mink_steps(env, policy, observations, repeats)
         except ImportError as exc:
-            raise EvalError("bench ik needs mink and daqp: pip install 'redundancy-gym[bench]'") from exc
+            raise EvalError(f"bench ik needs mink and daqp: {install_hint('bench')}") from exc
         scale = _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) \
             if scaling else []
     finally:

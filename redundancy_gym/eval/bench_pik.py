@@ -343,7 +343,7 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, progress: bool = True, q
     for name in tqdm(("clik", "predictive", "global"), desc="bench pik PlanarReach", disable=not progress):
         r = evaluate(PLANAR, name, episodes=episodes, seed=seed, progress=False).to_json()
         planar[name] = {k: r[k] for k in ("success_rate", "collision_rate", "pseudoenergy", "peak_joint_speed",
-                                          "task_error_max", "min_clearance")}
+                                          "tracking_error_max", "min_clearance")}
         planar[name]["step_time_ms_median"] = r["step_time_us"]["median"] * 1e-3
     report["planar"] = planar
     report["planar_mpc_vs_local_pseudoenergy"] = planar["predictive"]["pseudoenergy"] / planar["clik"]["pseudoenergy"]

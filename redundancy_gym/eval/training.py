@@ -21,7 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from ..registration import ENV_IDS
-from ..sb3_import import import_stable_baselines3
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .evaluate import make_env
 from .exceptions import EvalError
 
@@ -30,8 +30,6 @@ __all__ = ["ALGOS", "LEARN_EXTRA_HINT", "VEC_ENVS", "LinearSchedule", "TrainingC
 
 ALGOS: tuple[str, ...] = ("ppo", "sac")
 VEC_ENVS: tuple[str, ...] = ("dummy", "subproc")
-LEARN_EXTRA_HINT = (
-    "pip install -e '.[learn]' (in a clone, from the repository root) or pip install 'redundancy-gym[learn]'")
 DEFAULT_POLICY = "MlpPolicy"
 RECENT_EPISODES = 20  # episodes averaged in the printed statistics
 

@@ -2,20 +2,17 @@
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
-os.environ.setdefault("MUJOCO_GL", "osmesa")  # headless by default; an explicit choice wins
+import gymnasium as gym
+import imageio.v2 as imageio
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
 
-import gymnasium as gym  # noqa: E402
-import imageio.v2 as imageio  # noqa: E402
-import numpy as np  # noqa: E402
-from numpy.typing import NDArray  # noqa: E402
-from tqdm.auto import tqdm  # noqa: E402
-
-from .. import make_policy  # noqa: E402
-from .evaluate import EpisodeSummary, make_env, run_episode  # noqa: E402
+from .. import make_policy
+from .evaluate import EpisodeSummary, make_env, run_episode
 
 __all__ = ["GIF_FPS", "MP4_MAX_FPS", "record_episode", "video_stride"]
 
