@@ -166,6 +166,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
     ## Version History
     - v0: initial version (physics step 10 ms, ``frame_skip`` 1; leaf blades drawn as one ellipsoid each).
+      Before release, ``info["task_error"]`` (the distance to the grasp point) was renamed ``goal_error``, and
+      ``tracking_error`` (against the reference path, new ``reference_*`` arguments), ``goal_reached`` and
+      ``tcp_ref`` were added; rewards and dynamics are unchanged.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}

@@ -137,7 +137,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version. Before release, ``info["task_error"]`` (``|v_x - target_speed|``) was renamed
+      ``speed_error`` and ``mean_speed_error`` was added; rewards and dynamics are unchanged.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 250}

@@ -130,6 +130,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
       old place the arm had to pass the obstacle on the other side, which no local method can do (the chain
       cannot change sides without crossing it); at the new place plain CLIK still collides and nullspace
       collision avoidance passes it, as in monograph 5.6.2.
+    - Before release, ``info["task_error"]`` / ``max_task_error`` were renamed ``tracking_error`` /
+      ``max_tracking_error``, and ``goal_error`` / ``goal_reached`` were added; rewards and dynamics are unchanged.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
