@@ -75,6 +75,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="JSON object of policy options")
     ev.add_argument("--json", dest="json_path", metavar="PATH",
                     help="write the report to this file (default: no file)")
+    ev.add_argument("--warmup", type=int, default=0, metavar="N",
+                    help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
+                         "counted in the step times")
     ev.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     tr = _add_parser(sub, "train", "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
@@ -216,7 +219,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
                               env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
-                              progress=not args.no_progress)
+                              progress=not args.no_progress, warmup=args.warmup)
             contract = report.to_json()
             print(format_report(contract))
             if args.json_path:

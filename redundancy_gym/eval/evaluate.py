@@ -229,7 +229,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
 
 def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
              policy_kwargs: dict[str, Any] | None = None, keep_traces: bool = False,
-             progress: bool = True) -> EvalReport:
+             progress: bool = True, warmup: int = 0) -> EvalReport:
     """Evaluate a policy (name or SB3 ``.zip``) on ``episodes`` episodes with seeds ``seed, seed + 1, ...``.
 
     Args:
@@ -241,9 +241,14 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         policy_kwargs: options of the policy.
         keep_traces: keep per-step traces in the report (for plots).
         progress: show a progress bar.
+        warmup: untimed episodes (seed ``seed``) run first with the same policy object and env, so that one-time
+            costs (JIT compilation, lazily built models) are not counted in the step times or as a plan-once
+            policy's per-episode solve.
     """
     if episodes < 1:
         raise EvalError(f"episodes must be >= 1, got {episodes}")
+    if isinstance(warmup, bool) or not isinstance(warmup, int) or warmup < 0:
+        raise EvalError(f"warmup must be an int >= 0, got {warmup!r}")
     env_kwargs = dict(env_kwargs or {})
     policy_kwargs = dict(policy_kwargs or {})
     env = make_env(env_id, env_kwargs)
@@ -251,6 +256,8 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         if policy == "random":
             policy_kwargs.setdefault("seed", seed)
         agent = make_policy(policy, env, **policy_kwargs)
+        for _ in range(warmup):
+            run_episode(env, agent, seed)
         summaries: list[EpisodeSummary] = []
         traces: list[EpisodeTrace] = []
         step_times: list[NDArray[np.float64]] = []

@@ -23,10 +23,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
-from tqdm.auto import tqdm  # noqa: E402
 
-from .evaluate import EpisodeSummary, EvalReport, make_env, run_episode  # noqa: E402
-from .exceptions import EvalError  # noqa: E402
+from .evaluate import EvalReport, evaluate  # noqa: E402
 from .plots import save_figure  # noqa: E402
 
 __all__ = ["METRICS", "Metric", "axis_scale", "evaluate_warm", "plot_speed_error", "plot_speed_error_panels",
@@ -405,29 +403,8 @@ def plot_speed_error(reports: Mapping[str, Mapping[str, Any]], path: str | Path,
 
 def evaluate_warm(env_id: str, policy: str, *, episodes: int, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
                   policy_kwargs: dict[str, Any] | None = None, warmup: int = 1, progress: bool = False) -> EvalReport:
-    """:func:`~redundancy_gym.eval.evaluate.evaluate`, after ``warmup`` untimed episodes (seed ``seed``) of the
+    """:func:`~redundancy_gym.eval.evaluate.evaluate` after ``warmup`` untimed episodes (seed ``seed``) of the
     same policy object in the same env, so that one-time costs (JIT compilation or loading, lazily built models)
-    are not counted as a step or as a plan-once policy's per-episode solve; the timed episodes use the seeds
-    ``seed, seed + 1, ...`` as ``evaluate`` does."""
-    from .. import make_policy  # noqa: PLC0415
-
-    if episodes < 1:
-        raise EvalError(f"episodes must be >= 1, got {episodes}")
-    env_kwargs = dict(env_kwargs or {})
-    policy_kwargs = dict(policy_kwargs or {})
-    env = make_env(env_id, env_kwargs)
-    try:
-        if policy == "random":
-            policy_kwargs.setdefault("seed", seed)
-        agent = make_policy(policy, env, **policy_kwargs)
-        for _ in range(warmup):
-            run_episode(env, agent, seed)
-        summaries: list[EpisodeSummary] = []
-        step_times = []
-        for k in tqdm(range(episodes), desc=f"eval {policy} on {env_id}", disable=not progress, leave=False):
-            summary, trace = run_episode(env, agent, seed + k)
-            summaries.append(summary)
-            step_times.append(trace.step_time_us)
-    finally:
-        env.close()
-    return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries, np.concatenate(step_times))
+    are not counted as a step or as a plan-once policy's per-episode solve."""
+    return evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs, policy_kwargs=policy_kwargs,
+                    progress=progress, warmup=warmup)

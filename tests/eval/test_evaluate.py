@@ -83,3 +83,14 @@ def test_biped_reports_speed_error_not_tracking_error() -> None:
     # standing still (or falling) at a 0.5 m/s command: the mean speed error is about the command
     assert data["speed_error"] == pytest.approx(0.5, abs=0.1) and data["speed_error_rms"] > 0.3
     assert "speed error mean / rms [m/s]" in format_report(data)
+
+
+def test_warmup_runs_untimed_episodes_first() -> None:
+    """The global policy solves at every episode's first step: with a warm-up episode its first-step time is the
+    solve alone, and the reported episodes and their seeds are the same as without."""
+    cold = evaluate(ENV_ID, "clik", episodes=1, seed=3, progress=False).to_json()
+    warm = evaluate(ENV_ID, "clik", episodes=1, seed=3, progress=False, warmup=1).to_json()
+    assert warm["per_episode"][0]["seed"] == 3 and warm["episodes"] == 1
+    assert warm["pseudoenergy"] == pytest.approx(cold["pseudoenergy"], rel=1e-9)  # same episode, same policy state
+    with pytest.raises(EvalError, match="warmup"):
+        evaluate(ENV_ID, "zero", episodes=1, warmup=-1)
