@@ -28,7 +28,7 @@ class GraspPathTiming(NamedTuple):
 
     max_speed: float = 0.35
     max_turn_rate: float = 0.8
-    min_duration: float = 1.0
+    min_duration: float = 1.5
     approach_speed: float = 0.12
 
 
