@@ -25,10 +25,9 @@ from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaul
 from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
-from .validation import check_render_backend
+from .validation import check_render_backend, warn_if_time_limit_short
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
-from .validation import warn_if_time_limit_short
 
 __all__ = ["AgriReachEnv", "default_config"]
 

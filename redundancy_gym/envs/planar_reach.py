@@ -22,10 +22,9 @@ from ..assets import (
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .exceptions import EnvConfigError, InvalidActionError
-from .validation import check_render_backend
+from .validation import check_render_backend, warn_if_time_limit_short
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
-from .validation import warn_if_time_limit_short
 
 __all__ = ["PlanarReachEnv", "default_config"]
 

@@ -7,7 +7,13 @@ from .collision_model import CollisionLayout, CollisionModel, CollisionState, Ki
 from .distance import PackedVolumes, PairBatch, SSVDistance, SSVDistances, distance, distances, indexed_distances
 from .exceptions import GeometryError
 from .grasp_path import GraspPath, GraspPathTiming, grasp_path_durations
-from .potentials import CubicPotential, PiecewisePotential, PotentialValue, QuadraticPotential, piecewise_potential_kernel
+from .potentials import (
+    CubicPotential,
+    PiecewisePotential,
+    PotentialValue,
+    QuadraticPotential,
+    piecewise_potential_kernel,
+)
 from .primitives import KIND_NAMES, LSS, PSS, SSV, TSS
 
 __all__ = [

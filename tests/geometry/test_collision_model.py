@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from redundancy_gym.assets import PLANAR_ARM_XML
 from redundancy_gym.geometry import LSS, PSS, TSS, CollisionModel, GeometryError, Segment, bounding_lss, distance
 from redundancy_gym.model import RobotModel, collision_geometry_from_mjcf, collision_model_from_mjcf
 
