@@ -28,8 +28,8 @@ import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-__all__ = ["HEADLESS_BACKENDS", "RenderBackendError", "configure_rendering", "guard_triton", "mesa_loaded",
-           "require_render_backend", "select_backend"]
+__all__ = ["HEADLESS_BACKENDS", "RenderBackendError", "can_open_window", "configure_rendering", "guard_triton",
+           "mesa_loaded", "require_render_backend", "require_window", "select_backend"]
 
 HEADLESS_BACKENDS: tuple[str, ...] = ("egl", "osmesa")
 """The ``MUJOCO_GL`` values that render without a display."""
@@ -118,6 +118,22 @@ def require_render_backend(find_library: Callable[[str], str | None] = ctypes.ut
     if backend == "egl" and find_library("EGL") is None:
         raise RenderBackendError(f"MUJOCO_GL=egl but libEGL is not installed; {_INSTALL_HINT}")
     return backend
+
+
+def can_open_window(environ: Mapping[str, str] | None = None) -> bool:
+    """Whether ``render_mode="human"`` can open a window: a display on Linux; assumed elsewhere."""
+    return platform.system() != "Linux" or _has_display(os.environ if environ is None else environ)
+
+
+def require_window() -> None:
+    """Raise :class:`RenderBackendError` where ``render_mode="human"`` cannot open a window.
+
+    Without a display GLFW does not fail with a Python error: it aborts the process (``glfwGetVideoMode:
+    Assertion 'monitor != NULL' failed``), so the check must come first.
+    """
+    if not can_open_window():
+        raise RenderBackendError("render_mode='human' opens a window and needs a display (DISPLAY or "
+                                 "WAYLAND_DISPLAY); on a machine without one use render_mode='rgb_array'")
 
 
 def mesa_loaded() -> bool:

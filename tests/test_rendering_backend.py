@@ -111,3 +111,30 @@ def test_missing_library_raises_one_clear_error(monkeypatch: pytest.MonkeyPatch)
             require_render_backend(_libs())
     monkeypatch.setenv("MUJOCO_GL", "osmesa")
     assert require_render_backend(_libs("OSMesa")) == "osmesa"
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="headless detection is for Linux")
+def test_human_mode_without_display_is_a_clear_error_and_not_listed() -> None:
+    """GLFW aborts the process without a display, so check_env (which renders every listed mode) and
+    render_mode="human" must not reach it."""
+    code = """
+import gymnasium as gym, redundancy_gym
+from gymnasium.utils.env_checker import check_env
+from redundancy_gym.rendering_backend import RenderBackendError
+for env_id in redundancy_gym.ENV_IDS:
+    env = gym.make(env_id)
+    assert "human" not in env.metadata["render_modes"], env.metadata
+    check_env(env.unwrapped)
+    if env_id.endswith("AgriReach-v0"):
+        continue  # offscreen only: gym.make serves "human" itself through its HumanRendering wrapper (pygame)
+    try:
+        gym.make(env_id, render_mode="human")
+    except RenderBackendError as exc:
+        assert "rgb_array" in str(exc)
+    else:
+        raise AssertionError("render_mode='human' without a display was accepted")
+print("checked")
+"""
+    result = _run(code, None)
+    assert result.returncode == 0, (result.returncode, result.stderr[-2000:])
+    assert "checked" in result.stdout

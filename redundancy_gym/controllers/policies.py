@@ -260,6 +260,18 @@ class Sb3Policy:
                 errors.append(f"{name}: {type(exc).__name__}")
         else:
             raise PolicyError(f"{path} is not a stable-baselines3 model of {', '.join(names)} ({'; '.join(errors)})")
+        if env is not None:
+            self._check_spaces(path, env)
+
+    def _check_spaces(self, path: Path, env: Any) -> None:
+        """A model trained on another env fails here, naming both, instead of at its first ``predict``."""
+        for kind in ("observation", "action"):
+            trained = getattr(self.model, f"{kind}_space", None)
+            here = getattr(env, f"{kind}_space", None)
+            shapes = (getattr(trained, "shape", None), getattr(here, "shape", None))
+            if None not in shapes and shapes[0] != shapes[1]:
+                raise PolicyError(f"{path} was trained with {kind} shape {shapes[0]}, but {env_name(env)} has "
+                                  f"{shapes[1]}: it was trained on another env (or other env kwargs)")
 
     def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:

@@ -126,7 +126,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     ``tracking_error`` (TCP distance [m] to the env's reference path at the current time: a quintic move from
     the start pose to the pre-grasp pose, then a straight approach, timed by the ``reference_*`` arguments; the
     ``clik`` reference follows this path, a learned policy need not), ``pseudoenergy``
-    [rad^2/s], ``min_clearance`` [m] (smallest swept-sphere distance to a hard obstacle or between non-adjacent
+    [rad^2/s], ``min_clearance`` [m] (the smaller of ``min_obstacle_clearance``, the smallest swept-sphere distance
+    between the arm and a hard plant part, and ``min_self_clearance``, between non-adjacent
     links; values beyond ``clearance_horizon`` are reported as the horizon), ``collision``, ``leaf_contacts``
     (this step), ``leaf_contacts_total``, ``joint_limit_margin`` (smallest distance to a limit [m or rad]),
     ``peak_joint_speed``, ``is_success`` (TCP within ``success_position_tolerance`` and
@@ -435,14 +436,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         ax, ay, az = self._approach_tuple
         cos_angle = float(m[0]) * ax + float(m[3]) * ay + float(m[6]) * az  # tool axis: the site's local x
         angle = math.acos(min(1.0, max(-1.0, cos_angle)))
-        clearance, leaves = self._contacts()
+        obstacle_clearance, self_clearance, leaves = self._contacts()
+        clearance = min(obstacle_clearance, self_clearance)
         collision = clearance <= 0.0
         self._collided = self._collided or collision
         self._leaf_total += leaves
         qd = qdot.tolist()
         margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list,
                                                                self._upper_list))
-        at_goal = error <= self._success_position and angle <= self._success_angle
+        at_goal = bool(error <= self._success_position and angle <= self._success_angle)
         success = (not self._collided) and at_goal
         return {
             "tracking_error": tracking,
@@ -451,6 +453,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             "orientation_error": angle,
             "pseudoenergy": sum(v * v for v in qd) * self.dt,
             "min_clearance": clearance,
+            "min_obstacle_clearance": obstacle_clearance,
+            "min_self_clearance": self_clearance,
             "collision": collision,
             "leaf_contacts": leaves,
             "leaf_contacts_total": self._leaf_total,
@@ -462,13 +466,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             "tcp_ref": np.array((rx, ry, rz)),
         }
 
-    def _contacts(self) -> tuple[float, int]:
-        """Smallest hard/self clearance (capped at the horizon) and the number of leaves touched."""
-        clearance = min(self._hard_batch.compute_near(self._horizon), self._horizon)
+    def _contacts(self) -> tuple[float, float, int]:
+        """Smallest clearance to a hard plant part and between non-adjacent arm volumes (each capped at the
+        horizon), and the number of leaves touched."""
+        obstacle = min(self._hard_batch.compute_near(self._horizon), self._horizon)
+        own = min(self._self_batch.compute_near(self._horizon), self._horizon)
         if self._soft_batch.compute_near(0.0) > 0.0:  # leaves only count when touched
-            return clearance, 0
+            return obstacle, own, 0
         touched = self._soft_part[self._soft_batch.result.distance <= 0.0]
-        return clearance, (int(np.unique(touched).size) if touched.size else 0)
+        return obstacle, own, (int(np.unique(touched).size) if touched.size else 0)
 
     # ------------------------------------------------------------------ scene
     def _pool_capacity(self) -> dict[str, int]:
@@ -560,7 +566,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                         np.array([0.003]))
 
     def _build_collision_pairs(self, row: CropRow, target: int) -> None:
-        """The pair batches of the episode: arm vs hard parts plus non-adjacent arm pairs, and arm vs
+        """The pair batches of the episode: arm vs hard parts, non-adjacent arm pairs, and arm vs
         leaves/petioles (only touching counts there, so it is culled at margin 0).
 
         Volumes are ordered moving arm volumes, the fixed column, then the plant parts, so the broad phase only
@@ -584,15 +590,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                                     np.concatenate([kinds, row.kind[k]]))
             ia = np.repeat(moving, k.size)
             ib = np.tile(self._n_arm + np.arange(k.size), n_moving)
-            if hard:
-                ia = np.concatenate([ia, volume_of[self._self_pairs[:, 0]]])
-                ib = np.concatenate([ib, volume_of[self._self_pairs[:, 1]]])
-            else:
+            if not hard:
                 self._soft_part = np.tile(k, n_moving)  # leaves are counted per part
-            batch = PairBatch(volumes, ia, ib, moving=n_moving)
+            batches.append(PairBatch(volumes, ia, ib, moving=n_moving))
+        own = PackedVolumes(vertices, m.geom_size[arm, 0], kinds)
+        batches.append(PairBatch(own, volume_of[self._self_pairs[:, 0]], volume_of[self._self_pairs[:, 1]],
+                                 moving=n_moving))
+        for batch in batches:
             batch.attach_frames(self.data.geom_xpos[g0:g1], self.data.geom_xmat[g0:g1], self._half_length[1:])
-            batches.append(batch)
-        self._hard_batch, self._soft_batch = batches
+        self._hard_batch, self._soft_batch, self._self_batch = batches
 
     def _observed_obstacles(self, row: CropRow, target: int) -> NDArray[np.float64]:
         """The static obstacle block of the observation: the K parts nearest to the approach corridor."""

@@ -25,6 +25,7 @@ from .self_collision import self_collision_pairs
 from .validation import check_render_backend
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
+from .validation import render_modes
 
 __all__ = ["NOMINAL_POSTURE", "BipedWalkEnv", "default_config"]
 
@@ -183,7 +184,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._floor_friction = _positive(floor_friction, "floor_friction")
         if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
             raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
-        self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
+        self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
         check_render_backend(render_mode)

@@ -25,6 +25,7 @@ from .exceptions import EnvConfigError, InvalidActionError
 from .validation import check_render_backend, warn_if_time_limit_short
 from .validation import non_negative as _non_negative
 from .validation import positive as _positive
+from .validation import render_modes
 
 __all__ = ["PlanarReachEnv", "default_config"]
 
@@ -185,7 +186,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._scene_xml = planar_arm_scene_xml(
             obstacle_center=self._obstacle_center if self._obstacle else None,
             obstacle_radius=self._obstacle_radius, line_start=self._line_start, line_end=self._line_end)
-        self.metadata = {"render_modes": ["human", "rgb_array", "depth_array"],
+        self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
         check_render_backend(render_mode)

@@ -7,10 +7,17 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ..rendering_backend import require_render_backend
+from ..rendering_backend import can_open_window, require_render_backend, require_window
 from .exceptions import EnvConfigError
 
-__all__ = ["check_render_backend", "non_negative", "positive", "warn_if_time_limit_short"]
+__all__ = ["check_render_backend", "non_negative", "positive", "render_modes", "warn_if_time_limit_short"]
+
+
+def render_modes(*offscreen: str) -> list[str]:
+    """The render modes an env offers here: ``"human"`` (a window) only where a display exists, then
+    ``offscreen``. Gymnasium's ``check_env`` renders every listed mode; listing ``"human"`` on a headless machine
+    would abort the process in GLFW."""
+    return (["human"] if can_open_window() else []) + list(offscreen)
 
 
 def warn_if_time_limit_short(env: Any, needed: float, what: str) -> bool:
@@ -35,12 +42,15 @@ def warn_if_time_limit_short(env: Any, needed: float, what: str) -> bool:
 
 
 def check_render_backend(render_mode: str | None) -> None:
-    """Fail at ``gym.make`` (not at the first frame) when an offscreen ``render_mode`` has no OpenGL backend.
+    """Fail at ``gym.make`` (not at the first frame) when an offscreen ``render_mode`` has no OpenGL backend, or
+    ``"human"`` has no display.
 
-    Raises :class:`redundancy_gym.rendering_backend.RenderBackendError` naming the library to install.
+    Raises :class:`redundancy_gym.rendering_backend.RenderBackendError` naming what to install or use instead.
     """
     if render_mode in ("rgb_array", "depth_array"):
         require_render_backend()
+    elif render_mode == "human":
+        require_window()
 
 
 def positive(value: float, name: str) -> float:

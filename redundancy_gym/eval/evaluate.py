@@ -54,6 +54,9 @@ class EpisodeSummary:
         speed_error_sq_sum: summed squared instantaneous speed error [m^2/s^2] (biped).
         mean_speed_error: ``|distance / time - target_speed|`` at the end [m/s] (biped).
         first_step_us: the policy's compute time for the first step [us] (where a plan-once policy solves).
+        min_obstacle_clearance, min_self_clearance: the smallest of ``info``'s values over the episode [m].
+        leaf_contacts: leaf contacts of the episode, summed over steps (``info["leaf_contacts_total"]`` at the
+            end; a leaf touched for 10 steps counts 10).
     """
 
     seed: int
@@ -74,6 +77,9 @@ class EpisodeSummary:
     mean_speed_error: float | None = None
     fell: bool | None = None
     forward_speed: float | None = None
+    min_obstacle_clearance: float | None = None
+    min_self_clearance: float | None = None
+    leaf_contacts: int | None = None
 
 
 @dataclass
@@ -108,6 +114,7 @@ class EvalReport:
             "pseudoenergy": float(np.mean([e.pseudoenergy for e in s])),
             "peak_joint_speed": max(e.peak_joint_speed for e in s),
             "min_clearance": _finite_or_none(min(e.min_clearance for e in s)),
+            **self._clearance_metrics(),
             "step_time_us": {
                 "median": float(np.median(times)),
                 "p99": float(np.percentile(times, 99)),
@@ -139,6 +146,20 @@ class EvalReport:
             "goal_reached_rate": float(np.mean([bool(e.goal_reached) for e in goals])) if goals else None,
             "time_to_goal": float(np.mean(reached)) if reached else None,
         }
+
+    def _clearance_metrics(self) -> dict[str, float | None]:
+        """``min_obstacle_clearance`` and ``min_self_clearance`` [m] (smallest over all steps) and
+        ``leaf_contacts`` (mean per episode of the leaf contacts summed over steps), for envs that report them."""
+        s = self.summaries
+        out: dict[str, float | None] = {}
+        for key in ("min_obstacle_clearance", "min_self_clearance"):
+            values = [getattr(e, key) for e in s if getattr(e, key) is not None]
+            if values:
+                out[key] = _finite_or_none(min(values))
+        leaves = [e.leaf_contacts for e in s if e.leaf_contacts is not None]
+        if leaves:
+            out["leaf_contacts"] = float(np.mean(leaves))
+        return out
 
     def _walking_metrics(self) -> dict[str, float]:
         """``fall_rate``, ``forward_speed`` (mean of distance / time), ``speed_error`` (mean over episodes of
@@ -183,6 +204,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
     ret = 0.0
     collision = False
     time_to_goal: float | None = None
+    clearances = {"min_obstacle_clearance": math.inf, "min_self_clearance": math.inf}
     state = None
     episode_start = np.array([True])
     while True:
@@ -198,6 +220,9 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
         now = float(info.get("time", len(rows) + 1))
         if time_to_goal is None and info.get("goal_reached", False):
             time_to_goal = now
+        for key, low in clearances.items():
+            if key in info:
+                clearances[key] = min(low, float(info[key]))
         rows.append((now, float(info.get("tracking_error", np.nan)), float(info.get("goal_error", np.nan)),
                      float(info.get("speed_error", np.nan)), float(info.get("peak_joint_speed", 0.0)),
                      float(info.get("min_clearance", np.inf)), float(info.get("pseudoenergy", 0.0)), elapsed_us))
@@ -220,6 +245,11 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
     if "speed_error" in info:
         summary.speed_error_sq_sum = float(np.sum(trace.speed_error**2))
         summary.mean_speed_error = float(info.get("mean_speed_error", np.nan))
+    for key, low in clearances.items():
+        if key in info:
+            setattr(summary, key, low)
+    if "leaf_contacts_total" in info:
+        summary.leaf_contacts = int(info["leaf_contacts_total"])
     if "fell" in info and "distance" in info:
         elapsed = float(info.get("time", 0.0))
         summary.fell = bool(info["fell"])
@@ -296,10 +326,15 @@ def format_report(report: dict[str, Any]) -> str:
     rows += [
         ("pseudoenergy [rad^2/s]", f"{report['pseudoenergy']:.4f}"),
         ("peak joint speed [rad/s]", f"{report['peak_joint_speed']:.3f}"),
-        ("min clearance [m]", "n/a" if report["min_clearance"] is None else f"{report['min_clearance']:.4f}"),
+        ("min clearance [mm]", "n/a" if report["min_clearance"] is None else f"{1e3 * report['min_clearance']:.1f}"),
+        *((f"  {label} [mm]", "n/a" if report[key] is None else f"{1e3 * report[key]:.1f}")
+          for key, label in (("min_obstacle_clearance", "to obstacles"), ("min_self_clearance", "between own links"))
+          if key in report),
+        *((("leaf contacts per episode [leaf-steps]", f"{report['leaf_contacts']:.1f}"),) if "leaf_contacts" in report else ()),
         ("step time median / p99 / mean [us]", f"{step['median']:.1f} / {step['p99']:.1f} / {step['mean']:.1f}"),
-        ("first step (plan) mean [us]", f"{step['first_step_mean']:.1f}"),
+        ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
+        ("episode length [steps]", f"{report['episode_length']:.1f}"),
     ]
     if "fall_rate" in report:
         rows.append(("fall rate", f"{report['fall_rate']:.3f}"))

@@ -297,8 +297,6 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
     env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=n_envs, seed=seed,
                        vec_env_cls=SubprocVecEnv if vec_env == "subproc" else DummyVecEnv,
                        monitor_kwargs={"info_keywords": ("is_success",) if env_id in ENV_IDS else ()})
-    callback = _statistics_callback(BaseCallback, int(steps), print_every or max(1000, int(steps) // 20),
-                                    log or (lambda line: None))
     import torch
 
     threads = torch.get_num_threads()
@@ -311,6 +309,15 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
                         **(hyperparameters or {}))
         except TypeError as exc:  # a keyword the algorithm does not take
             raise EvalError(f"invalid {algo.upper()} hyperparameters: {exc}") from None
+        total = int(steps)
+        rollout = int(getattr(model, "n_steps", 0) or 0) * n_envs  # on-policy learners collect whole rollouts
+        if rollout and total % rollout:
+            total = -(-total // rollout) * rollout
+            if log is not None:
+                log(f"note: {algo.upper()} collects n_steps x n_envs = {rollout} steps per update, so training "
+                    f"runs {total} steps, not {steps} (pass a multiple of {rollout} to --steps)")
+        callback = _statistics_callback(BaseCallback, total, print_every or max(1000, total // 20),
+                                        log or (lambda line: None))
         model.learn(total_timesteps=int(steps), progress_bar=progress_bar, callback=callback,
                     tb_log_name=f"{algo}_{env_id.split('/')[-1]}")
         out = Path(out)
