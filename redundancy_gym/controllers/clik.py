@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model import RobotModel
 from .exceptions import ControllerError
 from .objective import Objective, sum_objectives
-from .redundancy_resolution import METHODS, WeightMatrix, resolve
+from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_finite, resolve
 from .task import Task
 
 __all__ = ["Clik", "ClikProblem", "ClikResult"]
@@ -41,7 +41,8 @@ class ClikResult(NamedTuple):
     """Joint velocities of one CLIK step and diagnostics.
 
     Attributes:
-        qdot: joint velocities [rad/s or m/s]; zeros when ``success`` is False.
+        qdot: joint velocities [rad/s or m/s], within the controller's speed limits and joint ranges; zeros when
+            ``success`` is False.
         error: task error ``e`` before the step.
         error_norm: ``|e|``.
         sigma_min: smallest singular value of ``J W^-1/2``.
@@ -49,6 +50,8 @@ class ClikResult(NamedTuple):
         objective: nullspace objective ``H(q)``.
         success: False when the solve met a singularity it cannot pass (pseudoinverse).
         status: ``"ok"``, ``"damped"`` or ``"singular"``.
+        limited: True when the solution was bounded (a joint held at its range, or the whole command scaled
+            down to the speed limits), so ``qdot`` no longer gives the task velocity in full.
     """
 
     qdot: NDArray[np.float64]
@@ -59,6 +62,7 @@ class ClikResult(NamedTuple):
     objective: float
     success: bool
     status: str
+    limited: bool = False
 
 
 class Clik:
@@ -68,6 +72,12 @@ class Clik:
     ``"pseudoinverse"`` (exact; reports singular configurations), ``"dls"`` (damped least squares (5.22) whose
     damping grows as the smallest singular value falls below ``dls_threshold``; keeps the nullspace term) and
     ``"transpose"`` (transposed Jacobian (5.24), ``qdot = W^-1 J^T (wdot_d + K e)``; ignores objectives).
+
+    Every command is bounded (:class:`~redundancy_gym.controllers.redundancy_resolution.JointBounds`), whatever
+    the reference: a joint at or beyond a limit of its range gets no velocity towards it (with ``period`` given,
+    ``q + qdot period`` stays inside the range), and when a joint would exceed its speed limit the whole
+    ``qdot`` is scaled down by one factor (same direction, slower). :attr:`ClikResult.limited` says when.
+    Non-finite ``q``, ``target`` or ``target_velocity`` raise :class:`ControllerError` naming the argument.
 
     Args:
         model: the robot model.
@@ -80,12 +90,18 @@ class Clik:
         singular_threshold: smallest singular value below which ``"pseudoinverse"`` reports a singularity.
         dls_threshold: ``eps`` of the DLS damping law.
         dls_max_damping: ``k_max`` of the DLS damping law.
+        max_joint_velocity: joint speed limits [rad/s or m/s], one per velocity coordinate or one for all, > 0
+            (``inf``: none); None (default) takes the model's
+            (:attr:`~redundancy_gym.model.RobotModel.velocity_limits`, from the MJCF's velocity servos).
+        period: control period [s] over which ``qdot`` is applied, > 0; keeps ``q + qdot period`` inside the
+            joint ranges. None (default): only joints at or beyond a limit are held.
     """
 
     def __init__(self, model: RobotModel, task: Task, *, method: str = "pseudoinverse",
                  gain: ArrayLike | float = 10.0, weights: ArrayLike | float = 1.0, nullspace_gain: float = 1.0,
                  objectives: Sequence[Objective] = (), singular_threshold: float = 1e-6,
-                 dls_threshold: float = 0.05, dls_max_damping: float = 0.01) -> None:
+                 dls_threshold: float = 0.05, dls_max_damping: float = 0.01,
+                 max_joint_velocity: ArrayLike | float | None = None, period: float | None = None) -> None:
         if method not in METHODS:
             raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
         gain_arr = np.broadcast_to(np.asarray(gain, dtype=np.float64), (task.dim,)).copy()
@@ -110,15 +126,26 @@ class Clik:
         self.singular_threshold = float(singular_threshold)
         self.dls_threshold = float(dls_threshold)
         self.dls_max_damping = float(dls_max_damping)
+        self.bounds = JointBounds(model, max_joint_velocity, period)
+
+    @property
+    def max_joint_velocity(self) -> NDArray[np.float64]:
+        """The joint speed limits [rad/s or m/s] (nv; ``inf`` where none)."""
+        return self.bounds.max_velocity.copy()
+
+    @property
+    def period(self) -> float | None:
+        """The control period [s] the command is bounded for, or None."""
+        return self.bounds.period
 
     def build(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikProblem:
         """Evaluate kinematics and objectives at ``q`` for the reference ``w_d`` and ``wdot_d``."""
-        q = self.model.update(q)
-        error = self.task.error(self.model, np.asarray(target, dtype=np.float64))
+        q = self.model.update(check_finite(q, "q"))
+        error = self.task.error(self.model, check_finite(target, "target"))
         jacobian = self.task.jacobian(self.model)
         velocity = self.gain * error
         if target_velocity is not None:
-            wdot = np.asarray(target_velocity, dtype=np.float64)
+            wdot = check_finite(target_velocity, "target_velocity")
             feedforward = getattr(self.task, "feedforward", None)
             if feedforward is not None:  # tasks whose velocity is given in other coordinates (FrameAxisTask)
                 wdot = feedforward(self.model, wdot)
@@ -134,8 +161,9 @@ class Clik:
         res = resolve(problem.jacobian, problem.velocity, z, self.weights, method=self.method,
                       singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,
                       dls_max_damping=self.dls_max_damping)
-        return ClikResult(res.x, problem.error, float(np.linalg.norm(problem.error)), res.sigma_min, res.damping,
-                          problem.objective, res.success, res.status)
+        qdot, limited = self.bounds.apply(res.x, problem.q)
+        return ClikResult(qdot, problem.error, float(np.linalg.norm(problem.error)), res.sigma_min, res.damping,
+                          problem.objective, res.success, res.status, limited)
 
     def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
         """``solve(build(q, target, target_velocity))``."""

@@ -24,7 +24,8 @@ from ..model.chain_kernels import chain_forward, chain_jacobian, place_frame
 from .collision_kernels import collision_potential
 from .kernel_buffers import float_field, int_field, pack_fields
 
-__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "STATUS_NAMES", "clik_step", "pack_buffers"]
+__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_step",
+           "pack_buffers"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
     "placement_rotation", "placement_translation", "axis", "rotation", "position", "world_axis",
@@ -33,29 +34,34 @@ FLOAT_FIELDS: tuple[str, ...] = (
     "segment_rotation", "segment_translation", "segment_center", "segment_radius", "segment_world_center",
     "local", "vertices", "radii", "collision_parameters",
     "inputs", "outputs", "jacobian6", "jacobian", "gradient", "scratch",
+    "max_velocity", "position_lower", "position_upper",
 )
 INT_FIELDS: tuple[str, ...] = (
     "dims", "parent", "joint_type", "q_index", "v_index", "task_rows", "segment_joint", "segment_starts", "kinds",
-    "segment_pairs", "pair_starts", "volume_a", "volume_b",
+    "segment_pairs", "pair_starts", "volume_a", "volume_b", "position_q_index", "position_v_index",
 )
 # entries of the "dims" field
 DIMS: tuple[str, ...] = ("joints", "nv", "nq", "task_dim", "limit_objectives", "posture_objectives", "segments",
                          "volumes", "pairs", "volume_pairs", "task_kind", "task_joint", "task_axis", "method",
-                         "collision", "objectives")
+                         "collision", "objectives", "bounded_joints")
 METHOD_CODES: dict[str, int] = {"pseudoinverse": 0, "dls": 1, "transpose": 2}
 STATUS_NAMES: tuple[str, ...] = ("ok", "damped", "singular")
 SCRATCH_SIZE = 160
 # result entries after qdot (nv) and the task error (task_dim) in "outputs"
-OUTPUT_EXTRA = 6  # |e|, sigma_min, damping, H, status code, smallest collision distance seen [m]
+OUTPUT_EXTRA = 7  # |e|, sigma_min, damping, H, status code, smallest collision distance seen [m], limited (0/1)
+# entries of the "scalars" field
+SCALARS: tuple[str, ...] = ("nullspace_gain", "singular_threshold", "dls_threshold", "dls_max_damping", "period")
 
 _NF = len(FLOAT_FIELDS)
 (_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS, _F_TASK_ROTATION,
  _F_TASK_TRANSLATION, _F_GAIN, _F_INVERSE_WEIGHTS, _F_SCALARS, _F_LIMIT_LOWER, _F_LIMIT_UPPER, _F_LIMIT_PARAMETERS,
  _F_POSTURE_REFERENCE, _F_POSTURE_WEIGHTS, _F_SEGMENT_ROTATION, _F_SEGMENT_TRANSLATION, _F_SEGMENT_CENTER,
  _F_SEGMENT_RADIUS, _F_SEGMENT_WORLD_CENTER, _F_LOCAL, _F_VERTICES, _F_RADII, _F_COLLISION_PARAMETERS, _F_INPUTS,
- _F_OUTPUTS, _F_JACOBIAN6, _F_JACOBIAN, _F_GRADIENT, _F_SCRATCH) = range(_NF)
+ _F_OUTPUTS, _F_JACOBIAN6, _F_JACOBIAN, _F_GRADIENT, _F_SCRATCH, _F_MAX_VELOCITY, _F_POSITION_LOWER,
+ _F_POSITION_UPPER) = range(_NF)
 (_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_TASK_ROWS, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
- _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B) = range(_NF, _NF + len(INT_FIELDS))
+ _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B, _I_POSITION_Q_INDEX,
+ _I_POSITION_V_INDEX) = range(_NF, _NF + len(INT_FIELDS))
 
 # return codes of clik_step
 OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY = range(5)
@@ -217,10 +223,46 @@ def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, jo
 
 
 @njit(**_JIT)
+def _bound(f, i, nv, nb, q, x):
+    """:meth:`~.redundancy_resolution.JointBounds.apply` in place on ``x``: hold each bounded joint inside its
+    range (``q + x period`` inside with a period, else no velocity further out of a limit it has reached), then
+    scale the whole ``x`` into the speed limits; returns whether anything changed."""
+    limited = False
+    period = _fv(f, i, _F_SCALARS)[4]
+    lower = _fv(f, i, _F_POSITION_LOWER)
+    upper = _fv(f, i, _F_POSITION_UPPER)
+    q_index = _iv(i, _I_POSITION_Q_INDEX)
+    v_index = _iv(i, _I_POSITION_V_INDEX)
+    for b in range(nb):
+        qk = q[q_index[b]]
+        if period > 0.0:
+            low = min((lower[b] - qk) / period, 0.0)
+            high = max((upper[b] - qk) / period, 0.0)
+        else:
+            low = -np.inf if qk > lower[b] else 0.0
+            high = np.inf if qk < upper[b] else 0.0
+        v = x[v_index[b]]
+        bounded = min(max(v, low), high)
+        if bounded != v:
+            x[v_index[b]] = bounded
+            limited = True
+    vmax = _fv(f, i, _F_MAX_VELOCITY)
+    peak = 0.0
+    for k in range(nv):
+        peak = max(peak, abs(x[k]) / vmax[k])
+    if peak > 1.0:
+        for k in range(nv):
+            x[k] = min(max(x[k] / peak, -vmax[k]), vmax[k])
+        limited = True
+    return limited
+
+
+@njit(**_JIT)
 def clik_step(f, i, has_velocity):
     """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
-    (6)) and writes ``outputs`` (qdot, error, then :data:`OUTPUT_EXTRA` diagnostics); returns a code (0 ok,
-    1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target velocity)."""
+    (6)) and writes ``outputs`` (qdot, bounded by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics);
+    returns a code (0 ok, 1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target
+    velocity)."""
     dims = _iv(i, _I_DIMS)
     nj, nv, nq, m = dims[0], dims[1], dims[2], dims[3]
     n_limits, n_postures, method, collision, objectives = dims[4], dims[5], dims[13], dims[14], dims[15]
@@ -296,14 +338,22 @@ def clik_step(f, i, has_velocity):
     extra[0] = np.sqrt(e2)
     extra[3] = value
     extra[5] = smallest
+    extra[6] = 0.0
     x[:] = 0.0
     if method == 2:  # transpose (5.24): x = W^-1 J^T rhs, objectives ignored
+        finite = True
         for k in range(nv):
             acc = 0.0
             for r in range(m):
                 acc += jac[r, k] * rhs[r]
             x[k] = winv[k] * acc
-        extra[1], extra[2], extra[4] = sigma, 0.0, 0.0
+            finite = finite and np.isfinite(x[k])
+        if not finite:
+            x[:] = 0.0
+            status = 2
+        extra[1], extra[2], extra[4] = sigma, 0.0, float(status)
+        if finite and _bound(f, i, nv, dims[16], q, x):
+            extra[6] = 1.0
         return OK
     if method == 1:
         if sigma < dls_threshold:
@@ -338,4 +388,6 @@ def clik_step(f, i, has_velocity):
         x[:] = 0.0
         status = 2
     extra[1], extra[2], extra[4] = sigma, damping, float(status)
+    if finite and _bound(f, i, nv, dims[16], q, x):
+        extra[6] = 1.0
     return OK

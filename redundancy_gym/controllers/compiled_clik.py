@@ -15,6 +15,7 @@ from .clik_kernels import (
     DIMS,
     FLOAT_FIELDS,
     METHOD_CODES,
+    OK,
     OUTPUT_EXTRA,
     SCRATCH_SIZE,
     STATUS_NAMES,
@@ -30,6 +31,7 @@ from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .posture_objective import PostureObjective
+from .redundancy_resolution import check_finite
 
 __all__ = ["CompiledClik"]
 
@@ -47,7 +49,9 @@ class CompiledClik:
     :class:`JointLimitObjective` and :class:`PostureObjective` plus at most one :class:`CollisionObjective`.
     Collision pairs are evaluated exactly wherever they can be closer than the activation distance (segment
     bounding spheres skip the others, which contribute nothing); the collision model's environment is read
-    again whenever it changes (:attr:`~redundancy_gym.geometry.CollisionModel.version`). Build and solve are
+    again whenever it changes (:attr:`~redundancy_gym.geometry.CollisionModel.version`). The command is bounded
+    to the clik's speed limits and joint ranges as :meth:`Clik.solve` bounds it (same ``limited`` flag), and
+    non-finite inputs raise the same :class:`ControllerError`. Build and solve are
     fused here, so there is no separate ``build``; use :class:`Clik` to inspect a :class:`ClikProblem`.
 
     Args:
@@ -98,7 +102,7 @@ class CompiledClik:
             "world_axis": np.zeros((nj, 3)), "task_rotation": frame_rotation, "task_translation": frame_translation,
             "gain": clik.gain, "inverse_weights": 1.0 / clik.weights.diagonal,
             "scalars": np.array([clik.nullspace_gain, clik.singular_threshold, clik.dls_threshold,
-                                 clik.dls_max_damping]),
+                                 clik.dls_max_damping, clik.bounds.period or 0.0]),
             "limit_lower": np.array([o.lower for o in limits]), "limit_upper": np.array([o.upper for o in limits]),
             "limit_parameters": np.array([(o.potential.activation_distance, o.potential.slope,
                                            o.potential.switch_ratio, o.weight) for o in limits]),
@@ -107,11 +111,14 @@ class CompiledClik:
             "inputs": np.zeros(nq + 12), "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
             "jacobian6": np.zeros((6, nv)), "jacobian": np.zeros((m, nv)), "gradient": np.zeros(nv),
             "scratch": np.zeros(SCRATCH_SIZE),
+            "max_velocity": clik.bounds.max_velocity, "position_lower": clik.bounds.lower,
+            "position_upper": clik.bounds.upper,
         }
         ints: dict[str, NDArray[np.int64]] = {
             "parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index,
             "v_index": chain.v_index,
             "task_rows": task.rows if isinstance(task, FramePositionTask) else np.zeros(0, dtype=np.int64),
+            "position_q_index": clik.bounds.q_index, "position_v_index": clik.bounds.v_index,
         }
         counts = self._collision_fields(floats, ints)
         dims = {"joints": nj, "nv": nv, "nq": nq, "task_dim": m, "limit_objectives": len(limits),
@@ -119,7 +126,7 @@ class CompiledClik:
                 "task_kind": 1 if isinstance(task, FrameAxisTask) else 0, "task_joint": joint,
                 "task_axis": task.axis if isinstance(task, FrameAxisTask) else 0,
                 "method": METHOD_CODES[clik.method], "collision": int(self.collision is not None),
-                "objectives": int(bool(clik.objectives))}
+                "objectives": int(bool(clik.objectives)), "bounded_joints": int(clik.bounds.q_index.size)}
         ints["dims"] = np.array([dims[name] for name in DIMS], dtype=np.int64)
         self._f, self._i = pack_buffers(floats, ints)
         self._inputs = self._field("inputs")
@@ -202,20 +209,28 @@ class CompiledClik:
                 raise ControllerError(f"target_velocity must have shape ({width},), got {velocity.shape}")
             inputs[nq + 6:nq + 6 + width] = velocity
         code = self._kernel(self._f, self._i, has_velocity)
-        if code == BAD_CONFIGURATION:
-            raise ModelError("configuration contains non-finite values")
-        if code == BAD_TARGET:
-            raise ControllerError("target must be finite")
-        if code == ZERO_AXIS:
-            raise ControllerError("the target axis must not be zero")
-        if code == BAD_VELOCITY:
-            raise ControllerError("target_velocity must be finite")
+        if code != OK:
+            self._raise(code, q, target, target_velocity)
         out = self._outputs
         nv, m = self._nv, self._m
-        norm, sigma, damping, value, status, _ = out[nv + m:].tolist()
+        norm, sigma, damping, value, status, _, limited = out[nv + m:].tolist()
         name = STATUS_NAMES[int(status)]
         return ClikResult(out[:nv].copy(), out[nv:nv + m].copy(), norm, sigma, damping, value, name != "singular",
-                          name)
+                          name, limited != 0.0)
+
+    @staticmethod
+    def _raise(code: int, q: NDArray[np.float64], target: NDArray[np.float64],
+               target_velocity: ArrayLike | None) -> None:
+        """The :class:`ControllerError` of a kernel return code, worded as :meth:`Clik.step` words it."""
+        if code == BAD_CONFIGURATION:
+            check_finite(q, "q")
+        elif code == BAD_TARGET:
+            check_finite(target, "target")
+        elif code == BAD_VELOCITY:
+            check_finite(np.asarray(target_velocity, dtype=np.float64), "target_velocity")
+        elif code == ZERO_AXIS:
+            raise ControllerError("the target axis must not be zero")
+        raise ControllerError(f"the CLIK kernel returned code {code}")  # not reached: each check above raises
 
     @property
     def last_min_distance(self) -> float:

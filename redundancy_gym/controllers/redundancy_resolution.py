@@ -11,17 +11,136 @@ tested against (5.14)).
 
 from __future__ import annotations
 
+import math
 from typing import Literal, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..model import RobotModel
 from .exceptions import ControllerError
 
-__all__ = ["Method", "METHODS", "Resolution", "WeightMatrix", "resolve"]
+__all__ = ["JointBounds", "Method", "METHODS", "Resolution", "WeightMatrix", "all_finite", "check_finite", "resolve"]
 
 Method = Literal["pseudoinverse", "dls", "transpose"]
 METHODS: tuple[str, ...] = ("pseudoinverse", "dls", "transpose")
+
+
+def all_finite(values: NDArray[np.float64]) -> bool:
+    """Whether every entry is finite, by one reduction (NaN and inf survive a sum; only an overflowing sum of
+    finite entries needs the element-wise check)."""
+    if values.size <= 32:  # a Python sum of a short list is a fraction of NumPy's call overhead
+        return math.isfinite(sum(values.ravel().tolist())) or bool(np.isfinite(values).all())
+    return math.isfinite(float(values.sum())) or bool(np.isfinite(values).all())
+
+
+def check_finite(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``values`` as a float array; :class:`ControllerError` naming ``name`` when an entry is NaN or inf."""
+    arr = np.asarray(values, dtype=np.float64)
+    if not all_finite(arr):
+        raise ControllerError(f"{name} must be finite, got {np.array2string(arr, threshold=12)}")
+    return arr
+
+
+class JointBounds:
+    """The bounds every CLIK command is held to: joint speed limits and the joint ranges.
+
+    :meth:`apply` first keeps each joint's velocity from pushing it out of its range (a joint at or beyond a
+    limit gets no velocity towards it; with a control ``period`` known, ``q + qdot period`` stays inside the
+    range), then scales the whole vector by one factor when a joint exceeds its speed limit, so that the
+    command keeps its direction (and its task direction) and only slows down. Scaling towards zero never
+    leaves the range bounds, since those always admit zero velocity.
+
+    Args:
+        model: the robot model (its joint ranges, and its :attr:`~redundancy_gym.model.RobotModel.velocity_limits`
+            when ``max_joint_velocity`` is None).
+        max_joint_velocity: speed limit per velocity coordinate [rad/s or m/s] (nv) or one for all, > 0;
+            ``inf`` for none; None takes the model's.
+        period: control period [s] the command is integrated over, > 0; None when unknown (then only the joints
+            at or beyond a limit are held).
+    """
+
+    def __init__(self, model: RobotModel, max_joint_velocity: ArrayLike | float | None = None,
+                 period: float | None = None) -> None:
+        nv = model.nv
+        if max_joint_velocity is None:
+            limits = np.asarray(model.velocity_limits, dtype=np.float64)
+        else:
+            try:
+                if isinstance(max_joint_velocity, (bool, np.bool_, str)):
+                    raise TypeError
+                limits = np.broadcast_to(np.asarray(max_joint_velocity, dtype=np.float64), (nv,)).copy()
+            except (TypeError, ValueError):
+                raise ControllerError(f"max_joint_velocity must be a number or {nv} numbers [rad/s or m/s], got "
+                                      f"{max_joint_velocity!r}") from None
+        if limits.shape != (nv,) or np.any(np.isnan(limits)) or np.any(limits <= 0.0):
+            raise ControllerError(f"max_joint_velocity must be > 0 (inf for none) with {nv} entries, got {limits}")
+        if period is not None:
+            if isinstance(period, bool) or not isinstance(period, (int, float, np.floating, np.integer)) \
+                    or not math.isfinite(period) or period <= 0.0:
+                raise ControllerError(f"period must be a finite number > 0 [s] or None, got {period!r}")
+            period = float(period)
+        self.max_velocity = limits
+        self.has_velocity_limits = bool(np.any(np.isfinite(limits)))
+        self.period = period
+        # position limits of the 1-DoF joints (a free flyer's placeholder limits are not limits)
+        q_index, v_index, lower, upper = [], [], [], []
+        lows, highs = model.lower_limits, model.upper_limits
+        for joint in list(model.pinocchio_model.joints)[1:]:
+            if joint.nq != 1 or joint.nv != 1:
+                continue
+            lo, hi = float(lows[joint.idx_q]), float(highs[joint.idx_q])
+            if not (math.isfinite(lo) or math.isfinite(hi)) or not lo < hi:
+                continue
+            q_index.append(joint.idx_q)
+            v_index.append(joint.idx_v)
+            lower.append(lo)
+            upper.append(hi)
+        self.q_index = np.array(q_index, dtype=np.int64)
+        self.v_index = np.array(v_index, dtype=np.int64)
+        self.lower = np.array(lower, dtype=np.float64)
+        self.upper = np.array(upper, dtype=np.float64)
+        self.active = self.has_velocity_limits or self.q_index.size > 0
+        self._joints = list(zip(q_index, v_index, lower, upper))
+        self._max_velocity = limits.tolist()
+
+    def velocity_range(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(low, high)``: the velocities (of the bounded joints, :attr:`v_index`) that keep each joint from
+        pushing out of its range; both contain zero."""
+        qk = q[self.q_index]
+        if self.period is not None:
+            return (np.minimum((self.lower - qk) / self.period, 0.0),
+                    np.maximum((self.upper - qk) / self.period, 0.0))
+        return np.where(qk > self.lower, -np.inf, 0.0), np.where(qk < self.upper, np.inf, 0.0)
+
+    def apply(self, qdot: NDArray[np.float64], q: NDArray[np.float64]) -> tuple[NDArray[np.float64], bool]:
+        """``(qdot, limited)``: the bounded command and whether it differs from the given one (the same
+        arithmetic as the compiled kernel's ``_bound``; on Python floats, which beat NumPy at this size)."""
+        if not self.active:
+            return qdot, False
+        x = qdot.tolist()
+        qs = q.tolist()
+        limited = False
+        period = self.period
+        inf = math.inf
+        for qi, vi, lower, upper in self._joints:
+            qk, v = qs[qi], x[vi]
+            if period is not None:
+                low = min((lower - qk) / period, 0.0)
+                high = max((upper - qk) / period, 0.0)
+            else:
+                low = -inf if qk > lower else 0.0
+                high = inf if qk < upper else 0.0
+            bounded = min(max(v, low), high)
+            if bounded != v:
+                x[vi] = bounded
+                limited = True
+        if self.has_velocity_limits:
+            peak = max([abs(v) / m for v, m in zip(x, self._max_velocity)])
+            if peak > 1.0:
+                x = [min(max(v / peak, -m), m) for v, m in zip(x, self._max_velocity)]
+                limited = True
+        return (np.array(x, dtype=np.float64) if limited else qdot), limited
 
 
 class Resolution(NamedTuple):
@@ -105,7 +224,10 @@ def resolve(jacobian: NDArray[np.float64], rhs: NDArray[np.float64], z: NDArray[
     if method == "transpose":
         b_mat = jacobian @ weights.solve(jacobian.T)
         sigma = _sigma_min(b_mat)
-        return Resolution(weights.solve(jacobian.T @ rhs), sigma, 0.0, True, "ok")
+        x = weights.solve(jacobian.T @ rhs)
+        if not all_finite(x):
+            return Resolution(zero, sigma, 0.0, False, "singular")
+        return Resolution(x, sigma, 0.0, True, "ok")
     if method not in ("pseudoinverse", "dls"):
         raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
     winv_jt = weights.solve(jacobian.T)

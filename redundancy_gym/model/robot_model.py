@@ -9,6 +9,7 @@ frames and Jacobians pays for that pass once.
 from __future__ import annotations
 
 import math
+import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Literal
 
@@ -70,6 +71,7 @@ class RobotModel:
             model = pin.buildModelFromMJCF(str(path))
         except Exception as exc:  # pinocchio raises plain RuntimeError/ValueError
             raise ModelError(f"pinocchio could not load {path}: {exc}") from exc
+        _velocity_limits_from_actuators(model, path)
         return cls(model, source=str(path))
 
     # ------------------------------------------------------------------ description
@@ -117,6 +119,16 @@ class RobotModel:
     def upper_limits(self) -> NDArray[np.float64]:
         """Upper joint position limits [rad or m]."""
         return np.array(self._model.upperPositionLimit, dtype=np.float64)
+
+    @property
+    def velocity_limits(self) -> NDArray[np.float64]:
+        """Joint speed limits [rad/s or m/s] (nv), ``inf`` where the description gives none.
+
+        pinocchio's ``velocityLimit``; for a model built by :meth:`from_mjcf`, each joint driven by a
+        ``velocity`` or ``intvelocity`` actuator is limited to the smaller magnitude of that actuator's
+        ``ctrlrange`` (the speed its servo accepts; MJCF has no joint speed limit of its own).
+        """
+        return np.array(self._model.velocityLimit, dtype=np.float64)
 
     @property
     def total_mass(self) -> float:
@@ -380,6 +392,36 @@ class RobotModel:
             return _JACOBIAN_ROWS[kind]
         except KeyError:
             raise ModelError(f"unknown Jacobian kind {kind!r}; valid kinds: {', '.join(_JACOBIAN_ROWS)}") from None
+
+
+def _velocity_limits_from_actuators(model: pin.Model, path: Path) -> None:
+    """Set ``model.velocityLimit`` of each 1-DoF joint driven by a ``velocity``/``intvelocity`` actuator with an
+    explicit ``ctrlrange`` in the MJCF (the smaller magnitude of the range, when it contains zero; the smallest
+    over several such actuators). Leaves the model unchanged when the file cannot be parsed."""
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):
+        return
+    limits = np.array(model.velocityLimit, dtype=np.float64)
+    changed = False
+    for actuator in root.iterfind("actuator/*"):
+        if actuator.tag not in ("velocity", "intvelocity") or actuator.get("ctrllimited") == "false":
+            continue
+        joint, ctrlrange = actuator.get("joint"), actuator.get("ctrlrange")
+        if joint is None or ctrlrange is None or not model.existJointName(joint):
+            continue
+        try:
+            low, high = (float(v) for v in ctrlrange.split())
+        except ValueError:
+            continue
+        pin_joint = model.joints[model.getJointId(joint)]
+        if not (low < 0.0 < high) or pin_joint.nv != 1:
+            continue
+        k = pin_joint.idx_v
+        limits[k] = min(limits[k], -low, high)
+        changed = True
+    if changed:
+        model.velocityLimit = limits
 
 
 def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:

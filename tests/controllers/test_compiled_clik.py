@@ -35,7 +35,7 @@ def assert_same(a: ClikResult, b: ClikResult) -> None:
     assert b.sigma_min == pytest.approx(a.sigma_min, abs=1e-9)
     assert b.damping == pytest.approx(a.damping, abs=1e-12)
     assert b.objective == pytest.approx(a.objective, rel=1e-9, abs=1e-12)
-    assert (b.status, b.success) == (a.status, a.success)
+    assert (b.status, b.success, b.limited) == (a.status, a.success, a.limited)
 
 
 def agri_clik(method: str, model: RobotModel | None = None) -> tuple[Clik, CollisionObjective]:
@@ -102,7 +102,7 @@ def test_bad_inputs_raise_like_clik() -> None:
     compiled = CompiledClik(clik)
     q = np.zeros(9)
     good = np.array([0.5, 0.0, 1.0, 1.0, 0.0, 0.0])
-    with pytest.raises(ModelError, match="non-finite"):
+    with pytest.raises(ControllerError, match="q must be finite"):
         compiled.step(np.full(9, np.nan), good)
     with pytest.raises(ModelError, match="shape"):
         compiled.step(np.zeros(8), good)
