@@ -25,9 +25,15 @@ from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaul
 from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch, indexed_distances
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
-from .validation import check_render_backend, warn_if_time_limit_short
-from .validation import non_negative as _non_negative
-from .validation import positive as _positive
+from .validation import (
+    check_bool,
+    check_choice,
+    check_int,
+    check_range_pair,
+    check_real,
+    check_render_arguments,
+    warn_if_time_limit_short,
+)
 
 __all__ = ["AgriReachEnv", "default_config"]
 
@@ -148,8 +154,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     - ``difficulty``: ``"easy" | "medium" | "hard"`` presets of ``leaves_per_stem``, ``fruits_per_stem``,
       ``shoot_probability`` (occluding side shoots) and ``cluster_spread`` (fruit clusters); each may be given
       explicitly instead (``None`` keeps the preset).
-    - ``row_distance``, ``row_gap``, ``row_length`` [m]; ``stem_spacing``, ``stem_diameter``,
-      ``fruit_diameter`` (ranges [m]); ``harvest_band`` ((low, high) [m]).
+    - ``row_distance``, ``row_gap``, ``row_length`` [m] (> 0); ``stem_spacing``, ``stem_diameter``,
+      ``fruit_diameter`` (ranges (low, high) [m], both > 0; the stem spacing at least the largest stem diameter);
+      ``harvest_band`` ((low, high) [m], >= 0, at least ``cluster_spread`` high).
     - ``prune`` (bool): place only the parts within the arm's reach.
     - ``pregrasp_distance`` [m]; ``approach_elevation`` ((min, max) [deg] of the upward tilt of the approach).
     - ``observed_obstacles`` (K >= 0).
@@ -204,62 +211,60 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                                 success_angle_tolerance, clearance_horizon, reset_noise_scale, frame_skip,
                                 reference_speed, reference_turn_rate, reference_min_duration, reference_approach_speed,
                                 render_mode, width, height, camera_name)
-        if difficulty not in DIFFICULTIES:
-            raise EnvConfigError(f"unknown difficulty {difficulty!r}; valid: {', '.join(DIFFICULTIES)}")
+        check_choice("difficulty", difficulty, DIFFICULTIES)
         scene = crop_row_defaults(difficulty)
         if leaves_per_stem is not None:
-            scene["leaves_per_stem"] = _count(leaves_per_stem, "leaves_per_stem")
+            scene["leaves_per_stem"] = check_int("leaves_per_stem", leaves_per_stem, low=0)
         if fruits_per_stem is not None:
-            scene["fruits_per_stem"] = _int_range(fruits_per_stem, "fruits_per_stem")
+            scene["fruits_per_stem"] = check_range_pair("fruits_per_stem", fruits_per_stem, low=0, integer=True)
         if shoot_probability is not None:
-            p = _non_negative(shoot_probability, "shoot_probability")
-            if p > 1.0:
-                raise EnvConfigError(f"shoot_probability must be in [0, 1], got {shoot_probability!r}")
-            scene["shoot_probability"] = p
+            scene["shoot_probability"] = check_real("shoot_probability", shoot_probability, low=0.0, high=1.0)
         if cluster_spread is not None:
-            scene["cluster_spread"] = _non_negative(cluster_spread, "cluster_spread")
-        scene.update(row_distance=_positive(row_distance, "row_distance"), row_gap=_positive(row_gap, "row_gap"),
-                     row_length=_positive(row_length, "row_length"),
-                     stem_spacing=_range(stem_spacing, "stem_spacing"),
-                     stem_diameter=_range(stem_diameter, "stem_diameter"),
-                     fruit_diameter=_range(fruit_diameter, "fruit_diameter"),
-                     harvest_band=_range(harvest_band, "harvest_band"))
+            scene["cluster_spread"] = check_real("cluster_spread", cluster_spread, low=0.0, unit="m")
+        positive = {"low": 0.0, "low_open": True, "unit": "m"}
+        scene.update(row_distance=check_real("row_distance", row_distance, **positive),
+                     row_gap=check_real("row_gap", row_gap, **positive),
+                     row_length=check_real("row_length", row_length, **positive),
+                     stem_spacing=check_range_pair("stem_spacing", stem_spacing, **positive),
+                     stem_diameter=check_range_pair("stem_diameter", stem_diameter, **positive),
+                     fruit_diameter=check_range_pair("fruit_diameter", fruit_diameter, **positive),
+                     harvest_band=check_range_pair("harvest_band", harvest_band, low=0.0, unit="m"))
+        if scene["stem_spacing"][0] < scene["stem_diameter"][1]:
+            raise EnvConfigError(f"stem_spacing must not let stems overlap: its low {scene['stem_spacing'][0]:g} m "
+                                 f"is below the largest stem_diameter {scene['stem_diameter'][1]:g} m")
         if scene["harvest_band"][1] - scene["harvest_band"][0] < scene["cluster_spread"]:
-            raise EnvConfigError("harvest_band must be at least cluster_spread high")
+            raise EnvConfigError(f"harvest_band must be at least cluster_spread = {scene['cluster_spread']:g} m high, "
+                                 f"got {harvest_band!r}")
         self._scene = scene
         self._difficulty = difficulty
-        self._prune = bool(prune)
-        self._pregrasp_distance = _positive(pregrasp_distance, "pregrasp_distance")
-        elevation = _range(approach_elevation, "approach_elevation")
-        if elevation[0] < 0.0 or elevation[1] > 60.0:
-            raise EnvConfigError(f"approach_elevation must lie in [0, 60] deg, got {approach_elevation!r}")
+        self._prune = check_bool("prune", prune)
+        self._pregrasp_distance = check_real("pregrasp_distance", pregrasp_distance, **positive)
+        elevation = check_range_pair("approach_elevation", approach_elevation, low=0.0, high=60.0, unit="deg")
         self._elevation = np.deg2rad(elevation)
-        self._k = _count(observed_obstacles, "observed_obstacles")
-        self._max_joint_speed = _positive(max_joint_speed, "max_joint_speed")
-        self._max_lift_speed = _positive(max_lift_speed, "max_lift_speed")
-        self._weights = {name: _non_negative(value, name) for name, value in (
+        self._k = check_int("observed_obstacles", observed_obstacles, low=0)
+        self._max_joint_speed = check_real("max_joint_speed", max_joint_speed, low=0.0, low_open=True, unit="rad/s")
+        self._max_lift_speed = check_real("max_lift_speed", max_lift_speed, low=0.0, low_open=True, unit="m/s")
+        self._weights = {name: check_real(name, value, low=0.0) for name, value in (
             ("position_weight", position_weight), ("orientation_weight", orientation_weight),
             ("energy_weight", energy_weight), ("leaf_penalty", leaf_penalty),
             ("collision_penalty", collision_penalty), ("success_bonus", success_bonus))}
-        self._success_position = _positive(success_position_tolerance, "success_position_tolerance")
-        self._success_angle = np.deg2rad(_positive(success_angle_tolerance, "success_angle_tolerance"))
-        self._horizon = _positive(clearance_horizon, "clearance_horizon")
+        self._success_position = check_real("success_position_tolerance", success_position_tolerance, **positive)
+        self._success_angle = np.deg2rad(check_real("success_angle_tolerance", success_angle_tolerance, low=0.0,
+                                                    low_open=True, unit="deg"))
+        self._horizon = check_real("clearance_horizon", clearance_horizon, **positive)
         self.reference_timing = GraspPathTiming(
-            _positive(reference_speed, "reference_speed"), _positive(reference_turn_rate, "reference_turn_rate"),
-            _non_negative(reference_min_duration, "reference_min_duration"),
-            _positive(reference_approach_speed, "reference_approach_speed"))
+            check_real("reference_speed", reference_speed, low=0.0, low_open=True, unit="m/s"),
+            check_real("reference_turn_rate", reference_turn_rate, low=0.0, low_open=True, unit="rad/s"),
+            check_real("reference_min_duration", reference_min_duration, low=0.0, unit="s"),
+            check_real("reference_approach_speed", reference_approach_speed, low=0.0, low_open=True, unit="m/s"))
         self._path: GraspPath | None = None
-        self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
-        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
-            raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
-        self.frame_skip = int(frame_skip)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise EnvConfigError(f"unknown render_mode {render_mode!r}; valid: {', '.join(self.metadata['render_modes'])}")
-        if camera_name not in ("side", "front"):
-            raise EnvConfigError(f"unknown camera_name {camera_name!r}; valid: side, front")
-        check_render_backend(render_mode)
+        self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0)
+        self.frame_skip = check_int("frame_skip", frame_skip, low=1)
+        check_choice("camera_name", camera_name, ("side", "front"))
+        width, height = check_render_arguments(render_mode, width, height, camera_name,
+                                               tuple(self.metadata["render_modes"]))
         self.render_mode = render_mode
-        self.width, self.height, self.camera_name = int(width), int(height), camera_name
+        self.width, self.height, self.camera_name = width, height, camera_name
 
         self.model = mujoco.MjModel.from_xml_string(agri_scene_xml(self._pool_capacity()))
         self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, self.width)
@@ -719,23 +724,3 @@ def _place_blades(m: mujoco.MjModel, g: NDArray[np.int64], first: NDArray[np.flo
     for gi, f in zip(g, frame):
         mujoco.mju_mat2Quat(quat, f)
         m.geom_quat[gi] = quat
-
-
-def _count(value: int, name: str) -> int:
-    if not isinstance(value, (int, np.integer)) or value < 0:
-        raise EnvConfigError(f"{name} must be an int >= 0, got {value!r}")
-    return int(value)
-
-
-def _range(value: Sequence[float], name: str) -> tuple[float, float]:
-    r = np.asarray(value, dtype=np.float64)
-    if r.shape != (2,) or not np.all(np.isfinite(r)) or r[0] > r[1] or r[0] < 0.0:
-        raise EnvConfigError(f"{name} must be a (low, high) pair with 0 <= low <= high, got {value!r}")
-    return float(r[0]), float(r[1])
-
-
-def _int_range(value: Sequence[int], name: str) -> tuple[int, int]:
-    low, high = _range(value, name)
-    if low != int(low) or high != int(high):
-        raise EnvConfigError(f"{name} must be a pair of ints, got {value!r}")
-    return int(low), int(high)

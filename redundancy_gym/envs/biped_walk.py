@@ -22,12 +22,10 @@ from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs
-from .validation import check_render_backend
-from .validation import non_negative as _non_negative
-from .validation import positive as _positive
-from .validation import render_modes
+from .validation import check_bool, check_int, check_real, check_render_arguments, render_modes
 
-__all__ = ["NOMINAL_POSTURE", "BipedWalkEnv", "default_config"]
+__all__ = ["MAX_TARGET_SPEED", "NOMINAL_POSTURE", "STANDING_PELVIS_HEIGHT", "SUCCESS_SPEED_TOLERANCE",
+           "BipedWalkEnv", "default_config"]
 
 _TIMESTEP = 0.002  # [s], the MJCF option
 _GRAVITY = 9.81
@@ -37,6 +35,15 @@ NOMINAL_POSTURE: dict[str, float] = {
     "r_shoulder_roll": -0.1835, "r_elbow": -0.2976, "l_shoulder_roll": 0.1835, "l_elbow": -0.2976,
 }
 """Standing posture [rad] (joints not named are 0): knees bent so that the CoM is 0.91 m high, feet flat."""
+MAX_TARGET_SPEED = 1.0
+"""Largest ``target_speed`` [m/s]: the walking reference's fastest gait (``GaitConfig``: 0.6 m steps every 0.6 s);
+it walks reliably up to about 0.9 m/s, and a command beyond its gait is walked as this one (and falls)."""
+STANDING_PELVIS_HEIGHT = 0.9187
+"""Pelvis height [m] of the starting posture :data:`NOMINAL_POSTURE` with the soles on the ground;
+``min_base_height`` must lie below it, or every episode ends as a fall at its first step."""
+SUCCESS_SPEED_TOLERANCE = 0.02
+"""Smallest band [m/s] around ``target_speed`` in which the mean speed counts as a success (10 % of the command
+above 0.2 m/s): standing still at ``target_speed=0`` is a success."""
 _UPPER_BODY = ("pelvis_roll", "pelvis_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_elbow", "l_shoulder_pitch",
                "l_shoulder_roll", "l_elbow")
 
@@ -115,7 +122,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     ``joint_limit_margin`` [rad], ``pseudoenergy``, ``peak_joint_speed`` [rad/s], ``speed_error``
     (``|v_x - target_speed|`` [m/s], instantaneous: it swings within every step), ``mean_speed_error``
     (``|distance / time - target_speed|`` [m/s], the episode so far) and ``is_success`` (no fall or self-collision so far and the mean speed
-    ``distance / time`` within 10 % of the command).
+    ``distance / time`` within ``max(10 % of target_speed, 0.02 m/s)`` of the command: at ``target_speed=0`` a
+    robot that stands, drifting less than 2 cm/s on average, succeeds; see :data:`SUCCESS_SPEED_TOLERANCE`).
 
     ## Starting State
     The standing posture :data:`NOMINAL_POSTURE` with both soles flat on the ground and the pelvis at the
@@ -128,9 +136,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - Truncation: the time limit of the registration, 2500 steps = 10 s at the default 250 Hz.
 
     ## Arguments
-    - ``target_speed`` ([m/s], >= 0): commanded forward speed.
+    - ``target_speed`` ([m/s], in [0, 1]): commanded forward speed, at most :data:`MAX_TARGET_SPEED` (the walking
+      reference's fastest gait).
     - ``speed_weight``, ``lateral_weight``, ``healthy_reward``, ``energy_weight``, ``fall_penalty`` (>= 0).
-    - ``min_base_height`` ([m], > 0), ``max_torso_tilt`` ([rad], > 0): the fall rule.
+    - ``min_base_height`` ([m], in (0, 0.9187)), ``max_torso_tilt`` ([rad], in (0, pi]): the fall rule
+      (``min_base_height`` below the standing pelvis height :data:`STANDING_PELVIS_HEIGHT`).
     - ``reset_noise_scale`` ([rad], >= 0): upper-body joint noise of the starting posture.
     - ``velocity_feedforward`` (bool): servo velocity feedforward from the target rate.
     - ``floor_friction`` (> 0): sliding friction of the floor.
@@ -171,23 +181,28 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
                                 fall_penalty, min_base_height, max_torso_tilt, reset_noise_scale,
                                 velocity_feedforward, floor_friction, frame_skip, render_mode, width, height,
                                 camera_name)
-        self._target_speed = _non_negative(target_speed, "target_speed")
-        self._speed_weight = _non_negative(speed_weight, "speed_weight")
-        self._lateral_weight = _non_negative(lateral_weight, "lateral_weight")
-        self._healthy_reward = _non_negative(healthy_reward, "healthy_reward")
-        self._energy_weight = _non_negative(energy_weight, "energy_weight")
-        self._fall_penalty = _non_negative(fall_penalty, "fall_penalty")
-        self._min_base_height = _positive(min_base_height, "min_base_height")
-        self._max_torso_tilt = _positive(max_torso_tilt, "max_torso_tilt")
-        self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
-        self._velocity_feedforward = bool(velocity_feedforward)
-        self._floor_friction = _positive(floor_friction, "floor_friction")
-        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
-            raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
+        self._target_speed = check_real("target_speed", target_speed, low=0.0, high=MAX_TARGET_SPEED, unit="m/s",
+                                        note="the walking reference's fastest gait, 0.6 m steps every 0.6 s; "
+                                             "it walks reliably up to about 0.9 m/s")
+        self._speed_weight = check_real("speed_weight", speed_weight, low=0.0)
+        self._lateral_weight = check_real("lateral_weight", lateral_weight, low=0.0)
+        self._healthy_reward = check_real("healthy_reward", healthy_reward, low=0.0)
+        self._energy_weight = check_real("energy_weight", energy_weight, low=0.0)
+        self._fall_penalty = check_real("fall_penalty", fall_penalty, low=0.0)
+        self._min_base_height = check_real("min_base_height", min_base_height, low=0.0, high=STANDING_PELVIS_HEIGHT,
+                                           low_open=True, high_open=True, unit="m",
+                                           note="a fall is the pelvis below it; the standing pelvis height is "
+                                                f"{STANDING_PELVIS_HEIGHT:g} m")
+        self._max_torso_tilt = check_real("max_torso_tilt", max_torso_tilt, low=0.0, high=np.pi, low_open=True,
+                                          unit="rad")
+        self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
+        self._velocity_feedforward = check_bool("velocity_feedforward", velocity_feedforward)
+        self._floor_friction = check_real("floor_friction", floor_friction, low=0.0, low_open=True)
+        frame_skip = check_int("frame_skip", frame_skip, low=1)
+        width, height = check_render_arguments(render_mode, width, height, camera_name)
         self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
-        check_render_backend(render_mode)
         MujocoEnv.__init__(self, str(BIPED_XML), int(frame_skip), observation_space=observation_space,
                            render_mode=render_mode, width=width, height=height,
                            camera_name=camera_name if render_mode is not None else None)
@@ -342,8 +357,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "peak_joint_speed": float(np.max(np.abs(qdot))),
             "speed_error": abs(float(forward_speed) - self._target_speed),
             "mean_speed_error": abs(mean_speed - self._target_speed),
-            "is_success": bool(ok and self._time > 0.0
-                               and abs(mean_speed - self._target_speed) <= 0.1 * max(self._target_speed, 1e-9)),
+            "is_success": bool(ok and self._time > 0.0 and abs(mean_speed - self._target_speed)
+                               <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)),
         }
 
     def _contact_pressure(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:

@@ -22,10 +22,15 @@ from ..assets import (
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .exceptions import EnvConfigError, InvalidActionError
-from .validation import check_render_backend, warn_if_time_limit_short
-from .validation import non_negative as _non_negative
-from .validation import positive as _positive
-from .validation import render_modes
+from .validation import (
+    check_bool,
+    check_int,
+    check_real,
+    check_real_array,
+    check_render_arguments,
+    render_modes,
+    warn_if_time_limit_short,
+)
 
 __all__ = ["PlanarReachEnv", "default_config"]
 
@@ -163,33 +168,31 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
                                 initial_configuration, max_joint_speed, tracking_weight, energy_weight,
                                 collision_penalty, reset_noise_scale, success_tolerance, frame_skip, render_mode, width, height,
                                 camera_name)
-        self._obstacle = bool(obstacle)
+        self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
-        self._obstacle_radius = _positive(obstacle_radius, "obstacle_radius")
+        self._obstacle_radius = check_real("obstacle_radius", obstacle_radius, low=0.0, low_open=True, unit="m")
         self._line_start = _point(line_start, "line_start")
         self._line_end = _point(line_end, "line_end")
         for name, p in (("line_start", self._line_start), ("line_end", self._line_end)):
             if np.linalg.norm(p) >= 1.4:
                 raise EnvConfigError(f"{name} {tuple(p)} is outside the arm's reach of 1.4 m from (0, 0)")
-        self._duration = _positive(duration, "duration")
-        self._max_joint_speed = _positive(max_joint_speed, "max_joint_speed")
-        self._tracking_weight = _non_negative(tracking_weight, "tracking_weight")
-        self._energy_weight = _non_negative(energy_weight, "energy_weight")
-        self._collision_penalty = _non_negative(collision_penalty, "collision_penalty")
-        self._reset_noise_scale = _non_negative(reset_noise_scale, "reset_noise_scale")
-        self._success_tolerance = _positive(success_tolerance, "success_tolerance")
-        if not isinstance(frame_skip, (int, np.integer)) or frame_skip < 1:
-            raise EnvConfigError(f"frame_skip must be an int >= 1, got {frame_skip!r}")
-        seed_q = np.asarray(initial_configuration, dtype=np.float64)
-        if seed_q.shape != (4,) or not np.all(np.isfinite(seed_q)):
-            raise EnvConfigError(f"initial_configuration must be 4 finite angles [rad], got {initial_configuration!r}")
+        self._duration = check_real("duration", duration, low=0.0, low_open=True, unit="s")
+        self._max_joint_speed = check_real("max_joint_speed", max_joint_speed, low=0.0, low_open=True, unit="rad/s")
+        self._tracking_weight = check_real("tracking_weight", tracking_weight, low=0.0)
+        self._energy_weight = check_real("energy_weight", energy_weight, low=0.0)
+        self._collision_penalty = check_real("collision_penalty", collision_penalty, low=0.0)
+        self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
+        self._success_tolerance = check_real("success_tolerance", success_tolerance, low=0.0, low_open=True, unit="m")
+        frame_skip = check_int("frame_skip", frame_skip, low=1)
+        seed_q = check_real_array("initial_configuration", initial_configuration, shape=(4,),
+                                  what="4 joint angles [rad], finite real numbers")
+        width, height = check_render_arguments(render_mode, width, height, camera_name)
         self._scene_xml = planar_arm_scene_xml(
             obstacle_center=self._obstacle_center if self._obstacle else None,
             obstacle_radius=self._obstacle_radius, line_start=self._line_start, line_end=self._line_end)
         self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
         observation_space = spaces.Box(-np.inf, np.inf, shape=(18,), dtype=np.float64)
-        check_render_backend(render_mode)
         MujocoEnv.__init__(self, str(PLANAR_ARM_XML), int(frame_skip), observation_space=observation_space,
                            render_mode=render_mode, width=width, height=height,
                            camera_name=camera_name if render_mode is not None else None)
@@ -379,7 +382,4 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
 
 
 def _point(value: Sequence[float], name: str) -> NDArray[np.float64]:
-    p = np.asarray(value, dtype=np.float64)
-    if p.shape != (2,) or not np.all(np.isfinite(p)):
-        raise EnvConfigError(f"{name} must be a finite (x, z) pair [m], got {value!r}")
-    return p
+    return check_real_array(name, value, shape=(2,), what="an (x, z) pair [m] of finite real numbers")

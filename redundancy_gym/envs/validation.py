@@ -1,16 +1,24 @@
-"""Checks of env keyword arguments shared by the env classes (each raises :class:`EnvConfigError`)."""
+"""Checks of env keyword arguments shared by the env classes (each raises :class:`EnvConfigError`).
+
+The type, finiteness and range checks are those of :mod:`redundancy_gym.validation` (shared with the policies
+and the geometry), bound here to :class:`EnvConfigError`; they run in the constructors only.
+"""
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
+from .. import validation as _checks
 from ..rendering_backend import can_open_window, require_render_backend, require_window
 from .exceptions import EnvConfigError
 
-__all__ = ["check_render_backend", "non_negative", "positive", "render_modes", "warn_if_time_limit_short"]
+__all__ = ["RENDER_MODES", "check_bool", "check_choice", "check_int", "check_range_pair", "check_real",
+           "check_real_array", "check_render_arguments", "check_render_backend", "non_negative", "positive",
+           "render_modes", "warn_if_time_limit_short"]
 
 
 def render_modes(*offscreen: str) -> list[str]:
@@ -54,14 +62,40 @@ def check_render_backend(render_mode: str | None) -> None:
 
 
 def positive(value: float, name: str) -> float:
-    """``value`` as a float when it is a finite number > 0."""
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value <= 0:
-        raise EnvConfigError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
+    """``value`` as a float when it is a finite real number > 0 (see :func:`redundancy_gym.validation.check_real`)."""
+    return check_real(name, value, low=0.0, low_open=True)
 
 
 def non_negative(value: float, name: str) -> float:
-    """``value`` as a float when it is a finite number >= 0."""
-    if not isinstance(value, (int, float, np.number)) or not np.isfinite(value) or value < 0:
-        raise EnvConfigError(f"{name} must be a finite number >= 0, got {value!r}")
-    return float(value)
+    """``value`` as a float when it is a finite real number >= 0."""
+    return check_real(name, value, low=0.0)
+
+
+# the shared checks of redundancy_gym.validation, raising EnvConfigError
+check_bool = partial(_checks.check_bool, error=EnvConfigError)
+check_real = partial(_checks.check_real, error=EnvConfigError)
+check_int = partial(_checks.check_int, error=EnvConfigError)
+check_choice = partial(_checks.check_choice, error=EnvConfigError)
+check_range_pair = partial(_checks.check_range_pair, error=EnvConfigError)
+check_real_array = partial(_checks.check_real_array, error=EnvConfigError)
+
+RENDER_MODES: tuple[str, ...] = ("human", "rgb_array", "depth_array")
+"""Every render mode an env may name (``"human"`` needs a display: :func:`check_render_backend`)."""
+
+
+def check_render_arguments(render_mode: str | None, width: int, height: int, camera_name: str | None,
+                           render_modes: tuple[str, ...] = RENDER_MODES) -> tuple[int, int]:
+    """Check the rendering arguments every env takes; returns ``(width, height)`` as ints.
+
+    ``render_mode``: None or one of ``render_modes``; ``width``, ``height``: ints >= 1 [pixels];
+    ``camera_name``: None or a string (whether the camera exists is the env's check).
+    """
+    if render_mode is not None:
+        check_choice("render_mode", render_mode, render_modes)
+    w = check_int("width", width, low=1)
+    h = check_int("height", height, low=1)
+    if camera_name is not None and not isinstance(camera_name, str):
+        raise EnvConfigError(f"camera_name must be None or a camera's name (a str), got {camera_name!r} "
+                             f"({type(camera_name).__name__})")
+    check_render_backend(render_mode)
+    return w, h  # type: ignore[return-value]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -52,6 +53,26 @@ class PackedVolumes:
     radii: NDArray[np.float64]
     kinds: NDArray[np.int64]
 
+    def __post_init__(self) -> None:
+        """Check shapes, kinds and finiteness once, here (the kernels do not): a NaN vertex would give NaN
+        distances. Arrays of another dtype are converted (float64 vertices and radii, int64 kinds)."""
+        for name, dtype in (("vertices", np.float64), ("radii", np.float64), ("kinds", np.int64)):
+            value = getattr(self, name)
+            if not isinstance(value, np.ndarray) or value.dtype != dtype:
+                given = np.asarray(value)
+                if given.dtype.kind not in ("iu" if name == "kinds" else "iuf"):
+                    raise GeometryError(f"PackedVolumes {name} must be an array of "
+                                        f"{'ints' if name == 'kinds' else 'real numbers'}, got dtype {given.dtype}")
+                object.__setattr__(self, name, given.astype(dtype))
+        m = self.vertices.shape[0] if self.vertices.ndim == 3 else -1
+        if self.vertices.shape != (m, 3, 3):
+            raise GeometryError(f"PackedVolumes vertices must have shape (M, 3, 3), got {self.vertices.shape}")
+        for name in ("radii", "kinds"):
+            if getattr(self, name).shape != (m,):
+                raise GeometryError(f"PackedVolumes {name} must have shape ({m},) like the vertices, got "
+                                    f"{getattr(self, name).shape}")
+        check_packed_volumes(self)
+
     @classmethod
     def from_volumes(cls, volumes: Sequence[SSV]) -> PackedVolumes:
         """Pack a sequence of :class:`PSS`/:class:`LSS`/:class:`TSS`."""
@@ -64,10 +85,41 @@ class PackedVolumes:
             vertices[i] = v.vertices
         radii = np.array([v.radius for v in volumes], dtype=np.float64).reshape(n)
         kinds = np.array([v.kind for v in volumes], dtype=np.int64).reshape(n)
-        return cls(vertices, radii, kinds)
+        return cls._checked(vertices, radii, kinds)
+
+    @classmethod
+    def _checked(cls, vertices: NDArray[np.float64], radii: NDArray[np.float64],
+                 kinds: NDArray[np.int64]) -> PackedVolumes:
+        """Arrays already known valid (from checked volumes), without checking them again."""
+        packed = object.__new__(cls)
+        for name, value in (("vertices", vertices), ("radii", radii), ("kinds", kinds)):
+            object.__setattr__(packed, name, value)
+        return packed
 
     def __len__(self) -> int:
         return int(self.radii.shape[0])
+
+
+def check_packed_volumes(volumes: PackedVolumes) -> None:
+    """Raise :class:`GeometryError` naming the first volume with a non-finite vertex or radius, a negative
+    radius or an unknown kind (the arrays may have been written in place since they were packed)."""
+    v, r, k = volumes.vertices, volumes.radii, volumes.kinds
+    if not len(volumes) or (math.isfinite(float(v.sum()) + float(r.sum())) and r.min() >= 0.0
+                            and k.min() >= 0 and k.max() <= 2):
+        return
+    bad = ~np.isfinite(volumes.vertices).reshape(len(volumes), 9).all(axis=1)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise GeometryError(f"PackedVolumes vertices must be finite; volume {i} has {volumes.vertices[i].tolist()}")
+    bad = ~(np.isfinite(volumes.radii) & (volumes.radii >= 0.0))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise GeometryError(f"PackedVolumes radii must be finite and >= 0; volume {i} has {volumes.radii[i]!r}")
+    bad = (volumes.kinds < 0) | (volumes.kinds > 2)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise GeometryError(f"PackedVolumes kinds must be 0 (PSS), 1 (LSS) or 2 (TSS); volume {i} has "
+                            f"{int(volumes.kinds[i])}")
 
 
 def distance(a: SSV, b: SSV) -> SSVDistance:
@@ -112,12 +164,21 @@ def _layout(kinds: NDArray[np.int64], index_a: ArrayLike, index_b: ArrayLike) ->
 
 
 def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: ArrayLike) -> SSVDistances:
-    """Distances of the pairs ``(volumes[index_a[k]], volumes[index_b[k]])`` in one compiled call."""
+    """Distances of the pairs ``(volumes[index_a[k]], volumes[index_b[k]])`` in one compiled call.
+
+    Raises:
+        GeometryError: ``volumes`` is not a :class:`PackedVolumes`, holds a non-finite vertex or radius (checked
+            again here: the arrays may have been written since packing), or an index is out of range.
+    """
+    if not isinstance(volumes, PackedVolumes):
+        raise GeometryError(f"indexed_distances expects PackedVolumes, got {type(volumes).__name__}")
     layout = _layout(volumes.kinds, index_a, index_b)
     k = layout.slot.size
     out = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
     ssv_pairs_grouped(volumes.vertices, volumes.radii, volumes.kinds, *layout, np.ones(k, dtype=np.int64), *out,
                       np.empty(k, dtype=np.int64))
+    if not math.isfinite(float(out.distance.sum())):  # a non-finite input written after packing: say which
+        check_packed_volumes(volumes)
     return out
 
 
@@ -127,8 +188,8 @@ def distances(a: Sequence[SSV] | PackedVolumes, b: Sequence[SSV] | PackedVolumes
     pb = b if isinstance(b, PackedVolumes) else PackedVolumes.from_volumes(b)
     if len(pa) != len(pb):
         raise GeometryError(f"distances needs equally many volumes, got {len(pa)} and {len(pb)}")
-    both = PackedVolumes(np.concatenate([pa.vertices, pb.vertices]), np.concatenate([pa.radii, pb.radii]),
-                         np.concatenate([pa.kinds, pb.kinds]))
+    both = PackedVolumes._checked(np.concatenate([pa.vertices, pb.vertices]), np.concatenate([pa.radii, pb.radii]),
+                                  np.concatenate([pa.kinds, pb.kinds]))
     n = len(pa)
     return indexed_distances(both, np.arange(n), np.arange(n, 2 * n))
 

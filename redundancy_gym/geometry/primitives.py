@@ -12,6 +12,7 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..validation import check_real
 from .exceptions import GeometryError
 from .ssv_kernels import KIND_LSS, KIND_PSS, KIND_TSS
 
@@ -21,7 +22,13 @@ KIND_NAMES = ("PSS", "LSS", "TSS")
 
 
 def _point(value: ArrayLike, name: str) -> NDArray[np.float64]:
-    p = np.array(value, dtype=np.float64).reshape(-1)
+    try:
+        given = np.asarray(value)
+    except ValueError:  # a ragged sequence
+        given = np.asarray(None)
+    if given.dtype.kind not in "iuf":  # strings, bools, objects are not coordinates
+        raise GeometryError(f"{name} must be a 3-vector of finite real numbers [m], got {value!r}")
+    p = np.array(given, dtype=np.float64).reshape(-1)
     if p.shape != (3,):
         raise GeometryError(f"{name} must be a 3-vector, got shape {np.shape(value)}")
     if not np.all(np.isfinite(p)):
@@ -31,10 +38,7 @@ def _point(value: ArrayLike, name: str) -> NDArray[np.float64]:
 
 
 def _radius(value: float) -> float:
-    r = float(value)
-    if not np.isfinite(r) or r < 0.0:
-        raise GeometryError(f"radius must be finite and >= 0, got {value!r}")
-    return r
+    return check_real("radius", value, low=0.0, unit="m", error=GeometryError)  # type: ignore[return-value]
 
 
 class SSV:
