@@ -24,11 +24,10 @@ from .compiled_clik import CompiledClik
 from .exceptions import PolicyError
 from .frame_axis_task import FrameAxisTask
 from .joint_limit_objective import JointLimitObjective
+from .policies import PerEnvPolicy
 from .policy_options import config_from_options, env_with_attributes
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
-
-_START_TIME = 1e-9  # an observation with time below this starts a new episode
 
 
 @dataclass(frozen=True)
@@ -93,12 +92,14 @@ def obstacle_volumes(block: NDArray[np.float64]) -> list[tuple[SSV, bool]]:
     return out
 
 
-class GraspClikPolicy:
+class GraspClikPolicy(PerEnvPolicy):
     """Velocity-level CLIK along a :class:`GraspPath`, as a policy (observation in, normalized joint velocities out).
 
-    At the first observation of an episode (``time`` 0) it plans the path from the observed TCP pose and builds
-    its collision model: the robot's own segments from the robot MJCF (non-adjacent links, the lift column)
-    and one segment per observed obstacle. :attr:`last_result` keeps the last :class:`ClikResult`.
+    At the first observation of an episode (``episode_start``, or the observation's ``time`` ~0 or going back) it
+    plans the path from the observed TCP pose and builds its collision model: the robot's own segments from the
+    robot MJCF (non-adjacent links, the lift column) and one segment per observed obstacle. A batch of observations
+    gets one such state per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
+    :attr:`last_result` keeps the last :class:`ClikResult`.
 
     Args:
         env: an env exposing ``observation_layout`` (``q``, ``tcp_position``, ``tcp_quaternion``,
@@ -130,6 +131,8 @@ class GraspClikPolicy:
         self.path: GraspPath | None = None
         self.controller: Clik | CompiledClik | None = None  # built by the first observation (observed obstacles)
         self.last_result: ClikResult | None = None
+        self._time = self._layout["time"].start if "time" in self._layout else None  # predict needs it
+        self._init_per_env(env, kwargs, self._layout)
 
     def build_controller(self, environment: list[Segment]) -> Clik | CompiledClik:
         """The CLIK controller of this configuration (compiled unless ``backend="python"``) with ``environment``
@@ -147,7 +150,7 @@ class GraspClikPolicy:
 
     def plan(self, obs: NDArray[np.float64]) -> None:
         """A new episode: the grasp path from the observed TCP pose and grasp, and the controller with the
-        observed obstacles (done by :meth:`predict` when the observation's time is 0)."""
+        observed obstacles (done by :meth:`predict` at an episode start)."""
         lay = self._layout
         start = obs[lay["tcp_position"]]
         axis = _tool_axis(obs[lay["tcp_quaternion"]])
@@ -161,18 +164,15 @@ class GraspClikPolicy:
         if self.controller is None or self.config.collision_avoidance == "on":
             self.controller = self.build_controller(environment)
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
-        obs = np.asarray(observation, dtype=np.float64)
-        t = float(obs[self._layout["time"]][0])
-        if self.path is None or t < _START_TIME:
+        if self._new_episode(obs, starting) or self.path is None:
             self.plan(obs)
-        assert self.path is not None and self.controller is not None
-        target, velocity = self.path(t)
+        assert self.path is not None and self.controller is not None and self._time is not None
+        target, velocity = self.path(obs.item(self._time))
         result = self.controller.step(obs[self._layout["q"]], target, velocity)
         self.last_result = result
-        return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32), state
+        return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

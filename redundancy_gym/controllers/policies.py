@@ -9,6 +9,7 @@ policy supports.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -29,9 +30,9 @@ from .joint_limit_objective import JointLimitObjective
 from .policy_options import config_from_options, env_with_attributes
 from .posture_objective import PostureObjective
 
-__all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "Policy", "RandomPolicy", "Sb3Policy", "ZeroPolicy",
-           "env_name", "make_policy", "missing_capabilities", "policy_supports", "supported_env_ids",
-           "supported_policies"]
+__all__ = ["POLICY_NAMES", "ClikPolicy", "ClikPolicyConfig", "PerEnvPolicy", "Policy", "RandomPolicy", "Sb3Policy",
+           "ZeroPolicy", "env_name", "make_policy", "missing_capabilities", "observation_time_index",
+           "policy_supports", "supported_env_ids", "supported_policies"]
 
 POLICY_NAMES: tuple[str, ...] = ("clik", "walking", "predictive", "global", "zero", "random")
 _SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
@@ -56,20 +57,144 @@ class Policy(Protocol):
         ...
 
 
-class ZeroPolicy:
+_START_TIME = 1e-9
+"""An observation whose time (or phase) is below this starts a new episode."""
+
+
+def observation_time_index(layout: Mapping[str, slice] | None) -> int | None:
+    """Index of the observation entry that tells how far the episode is: ``time`` [s], else ``phase``
+    (PlanarReach: time over the line's duration); both are 0 at ``reset`` and never decrease within an episode.
+    None when the layout has neither (then only ``episode_start`` starts an episode)."""
+    for key in ("time", "phase"):
+        if layout is not None and key in layout:
+            return int(layout[key].start)
+    return None
+
+
+def _one_start(episode_start: Any) -> bool:
+    """``episode_start`` of a single observation: None, a bool or one flag."""
+    if type(episode_start) is np.ndarray and episode_start.size == 1:  # what harnesses pass: the hot path
+        return bool(episode_start.item())
+    if episode_start is None:
+        return False
+    flags = np.asarray(episode_start, dtype=bool).reshape(-1)
+    if flags.size != 1:
+        raise PolicyError(f"episode_start must have one entry for a single observation, got shape {flags.shape}")
+    return bool(flags[0])
+
+
+def _batch_starts(episode_start: Any, n: int) -> NDArray[np.bool_]:
+    """``episode_start`` of a batch of ``n`` observations: None (no start) or ``n`` flags."""
+    if episode_start is None:
+        return np.zeros(n, dtype=bool)
+    flags = np.asarray(episode_start, dtype=bool).reshape(-1)
+    if flags.size != n:
+        raise PolicyError(f"episode_start must have one entry per observation ({n}), got shape "
+                          f"{np.shape(episode_start)}")
+    return flags
+
+
+class PerEnvPolicy:
+    """The stable-baselines3 ``predict`` over one observation ``(obs_dim,)`` or a batch ``(n, obs_dim)`` (a VecEnv's),
+    with one controller state per env index.
+
+    A subclass implements :meth:`_act` for one float64 observation. The policy object is itself the controller
+    state of env index 0, which a single observation also uses; index ``i > 0`` of a batch gets its own policy
+    object (:meth:`core`, built with the same env and options the first time ``i`` appears), so env ``i``'s episode
+    is independent of env ``j``'s. A batch gives actions ``(n, act_dim)``.
+
+    A new episode of an index begins where its ``episode_start`` entry is True, and, in an env whose observation
+    carries its time (:func:`observation_time_index`), where that time is ~0 or went back from the index's last
+    observation: a policy reused for another episode (or after a ``reset`` mid-episode) without
+    ``episode_start`` acts as a fresh one.
+    """
+
+    _env: Any
+    _options: dict[str, Any]
+    _obs_shape: tuple[int, ...] | None
+    _cores: dict[int, PerEnvPolicy]
+    _time_index: int | None
+    _last_time: float
+
+    def _init_per_env(self, env: Any, options: dict[str, Any], layout: Mapping[str, slice] | None = None) -> None:
+        """Remember how this policy was built (``type(self)(env, **options)`` builds the other indices' states)
+        and where the observation's time is (``layout``; None: the policy keeps no episode state)."""
+        self._env = env
+        self._options = dict(options)
+        shape = getattr(getattr(env, "observation_space", None), "shape", None)
+        self._obs_shape = tuple(shape) if shape else None
+        self._cores = {0: self}
+        self._time_index = observation_time_index(layout)
+        self._last_time = -np.inf
+
+    def _new_core(self, index: int) -> PerEnvPolicy:
+        """A fresh controller state for env ``index`` (> 0)."""
+        return type(self)(self._env, **self._options)
+
+    def core(self, index: int) -> Any:
+        """The policy object that keeps env ``index``'s controller state (``self`` for index 0; built on first use),
+        e.g. for its diagnostics (``last_result``)."""
+        core = self._cores.get(index)
+        if core is None:
+            if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or index < 0:
+                raise PolicyError(f"env index must be an int >= 0, got {index!r}")
+            core = self._cores[int(index)] = self._new_core(int(index))
+        return core
+
+    def _new_episode(self, obs: NDArray[np.float64], starting: bool) -> bool:
+        """Whether ``obs`` begins an episode: ``starting`` (``episode_start``), or the observation's time ~0 or
+        earlier than at the last call."""
+        index = self._time_index
+        if index is None:
+            return starting
+        t = obs.item(index)
+        last, self._last_time = self._last_time, t
+        return starting or t < _START_TIME or t < last
+
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
+        """The action for one observation of this env index; ``starting``: its ``episode_start``."""
+        raise NotImplementedError
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[Any], Any]:
+        """The action ``(act_dim,)`` for one observation, or the actions ``(n, act_dim)`` for a batch ``(n, obs_dim)``
+        (row ``i``: env index ``i``); ``episode_start``: a flag per observation (True begins a new episode there);
+        ``state`` comes back unchanged (no recurrent state); the policies are deterministic."""
+        obs = np.asarray(observation, dtype=np.float64)
+        if obs.shape == self._obs_shape or (self._obs_shape is None and obs.ndim == 1):  # one observation
+            return self._act(obs, episode_start is not None and _one_start(episode_start)), state
+        if obs.ndim != 2 or (self._obs_shape is not None and obs.shape[1:] != self._obs_shape):
+            dim = "obs_dim" if self._obs_shape is None else self._obs_shape[0]
+            raise PolicyError(f"observation must have shape {self._obs_shape or '(obs_dim,)'} or (n, {dim}), "
+                              f"got {obs.shape}")
+        starts = _batch_starts(episode_start, obs.shape[0])
+        if obs.shape[0] == 0:
+            return self._no_actions(), state
+        return np.stack([self.core(i)._act(obs[i], bool(starts[i])) for i in range(obs.shape[0])]), state
+
+    def _no_actions(self) -> NDArray[Any]:
+        """The actions ``(0, act_dim)`` of an empty batch."""
+        space = getattr(self._env, "action_space", None)
+        shape = tuple(getattr(space, "shape", None) or (0,))
+        return np.zeros((0, *shape), dtype=getattr(space, "dtype", np.float32))
+
+
+class ZeroPolicy(PerEnvPolicy):
     """Always the zero action (for a velocity-commanded arm: hold still)."""
 
     def __init__(self, env: Any) -> None:
         self._action = np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+        self._init_per_env(env, {})
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
-        """The zero action."""
-        return self._action.copy(), state
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
+        return self._action.copy()
 
 
-class RandomPolicy:
+class RandomPolicy(PerEnvPolicy):
     """Uniform random actions in the action box, from the policy's own seeded generator.
+
+    In a batch, env index ``i`` draws from its own generator, seeded with ``seed + i`` (as ``make_vec_env``
+    seeds its envs); a generator runs on over episodes (``episode_start`` does not reseed it).
 
     Args:
         env: the environment (its action space bounds are used).
@@ -83,12 +208,16 @@ class RandomPolicy:
         if not (np.all(np.isfinite(self._low)) and np.all(np.isfinite(self._high))):
             raise PolicyError("the random policy needs a bounded action space")
         self._dtype = space.dtype
+        self._seed = seed
         self._rng = np.random.default_rng(seed)
+        self._init_per_env(env, {"seed": seed})
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+    def _new_core(self, index: int) -> PerEnvPolicy:
+        return RandomPolicy(self._env, seed=None if self._seed is None else self._seed + index)
+
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
         """A uniform random action."""
-        return self._rng.uniform(self._low, self._high).astype(self._dtype), state
+        return self._rng.uniform(self._low, self._high).astype(self._dtype)
 
 
 @dataclass(frozen=True)
@@ -136,7 +265,7 @@ COLLISION_MODES = ("auto", "on", "off")
 OBSTACLE_SEGMENT = "obstacle"
 
 
-class ClikPolicy:
+class ClikPolicy(PerEnvPolicy):
     """Velocity-level CLIK (5.14) on the env's task, as a policy: observation in, normalized joint velocities out.
 
     The joint configuration and the task reference (position and velocity) are read from the observation;
@@ -182,6 +311,7 @@ class ClikPolicy:
                     dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping)
         self.controller: Clik | CompiledClik = CompiledClik(clik) if self.config.backend == "compiled" else clik
         self.last_result: ClikResult | None = None
+        self._init_per_env(env, kwargs)  # a velocity-level law: no episode state
 
     def _collision_objective(self, base: Any, has_obstacle: bool) -> CollisionObjective:
         """Robot segments from the robot MJCF; the obstacle (a sphere, read from the observation) as a PSS."""
@@ -213,16 +343,13 @@ class ClikPolicy:
         self.collision.collision_model.set_environment_placement(OBSTACLE_SEGMENT, np.eye(3), position)
         self.collision.collision_model.set_environment_radius(OBSTACLE_SEGMENT, max(radius, 0.0))
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
-        obs = np.asarray(observation, dtype=np.float64)
         self.update_obstacle(obs)
         result = self.controller.step(obs[self._layout["q"]], obs[self._layout["tcp_ref"]],
                                       obs[self._layout["tcp_ref_vel"]])
         self.last_result = result
-        action = np.clip(result.qdot / self._speed, -1.0, 1.0)
-        return action.astype(np.float32), state
+        return np.clip(result.qdot / self._speed, -1.0, 1.0).astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""
@@ -369,11 +496,24 @@ def supported_env_ids(name: str) -> tuple[str, ...]:
 
 
 def _unsupported(name: str, env: Any, missing: list[str]) -> PolicyError:
+    if hasattr(env, "num_envs"):  # a VecEnv that is not a plain DummyVecEnv
+        return PolicyError(f"policy {name!r} is built from one env, got the VecEnv {type(env).__name__}: pass one "
+                           "of its envs (e.g. gym.make(env_id)); the policy then takes the VecEnv's batches")
     ids = supported_env_ids(name)
     supports = ", ".join(ids) if ids else "no registered env"
     base = getattr(env, "unwrapped", env)
     return PolicyError(f"policy {name!r} supports {supports}; got {env_name(env)} "
                        f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})")
+
+
+def _one_env(env: Any) -> Any:
+    """The first env of a plain stable-baselines3 ``DummyVecEnv`` (its envs live in this process and are built
+    alike), else ``env``. A wrapped VecEnv (VecNormalize, ...) is left as it is: its observations are not the
+    env's, so an analytic policy must not take it."""
+    envs = getattr(env, "envs", None)
+    if hasattr(env, "num_envs") and not hasattr(env, "venv") and isinstance(envs, list) and envs:
+        return envs[0]
+    return env
 
 
 def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
@@ -386,7 +526,8 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
             (:class:`~redundancy_gym.controllers.predictive_policy.PredictivePolicy`, PlanarReach and AgriReach),
             ``"zero"``, ``"random"`` or the path of a stable-baselines3
             ``.zip``.
-        env: the environment the policy will act in.
+        env: the environment the policy will act in (or a stable-baselines3 ``DummyVecEnv`` of such envs). The
+            policy takes one observation of it or a batch (a VecEnv's, one controller state per env index).
         **kwargs: options of the policy (``ClikPolicyConfig`` fields for ``clik``, ``seed`` for ``random``,
             ``algo`` for a ``.zip``).
 
@@ -394,6 +535,7 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
         PolicyError: unknown name or options, or an env the policy does not support (the message names the
             registered env ids it supports).
     """
+    env = _one_env(env)
     missing = missing_capabilities(name, env)
     if missing:
         raise _unsupported(name, env, missing)

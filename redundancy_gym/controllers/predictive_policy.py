@@ -24,7 +24,7 @@ from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .grasp_clik_policy import GraspClikPolicy
 from .joint_limit_objective import JointLimitObjective
-from .policies import ClikPolicy
+from .policies import ClikPolicy, PerEnvPolicy
 from .policy_options import config_from_options
 from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
 from .receding_horizon import HorizonUpdate, RecedingHorizon
@@ -33,7 +33,6 @@ __all__ = ["MODES", "TASK_DEFAULTS", "PredictivePolicy", "PredictivePolicyConfig
 
 MODES = ("predictive", "global")
 """``predictive``: receding horizon (algorithm 12); ``global``: one optimization over the whole episode."""
-_START_TIME = 1e-9
 
 
 @dataclass(frozen=True)
@@ -123,9 +122,13 @@ def predictive_problem(model: RobotModel, task: FramePositionTask | FrameAxisTas
                         augmented=augmented, input_weight=config.input_weight, damping=config.damping)
 
 
-class PredictivePolicy:
+class PredictivePolicy(PerEnvPolicy):
     """Predictive IK as a policy on PlanarReach (the TCP line of fig. 5.30, reference from the env's
     ``reference(t)``) or AgriReach (the grasp path of the ``clik`` reference, with its observed obstacles).
+
+    An episode starts (the reference table and the problem are built, ``global`` solves it) at ``episode_start``
+    or where the observation's time (PlanarReach: its ``phase``) is ~0 or went back; a batch of observations gets
+    one such state per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
 
     Args:
         env: the environment.
@@ -188,6 +191,7 @@ class PredictivePolicy:
         self._step = 0
         self.last_update: HorizonUpdate | None = None
         self.last_error: NDArray[np.float64] | None = None
+        self._init_per_env(env, {"mode": mode, **kwargs}, self._layout)
 
     # ------------------------------------------------------------------ episode start
     def problem(self) -> PredictiveIk:
@@ -254,14 +258,9 @@ class PredictivePolicy:
         return wdot
 
     # ------------------------------------------------------------------ step
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
-        obs = np.asarray(observation, dtype=np.float64)
-        starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])
-        if self._grasp:
-            starting = starting or float(obs[self._layout["time"]][0]) < _START_TIME
-        if starting or self.pik is None:
+        if self._new_episode(obs, starting) or self.pik is None:
             self.start(obs)
         assert self.pik is not None and self._table is not None
         q = obs[self._layout["q"]]
@@ -278,7 +277,7 @@ class PredictivePolicy:
         row = self._table[min(k, len(self._table) - 1)]
         qdot, self.last_error = self.pik.command(q, u, row[:self._width], row[6:6 + self._width], self._gain)
         self._step += 1
-        return np.clip(qdot / self._speeds, -1.0, 1.0).astype(np.float32), state
+        return np.clip(qdot / self._speeds, -1.0, 1.0).astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

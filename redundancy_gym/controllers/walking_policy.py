@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from ..model import RobotModel
 from .exceptions import PolicyError
+from .policies import PerEnvPolicy
 from .policy_options import config_from_options, env_with_attributes
 from .walking import GaitConfig, StabilizerGains, WalkingCommand, WalkingController, WalkingIkConfig
 
@@ -52,10 +53,12 @@ class WalkingPolicyConfig:
     backend: str = WalkingIkConfig.backend
 
 
-class WalkingPolicy:
+class WalkingPolicy(PerEnvPolicy):
     """Walks at the observation's commanded speed with :class:`~redundancy_gym.controllers.walking.WalkingController`.
 
-    The controller restarts (a new walking pattern from the observed standing state) at every episode start.
+    The controller restarts (a new walking pattern from the observed standing state) at every episode start:
+    ``episode_start``, or the observation's ``time`` ~0 or going back. A batch of observations gets one controller
+    per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
     The last :class:`WalkingCommand` is kept in :attr:`last_command` for diagnostics and plots.
 
     Args:
@@ -100,23 +103,20 @@ class WalkingPolicy:
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc
         self.last_command: WalkingCommand | None = None
+        self._init_per_env(env, kwargs, layout)
 
     def _state(self, obs: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self.model.from_mujoco_state(obs[self._qpos], obs[self._qvel])
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.float32], Any]:
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint position targets for one observation."""
-        obs = np.asarray(observation, dtype=np.float64)
         q, v = self._state(obs)
-        starting = episode_start is not None and bool(np.asarray(episode_start).reshape(-1)[0])
-        if starting or self.controller.pattern is None:
+        if self._new_episode(obs, starting) or self.controller.pattern is None:
             self.controller.start(q, float(obs[self._command][0]))
         wrench = obs[self._wrench].reshape(2, 6)
         command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])
         self.last_command = command
-        action = np.clip((command.joint_targets - self._nominal) / self._scale, -1.0, 1.0)
-        return action.astype(np.float32), state
+        return np.clip((command.joint_targets - self._nominal) / self._scale, -1.0, 1.0).astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""
