@@ -117,15 +117,23 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
                          "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
-                         "pik: predictive IK against local CLIK and the global optimum")
+                         "pik: predictive IK against local CLIK and the global optimum; "
+                         "soak: random, bang-bang and reference-policy actions on every env, counting exceptions "
+                         "and non-finite values (exit status 1 when any)")
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
     be.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the benchmark's scenes")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
     be.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    budget = be.add_mutually_exclusive_group()
+    budget.add_argument("--seconds", type=float, metavar="S",
+                        help="soak only: wall time per env, split over the action sources (default: 10, "
+                             "--quick: 1)")
+    budget.add_argument("--steps", type=int, metavar="N",
+                        help="soak only: steps per env instead of --seconds, split over the action sources")
 
     de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
@@ -205,7 +213,10 @@ def _train(args: argparse.Namespace) -> None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if args.command == "bench" and args.name != "soak" and (args.seconds is not None or args.steps is not None):
+        parser.error("--seconds and --steps apply to bench soak only")
     from .controllers.exceptions import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
@@ -261,6 +272,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                                        progress=not args.no_progress)
                 print(format_pik_bench(report))
                 print(f"wrote {write_pik_bench(report, json_path)}")
+            elif args.name == "soak":
+                from .eval.bench_soak import format_soak_bench, run_soak_bench, write_soak_bench
+
+                seconds = args.seconds if args.seconds is not None else (1.0 if args.quick else 10.0)
+                report = run_soak_bench(seconds=None if args.steps is not None else seconds, steps=args.steps,
+                                        seed=args.seed, progress=not args.no_progress)
+                print(format_soak_bench(report))
+                print(f"wrote {write_soak_bench(report, json_path)}")
+                if not report["ok"]:
+                    return 1
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench
