@@ -29,6 +29,7 @@ from .validation import (
     check_bool,
     check_choice,
     check_int,
+    check_noise,
     check_range_pair,
     check_real,
     check_render_arguments,
@@ -80,6 +81,7 @@ def default_config() -> dict[str, Any]:
         "reference_turn_rate": 0.8,
         "reference_min_duration": 1.5,
         "reference_approach_speed": 0.12,
+        "obs_noise": None,
     }
 
 
@@ -172,6 +174,12 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       duration of 1.5 s keeps the path within the joints' speed limits: with 1.0 s the ``clik`` reference
       saturated at ``max_joint_speed`` for about 0.5 s and lagged up to 24 mm behind the path (0.5 mm rms
       and 4 mm max with 1.5 s, over 30 seeds).
+    - ``obs_noise`` (fault, default None = off): zero-mean Gaussian noise added to the measured channels of the
+      observation at every step and reset, drawn from the env's generator (``reset(seed=...)`` reproduces it);
+      a float std applies to ``q`` [m, rad], ``qdot`` [m/s, rad/s] and ``tcp`` (``tcp_position``) [m] alike, a
+      dict gives one per group (``{"q": 0.001, "qdot": 0.01, "tcp": 0.001, "tcp_quaternion": 0.001}``; groups
+      not named get none; the quaternion's entries are not renormalized). The episode constants (grasp,
+      approach, pre-grasp, obstacles) and ``time`` stay exact, and ``info`` and the rewards use the true state.
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
@@ -199,7 +207,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                  clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,
                  reference_speed: float = 0.35, reference_turn_rate: float = 0.8, reference_min_duration: float = 1.5,
                  reference_approach_speed: float = 0.12, render_mode: str | None = None, width: int = 480, height: int = 480, camera_name: str = "side",
-                 **kwargs: Any) -> None:
+                 obs_noise: float | dict[str, float] | None = None, **kwargs: Any) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
@@ -210,7 +218,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                                 leaf_penalty, collision_penalty, success_bonus, success_position_tolerance,
                                 success_angle_tolerance, clearance_horizon, reset_noise_scale, frame_skip,
                                 reference_speed, reference_turn_rate, reference_min_duration, reference_approach_speed,
-                                render_mode, width, height, camera_name)
+                                render_mode, width, height, camera_name, obs_noise=obs_noise)
         check_choice("difficulty", difficulty, DIFFICULTIES)
         scene = crop_row_defaults(difficulty)
         if leaves_per_stem is not None:
@@ -285,6 +293,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             start += size
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(start,), dtype=np.float64)
         self._obs = np.zeros(start)
+        lay = self.observation_layout
+        self._noise = check_noise("obs_noise", obs_noise, {
+            "q": (lay["q"],), "qdot": (lay["qdot"],), "tcp": (lay["tcp_position"],),
+            "tcp_quaternion": (lay["tcp_quaternion"],)}, ("q", "qdot", "tcp"))
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
         self._row: CropRow | None = None
@@ -414,7 +426,12 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         mujoco.mju_mat2Quat(self._quat, self.data.site_xmat[self._tcp_site])
         o[lay["tcp_quaternion"]] = self._quat
         o[lay["time"]] = self._time
-        return o.copy()
+        if self._noise is None:
+            return o.copy()
+        index, std = self._noise
+        obs = o.copy()
+        obs[index] += std * self.np_random.standard_normal(index.size)
+        return obs
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""

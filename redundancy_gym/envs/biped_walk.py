@@ -21,8 +21,9 @@ from ..assets import (
 from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
+from .faults import PushSchedule
 from .self_collision import self_collision_pairs
-from .validation import check_bool, check_int, check_real, check_render_arguments, render_modes
+from .validation import check_bool, check_int, check_noise, check_real, check_render_arguments, render_modes
 
 __all__ = ["MAX_TARGET_SPEED", "NOMINAL_POSTURE", "STANDING_PELVIS_HEIGHT", "SUCCESS_SPEED_TOLERANCE",
            "BipedWalkEnv", "default_config"]
@@ -63,6 +64,9 @@ def default_config() -> dict[str, Any]:
         "velocity_feedforward": True,
         "floor_friction": 1.0,
         "frame_skip": 2,
+        "sensor_noise": None,
+        "push": None,
+        "actuator_torque_scale": 1.0,
     }
 
 
@@ -145,10 +149,32 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - ``velocity_feedforward`` (bool): servo velocity feedforward from the target rate.
     - ``floor_friction`` (> 0): sliding friction of the floor.
     - ``frame_skip`` (int >= 1): physics steps of 2 ms per control step.
+    - ``sensor_noise`` (fault, default None = off): zero-mean Gaussian noise added to the observation's sensor
+      channels at every step and reset, drawn from the env's generator (``reset(seed=...)`` reproduces it). A
+      float is the std of every sensor group, in each group's unit; a dict gives a std per group (others get
+      none): ``"q"`` [rad], ``"qdot"`` [rad/s], ``"force"`` (both ankle forces) [N], ``"torque"`` (both ankle
+      moments) [N m], ``"imu"`` (accelerometer [m/s^2] and gyro [rad/s]), ``"imu_orientation"`` (the quaternion's
+      entries, not renormalized), ``"base"`` (the free base's position [m], quaternion, linear [m/s] and
+      angular [rad/s] velocity; not in the float's groups). Example: ``{"q": 0.001, "qdot": 0.01, "force": 5.0,
+      "imu": 0.01}``. ``info`` and the rewards use the true state.
+    - ``push`` (fault, default None = off): external forces on a body through ``data.xfrc_applied`` (world
+      frame, at the body's CoM), at control-step resolution (a push acts on the control steps that start inside
+      its window), one push at a time, cleared when its window ends and at every reset. Either an explicit
+      schedule, a list of ``{"time": t0 [s], "force": (fx, fy, fz) [N], "duration": d [s], "body": name}`` (the
+      force acts during ``[t0, t0 + d)`` of each episode; ``body`` defaults to ``"torso"``), or a random push
+      process ``{"rate": [1/s], "force": (min, max) [N], "duration": d [s], "body": name, "direction":
+      "lateral" | "forward" | "any"}``: the waits before each push (from the reset, then from the end of the
+      last push) are exponential with mean ``1 / rate``, the magnitude uniform in ``(min, max)``, the
+      direction horizontal: ``lateral`` +-y, ``forward`` +-x (sign drawn), ``any`` uniform; all drawn from the
+      env's generator. ``info["push_force"]`` is the force [N] applied during the step (zeros without one).
+    - ``actuator_torque_scale`` (fault, in (0, 1], default 1): scales every servo's torque limit
+      (``actuator_forcerange`` of the MJCF, 30-250 N m) as weak or worn drives; gains are unchanged.
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
-    - v0: initial version. Before release, ``info["task_error"]`` (``|v_x - target_speed|``) was renamed
+    - v0: initial version. Before release, the fault arguments ``sensor_noise``, ``push`` and
+      ``actuator_torque_scale`` (all off by default: behaviour unchanged) and ``info["push_force"]`` were added;
+      ``info["task_error"]`` (``|v_x - target_speed|``) was renamed
       ``speed_error`` and ``mean_speed_error`` was added; rewards and dynamics are unchanged.
     """
 
@@ -173,14 +199,17 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
                  min_base_height: float = 0.55, max_torso_tilt: float = 0.8, reset_noise_scale: float = 0.02,
                  velocity_feedforward: bool = True, floor_friction: float = 1.0, frame_skip: int = 2,
                  render_mode: str | None = None, width: int = 640, height: int = 480,
-                 camera_name: str | None = "track", **kwargs: Any) -> None:
+                 camera_name: str | None = "track", sensor_noise: float | dict[str, float] | None = None,
+                 push: list[dict[str, Any]] | dict[str, Any] | None = None, actuator_torque_scale: float = 1.0,
+                 **kwargs: Any) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
         utils.EzPickle.__init__(self, target_speed, speed_weight, lateral_weight, healthy_reward, energy_weight,
                                 fall_penalty, min_base_height, max_torso_tilt, reset_noise_scale,
                                 velocity_feedforward, floor_friction, frame_skip, render_mode, width, height,
-                                camera_name)
+                                camera_name, sensor_noise=sensor_noise, push=push,
+                                actuator_torque_scale=actuator_torque_scale)
         self._target_speed = check_real("target_speed", target_speed, low=0.0, high=MAX_TARGET_SPEED, unit="m/s",
                                         note="the walking reference's fastest gait, 0.6 m steps every 0.6 s; "
                                              "it walks reliably up to about 0.9 m/s")
@@ -199,6 +228,17 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._velocity_feedforward = check_bool("velocity_feedforward", velocity_feedforward)
         self._floor_friction = check_real("floor_friction", floor_friction, low=0.0, low_open=True)
         frame_skip = check_int("frame_skip", frame_skip, low=1)
+        self._torque_scale = check_real("actuator_torque_scale", actuator_torque_scale, low=0.0, high=1.0,
+                                        low_open=True, note="a fraction of the servos' torque limits")
+        layout = self.OBSERVATION_LAYOUT
+        self._noise = check_noise("sensor_noise", sensor_noise, {
+            "q": (layout["q"],), "qdot": (layout["qdot"],),
+            "force": (layout["right_force"], layout["left_force"]),
+            "torque": (layout["right_torque"], layout["left_torque"]),
+            "imu": (layout["imu_acceleration"], layout["imu_gyro"]), "imu_orientation": (layout["imu_orientation"],),
+            "base": (layout["base_position"], layout["base_quaternion"], layout["base_linear_velocity"],
+                     layout["base_angular_velocity"])}, ("q", "qdot", "force", "torque", "imu"))
+        self._push = None if push is None else PushSchedule(push, "torso")
         width, height = check_render_arguments(render_mode, width, height, camera_name)
         self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
                          "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
@@ -207,6 +247,15 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
                            render_mode=render_mode, width=width, height=height,
                            camera_name=camera_name if render_mode is not None else None)
         self._resolve_names()
+        if self._push is not None:
+            ids = []
+            for body in self._push.bodies:
+                ids.append(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, body))
+                if ids[-1] <= 0:
+                    raise EnvConfigError(f"push names the body {body!r}, which the biped does not have (e.g. torso, "
+                                         "pelvis, r_thigh)")
+            self._push_bodies = ids
+        self._push_force = np.zeros(3)
         self._time = 0.0
         self._start_x = 0.0
         self._targets = self._nominal.copy()
@@ -222,6 +271,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             raise EnvConfigError(f"the biped MJCF must use a {_TIMESTEP} s timestep")
         # the env clips targets into the joint range itself; the feedforward may take ctrl past it
         model.actuator_ctrllimited[:] = 0
+        if self._torque_scale != 1.0:
+            model.actuator_forcerange[: len(BIPED_SERVOS)] *= self._torque_scale
         return model, mujoco.MjData(model)
 
     def _set_action_space(self) -> spaces.Box:
@@ -240,6 +291,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             ctrl += self._servo_lead * (targets - self._targets) / self.dt
         self._targets = targets
         x_before = float(self.data.qpos[0])
+        if self._push is not None:
+            self._apply_push()
         self.do_simulation(ctrl, self.frame_skip)
         self._time += self.dt
         metrics = self._metrics((float(self.data.qpos[0]) - x_before) / self.dt)
@@ -247,10 +300,27 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         terminated = bool(metrics["fell"] or metrics["self_collision"])
         if self.render_mode == "human":
             self.render()
-        return self._get_obs(), reward, terminated, False, {**terms, **metrics}
+        return self._get_obs(), reward, terminated, False, {**terms, **metrics, "push_force": self._push_force.copy()}
+
+    def _apply_push(self) -> None:
+        """Set ``xfrc_applied`` for the coming control step from the push schedule (clear it after a push)."""
+        acting = self._push.force_at(self._time, self.np_random)  # type: ignore[union-attr]
+        xfrc = self.data.xfrc_applied
+        if acting is None:
+            if self._push_force.any():
+                xfrc[self._push_bodies, :3] = 0.0
+                self._push_force = np.zeros(3)
+            return
+        force, body = acting
+        if self._push_force.any():
+            xfrc[self._push_bodies, :3] = 0.0
+        xfrc[self._push_bodies[body], :3] = force
+        self._push_force = np.array(force, dtype=np.float64)
 
     def reset_model(self) -> NDArray[np.float64]:
         self._time = 0.0
+        self.data.xfrc_applied[:] = 0.0
+        self._push_force = np.zeros(3)
         self._fell = False
         self._self_collided = False
         q = self._nominal.copy()
@@ -267,10 +337,12 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._targets = q.copy()
         self.data.ctrl[:] = q
         self._start_x = float(self.data.qpos[0])
+        if self._push is not None:
+            self._push.reset(self.np_random)
         return self._get_obs()
 
     def _get_reset_info(self) -> dict[str, Any]:
-        return self._metrics(0.0)
+        return {**self._metrics(0.0), "push_force": np.zeros(3)}
 
     # ------------------------------------------------------------------ task
     @property
@@ -304,7 +376,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
 
     def _get_obs(self) -> NDArray[np.float64]:
         d = self.data
-        return np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time]])
+        obs = np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time]])
+        if self._noise is not None:
+            index, std = self._noise
+            obs[index] += std * self.np_random.standard_normal(index.size)
+        return obs
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""

@@ -25,6 +25,7 @@ from .exceptions import EnvConfigError, InvalidActionError
 from .validation import (
     check_bool,
     check_int,
+    check_noise,
     check_real,
     check_real_array,
     check_render_arguments,
@@ -55,6 +56,7 @@ def default_config() -> dict[str, Any]:
         "reset_noise_scale": 0.1,
         "success_tolerance": 1e-3,
         "frame_skip": 10,
+        "obs_noise": None,
     }
 
 
@@ -128,6 +130,11 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - ``reset_noise_scale`` ([rad], >= 0): joint noise of the starting posture.
     - ``success_tolerance`` ([m], > 0): largest TCP error of a successful episode.
     - ``frame_skip`` (int >= 1): physics steps of 1 ms per control step.
+    - ``obs_noise`` (fault, default None = off): zero-mean Gaussian noise added to the measured channels of the
+      observation at every step and reset, drawn from the env's generator (``reset(seed=...)`` reproduces it);
+      a float std applies to ``q`` [rad], ``qdot`` [rad/s] and ``tcp`` [m] alike, a dict gives one per group
+      (``{"q": 0.001, "qdot": 0.01, "tcp": 0.001}``; groups not named get none). The episode constants
+      (reference, phase, obstacle) stay exact, and ``info`` and the rewards use the true state.
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
@@ -160,14 +167,17 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
                  initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5), max_joint_speed: float = 3.0,
                  tracking_weight: float = 10.0, energy_weight: float = 0.1, collision_penalty: float = 10.0,
                  reset_noise_scale: float = 0.1, success_tolerance: float = 1e-3, frame_skip: int = 10, render_mode: str | None = None,
-                 width: int = 480, height: int = 480, camera_name: str | None = "side", **kwargs: Any) -> None:
+                 width: int = 480, height: int = 480, camera_name: str | None = "side",
+                 obs_noise: float | dict[str, float] | None = None, **kwargs: Any) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
         utils.EzPickle.__init__(self, obstacle, obstacle_center, obstacle_radius, line_start, line_end, duration,
                                 initial_configuration, max_joint_speed, tracking_weight, energy_weight,
                                 collision_penalty, reset_noise_scale, success_tolerance, frame_skip, render_mode, width, height,
-                                camera_name)
+                                camera_name, obs_noise=obs_noise)
+        self._noise = check_noise("obs_noise", obs_noise, {
+            k: (self.OBSERVATION_LAYOUT[k],) for k in ("q", "qdot", "tcp")}, ("q", "qdot", "tcp"))
         self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
         self._obstacle_radius = check_real("obstacle_radius", obstacle_radius, low=0.0, low_open=True, unit="m")
@@ -297,8 +307,12 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         ref_pos, ref_vel, phase = self.reference(self._time)
         center = self._obstacle_center if self._obstacle else np.zeros(2)
         radius = self._obstacle_radius if self._obstacle else 0.0
-        return np.concatenate([self.data.qpos[self._qpos], self.data.qvel[self._qvel], self.tcp_position,
-                               ref_pos, ref_vel, [phase], center, [radius]])
+        obs = np.concatenate([self.data.qpos[self._qpos], self.data.qvel[self._qvel], self.tcp_position,
+                              ref_pos, ref_vel, [phase], center, [radius]])
+        if self._noise is not None:
+            index, std = self._noise
+            obs[index] += std * self.np_random.standard_normal(index.size)
+        return obs
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""

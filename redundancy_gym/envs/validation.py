@@ -16,7 +16,7 @@ from .. import validation as _checks
 from ..rendering_backend import can_open_window, require_render_backend, require_window
 from .exceptions import EnvConfigError
 
-__all__ = ["RENDER_MODES", "check_bool", "check_choice", "check_int", "check_range_pair", "check_real",
+__all__ = ["RENDER_MODES", "check_bool", "check_choice", "check_int", "check_noise", "check_range_pair", "check_real",
            "check_real_array", "check_render_arguments", "check_render_backend", "non_negative", "positive",
            "render_modes", "warn_if_time_limit_short"]
 
@@ -78,6 +78,40 @@ check_int = partial(_checks.check_int, error=EnvConfigError)
 check_choice = partial(_checks.check_choice, error=EnvConfigError)
 check_range_pair = partial(_checks.check_range_pair, error=EnvConfigError)
 check_real_array = partial(_checks.check_real_array, error=EnvConfigError)
+
+def check_noise(name: str, value: Any, groups: dict[str, tuple[slice, ...]], default_groups: tuple[str, ...],
+                unit: str | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+    """An observation-noise argument (``sensor_noise``, ``obs_noise``) as ``(indices, stds)``, or None when off.
+
+    ``value`` is None or 0 (off), a float std >= 0 for every group of ``default_groups``, or a dict from group
+    names (keys of ``groups``, each naming its observation slices) to stds >= 0 (groups not named get none).
+    Only entries with a std > 0 are returned, so a noise of 0 everywhere is off.
+    """
+    if value is None:
+        return None
+    if isinstance(value, dict):
+        unknown = sorted(str(k) for k in value if k not in groups)
+        if unknown:
+            raise EnvConfigError(f"{name} has unknown channel group(s) {', '.join(unknown)}; valid: "
+                                 f"{', '.join(groups)}")
+        stds = {k: check_real(f"{name}[{k!r}]", v, low=0.0, unit=unit) for k, v in value.items()}
+    else:
+        std = check_real(name, value, low=0.0, unit=unit,
+                         note="None or 0: off; a float: the std of every sensor channel; a dict: a std per "
+                              f"channel group of {', '.join(groups)}")
+        stds = {k: std for k in default_groups}
+    index: list[int] = []
+    scale: list[float] = []
+    for group, std in stds.items():
+        if std and std > 0.0:
+            for part in groups[group]:
+                idx = range(part.start, part.stop)
+                index.extend(idx)
+                scale.extend([std] * len(idx))
+    if not index:
+        return None
+    return np.array(index, dtype=np.intp), np.array(scale)
+
 
 RENDER_MODES: tuple[str, ...] = ("human", "rgb_array", "depth_array")
 """Every render mode an env may name (``"human"`` needs a display: :func:`check_render_backend`)."""
