@@ -342,8 +342,11 @@ def run_soak_bench(*, seconds: float | None = None, steps: int | None = None, se
     plan = []
     for env_id in envs:
         split = _split(budget, shares.get(env_id, {}), sources)
+        if steps is not None:  # whole steps that add up to the budget (the rounding remainder to the first source)
+            split = {s: max(1, int(v)) for s, v in split.items()}
+            split[sources[0]] += max(0, int(steps) - sum(split.values()))
         for source in sources:
-            plan.append((env_id, source, max(1, round(split[source])) if steps is not None else split[source]))
+            plan.append((env_id, source, split[source]))
     total = sum(p[2] for p in plan)
     bar = tqdm(total=total, desc="bench soak", unit="step" if steps is not None else "s",
                disable=not progress, dynamic_ncols=True)

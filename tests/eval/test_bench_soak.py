@@ -64,6 +64,7 @@ def test_short_soak_of_every_env_is_clean(tmp_path) -> None:
     written = json.loads(write_soak_bench(report, tmp_path / "soak.json").read_text())
     assert written["totals"] == report["totals"] and "processor" in written["machine"]
     assert written["budget"] == {"steps_per_env": 120}
+    assert all(e["steps"] == 120 for e in report["envs"].values())
 
 
 def test_seconds_budget_and_table() -> None:
