@@ -21,3 +21,19 @@ def planar_model() -> RobotModel:
 @pytest.fixture()
 def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
+
+
+# hypothesis profiles for tests/fuzz: "fast" (default, `make test`: deterministic, a few dozen examples per
+# test) and "nightly" (>= 1000 examples per test): HYPOTHESIS_PROFILE=nightly pytest tests/fuzz
+try:
+    from hypothesis import HealthCheck, settings
+except ImportError:  # hypothesis comes with the `test` extra; only tests/fuzz needs it
+    pass
+else:
+    _SUPPRESSED = [HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large,
+                   HealthCheck.filter_too_much]
+    settings.register_profile("fast", max_examples=30, deadline=None, derandomize=True, print_blob=True,
+                              suppress_health_check=_SUPPRESSED)
+    settings.register_profile("nightly", max_examples=1000, deadline=None, print_blob=True,
+                              suppress_health_check=_SUPPRESSED)
+    settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fast"))

@@ -31,7 +31,7 @@ from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .posture_objective import PostureObjective
-from .redundancy_resolution import check_finite
+from .redundancy_resolution import as_float_array, check_finite
 
 __all__ = ["CompiledClik"]
 
@@ -193,18 +193,18 @@ class CompiledClik:
             self._refresh_environment()
         nq = self._nq
         inputs = self._inputs
-        q = np.asarray(q, dtype=np.float64)
-        target = np.asarray(target, dtype=np.float64)
+        q = as_float_array(q, "q")
         width = self._width
         if q.shape != (nq,):
             raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
+        target = as_float_array(target, "target")
         if target.shape != (width,):
             raise ControllerError(f"target must have shape ({width},), got {target.shape}")
         inputs[:nq] = q
         inputs[nq:nq + width] = target
         has_velocity = target_velocity is not None
         if has_velocity:
-            velocity = np.asarray(target_velocity, dtype=np.float64)
+            velocity = as_float_array(target_velocity, "target_velocity")
             if velocity.shape != (width,):
                 raise ControllerError(f"target_velocity must have shape ({width},), got {velocity.shape}")
             inputs[nq + 6:nq + 6 + width] = velocity

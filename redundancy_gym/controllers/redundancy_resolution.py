@@ -34,9 +34,21 @@ def all_finite(values: NDArray[np.float64]) -> bool:
     return math.isfinite(float(values.sum())) or bool(np.isfinite(values).all())
 
 
+def as_float_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``values`` as a float64 array; :class:`ControllerError` naming ``name`` when they are not real numbers
+    (strings, None, mappings, complex numbers, ragged sequences)."""
+    try:
+        given = np.asarray(values)
+    except ValueError:  # a ragged sequence
+        raise ControllerError(f"{name} must be an array of real numbers, got {values!r}") from None
+    if given.dtype.kind not in "biuf":
+        raise ControllerError(f"{name} must be an array of real numbers, got {values!r}")
+    return np.asarray(given, dtype=np.float64)
+
+
 def check_finite(values: ArrayLike, name: str) -> NDArray[np.float64]:
     """``values`` as a float array; :class:`ControllerError` naming ``name`` when an entry is NaN or inf."""
-    arr = np.asarray(values, dtype=np.float64)
+    arr = as_float_array(values, name)
     if not all_finite(arr):
         raise ControllerError(f"{name} must be finite, got {np.array2string(arr, threshold=12)}")
     return arr

@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
+from ..validation import check_real
 from .chain_kernels import FREE, PRISMATIC, REVOLUTE
 from .exceptions import ModelError, UnknownFrameError
 from .serial_chain import SerialChain
@@ -194,7 +195,7 @@ class RobotModel:
     # ------------------------------------------------------------------ state
     def check_configuration(self, q: ArrayLike) -> NDArray[np.float64]:
         """Return ``q`` as a float array after checking its size and finiteness."""
-        q = np.asarray(q, dtype=np.float64)
+        q = _as_float_array(q, "configuration")
         if q.shape != (self.nq,):
             raise ModelError(f"configuration must have shape ({self.nq},), got {q.shape}")
         if not math.isfinite(float(q.sum())):  # one reduction: NaN and inf survive a sum
@@ -329,7 +330,13 @@ class RobotModel:
         """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration manifold)."""
         q = self.check_configuration(q)
         qdot = self._check_velocity(qdot)
-        return np.array(pin.integrate(self._model, q, qdot * float(dt)), dtype=np.float64)
+        step = qdot * check_real("dt", dt, unit="s", error=ModelError)
+        if not math.isfinite(float(step.sum())):
+            raise ModelError(f"qdot * dt overflows (dt = {dt!r})")
+        q_next = np.array(pin.integrate(self._model, q, step), dtype=np.float64)
+        if not math.isfinite(float(q_next.sum())):
+            raise ModelError(f"integrating qdot over dt = {dt!r} s gives a non-finite configuration")
+        return q_next
 
     def difference(self, q0: ArrayLike, q1: ArrayLike) -> NDArray[np.float64]:
         """Tangent vector ``v`` with ``integrate(q0, v, 1) == q1``."""
@@ -372,7 +379,7 @@ class RobotModel:
 
     # ------------------------------------------------------------------ helpers
     def _check_velocity(self, qdot: ArrayLike) -> NDArray[np.float64]:
-        qdot = np.asarray(qdot, dtype=np.float64)
+        qdot = _as_float_array(qdot, "velocity")
         if qdot.shape != (self.nv,):
             raise ModelError(f"velocity must have shape ({self.nv},), got {qdot.shape}")
         if not math.isfinite(float(qdot.sum())):
@@ -426,3 +433,14 @@ def _velocity_limits_from_actuators(model: pin.Model, path: Path) -> None:
 
 def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``value`` as a float64 array; strings, None, mappings and other non-numbers raise :class:`ModelError`."""
+    try:
+        given = np.asarray(value)
+    except ValueError:  # a ragged sequence
+        raise ModelError(f"{name} must be an array of real numbers, got {value!r}") from None
+    if given.dtype.kind not in "biuf":
+        raise ModelError(f"{name} must be an array of real numbers, got {value!r}")
+    return np.asarray(given, dtype=np.float64)

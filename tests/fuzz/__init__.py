@@ -1,0 +1,1 @@
+"""Property-based fuzzing (hypothesis) of the public constructors and step/predict."""
