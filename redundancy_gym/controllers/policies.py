@@ -18,7 +18,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from ..geometry import PSS, Segment
+from ..geometry import PSS, GeometryError, Segment
 from ..model import RobotModel, collision_model_from_mjcf
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .clik import Clik, ClikResult
@@ -160,9 +160,15 @@ class PerEnvPolicy:
         """The action ``(act_dim,)`` for one observation, or the actions ``(n, act_dim)`` for a batch ``(n, obs_dim)``
         (row ``i``: env index ``i``); ``episode_start``: a flag per observation (True begins a new episode there);
         ``state`` comes back unchanged (no recurrent state); the policies are deterministic."""
-        obs = np.asarray(observation, dtype=np.float64)
-        if obs.shape == self._obs_shape or (self._obs_shape is None and obs.ndim == 1):  # one observation
-            return self._act(obs, episode_start is not None and _one_start(episode_start)), state
+        try:
+            obs = np.asarray(observation, dtype=np.float64)
+        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an observation
+            raise PolicyError(f"observation must be an array of numbers, got {type(observation).__name__}") from exc
+        try:
+            if obs.shape == self._obs_shape or (self._obs_shape is None and obs.ndim == 1):  # one observation
+                return self._act(obs, episode_start is not None and _one_start(episode_start)), state
+        except GeometryError as exc:  # the obstacle slots of the observation do not describe a volume
+            raise PolicyError(f"invalid obstacle in the observation: {exc}") from exc
         if obs.ndim != 2 or (self._obs_shape is not None and obs.shape[1:] != self._obs_shape):
             dim = "obs_dim" if self._obs_shape is None else self._obs_shape[0]
             raise PolicyError(f"observation must have shape {self._obs_shape or '(obs_dim,)'} or (n, {dim}), "
@@ -170,7 +176,10 @@ class PerEnvPolicy:
         starts = _batch_starts(episode_start, obs.shape[0])
         if obs.shape[0] == 0:
             return self._no_actions(), state
-        return np.stack([self.core(i)._act(obs[i], bool(starts[i])) for i in range(obs.shape[0])]), state
+        try:
+            return np.stack([self.core(i)._act(obs[i], bool(starts[i])) for i in range(obs.shape[0])]), state
+        except GeometryError as exc:
+            raise PolicyError(f"invalid obstacle in the observation: {exc}") from exc
 
     def _no_actions(self) -> NDArray[Any]:
         """The actions ``(0, act_dim)`` of an empty batch."""

@@ -346,7 +346,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         return self._get_obs(), metrics
 
     def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        action = np.asarray(action, dtype=np.float64)
+        try:
+            action = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
+            raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
         if action.shape != (9,):
             raise InvalidActionError(f"action must have shape (9,), got {action.shape}")
         # a finite sum proves every entry finite (the full check only runs when it is not)

@@ -280,7 +280,10 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         return self.action_space
 
     def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        action = np.asarray(action, dtype=np.float64)
+        try:
+            action = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
+            raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
         if action.shape != (len(BIPED_JOINTS),):
             raise InvalidActionError(f"action must have shape ({len(BIPED_JOINTS)},), got {action.shape}")
         if not np.all(np.isfinite(action)):

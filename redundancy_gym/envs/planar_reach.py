@@ -237,7 +237,10 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         mujoco.mj_kinematics(self.model, self.data)
 
     def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        action = np.asarray(action, dtype=np.float64)
+        try:
+            action = np.asarray(action, dtype=np.float64)
+        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
+            raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
         if action.shape != (4,):
             raise InvalidActionError(f"action must have shape (4,), got {action.shape}")
         if not np.all(np.isfinite(action)):

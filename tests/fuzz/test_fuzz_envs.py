@@ -133,10 +133,6 @@ def test_env_step_is_valid_or_raises(env, data) -> None:
             env.reset()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "envs/ bug, not fixed here (not this change's files): env.step with a non-numeric action ({} or "
-    "np.array(['a', 'b', 'c'])) raises TypeError 'float() argument must be a string or a real number, not "
-    "'dict'' / ValueError 'could not convert string to float' instead of InvalidActionError"))
 @given(action=st.sampled_from([{}, np.array(["a", "b", "c"]), "abc", None, object()]))
 def test_env_step_with_non_numeric_action_raises_invalid_action(env, action) -> None:
     try:

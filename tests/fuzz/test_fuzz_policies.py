@@ -14,19 +14,9 @@ from redundancy_gym.controllers import ControllerError, PolicyError
 
 from .strategies import ANY_FLOATS, JUNK
 
-AGRI_CLIK_BUG = (
-    "policy bug (controllers/policies.py, not fixed here): the AgriReach clik policy builds its obstacle volumes "
-    "from the observation unchecked, so a NaN or a perturbed obstacle slot raises GeometryError ('p1 must be "
-    "finite, got [..., nan, ...]'; 'radius must be a finite real number >= 0 [m], got -0.0003...') instead of "
-    "PolicyError")
-PLANAR_CLIK_BUG = (
-    "policy bug (controllers/policies.py, not fixed here): the PlanarReach clik policy places its obstacle from "
-    "the observation unchecked, so a NaN in the obstacle slot (obs[15] = nan) raises GeometryError 'rotation must "
-    "be a finite 3 x 3 matrix and translation a finite 3-vector' instead of PolicyError")
-CASES = [pytest.param("redundancy_gym/PlanarReach-v0", "clik",
-                      marks=pytest.mark.xfail(strict=True, reason=PLANAR_CLIK_BUG)), ("redundancy_gym/PlanarReach-v0", "zero"),
+CASES = [("redundancy_gym/PlanarReach-v0", "clik"), ("redundancy_gym/PlanarReach-v0", "zero"),
          ("redundancy_gym/PlanarReach-v0", "random"),
-         pytest.param("redundancy_gym/AgriReach-v0", "clik", marks=pytest.mark.xfail(strict=True, reason=AGRI_CLIK_BUG)),
+         ("redundancy_gym/AgriReach-v0", "clik"),
          ("redundancy_gym/AgriReach-v0", "zero"), ("redundancy_gym/BipedWalk-v0", "walking")]
 IDS = ["PlanarReach-clik", "PlanarReach-zero", "PlanarReach-random", "AgriReach-clik", "AgriReach-zero",
        "BipedWalk-walking"]
@@ -84,11 +74,7 @@ def test_predict_is_finite_within_bounds_or_raises(setup, data) -> None:
     assert np.all(action >= env.action_space.low - 1e-6) and np.all(action <= env.action_space.high + 1e-6), action
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "policy bug (controllers/policies.py, not fixed here): predict with a non-numeric observation ({} or "
-    "np.array(['a', 'b', 'c'])) raises TypeError 'float() argument must be a string or a real number, not "
-    "'dict'' / ValueError 'could not convert string to float' instead of PolicyError (every policy)"))
-@pytest.mark.parametrize(("env_id", "name"), [tuple(c.values) if hasattr(c, "values") else c for c in CASES],
+@pytest.mark.parametrize(("env_id", "name"), CASES,
                          ids=IDS)
 @pytest.mark.parametrize("observation", [{}, np.array(["a", "b", "c"])], ids=["dict", "strings"])
 def test_predict_with_non_numeric_observation_raises_policy_error(setup, observation) -> None:
