@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["check_bool", "check_choice", "check_int", "check_range_pair", "check_real", "check_real_array",
+__all__ = ["as_real_array", "check_bool", "check_choice", "check_int", "check_range_pair", "check_real", "check_real_array",
            "describe_range", "is_real"]
 
 ErrorType = type[Exception]
@@ -175,6 +175,19 @@ def check_real_array(name: str, value: Any, *, shape: tuple[int, ...] | None = N
         what = f"{count}finite real numbers"
     bounds = describe_range(low, high, low_open, high_open, unit)
     raise error(f"{name} must be {what}{' ' + bounds if bounds else ''}, got {_show(value)}")
+
+
+def as_real_array(name: str, value: Any, *, error: ErrorType = ValueError) -> NDArray[np.float64]:
+    """``value`` as a float64 array when it holds real numbers (bools and ints too; finiteness is not checked,
+    so hot paths can check it their own cheap way); otherwise ``error`` (strings, None, mappings, complex
+    numbers, ragged sequences)."""
+    try:
+        given = np.asarray(value)
+    except ValueError:  # a ragged sequence
+        raise error(f"{name} must be an array of real numbers, got {value!r}") from None
+    if given.dtype.kind not in "biuf":
+        raise error(f"{name} must be an array of real numbers, got {value!r}")
+    return np.asarray(given, dtype=np.float64)
 
 
 def check_range_pair(name: str, value: Any, *, low: float | None = None, high: float | None = None,

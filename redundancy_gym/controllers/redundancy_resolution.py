@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model import RobotModel
+from ..validation import as_real_array
 from .exceptions import ControllerError
 
 __all__ = ["JointBounds", "Method", "METHODS", "Resolution", "WeightMatrix", "all_finite", "check_finite", "resolve"]
@@ -37,13 +38,7 @@ def all_finite(values: NDArray[np.float64]) -> bool:
 def as_float_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
     """``values`` as a float64 array; :class:`ControllerError` naming ``name`` when they are not real numbers
     (strings, None, mappings, complex numbers, ragged sequences)."""
-    try:
-        given = np.asarray(values)
-    except ValueError:  # a ragged sequence
-        raise ControllerError(f"{name} must be an array of real numbers, got {values!r}") from None
-    if given.dtype.kind not in "biuf":
-        raise ControllerError(f"{name} must be an array of real numbers, got {values!r}")
-    return np.asarray(given, dtype=np.float64)
+    return as_real_array(name, values, error=ControllerError)
 
 
 def check_finite(values: ArrayLike, name: str) -> NDArray[np.float64]:

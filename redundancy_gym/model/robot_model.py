@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from ..validation import check_real
+from ..validation import as_real_array, check_real
 from .chain_kernels import FREE, PRISMATIC, REVOLUTE
 from .exceptions import ModelError, UnknownFrameError
 from .serial_chain import SerialChain
@@ -437,10 +437,4 @@ def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def _as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:
     """``value`` as a float64 array; strings, None, mappings and other non-numbers raise :class:`ModelError`."""
-    try:
-        given = np.asarray(value)
-    except ValueError:  # a ragged sequence
-        raise ModelError(f"{name} must be an array of real numbers, got {value!r}") from None
-    if given.dtype.kind not in "biuf":
-        raise ModelError(f"{name} must be an array of real numbers, got {value!r}")
-    return np.asarray(given, dtype=np.float64)
+    return as_real_array(name, value, error=ModelError)

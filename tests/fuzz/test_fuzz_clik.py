@@ -8,25 +8,21 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from redundancy_gym.assets import AGRI_ARM_TCP, AGRI_ARM_XML, PLANAR_ARM_TCP, PLANAR_ARM_XML
+from redundancy_gym.assets import PLANAR_ARM_TCP, PLANAR_ARM_XML
 from redundancy_gym.controllers import (
     Clik,
     CollisionObjective,
     CompiledClik,
     ControllerError,
-    FrameAxisTask,
     FramePositionTask,
     JointLimitObjective,
     PostureObjective,
 )
-from redundancy_gym.geometry import LSS, PSS, TSS, Segment
+from redundancy_gym.geometry import PSS, Segment
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
 
+from ..controllers.test_compiled_clik import agri_clik
 from .strategies import hostile_vectors, vectors
-
-PLANT = (Segment("stem", (LSS([0.55, 0.05, 0.2], [0.55, 0.05, 1.7], 0.007),)),
-         Segment("fruit", (PSS([0.5, -0.08, 1.0], 0.045),)),
-         Segment("leaf", (TSS([0.45, 0.1, 1.2], [0.6, 0.2, 1.25], [0.5, 0.25, 1.1], 0.002),)))
 
 
 def _planar(method: str) -> Clik:
@@ -40,11 +36,7 @@ def _planar(method: str) -> Clik:
 
 
 def _agri(method: str) -> Clik:
-    model = RobotModel.from_mjcf(AGRI_ARM_XML)
-    collision = CollisionObjective(collision_model_from_mjcf(model, PLANT), activation_distance=0.1, slope=4.0,
-                                   weight=10.0)
-    limits = JointLimitObjective.from_model(model, activation_distance=0.2, weight=0.5)
-    return Clik(model, FrameAxisTask(AGRI_ARM_TCP), method=method, objectives=[limits, collision])
+    return agri_clik(method)[0]
 
 
 CASES = [(robot, method) for robot in ("planar", "agri") for method in ("dls", "pseudoinverse", "transpose")]
