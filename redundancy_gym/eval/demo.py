@@ -105,8 +105,13 @@ def _predictive(out: Path, *, seed: int) -> list[Path]:
     (PlanarReach obstacle scene, 1 s horizon), the fig. 5.35 analogue (the fig. 5.10 self-collision move of the
     9-DoF arm, 0.15 s and 2 s horizons) and the figs. 5.33/5.34 analogue (the second joint's velocity with and
     without the augmented state at a 0.2 s prediction sample)."""
-    from .bench_pik import (JUMP_SAMPLE_TIME, agri_self_collision_traces, plot_joint_velocity,  # noqa: PLC0415
-                            planar_kinematic_traces, plot_pseudoenergy)
+    from .bench_pik import (  # noqa: PLC0415
+        JUMP_SAMPLE_TIME,
+        agri_self_collision_traces,
+        planar_kinematic_traces,
+        plot_joint_velocity,
+        plot_pseudoenergy,
+    )
 
     written = [plot_pseudoenergy(planar_kinematic_traces(seed=seed), out / "planar_reach_pseudoenergy_fig_5_31.png",
                                  "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)")]
@@ -138,11 +143,11 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
     trivial policies (obstacle off; tracking error max), local against predictive and global IK on PlanarReach
     with its obstacle and on AgriReach (pseudoenergy; tracking and goal error in the tables), and the walking
     reference's variants on BipedWalk (speed error). Each controller runs one untimed warm-up episode first."""
-    from .speed_error import evaluate_warm, plot_speed_error_panels  # noqa: PLC0415
+    from .speed_error import plot_speed_error_panels  # noqa: PLC0415
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:
-        return {label: evaluate_warm(env_id, policy, episodes=n, seed=seed, env_kwargs=env_kwargs,
-                                     policy_kwargs=kwargs, progress=progress).to_json()
+        return {label: evaluate(env_id, policy, episodes=n, seed=seed, env_kwargs=env_kwargs, policy_kwargs=kwargs,
+                                progress=progress, warmup=1).to_json()
                 for label, (policy, kwargs) in variants.items()}
 
     free = run(_PLANAR, {

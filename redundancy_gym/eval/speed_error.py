@@ -24,10 +24,9 @@ import numpy as np  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.text import Text  # noqa: E402
 
-from .evaluate import EvalReport, evaluate  # noqa: E402
 from .plots import save_figure  # noqa: E402
 
-__all__ = ["METRICS", "Metric", "axis_scale", "evaluate_warm", "plot_speed_error", "plot_speed_error_panels",
+__all__ = ["METRICS", "Metric", "axis_scale", "plot_speed_error", "plot_speed_error_panels",
            "speed_error_markdown", "speed_error_paragraph"]
 
 
@@ -400,11 +399,3 @@ def plot_speed_error(reports: Mapping[str, Mapping[str, Any]], path: str | Path,
     """
     return plot_speed_error_panels([(reports, title, error)], path)
 
-
-def evaluate_warm(env_id: str, policy: str, *, episodes: int, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
-                  policy_kwargs: dict[str, Any] | None = None, warmup: int = 1, progress: bool = False) -> EvalReport:
-    """:func:`~redundancy_gym.eval.evaluate.evaluate` after ``warmup`` untimed episodes (seed ``seed``) of the
-    same policy object in the same env, so that one-time costs (JIT compilation or loading, lazily built models)
-    are not counted as a step or as a plan-once policy's per-episode solve."""
-    return evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs, policy_kwargs=policy_kwargs,
-                    progress=progress, warmup=warmup)

@@ -8,8 +8,14 @@ import matplotlib.pyplot as plt
 import pytest
 
 import redundancy_gym.eval.speed_error as speed_error
-from redundancy_gym.eval.speed_error import (axis_scale, evaluate_warm, plot_speed_error, plot_speed_error_panels,
-                                             speed_error_markdown, speed_error_paragraph)
+from redundancy_gym.eval.evaluate import evaluate
+from redundancy_gym.eval.speed_error import (
+    axis_scale,
+    plot_speed_error,
+    plot_speed_error_panels,
+    speed_error_markdown,
+    speed_error_paragraph,
+)
 
 
 def _report(mean_us: float, tracking_max: float, *, success: float = 1.0, median_us: float | None = None,
@@ -159,9 +165,9 @@ def test_panels_and_unknown_error(tmp_path) -> None:
         plot_speed_error(reports, tmp_path / "s.png", "T", error="speed")  # no report defines it
 
 
-def test_evaluate_warm_times_the_requested_seeds() -> None:
-    report = evaluate_warm("redundancy_gym/PlanarReach-v0", "zero", episodes=2, seed=4,
-                           env_kwargs={"obstacle": False}).to_json()
+def test_warm_evaluation_times_the_requested_seeds() -> None:
+    report = evaluate("redundancy_gym/PlanarReach-v0", "zero", episodes=2, seed=4, env_kwargs={"obstacle": False},
+                      progress=False, warmup=1).to_json()
     assert report["episodes"] == 2 and report["seed"] == 4
     assert [row["seed"] for row in report["per_episode"]] == [4, 5]
     assert report["step_time_us"]["steps"] == sum(row["length"] for row in report["per_episode"])
