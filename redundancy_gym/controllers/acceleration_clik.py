@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model import RobotModel
 from .exceptions import ControllerError
 from .objective import Objective, sum_objectives
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_finite, resolve
+from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 from .task import Task
 
 __all__ = ["AccelerationClik", "AccelerationClikResult", "DriftTask"]
@@ -114,7 +114,7 @@ class AccelerationClik:
     def step(self, q: ArrayLike, qdot: ArrayLike, target: ArrayLike, target_velocity: ArrayLike,
              target_acceleration: ArrayLike) -> AccelerationClikResult:
         """Joint accelerations for the state ``(q, qdot)`` and the reference ``(w_d, wdot_d, wddot_d)``."""
-        q = check_finite(q, "q")  # shape checked by model.update inside task.drift
+        q = check_configuration(q, "q")  # shape checked by model.update inside task.drift
         qdot = check_finite(qdot, "qdot")
         if qdot.shape != (self.model.nv,):
             raise ControllerError(f"qdot must be finite with shape ({self.model.nv},)")

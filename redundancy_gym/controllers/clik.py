@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..model import RobotModel
 from .exceptions import ControllerError
 from .objective import Objective, sum_objectives
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_finite, resolve
+from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 from .task import Task
 
 __all__ = ["Clik", "ClikProblem", "ClikResult"]
@@ -51,7 +51,9 @@ class ClikResult(NamedTuple):
         success: False when the solve met a singularity it cannot pass (pseudoinverse).
         status: ``"ok"``, ``"damped"`` or ``"singular"``.
         limited: True when the solution was bounded (a joint held at its range, or the whole command scaled
-            down to the speed limits), so ``qdot`` no longer gives the task velocity in full.
+            down to the speed limits), so ``qdot`` no longer gives the task velocity in full; holding a joint
+            counts when it changes the command by more than round-off (a component that is zero but for its
+            round-off sign, clamped on a joint at its limit, does not).
     """
 
     qdot: NDArray[np.float64]
@@ -140,7 +142,7 @@ class Clik:
 
     def build(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikProblem:
         """Evaluate kinematics and objectives at ``q`` for the reference ``w_d`` and ``wdot_d``."""
-        q = self.model.update(check_finite(q, "q"))
+        q = self.model.update(check_configuration(q, "q"))
         error = self.task.error(self.model, check_finite(target, "target"))
         jacobian = self.task.jacobian(self.model)
         velocity = self.gain * error

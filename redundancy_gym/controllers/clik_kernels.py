@@ -23,6 +23,7 @@ from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import chain_forward, chain_jacobian, place_frame
 from .collision_kernels import collision_potential
 from .kernel_buffers import float_field, int_field, pack_fields
+from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
 __all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_step",
            "pack_buffers"]
@@ -226,8 +227,13 @@ def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, jo
 def _bound(f, i, nv, nb, q, x):
     """:meth:`~.redundancy_resolution.JointBounds.apply` in place on ``x``: hold each bounded joint inside its
     range (``q + x period`` inside with a period, else no velocity further out of a limit it has reached), then
-    scale the whole ``x`` into the speed limits; returns whether anything changed."""
+    scale the whole ``x`` into the speed limits; returns whether anything changed by more than round-off
+    (:data:`~.redundancy_resolution.BOUND_ROUND_OFF` of the largest component, or of 1)."""
     limited = False
+    largest = 1.0
+    for k in range(nv):
+        largest = max(largest, abs(x[k]))
+    tolerance = BOUND_ROUND_OFF * largest
     period = _fv(f, i, _F_SCALARS)[4]
     lower = _fv(f, i, _F_POSITION_LOWER)
     upper = _fv(f, i, _F_POSITION_UPPER)
@@ -245,7 +251,8 @@ def _bound(f, i, nv, nb, q, x):
         bounded = min(max(v, low), high)
         if bounded != v:
             x[v_index[b]] = bounded
-            limited = True
+            if abs(bounded - v) > tolerance:
+                limited = True
     vmax = _fv(f, i, _F_MAX_VELOCITY)
     peak = 0.0
     for k in range(nv):
@@ -269,7 +276,7 @@ def clik_step(f, i, has_velocity):
     inputs = _fv(f, i, _F_INPUTS)
     q = inputs[:nq]
     for k in range(nq):
-        if not np.isfinite(q[k]):
+        if not abs(q[k]) <= MAX_COORDINATE:  # NaN, inf or beyond the coordinates a controller accepts
             return BAD_CONFIGURATION
     parent = _iv(i, _I_PARENT)
     joint_type = _iv(i, _I_JOINT_TYPE)

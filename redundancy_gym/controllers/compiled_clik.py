@@ -31,7 +31,7 @@ from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .posture_objective import PostureObjective
-from .redundancy_resolution import as_float_array, check_finite
+from .redundancy_resolution import as_float_array, check_configuration, check_finite
 
 __all__ = ["CompiledClik"]
 
@@ -223,7 +223,7 @@ class CompiledClik:
                target_velocity: ArrayLike | None) -> None:
         """The :class:`ControllerError` of a kernel return code, worded as :meth:`Clik.step` words it."""
         if code == BAD_CONFIGURATION:
-            check_finite(q, "q")
+            check_configuration(q, "q")
         elif code == BAD_TARGET:
             check_finite(target, "target")
         elif code == BAD_VELOCITY:

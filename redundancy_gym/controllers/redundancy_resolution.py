@@ -21,7 +21,8 @@ from ..model import RobotModel
 from ..validation import as_real_array
 from .exceptions import ControllerError
 
-__all__ = ["JointBounds", "Method", "METHODS", "Resolution", "WeightMatrix", "all_finite", "check_finite", "resolve"]
+__all__ = ["JointBounds", "MAX_COORDINATE", "Method", "METHODS", "Resolution", "WeightMatrix", "all_finite",
+           "check_configuration", "check_finite", "resolve"]
 
 Method = Literal["pseudoinverse", "dls", "transpose"]
 METHODS: tuple[str, ...] = ("pseudoinverse", "dls", "transpose")
@@ -49,6 +50,26 @@ def check_finite(values: ArrayLike, name: str) -> NDArray[np.float64]:
     return arr
 
 
+# Largest |q| entry [rad or m] a controller accepts: beyond it a revolute angle has lost its meaning and the
+# nullspace gradients (which grow with the distance to a joint limit or a posture) swamp the task's part of the
+# command in round-off, so that the result would be noise (different noise in each backend).
+MAX_COORDINATE = 1e6
+# Relative round-off below which bounding a command is not reported as ``limited``: a component that is zero
+# analytically (a joint whose Jacobian column is orthogonal to the task velocity) comes out as +-1e-16 with a
+# round-off sign; on a joint at its limit the clamp of that noise is not a limit acting.
+BOUND_ROUND_OFF = 1e-12
+
+
+def check_configuration(q: ArrayLike, name: str = "q") -> NDArray[np.float64]:
+    """``q`` as a float array; :class:`ControllerError` naming ``name`` when an entry is NaN, inf or beyond
+    :data:`MAX_COORDINATE` in magnitude."""
+    arr = as_float_array(q, name)
+    if not all_finite(arr) or not bool(np.all(np.abs(arr) <= MAX_COORDINATE)):
+        raise ControllerError(f"{name} must be finite, with every |entry| <= {MAX_COORDINATE:g} [rad or m], got "
+                              f"{np.array2string(arr, threshold=12)}")
+    return arr
+
+
 class JointBounds:
     """The bounds every CLIK command is held to: joint speed limits and the joint ranges.
 
@@ -56,7 +77,9 @@ class JointBounds:
     limit gets no velocity towards it; with a control ``period`` known, ``q + qdot period`` stays inside the
     range), then scales the whole vector by one factor when a joint exceeds its speed limit, so that the
     command keeps its direction (and its task direction) and only slows down. Scaling towards zero never
-    leaves the range bounds, since those always admit zero velocity.
+    leaves the range bounds, since those always admit zero velocity. Holding a joint is reported as
+    ``limited`` only when it changes the command by more than round-off (:data:`BOUND_ROUND_OFF` of the
+    largest component, or of 1): the clamp of a component that is zero but for its round-off sign is no limit.
 
     Args:
         model: the robot model (its joint ranges, and its :attr:`~redundancy_gym.model.RobotModel.velocity_limits`
@@ -121,13 +144,15 @@ class JointBounds:
         return np.where(qk > self.lower, -np.inf, 0.0), np.where(qk < self.upper, np.inf, 0.0)
 
     def apply(self, qdot: NDArray[np.float64], q: NDArray[np.float64]) -> tuple[NDArray[np.float64], bool]:
-        """``(qdot, limited)``: the bounded command and whether it differs from the given one (the same
-        arithmetic as the compiled kernel's ``_bound``; on Python floats, which beat NumPy at this size)."""
+        """``(qdot, limited)``: the bounded command and whether it differs from the given one by more than
+        round-off (the same arithmetic as the compiled kernel's ``_bound``; on Python floats, which beat NumPy
+        at this size)."""
         if not self.active:
             return qdot, False
         x = qdot.tolist()
         qs = q.tolist()
-        limited = False
+        limited = changed = False
+        tolerance = BOUND_ROUND_OFF * max(1.0, max([abs(v) for v in x]))
         period = self.period
         inf = math.inf
         for qi, vi, lower, upper in self._joints:
@@ -141,13 +166,14 @@ class JointBounds:
             bounded = min(max(v, low), high)
             if bounded != v:
                 x[vi] = bounded
-                limited = True
+                changed = True
+                limited = limited or abs(bounded - v) > tolerance
         if self.has_velocity_limits:
             peak = max([abs(v) / m for v, m in zip(x, self._max_velocity)])
             if peak > 1.0:
                 x = [min(max(v / peak, -m), m) for v, m in zip(x, self._max_velocity)]
-                limited = True
-        return (np.array(x, dtype=np.float64) if limited else qdot), limited
+                changed = limited = True
+        return (np.array(x, dtype=np.float64) if changed else qdot), limited
 
 
 class Resolution(NamedTuple):
