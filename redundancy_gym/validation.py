@@ -78,14 +78,16 @@ def is_real(value: Any) -> bool:
 
 
 def _finite_float(value: Any) -> float | None:
-    """``float(value)`` for a finite real number, else None (an int too large for a float included)."""
+    """``float(value)`` for a finite real number, else None (an int too large for a float included). A negative
+    zero comes back as ``0.0``: ``-0.0`` passes ``>= 0`` but is no valid bound of ``uniform(-x, x)`` (NumPy
+    rejects ``high - low = -0.0``), and no argument means anything else by it."""
     if not is_real(value):
         return None
     try:
         x = float(value)
     except (OverflowError, ValueError, TypeError):
         return None
-    return x if math.isfinite(x) else None
+    return x + 0.0 if math.isfinite(x) else None
 
 
 def _suffix(note: str | None) -> str:
@@ -165,7 +167,7 @@ def check_real_array(name: str, value: Any, *, shape: tuple[int, ...] | None = N
         arr = None
     ok = (arr is not None and arr.dtype.kind in "iuf" and (shape is None or arr.shape == shape))
     if ok:
-        out = np.array(arr, dtype=np.float64)
+        out = np.array(arr, dtype=np.float64) + 0.0  # + 0.0: no negative zeros (see _finite_float)
         if np.all(np.isfinite(out)) and (out.size == 0 or _within(float(out.min()), low, None, low_open, False)
                                          and _within(float(out.max()), None, high, False, high_open)):
             return out
@@ -205,7 +207,7 @@ def check_range_pair(name: str, value: Any, *, low: float | None = None, high: f
         else:
             good = all(_finite_float(v) is not None for v in pair)
         if good:
-            a, b = (int(v) for v in pair) if integer else (float(v) for v in pair)
+            a, b = (int(v) for v in pair) if integer else (float(v) + 0.0 for v in pair)  # no negative zeros
             if a <= b and _within(a, low, high, low_open, high_open) and _within(b, low, high, low_open, high_open):
                 return (a, b)  # type: ignore[return-value]
     kind = "ints" if integer else "finite real numbers"
