@@ -19,8 +19,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..geometry import PSS, GeometryError, Segment
-from ..model import RobotModel, collision_model_from_mjcf
+from ..model import ModelError, RobotModel, collision_model_from_mjcf
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from ..validation import check_int
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
@@ -159,7 +160,11 @@ class PerEnvPolicy:
                 deterministic: bool = True) -> tuple[NDArray[Any], Any]:
         """The action ``(act_dim,)`` for one observation, or the actions ``(n, act_dim)`` for a batch ``(n, obs_dim)``
         (row ``i``: env index ``i``); ``episode_start``: a flag per observation (True begins a new episode there);
-        ``state`` comes back unchanged (no recurrent state); the policies are deterministic."""
+        ``state`` comes back unchanged (no recurrent state); the policies are deterministic.
+
+        An observation that is no state of the env (not numbers, a wrong shape, an obstacle slot that is no
+        volume, a robot state the model rejects: NaN, a zero base quaternion) raises :class:`PolicyError`; a
+        controller that rejects its input raises its :class:`ControllerError`."""
         try:
             obs = np.asarray(observation, dtype=np.float64)
         except (TypeError, ValueError) as exc:  # a dict, strings, None: not an observation
@@ -169,6 +174,8 @@ class PerEnvPolicy:
                 return self._act(obs, episode_start is not None and _one_start(episode_start)), state
         except GeometryError as exc:  # the obstacle slots of the observation do not describe a volume
             raise PolicyError(f"invalid obstacle in the observation: {exc}") from exc
+        except ModelError as exc:  # the robot state of the observation is none (NaN, a zero base quaternion)
+            raise PolicyError(f"invalid robot state in the observation: {exc}") from exc
         if obs.ndim != 2 or (self._obs_shape is not None and obs.shape[1:] != self._obs_shape):
             dim = "obs_dim" if self._obs_shape is None else self._obs_shape[0]
             raise PolicyError(f"observation must have shape {self._obs_shape or '(obs_dim,)'} or (n, {dim}), "
@@ -180,6 +187,8 @@ class PerEnvPolicy:
             return np.stack([self.core(i)._act(obs[i], bool(starts[i])) for i in range(obs.shape[0])]), state
         except GeometryError as exc:
             raise PolicyError(f"invalid obstacle in the observation: {exc}") from exc
+        except ModelError as exc:
+            raise PolicyError(f"invalid robot state in the observation: {exc}") from exc
 
     def _no_actions(self) -> NDArray[Any]:
         """The actions ``(0, act_dim)`` of an empty batch."""
@@ -207,7 +216,7 @@ class RandomPolicy(PerEnvPolicy):
 
     Args:
         env: the environment (its action space bounds are used).
-        seed: seed of the generator.
+        seed: seed of the generator: an int >= 0, or None for fresh entropy (anything else is a PolicyError).
     """
 
     def __init__(self, env: Any, seed: int | None = 0) -> None:
@@ -217,8 +226,8 @@ class RandomPolicy(PerEnvPolicy):
         if not (np.all(np.isfinite(self._low)) and np.all(np.isfinite(self._high))):
             raise PolicyError("the random policy needs a bounded action space")
         self._dtype = space.dtype
-        self._seed = seed
-        self._rng = np.random.default_rng(seed)
+        self._seed = check_int("seed", seed, low=0, optional=True, error=PolicyError)
+        self._rng = np.random.default_rng(self._seed)
         self._init_per_env(env, {"seed": seed})
 
     def _new_core(self, index: int) -> PerEnvPolicy:
