@@ -16,6 +16,8 @@ by pair type) and :func:`ssv_pairs_at` (the same on buffer addresses, for repeat
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
@@ -153,7 +155,7 @@ def segment_segment(a0, a1, b0, b1):
         if lo <= hi:
             ma = _add_scaled(a0, 0.5 * (lo + hi), d1)
             e, mb = point_segment(ma, b0, b1)
-            if e <= best * (1.0 + 1e-9) + 1e-300:
+            if e <= best * (1.0 + 1e-9) + 1e-300 * min(aa, 1.0):  # the tie slack shrinks with tiny segments
                 best, pa, pb = e, ma, mb
     return best, pa, pb
 
@@ -566,6 +568,24 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
                 _general_pair(v, radii, kinds, index_a, index_b, slot, swap, k, g, out_d, out_pa, out_pb, out_n)
 
 
+# Relative coordinates of a pair whose extent lies outside [2^-100, 2^100] m are scaled by a power of two (exact)
+# before the closest-point routines: their squared lengths and 2x2 determinants (fourth powers) would underflow
+# to zero below ~1e-80 m (every triangle and segment pair taken for degenerate) or overflow above ~1e77 m.
+_SCALE_LOW = 2.0 ** -100
+_SCALE_HIGH = 2.0 ** 100
+
+
+@njit(**_JIT)
+def _times(p, f):
+    return (p[0] * f, p[1] * f, p[2] * f)
+
+
+@njit(**_JIT)
+def _extent(p0, p1, p2):
+    return max(abs(p0[0]), abs(p0[1]), abs(p0[2]), abs(p1[0]), abs(p1[1]), abs(p1[2]), abs(p2[0]), abs(p2[1]),
+               abs(p2[2]))
+
+
 @njit(**_JIT)
 def _closest(v, kinds, i, j, g):
     """Closest points of the generating primitives of volumes ``i`` and ``j`` (``kinds[i] <= kinds[j]``, group
@@ -574,29 +594,33 @@ def _closest(v, kinds, i, j, g):
     oy = v[i, 0, 1]
     oz = v[i, 0, 2]
     a0 = (0.0, 0.0, 0.0)
-    b0 = (v[j, 0, 0] - ox, v[j, 0, 1] - oy, v[j, 0, 2] - oz)
+    _, a1, a2 = _load(v, i, ox, oy, oz)
+    b0, b1, b2 = _load(v, j, ox, oy, oz)
+    extent = max(_extent(a0, a1, a2), _extent(b0, b1, b2))
+    scale = 1.0
+    if extent > 0.0 and (extent < _SCALE_LOW or extent > _SCALE_HIGH):
+        scale = math.ldexp(1.0, -math.frexp(extent)[1])
+        a1, a2, b0, b1, b2 = _times(a1, scale), _times(a2, scale), _times(b0, scale), _times(b1, scale), \
+            _times(b2, scale)
     if g == 0:
         d2 = _dist2(a0, b0)
         pa = a0
         pb = b0
     elif g == 1:
-        d2, pb = point_segment(a0, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
+        d2, pb = point_segment(a0, b0, b1)
         pa = a0
     elif g == 2:
-        _, b1, b2 = _load(v, j, ox, oy, oz)
         d2, pb = point_triangle(a0, b0, b1, b2)
         pa = a0
     elif g == 3:
-        a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
-        d2, pa, pb = segment_segment(a0, a1, b0, (v[j, 1, 0] - ox, v[j, 1, 1] - oy, v[j, 1, 2] - oz))
+        d2, pa, pb = segment_segment(a0, a1, b0, b1)
     elif g == 4:
-        a1 = (v[i, 1, 0] - ox, v[i, 1, 1] - oy, v[i, 1, 2] - oz)
-        _, b1, b2 = _load(v, j, ox, oy, oz)
         d2, pa, pb = segment_triangle(a0, a1, b0, b1, b2)
     else:
-        _, a1, a2 = _load(v, i, ox, oy, oz)
-        _, b1, b2 = _load(v, j, ox, oy, oz)
         d2, pa, pb = triangle_triangle(a0, a1, a2, b0, b1, b2)
+    if scale != 1.0:
+        d2 = d2 / scale / scale
+        pa, pb = _times(pa, 1.0 / scale), _times(pb, 1.0 / scale)
     return d2, pa, pb, ox, oy, oz
 
 
