@@ -204,6 +204,8 @@ class PredictiveIk:
         if not self.augmented:
             return params
         start = np.zeros(self.n) if u_b is None else np.asarray(u_b, dtype=np.float64)
+        if start.shape != (self.n,) or not np.all(np.isfinite(start)):
+            raise ControllerError(f"u_b must be finite with shape ({self.n},), got {np.array2string(start)}")
         u = np.empty_like(params)
         u[0] = start
         u[1:] = start + dt * np.cumsum(params[:-1], axis=0)
