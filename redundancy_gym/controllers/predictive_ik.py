@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..model import RobotModel
+from ..validation import check_real
 from .collision_kernels import bounding_spheres, collision_fields
 from .collision_objective import CollisionObjective
 from .exceptions import ControllerError
@@ -29,6 +30,7 @@ from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .predictive_kernels import pik_command, pik_gradient, pik_rollout
+from .redundancy_resolution import as_float_array
 
 __all__ = ["DESCENT_METHODS", "PredictiveIk", "PredictiveResult", "PredictiveRollout"]
 
@@ -116,10 +118,10 @@ class PredictiveIk:
                  augmented: bool = False, input_weight: float = 0.0, damping: float = 1e-6) -> None:
         if model.floating_base:
             raise ControllerError("PredictiveIk needs a fixed-base model")
-        for name, value in (("velocity_weight", velocity_weight), ("input_weight", input_weight),
-                            ("damping", damping)):
-            if not np.isfinite(value) or value < 0.0:
-                raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
+        velocity_weight, input_weight, damping = (
+            check_real(name, value, low=0.0, error=ControllerError)
+            for name, value in (("velocity_weight", velocity_weight), ("input_weight", input_weight),
+                                ("damping", damping)))
         if not isinstance(task, (FramePositionTask, FrameAxisTask)):
             raise ControllerError(f"PredictiveIk supports FramePositionTask and FrameAxisTask, got "
                                   f"{type(task).__name__}")
@@ -200,10 +202,10 @@ class PredictiveIk:
     def inputs(self, params: ArrayLike, dt: float, u_b: ArrayLike | None = None) -> NDArray[np.float64]:
         """The nullspace inputs ``u`` (N, n) of the decision variables: ``params`` itself, or for the augmented
         problem ``u_k = u_b + dt sum_{l<k} udot_l``."""
-        params = np.asarray(params, dtype=np.float64)
+        params = as_float_array(params, "the inputs")
         if not self.augmented:
             return params
-        start = np.zeros(self.n) if u_b is None else np.asarray(u_b, dtype=np.float64)
+        start = np.zeros(self.n) if u_b is None else as_float_array(u_b, "u_b")
         if start.shape != (self.n,) or not np.all(np.isfinite(start)):
             raise ControllerError(f"u_b must be finite with shape ({self.n},), got {np.array2string(start)}")
         u = np.empty_like(params)
@@ -213,9 +215,9 @@ class PredictiveIk:
 
     def _check(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        q0 = np.ascontiguousarray(q0, dtype=np.float64)
-        params = np.ascontiguousarray(params, dtype=np.float64)
-        wdot = np.ascontiguousarray(wdot, dtype=np.float64)
+        q0 = np.ascontiguousarray(as_float_array(q0, "q0"))
+        params = np.ascontiguousarray(as_float_array(params, "the inputs"))
+        wdot = np.ascontiguousarray(as_float_array(wdot, "wdot"))
         if q0.shape != (self.n,) or params.ndim != 2 or params.shape[1] != self.n or params.shape[0] < 1:
             raise ControllerError(f"q0 must have shape ({self.n},) and the inputs (N, {self.n}), got {q0.shape} and "
                                   f"{params.shape}")
@@ -224,7 +226,8 @@ class PredictiveIk:
                                   f"{wdot.shape}")
         if not (np.all(np.isfinite(q0)) and np.all(np.isfinite(params)) and np.all(np.isfinite(wdot))):
             raise ControllerError("q0, the inputs and wdot must be finite")
-        if not np.isfinite(dt) or dt <= 0.0:
+        if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         return q0, params, wdot
 
@@ -235,7 +238,16 @@ class PredictiveIk:
         ``wdot`` (N, 6) is the task velocity at each sample: the task's rows for a :class:`FramePositionTask`
         (then zeros), ``[v_d, omega_d]`` for a :class:`FrameAxisTask`.
         """
-        q0, params, wdot = self._check(q0, params, wdot, dt)
+        roll = self._rollout(*self._check(q0, params, wdot, dt), dt, u_b)
+        if not (np.isfinite(roll.cost) and np.all(np.isfinite(roll.q)) and np.all(np.isfinite(roll.qdot))):
+            raise ControllerError(f"the rollout overflowed (cost {roll.cost!r}): the inputs, u_b or wdot are too "
+                                  "large")
+        return roll
+
+    def _rollout(self, q0: NDArray[np.float64], params: NDArray[np.float64], wdot: NDArray[np.float64], dt: float,
+                 u_b: ArrayLike | None) -> PredictiveRollout:
+        """:meth:`rollout` of checked arrays; an overflowing rollout comes back with its infinite cost (the line
+        search of :meth:`optimize` rejects it like any step that does not decrease the cost)."""
         self._refresh_environment()
         u = np.ascontiguousarray(self.inputs(params, dt, u_b))
         steps = params.shape[0]
@@ -248,7 +260,10 @@ class PredictiveIk:
         rate = dt * self.input_weight * float(np.sum(params * params)) if self.augmented else 0.0
         parts = {"velocity": float(terms[0]), "joint_limits": float(terms[1]), "collision": float(terms[2]),
                  "input_rate": rate}
-        return PredictiveRollout(q, qdot, u, float(terms.sum()) + rate, parts)
+        cost = float(terms.sum()) + rate
+        if not np.isfinite(cost) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
+            cost = np.inf
+        return PredictiveRollout(q, qdot, u, cost, parts)
 
     def gradient(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float,
                  u_b: ArrayLike | None = None, rollout: PredictiveRollout | None = None
@@ -281,11 +296,14 @@ class PredictiveIk:
         ``target`` and ``target_velocity`` are the task's rows (:class:`FramePositionTask`) or ``[p_d, a_d]``
         and ``[v_d, omega_d]`` (:class:`FrameAxisTask`), as for :meth:`Clik.step`.
         """
-        q = np.ascontiguousarray(q, dtype=np.float64)
-        u = np.ascontiguousarray(u, dtype=np.float64)
+        q = np.ascontiguousarray(as_float_array(q, "q"))
+        u = np.ascontiguousarray(as_float_array(u, "u"))
         width = self.m if isinstance(self.task, FramePositionTask) else 6
-        target = np.asarray(target, dtype=np.float64)
-        velocity = np.asarray(target_velocity, dtype=np.float64)
+        target = as_float_array(target, "target")
+        velocity = as_float_array(target_velocity, "target_velocity")
+        if isinstance(gain, (bool, np.bool_)) or not isinstance(gain, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(gain) or gain < 0.0:
+            raise ControllerError(f"gain must be finite and >= 0, got {gain!r}")
         if q.shape != (self.n,) or u.shape != (self.n,) or target.shape != (width,) or velocity.shape != (width,):
             raise ControllerError(f"q and u must have shape ({self.n},), the target and its velocity ({width},)")
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(u)) and np.all(np.isfinite(target))
@@ -327,8 +345,9 @@ class PredictiveIk:
             raise ControllerError(f"max_iterations must be an int >= 0, got {max_iterations!r}")
         if not np.isfinite(step) or step <= 0.0 or not np.isfinite(tolerance) or tolerance < 0.0:
             raise ControllerError(f"step must be > 0 and tolerance >= 0, got {step!r}, {tolerance!r}")
-        params = np.array(initial, dtype=np.float64)
-        roll, grad = self.gradient(q0, params, wdot, dt, u_b)
+        roll, grad = self.gradient(q0, initial, wdot, dt, u_b)
+        q0, params, wdot = self._check(q0, initial, wdot, dt)
+        params = params.copy()
         costs = [roll.cost]
         hamiltonian = grad / dt  # dH/du: the function-space gradient (5.119)
         direction = -hamiltonian
@@ -346,7 +365,7 @@ class PredictiveIk:
             trial_cost, trial = np.inf, None
             for _ in range(30):  # backtracking with the Armijo condition
                 candidate = params + alpha * direction
-                trial = self.rollout(q0, candidate, wdot, dt, u_b)
+                trial = self._rollout(q0, candidate, wdot, dt, u_b)
                 trial_cost = trial.cost
                 if trial_cost <= roll.cost + 1e-4 * alpha * slope:
                     break
@@ -359,7 +378,7 @@ class PredictiveIk:
             if curvature > 0.0:
                 best = -slope * alpha * alpha / (2.0 * curvature)
                 if 0.0 < best < 4.0 * alpha and abs(best - alpha) > 1e-3 * alpha:
-                    other = self.rollout(q0, params + best * direction, wdot, dt, u_b)
+                    other = self._rollout(q0, params + best * direction, wdot, dt, u_b)
                     if other.cost < trial_cost:
                         candidate, trial, trial_cost, alpha = params + best * direction, other, other.cost, best
             decrease = (roll.cost - trial_cost) / max(abs(roll.cost), 1e-300)

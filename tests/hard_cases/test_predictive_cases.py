@@ -113,7 +113,8 @@ def test_non_finite_command_target_raises(planar, target: list, velocity: list) 
 
 
 @pytest.mark.parametrize("kwargs, match", [({"velocity_weight": -1.0}, "velocity_weight"),
-                                           ({"damping": np.nan}, "damping"), ({"input_weight": np.inf}, "input_weight")])
+                                           ({"damping": np.nan}, "damping"), ({"input_weight": np.inf}, "input_weight"),
+                                           ({"damping": "1e-6"}, "damping")])
 def test_bad_constructor_arguments_raise_naming_them(kwargs: dict, match: str) -> None:
     model = RobotModel.from_mjcf(PLANAR_ARM_XML)
     with pytest.raises(ControllerError, match=match):
