@@ -97,6 +97,8 @@ OPTION_RULES: dict[str, OptionRule] = {
     # walking: W = gamma I + J^T J must be invertible, beta divides the nullspace step
     "gamma": _above(0.0), "beta": _above(0.0), "step_duration": _above(0.0, "s"), "com_height": _above(0.0, "m"),
     "correction_iterations": _at_least(0),
+    "step_min_remaining": _above(0.0, "s"), "step_max_forward": _at_least(0.0, "m"),
+    "step_max_backward": _at_least(0.0, "m"), "step_min_width": _at_least(0.0, "m"), "step_max_width": _above(0.0, "m"),
     # choices
     "method": OptionRule(kind="str", choices=METHODS), "backend": OptionRule(kind="str", choices=BACKENDS),
     "descent": OptionRule(kind="str", choices=DESCENT_METHODS),

@@ -12,7 +12,7 @@ from ..model import RobotModel
 from .exceptions import PolicyError
 from .policies import PerEnvPolicy
 from .policy_options import config_from_options, env_with_attributes
-from .walking import GaitConfig, StabilizerGains, WalkingCommand, WalkingController, WalkingIkConfig
+from .walking import GaitConfig, StabilizerGains, StepAdjusterConfig, WalkingCommand, WalkingController, WalkingIkConfig
 
 __all__ = ["WalkingPolicy", "WalkingPolicyConfig"]
 
@@ -35,6 +35,12 @@ class WalkingPolicyConfig:
         self_collision_activation: its activation distance ``d_a`` [m].
         self_collision_slope: its slope at contact [1/m].
         backend: whole-body IK implementation, ``"compiled"`` or ``"python"``.
+        push_recovery: step adjustment from the measured DCM (:class:`StepAdjuster`: landing and timing of the
+            current step) on.
+        step_activation: DCM error [m] that starts a step adjustment.
+        step_min_remaining: shortest single support left after a re-timing [s].
+        step_max_forward, step_max_backward: reachable landing ahead of / behind the stance foot [m].
+        step_min_width, step_max_width: reachable landing beside the stance foot [m].
     """
 
     momentum_minimization: bool = True
@@ -51,6 +57,13 @@ class WalkingPolicyConfig:
     self_collision_activation: float = WalkingIkConfig.self_collision_activation
     self_collision_slope: float = WalkingIkConfig.self_collision_slope
     backend: str = WalkingIkConfig.backend
+    push_recovery: bool = StepAdjusterConfig.enabled
+    step_activation: float = StepAdjusterConfig.activation
+    step_min_remaining: float = StepAdjusterConfig.min_remaining
+    step_max_forward: float = StepAdjusterConfig.max_forward
+    step_max_backward: float = StepAdjusterConfig.max_backward
+    step_min_width: float = StepAdjusterConfig.min_width
+    step_max_width: float = StepAdjusterConfig.max_width
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -96,9 +109,14 @@ class WalkingPolicy(PerEnvPolicy):
                                  self_collision_weight=c.self_collision_weight,
                                  self_collision_activation=c.self_collision_activation,
                                  self_collision_slope=c.self_collision_slope, backend=c.backend)
+            stepping = StepAdjusterConfig(
+                enabled=c.push_recovery, activation=c.step_activation,
+                tracking=min(StepAdjusterConfig.tracking, c.step_activation), min_remaining=c.step_min_remaining,
+                max_forward=c.step_max_forward, max_backward=c.step_max_backward, min_width=c.step_min_width,
+                max_width=c.step_max_width)
             self.controller = WalkingController(
                 self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
-                np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik,
+                np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik, stepping=stepping,
                 correction_iterations=c.correction_iterations)
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc

@@ -6,6 +6,7 @@ from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
+from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_LAYOUT, REFERENCE_SIZE, TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
@@ -28,6 +29,9 @@ __all__ = [
     "Stabilizer",
     "StabilizerGains",
     "StabilizerOutput",
+    "StepAdjuster",
+    "StepAdjusterConfig",
+    "StepAdjustment",
     "WalkingCommand",
     "WalkingController",
     "WalkingIkConfig",

@@ -27,6 +27,7 @@ from ..posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
+from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
@@ -85,6 +86,7 @@ class WalkingCommand(NamedTuple):
         stabilizer: the stabilizer output.
         contact: the ZMP estimate from the ankle sensors.
         ik: the whole-body IK result (``ik.q`` is the kinematic model's configuration).
+        adjustment: the step adjustment made in this period (push recovery), or None.
     """
 
     joint_targets: NDArray[np.float64]
@@ -92,6 +94,7 @@ class WalkingCommand(NamedTuple):
     stabilizer: StabilizerOutput
     contact: ZmpEstimate
     ik: WholeBodyIkResult
+    adjustment: StepAdjustment | None = None
 
 
 class WalkingController:
@@ -104,6 +107,7 @@ class WalkingController:
         gait: walking pattern parameters.
         gains: stabilizer gains.
         ik: whole-body IK settings.
+        stepping: push recovery by step adjustment (:class:`StepAdjuster`; ``enabled=False`` turns it off).
         feet_frames: sole frames (right, left); ``ankle_frames``: the force/torque sensor frames.
         torso_frame: frame of the upper body whose orientation is kept upright.
         correction_iterations: kinematic rollouts that estimate the multi-body ZMP correction (0: plain LIPM).
@@ -112,7 +116,7 @@ class WalkingController:
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
                  gait: GaitConfig | None = None, gains: StabilizerGains | None = None,
-                 ik: WalkingIkConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+                 ik: WalkingIkConfig | None = None, stepping: StepAdjusterConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
                  correction_iterations: int = 3, correction_samples: int = 20) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
@@ -142,6 +146,7 @@ class WalkingController:
         self.correction_samples = int(correction_samples)
         self._corrections: dict[tuple[float, bool], ZmpCorrection] = {}
         self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
+        self.step_adjuster = StepAdjuster(stepping)
         self._mass = model.total_mass
         self.pattern: WalkingPattern | None = None
         self.ik: WholeBodyIk | None = None
@@ -195,6 +200,7 @@ class WalkingController:
             self._corrections[key] = self._estimate_correction(q_ref, speed)
         self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, self._corrections.get(key))
         self.stabilizer.reset()
+        self.step_adjuster.reset()
         self.time = 0.0
         self._next: PatternSample | None = None
 
@@ -280,6 +286,9 @@ class WalkingController:
         v = np.asarray(v, dtype=np.float64)
         com, com_velocity, rotations, positions = model.measure(q, v, self._ankles)
         contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
+        adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega)
+        if adjustment is not None:
+            self._next = None  # the plan changed from now on
         start = self._next if self._next is not None and self._next.time == self.time else self.pattern.sample(self.time)
         end = self.pattern.sample(self.time + self.dt)
         self._next = end
@@ -289,4 +298,4 @@ class WalkingController:
                                   self._reference_array(end, offset_end, feedback.rate), self.dt)
         self.q_ref = result.q
         self.time += self.dt
-        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result)
+        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result, adjustment)

@@ -26,6 +26,10 @@ from .quintic import PiecewiseQuintic, Quintic
 __all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
 
 RIGHT, LEFT = 0, 1
+ADJUSTED_RISE = 0.35
+"""Share of the remaining single support in which an adjusted swing rises to the step height."""
+ADJUSTED_OVER = 0.7
+"""Share of the remaining single support after which an adjusted swing is above its landing (then only descends)."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +91,25 @@ class ZmpCorrection:
             raise ControllerError("phases must increase within [0, 1)")
 
 
+@dataclass(frozen=True)
+class _RetimedSwing:
+    """A swing replanned mid-way by :meth:`WalkingPattern.adjust_step`.
+
+    Attributes:
+        since: swing time of the adjustment [s].
+        nominal_since: the nominal swing time it stood at [s] (height and pitch profiles).
+        rate: nominal swing time per swing time from then on (> 1: a shortened single support) for the pitch.
+        horizontal: the new horizontal path from ``since`` to touchdown (its time starts at 0).
+        vertical: the new height from ``since`` to touchdown (its time starts at 0).
+    """
+
+    since: float
+    nominal_since: float
+    rate: float
+    horizontal: PiecewiseQuintic
+    vertical: PiecewiseQuintic
+
+
 class WalkingPattern:
     """Walking straight ahead (+x) at a commanded speed from a standing start.
 
@@ -116,6 +139,11 @@ class WalkingPattern:
         self._single = (1.0 - config.double_support_ratio) * self.step_duration
         self.planner = DcmPlanner(config.com_height)
         self._swing_cache: dict[int, tuple[PiecewiseQuintic, Quintic]] = {}
+        # step adjustments (push recovery, :meth:`adjust_step`): foothold shifts from a foothold index on, the
+        # single supports that were shortened, and the re-timed swings
+        self._shifts: list[tuple[int, NDArray[np.float64]]] = []
+        self._singles: dict[int, float] = {}
+        self._retimed: dict[int, _RetimedSwing] = {}
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -130,22 +158,41 @@ class WalkingPattern:
 
     # ------------------------------------------------------------------ footholds and timing
     def foothold(self, j: int) -> NDArray[np.float64]:
-        """Sole position of foothold ``h_j`` [m]: ``h_0``/``h_1`` the starting right/left feet, then alternating."""
+        """Sole position of foothold ``h_j`` [m]: ``h_0``/``h_1`` the starting right/left feet, then alternating
+        (moved by the step adjustments made so far)."""
         if j < 2:
             return self._start_feet[j].copy()
         side = RIGHT if j % 2 == 0 else LEFT
         y = self._center[1] + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
-        return np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
+        h = np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
+        for first, shift in self._shifts:
+            if j >= first:
+                h[:2] += shift
+        return h
+
+    def step_single(self, k: int) -> float:
+        """Single-support duration [s] of step ``k`` (shorter than nominal after a re-timing by :meth:`adjust_step`)."""
+        return self._singles.get(k, self._single)
 
     def step_start(self, k: int) -> float:
         """Start time [s] of step ``k`` (its swing foot lifts off)."""
-        return self.config.start_duration + k * self.step_duration
+        start = self.config.start_duration + k * self.step_duration
+        for i, single in self._singles.items():
+            if i < k:
+                start -= self._single - single
+        return start
 
     def step_at(self, t: float) -> int:
         """Index of the step under way at ``t`` (-1 during the starting double support)."""
         if t < self.config.start_duration:
             return -1
-        return int((t - self.config.start_duration) // self.step_duration)
+        k = int((t - self.config.start_duration) // self.step_duration)
+        if not self._singles:
+            return k
+        k += int(sum(self._single - v for v in self._singles.values()) // self.step_duration) + 1
+        while k > 0 and self.step_start(k) > t:
+            k -= 1
+        return k
 
     def _zmp_point(self, j: int, along: float) -> NDArray[np.float64]:
         h = self.foothold(j)
@@ -164,8 +211,9 @@ class WalkingPattern:
         correction = self.correction
         for k in range(first_step, last + 1):
             t = self.step_start(k)
+            single = self.step_single(k)
             if correction is None:
-                times += [t, t + self._single]
+                times += [t, t + single]
                 points += [self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)]
                 continue
             stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
@@ -176,7 +224,12 @@ class WalkingPattern:
                     base = stance + (swing_to - stance) * (phase / ratio)
                 else:
                     base = swing_to + (landing - swing_to) * ((phase - ratio) / (1.0 - ratio))
-                times.append(t + phase * self.step_duration)
+                if single == self._single:
+                    times.append(t + phase * self.step_duration)
+                elif phase < ratio:  # a re-timed step: its single support is shorter, its double support is not
+                    times.append(t + phase / ratio * single)
+                else:
+                    times.append(t + single + (phase - ratio) * self.step_duration)
                 points.append(base - offset)
         times.append(self.step_start(last + 1))
         points.append(self._zmp_point(last + 2, -a))
@@ -200,10 +253,11 @@ class WalkingPattern:
             feet[swing_side] = self.foothold(k + 2)
             feet[1 - swing_side] = self.foothold(k + 1)
             s = t - self.step_start(k)
-            if s < self._single:
+            if s < self.step_single(k):
                 position, velocity = self._swing(k, s)
-                angle, rate, _ = self._swing_pitch.evaluate(s)
-                angle, rate = float(angle), float(rate)
+                nominal, scale = self._nominal_swing_time(k, s)
+                angle, rate, _ = self._swing_pitch.evaluate(nominal)
+                angle, rate = float(angle), float(rate) * scale
                 # the pitched foot turns about its toe tip, which follows the swing path: no toe scuffing
                 toe = self.config.toe_length
                 position += toe * np.array([1.0 - np.cos(angle), 0.0, np.sin(angle)])
@@ -224,8 +278,29 @@ class WalkingPattern:
         self._plan = self.planner.plan(times, zmp, com)
         self._plan_step = k
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i >= k}
+        self._retimed = {i: v for i, v in self._retimed.items() if i >= k}
 
     def _swing(self, k: int, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        retimed = self._retimed.get(k)
+        if retimed is None:
+            vertical, horizontal = self._nominal_swing(k)
+            z, vz, _ = vertical.evaluate(s)
+            xy, vxy, _ = horizontal.evaluate(s)
+        else:
+            z, vz, _ = retimed.vertical.evaluate(s - retimed.since)
+            xy, vxy, _ = retimed.horizontal.evaluate(s - retimed.since)
+        return np.array([xy[0], xy[1], float(z)]), np.array([vxy[0], vxy[1], float(vz)])
+
+    def _swing_kinematics(self, k: int, s: float) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
+        """Horizontal and vertical (position, velocity, acceleration) of step ``k``'s swing at ``s`` [s]."""
+        retimed = self._retimed.get(k)
+        if retimed is None:
+            vertical, horizontal = self._nominal_swing(k)
+            return horizontal.evaluate(s), vertical.evaluate(s)
+        return retimed.horizontal.evaluate(s - retimed.since), retimed.vertical.evaluate(s - retimed.since)
+
+    def _nominal_swing(self, k: int) -> tuple[PiecewiseQuintic, Quintic]:
+        """Step ``k``'s planned swing: height over the nominal single support, and the horizontal path."""
         if k not in self._swing_cache:
             start, end = self.foothold(k), self.foothold(k + 2)
             half = 0.5 * self._single
@@ -236,10 +311,111 @@ class WalkingPattern:
             land = Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)
             self._swing_cache[k] = (PiecewiseQuintic([lift, land]),
                                     Quintic.from_boundary(self._single, start[:2], end[:2]))
-        vertical, horizontal = self._swing_cache[k]
-        z, vz, _ = vertical.evaluate(s)
-        xy, vxy, _ = horizontal.evaluate(s)
-        return np.array([xy[0], xy[1], float(z)]), np.array([vxy[0], vxy[1], float(vz)])
+        return self._swing_cache[k]
+
+    def _nominal_swing_time(self, k: int, s: float) -> tuple[float, float]:
+        """The nominal swing time [s] at swing time ``s`` of step ``k``, and its rate (1 unless re-timed)."""
+        retimed = self._retimed.get(k)
+        if retimed is None:
+            return s, 1.0
+        return min(retimed.nominal_since + (s - retimed.since) * retimed.rate, self._single), retimed.rate
+
+    # ------------------------------------------------------------------ step adjustment
+    def swing_state(self, t: float) -> tuple[int, float, float]:
+        """``(step, swing time [s], remaining single support [s])`` at ``t``; remaining <= 0 outside a swing."""
+        k = self.step_at(t)
+        if k < 0:
+            return k, 0.0, 0.0
+        s = t - self.step_start(k)
+        return k, s, self.step_single(k) - s
+
+    def swing_foot(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Planned horizontal position [m] and velocity [m/s] of the swing foot's path at ``t`` (in single support)."""
+        k, s, remaining = self.swing_state(t)
+        if remaining <= 0.0:
+            raise ControllerError(f"no foot swings at t={t!r}")
+        (xy, vxy, _), _ = self._swing_kinematics(k, s)
+        return np.asarray(xy, dtype=np.float64).copy(), np.asarray(vxy, dtype=np.float64).copy()
+
+    def dcm(self, t: float) -> NDArray[np.float64]:
+        """The planned DCM (x, y) [m] at ``t`` (the current plan; :meth:`sample` replans at step starts)."""
+        return self._plan.sample(t).dcm
+
+    def preview_dcm(self, t: float, shift: ArrayLike, single: float) -> NDArray[np.float64]:
+        """The planned DCM at ``t`` [m] that :meth:`adjust_step` ``(t, shift, single)`` would give (nothing changes).
+
+        The DCM is affine in ``shift``, with the same gain on x and y, which :class:`StepAdjuster` uses.
+        """
+        k, _, _ = self._check_adjustable(t, single)
+        shifts, singles = self._shifts, self._singles
+        try:
+            self._shifts = [*shifts, (k + 2, np.asarray(shift, dtype=np.float64))]
+            self._singles = {**singles, k: float(single)}
+            times, zmp = self._knots_from(t, k)
+        finally:
+            self._shifts, self._singles = shifts, singles
+        return self.planner.dcm_at_knots(times, zmp)[0]
+
+    def adjust_step(self, t: float, shift: ArrayLike, single: float) -> None:
+        """Move the swing foot's landing and every later foothold by ``shift`` (x, y) [m] and end the current single
+        support ``single`` [s] after the step's start; the swing and the CoM plan are replanned from ``t`` on.
+
+        The swing foot continues from its state at ``t`` (position, velocity and acceleration: the reference
+        stays C2) along a new quintic to the new landing; its height and pitch follow the planned profiles,
+        time-scaled to the remaining single support. The CoM plan restarts at ``t`` from the current plan's CoM;
+        its DCM at ``t`` follows from the new footholds (:meth:`preview_dcm`).
+
+        Raises:
+            ControllerError: ``t`` is not inside a single support or ``single`` ends before ``t``.
+        """
+        k, s, _ = self._check_adjustable(t, single)
+        shift = np.asarray(shift, dtype=np.float64)
+        if shift.shape != (2,) or not np.all(np.isfinite(shift)):
+            raise ControllerError(f"shift must be a finite (x, y), got {shift!r}")
+        (xy, vxy, axy), (z, vz, az) = self._swing_kinematics(k, s)
+        nominal, _ = self._nominal_swing_time(k, s)
+        com = self._plan.sample(t).position
+        if np.any(shift != 0.0):
+            self._shifts.append((k + 2, shift))
+        self._singles[k] = float(single)
+        remaining = float(single) - s
+        # the foot rises to the step height (or holds a higher one) and reaches the landing above it, then
+        # comes straight down: a foot moving sideways close to the ground of a tilted robot would catch it
+        rise, over = ADJUSTED_RISE * remaining, ADJUSTED_OVER * remaining
+        top = max(float(z), self.ground + self.config.step_height)
+        landing = self.foothold(k + 2)
+        vertical = PiecewiseQuintic([Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
+                                     Quintic.from_boundary(remaining - rise, top, landing[2])])
+        horizontal = PiecewiseQuintic([Quintic.from_boundary(over, xy, landing[:2], vxy, 0.0, axy, 0.0),
+                                       Quintic.from_boundary(remaining - over, landing[:2], landing[:2])])
+        self._retimed[k] = _RetimedSwing(since=s, nominal_since=nominal, rate=(self._single - nominal) / remaining,
+                                         horizontal=horizontal, vertical=vertical)
+        times, zmp = self._knots_from(t, k)
+        self._plan = self.planner.plan(times, zmp, com)
+
+    def _check_adjustable(self, t: float, single: float) -> tuple[int, float, float]:
+        k, s, remaining = self.swing_state(t)
+        if k > self._plan_step:
+            self._replan(k)
+        if remaining <= 0.0:
+            raise ControllerError(f"a step can be adjusted in single support only; t={t!r} is not in one")
+        if not np.isfinite(single) or single <= s or single > self._single + 1e-12:
+            raise ControllerError(f"single must lie in ({s!r}, {self._single!r}] s, got {single!r}")
+        return k, s, remaining
+
+    def _knots_from(self, t: float, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The ZMP knots of step ``k`` on, cut at ``t`` (its ZMP interpolated)."""
+        times, zmp = self._knots(k)
+        i = int(np.searchsorted(times, t, side="right"))
+        if i >= times.size:
+            raise ControllerError(f"t={t!r} lies past the preview")
+        if i == 0:
+            return times, zmp
+        w = (t - times[i - 1]) / (times[i] - times[i - 1])
+        first = zmp[i - 1] + w * (zmp[i] - zmp[i - 1])
+        if times[i] - t < 1e-9:  # on a knot: no zero-length segment
+            return times[i:], zmp[i:]
+        return np.concatenate([[t], times[i:]]), np.concatenate([first[None], zmp[i:]])
 
     @staticmethod
     def _right_load(zmp: NDArray[np.float64], feet: NDArray[np.float64], contact: list[bool]) -> float:

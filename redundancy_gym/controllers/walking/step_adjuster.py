@@ -1,0 +1,164 @@
+"""Push recovery by stepping: the landing point and the timing of the current step from the measured DCM.
+
+A push changes the CoM velocity, so the measured divergent component of motion ``xi_m = c + cdot / omega``
+leaves the plan. In the LIPM the DCM runs away from the ZMP, ``xid = omega (xi - r)``; the ankle (the ZMP inside
+the stance foot, :class:`Stabilizer`) can only hold an error up to the foot's edge. Beyond that the robot has
+to step: put the next foothold where the DCM will be. The pattern's DCM at the current instant is affine in a
+shift of the landing foot and all later footholds (:meth:`WalkingPattern.preview_dcm`), so one division gives
+the shift for which the replanned DCM equals the measured one (Englsberger et al.'s capture-point step
+adjustment on the previewed plan). Where that landing lies outside the reachable region (a step box around the
+stance foot, no crossing of the feet), the single support is shortened: the foot lands sooner, when the DCM
+has run away less (step timing); if no timing is enough, the shortest one is taken with the landing clipped
+into the box, and the next step takes the rest.
+
+Adjustments start when the DCM error exceeds ``activation`` (above what undisturbed walking shows) and then
+follow the measurement at every control period of that step while the error exceeds ``tracking``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..exceptions import ControllerError
+from .walking_pattern import ADJUSTED_OVER, LEFT, WalkingPattern
+
+__all__ = ["StepAdjuster", "StepAdjusterConfig", "StepAdjustment"]
+
+
+@dataclass(frozen=True)
+class StepAdjusterConfig:
+    """Parameters of :class:`StepAdjuster` (lengths relative to the stance foot's sole point, walking along +x).
+
+    Attributes:
+        enabled: adjust steps at all (False: the planned footholds and timing whatever happens).
+        activation: DCM error [m] that starts adjusting a step.
+        tracking: DCM error [m] above which an adjusted step keeps following the measurement.
+        min_remaining: shortest single support left when a step is re-timed [s]; no adjustment closer to touchdown.
+        timing_candidates: how many shortened timings are tried, from the planned one down to ``min_remaining``.
+        max_forward: farthest landing ahead of the stance foot [m].
+        max_backward: farthest landing behind it [m].
+        min_width, max_width: nearest and farthest landing beside it [m] (the feet never cross).
+        max_swing_acceleration: the swing foot's horizontal acceleration the new path may ask for [m/s^2]
+            (quicker, farther steps throw the robot off its stance foot): a landing farther than
+            ``a tau^2 / 5.77`` from where the foot would stop (``tau`` the time left to reach it) is out of reach.
+    """
+
+    enabled: bool = True
+    activation: float = 0.05
+    tracking: float = 0.02
+    min_remaining: float = 0.2
+    timing_candidates: int = 5
+    max_forward: float = 0.65
+    max_backward: float = 0.3
+    min_width: float = 0.16
+    max_width: float = 0.45
+    max_swing_acceleration: float = 40.0
+
+    def __post_init__(self) -> None:
+        for name in ("activation", "tracking", "min_remaining", "max_forward", "max_backward", "min_width", "max_width",
+                     "max_swing_acceleration"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
+                    or not np.isfinite(value) or value < 0.0:
+                raise ControllerError(f"step adjuster {name} must be a finite real >= 0, got {value!r}")
+        if not isinstance(self.enabled, (bool, np.bool_)):
+            raise ControllerError(f"step adjuster enabled must be a bool, got {self.enabled!r}")
+        if isinstance(self.timing_candidates, bool) or not isinstance(self.timing_candidates, (int, np.integer)) \
+                or self.timing_candidates < 1:
+            raise ControllerError(f"step adjuster timing_candidates must be an int >= 1, got {self.timing_candidates!r}")
+        if self.min_width > self.max_width:
+            raise ControllerError(f"min_width={self.min_width!r} exceeds max_width={self.max_width!r}")
+        if self.tracking > self.activation:
+            raise ControllerError(f"tracking={self.tracking!r} exceeds activation={self.activation!r}")
+
+
+class StepAdjustment(NamedTuple):
+    """One adjustment made by :meth:`StepAdjuster.update`.
+
+    Attributes:
+        step: the step adjusted.
+        shift: the landing's move (x, y) [m] (every later foothold moves with it).
+        single: the step's new single-support duration [s].
+        dcm_error: measured minus planned DCM before the adjustment [m].
+        clipped: the landing was clipped into the reachable box (the DCM error is not fully taken).
+    """
+
+    step: int
+    shift: NDArray[np.float64]
+    single: float
+    dcm_error: NDArray[np.float64]
+    clipped: bool
+
+
+class StepAdjuster:
+    """Chooses the landing and timing of the current step from the measured DCM (see the module docstring).
+
+    Args:
+        config: parameters.
+    """
+
+    def __init__(self, config: StepAdjusterConfig | None = None) -> None:
+        self.config = config or StepAdjusterConfig()
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the step being adjusted (a new walk)."""
+        self._active_step = -2
+
+    def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike) -> StepAdjustment | None:
+        """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged."""
+        c = self.config
+        if not c.enabled:
+            return None
+        k, s, remaining = pattern.swing_state(t)
+        if k < 0 or remaining <= c.min_remaining:
+            return None
+        dcm = np.asarray(dcm, dtype=np.float64)[:2]
+        if not np.all(np.isfinite(dcm)):
+            raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
+        pattern.sample(t)  # the plan of step k
+        error = dcm - pattern.dcm(t)
+        if float(np.linalg.norm(error)) < (c.tracking if k == self._active_step else c.activation):
+            return None
+        self._active_step = k
+        stance, landing = pattern.foothold(k + 1)[:2], pattern.foothold(k + 2)[:2]
+        side = 1.0 if (k + 2) % 2 == LEFT else -1.0
+        low = np.array([stance[0] - c.max_backward, stance[1] + (c.min_width if side > 0 else -c.max_width)])
+        high = np.array([stance[0] + c.max_forward, stance[1] + (c.max_width if side > 0 else -c.min_width)])
+        foot, foot_velocity = pattern.swing_foot(t)
+        best: tuple[float, NDArray[np.float64], float] | None = None
+        for i in range(c.timing_candidates):
+            left = remaining if c.timing_candidates == 1 else \
+                remaining + (c.min_remaining - remaining) * i / (c.timing_candidates - 1)
+            single = s + left
+            base = pattern.preview_dcm(t, np.zeros(2), single)
+            gain = pattern.preview_dcm(t, np.ones(2), single) - base
+            target = landing + (dcm - base) / gain
+            reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
+            miss = float(np.linalg.norm(reachable - target))
+            if best is None or miss < best[0] - 1e-9:
+                best = (miss, reachable - landing, single)
+            if miss <= 1e-9:
+                break
+        assert best is not None
+        miss, shift, single = best
+        clipped = miss > 1e-9
+        pattern.adjust_step(t, shift, single)
+        return StepAdjustment(k, shift, single, error, clipped)
+
+    def _reachable(self, target: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64],
+                   foot: NDArray[np.float64], velocity: NDArray[np.float64], tau: float) -> NDArray[np.float64]:
+        """The point nearest ``target`` inside the step box and within the swing's reach in ``tau`` [s]."""
+        point = np.clip(target, low, high)
+        centre = foot + 0.5 * tau * velocity  # where a quintic from this velocity to rest would go unforced
+        radius = self.config.max_swing_acceleration * tau * tau / 5.77
+        away = point - centre
+        distance = float(np.linalg.norm(away))
+        if distance > radius:
+            # the disc's point nearest the box point, pulled back into the box (both convex: near enough)
+            point = np.clip(centre + away * (radius / distance), low, high)
+        return point
