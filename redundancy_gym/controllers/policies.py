@@ -25,7 +25,7 @@ from ..validation import check_int
 from .clik import Clik, ClikResult
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
-from .exceptions import PolicyError
+from .exceptions import ControllerError, PolicyError
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
 from .policy_options import config_from_options, env_with_attributes
@@ -550,13 +550,22 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
             ``algo`` for a ``.zip``).
 
     Raises:
-        PolicyError: unknown name or options, or an env the policy does not support (the message names the
-            registered env ids it supports).
+        PolicyError: unknown name or options, an option value the policy or its controller rejects (the message
+            names it), or an env the policy does not support (the message names the registered env ids it
+            supports).
     """
     env = _one_env(env)
     missing = missing_capabilities(name, env)
     if missing:
         raise _unsupported(name, env, missing)
+    try:
+        return _build_policy(name, env, kwargs)
+    except ControllerError as exc:  # an option the controller rejects (its message names it)
+        raise PolicyError(f"invalid option for the {name} policy: {exc}") from exc
+
+
+def _build_policy(name: str, env: Any, kwargs: dict[str, Any]) -> Policy:
+    """The policy ``name`` on a supported ``env`` (see :func:`make_policy`)."""
     if name == "clik":
         base = getattr(env, "unwrapped", env)
         if "grasp_position" in getattr(base, "observation_layout", {}):

@@ -94,6 +94,7 @@ def test_empty_batch_gives_no_actions() -> None:
 
 @pytest.mark.parametrize("name, kwargs, match", [
     ("clik", {"gain": -1.0}, "gain"),
+    ("clik", {"dls_max_damping": 0.0}, r"^invalid option for the clik policy: dls_max_damping"),  # was ControllerError
     ("clik", {"no_such_option": 1}, "no_such_option"),
     ("predictive", {"horizon": 0.0}, "horizon"),
     ("predictive", {"sample_time": 0.015}, "sample_time"),

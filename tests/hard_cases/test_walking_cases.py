@@ -165,14 +165,38 @@ def test_dcm_planner_bad_com_raises(com: list) -> None:
         DcmPlanner(0.9).plan([0.0, 1.0], [[0.0, 0.0], [0.1, 0.0]], com)
 
 
-@pytest.mark.xfail(strict=True, reason="finding: a positive gravity of ~1e-270 (omega ~ 1e-135) passes the check "
-                   "and start_zmp divides by a zero gain: NaN (walking/dcm_planner.py; nightly walking fuzz)")
-def test_dcm_planner_with_a_vanishing_gravity_is_rejected_or_finite() -> None:
+@pytest.mark.xfail(strict=True, reason="finding: a positive gravity or CoM height far from the physical ones (omega "
+                   "~ 0 or huge) passes the checks and start_zmp divides by a zero gain: NaN (walking/dcm_planner.py; "
+                   "nightly walking fuzz)")
+@pytest.mark.parametrize("height, gravity", [(1.0, 8.8e-271), (1e300, 9.81)],
+                         ids=["vanishing-gravity", "huge-com-height"])
+def test_dcm_planner_with_an_extreme_omega_is_rejected_or_finite(height: float, gravity: float) -> None:
     try:
-        planner = DcmPlanner(1.0, 8.8e-271)
+        planner = DcmPlanner(height, gravity)
     except ControllerError:
         return
     assert np.all(np.isfinite(planner.start_zmp([0.0, 1.0], [[0.0, 0.0], [0.0, 0.0]], [0.0, 0.0])))
+
+
+@pytest.mark.xfail(strict=True, reason="finding: start_zmp on knots 1e-9 s apart divides by a zero gain and "
+                   "returns NaN instead of raising (walking/dcm_planner.py; walking fuzz)")
+def test_start_zmp_of_a_vanishing_segment_raises_or_is_finite() -> None:
+    try:
+        start = DcmPlanner(1.0).start_zmp([0.0, 1e-9], [[0.0, 0.0], [0.0, 0.0]], [0.0, 0.0])
+    except ControllerError:
+        return
+    assert np.all(np.isfinite(start))
+
+
+@pytest.mark.xfail(strict=True, reason="finding: com_height=3.6e-94 (omega ~ 1.6e47) passes GaitConfig and the "
+                   "pattern's CoM is NaN half a second in (walking/dcm_planner.py; nightly walking fuzz)")
+def test_pattern_with_a_tiny_com_height_is_rejected_or_finite() -> None:
+    try:
+        pattern = WalkingPattern(GaitConfig(com_height=3.6e-94, heel_toe_shift=0.0), FEET[0], FEET[1], [0.0, 0.0],
+                                 0.0)
+    except ControllerError:
+        return
+    assert np.all(np.isfinite(pattern.sample(0.5).com))
 
 
 @pytest.mark.xfail(strict=True, reason="finding: Stabilizer.update takes a NaN measurement or dt silently and "
