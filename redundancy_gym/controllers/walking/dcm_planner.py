@@ -30,6 +30,16 @@ __all__ = ["GRAVITY", "ComState", "DcmPlan", "DcmPlanner"]
 
 GRAVITY = 9.81
 """Gravitational acceleration [m/s^2] of the reduced model."""
+OMEGA_RANGE = (0.1, 100.0)
+"""``omega = sqrt(g / z_c)`` [1/s] the planner accepts: a CoM 0.1 mm to 1 km above the ground under Earth's gravity.
+Outside it the exponentials of a step over- or underflow."""
+MAX_EXPONENT = 700.0
+"""Largest ``omega s`` evaluated (``e^700`` ~ 1e304): a plan sampled long after it diverged stays finite."""
+
+
+def _divergent(c: NDArray[np.float64], exponent: float) -> NDArray[np.float64]:
+    """``c e^exponent``, exactly zero where ``c`` is (no ``0 * inf``), the exponent capped at :data:`MAX_EXPONENT`."""
+    return np.where(c != 0.0, c * np.exp(min(exponent, MAX_EXPONENT)), 0.0)
 
 
 @dataclass(frozen=True)
@@ -78,8 +88,11 @@ class DcmPlan:
             s = t - times[-1]
             c = xi - r
             d = x - r - 0.5 * c
-            position = r + 0.5 * c * np.exp(self.omega * s) + d * np.exp(-self.omega * s)
-            velocity = self.omega * (0.5 * c * np.exp(self.omega * s) - d * np.exp(-self.omega * s))
+            # at rest (xi = r) the divergent term is exactly zero, however long the pause (no 0 * inf)
+            grow = _divergent(0.5 * c, self.omega * s)
+            decay = d * np.exp(-self.omega * s)
+            position = r + grow + decay
+            velocity = self.omega * (grow - decay)
             return self._state(position, velocity, r)
         k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2))
         s = max(t - times[k], 0.0)
@@ -87,9 +100,9 @@ class DcmPlan:
         r = self.zmp[k] + slope * s
         c = self.dcm[k] - self.zmp[k] - slope / self.omega
         d = self.com[k] - self.zmp[k] - 0.5 * c
-        grow, decay = np.exp(self.omega * s), np.exp(-self.omega * s)
-        position = r + 0.5 * c * grow + d * decay
-        velocity = slope + self.omega * (0.5 * c * grow - d * decay)
+        grow, decay = _divergent(0.5 * c, self.omega * s), d * np.exp(-self.omega * s)
+        position = r + grow + decay
+        velocity = slope + self.omega * (grow - decay)
         return self._state(position, velocity, r)
 
     def _state(self, position: NDArray[np.float64], velocity: NDArray[np.float64], r: NDArray[np.float64]) -> ComState:
@@ -105,12 +118,18 @@ class DcmPlanner:
     """
 
     def __init__(self, com_height: float, gravity: float = GRAVITY) -> None:
+        for name, value in (("com_height", com_height), ("gravity", gravity)):
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ControllerError(f"{name} must be a real number, got {value!r} ({type(value).__name__})")
         if not np.isfinite(com_height) or com_height <= 0.0:
             raise ControllerError(f"com_height must be finite and > 0, got {com_height!r}")
         if not np.isfinite(gravity) or gravity <= 0.0:
             raise ControllerError(f"gravity must be finite and > 0, got {gravity!r}")
         self.com_height = float(com_height)
         self.omega = float(np.sqrt(gravity / com_height))
+        if not OMEGA_RANGE[0] <= self.omega <= OMEGA_RANGE[1]:
+            raise ControllerError(f"com_height={com_height!r} m and gravity={gravity!r} m/s^2 give omega="
+                                  f"{self.omega:.3g} 1/s, outside {OMEGA_RANGE} (a physical LIPM)")
 
     def dcm_at_knots(self, times: ArrayLike, zmp: ArrayLike) -> NDArray[np.float64]:
         """DCM at every knot by backward recursion from ``xi = r`` at the last knot (the walk ends at rest)."""
@@ -123,19 +142,34 @@ class DcmPlanner:
             dcm[k] = zmp[k] + slope / self.omega + (dcm[k + 1] - zmp[k + 1] - slope / self.omega) * np.exp(-self.omega * dt)
         return dcm
 
+    def first_dcm(self, times: ArrayLike, zmp: ArrayLike) -> NDArray[np.float64]:
+        """The DCM at the first knot, as :meth:`dcm_at_knots` ``[0]`` but in closed form (no loop over knots).
+
+        The recursion is ``xi_k = a_k + b_k xi_{k+1}`` with ``b_k = e^{-omega dt_k}``, so
+        ``xi_0 = sum_j (prod_{i<j} b_i) a_j + (prod_i b_i) r_n``.
+        """
+        times, zmp = self._check(times, zmp)
+        dt = np.diff(times)
+        slope = np.diff(zmp, axis=0) / dt[:, None]
+        decay = np.exp(-self.omega * dt)
+        a = zmp[:-1] + slope / self.omega - (zmp[1:] + slope / self.omega) * decay[:, None]
+        weights = np.concatenate([[1.0], np.cumprod(decay)])
+        return weights[:-1] @ a + weights[-1] * zmp[-1]
+
     def plan(self, times: ArrayLike, zmp: ArrayLike, com: ArrayLike) -> DcmPlan:
         """The plan from the CoM ``com`` (x, y) [m] at the first knot; the DCM comes from :meth:`dcm_at_knots`."""
         times, zmp = self._check(times, zmp)
+        com = self._check_com(com)
         dcm = self.dcm_at_knots(times, zmp)
         x = np.empty_like(zmp)
-        x[0] = np.asarray(com, dtype=np.float64)
+        x[0] = com
         w = self.omega
         for k in range(times.size - 1):
             dt = times[k + 1] - times[k]
             slope = (zmp[k + 1] - zmp[k]) / dt
             c = dcm[k] - zmp[k] - slope / w
             d = x[k] - zmp[k] - 0.5 * c
-            x[k + 1] = zmp[k + 1] + 0.5 * c * np.exp(w * dt) + d * np.exp(-w * dt)
+            x[k + 1] = zmp[k + 1] + _divergent(0.5 * c, w * dt) + d * np.exp(-w * dt)
         return DcmPlan(w, times, zmp, dcm, x)
 
     def start_zmp(self, times: ArrayLike, zmp: ArrayLike, com: ArrayLike) -> NDArray[np.float64]:
@@ -146,13 +180,26 @@ class DcmPlanner:
         """
         times, zmp = self._check(times, zmp)
         zmp = zmp.copy()
-        com = np.asarray(com, dtype=np.float64)
+        com = self._check_com(com)
         zmp[0] = 0.0
         offset = self.dcm_at_knots(times, zmp)[0]
         zmp[0] = 1.0
         gain = self.dcm_at_knots(times, zmp)[0] - offset
+        if not np.all(np.abs(gain) > 1e-9):
+            raise ControllerError(f"the first ZMP knot hardly moves the DCM (gain {gain.tolist()}): the first "
+                                  f"segment of {times[1] - times[0]!r} s is too short for a start from rest")
         zmp[0] = (com - offset) / gain
         return zmp
+
+    @staticmethod
+    def _check_com(com: ArrayLike) -> NDArray[np.float64]:
+        try:
+            value = np.asarray(com, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ControllerError(f"com must be a finite (x, y), got {com!r}") from None
+        if value.shape != (2,) or not np.all(np.isfinite(value)):
+            raise ControllerError(f"com must be a finite (x, y), got {com!r}")
+        return value
 
     @staticmethod
     def _check(times: ArrayLike, zmp: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -22,7 +22,8 @@ class GaitConfig:
         max_step_length: longest step [m]; faster commands shorten ``T`` (down to ``min_step_duration``).
         min_step_duration: shortest ``T`` [s] a fast command may use.
         step_height: apex of the swing foot above the ground [m].
-        swing_pitch: largest toes-down pitch of the swing foot [rad] (lift-off without over-bending the ankle).
+        swing_pitch: largest toes-down pitch of the swing foot [rad], in [0, 0.6] (lift-off without over-bending
+            the ankle).
         swing_pitch_peak: share of the single support at which the swing pitch peaks, in (0, swing_pitch_flat).
         toe_length: distance from the sole point to the tip of the toe [m]; the pitched swing foot turns about it.
         swing_pitch_flat: share of the single support from which the swing foot is flat again, in (0, 1).
@@ -50,6 +51,12 @@ class GaitConfig:
     preview_steps: int = 4
 
     def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            wanted = (int, np.integer) if f.name == "preview_steps" else (int, float, np.integer, np.floating)
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, wanted):
+                kind = "an int" if f.name == "preview_steps" else "a real number"
+                raise ControllerError(f"{f.name} must be {kind}, got {value!r} ({type(value).__name__})")
         positive = ("step_duration", "step_width", "max_step_length", "min_step_duration", "step_height",
                     "com_height", "start_duration")
         for name in positive:
@@ -67,8 +74,8 @@ class GaitConfig:
         if not 0.0 < self.swing_pitch_peak < self.swing_pitch_flat < 1.0:
             raise ControllerError("need 0 < swing_pitch_peak < swing_pitch_flat < 1, got "
                                   f"{self.swing_pitch_peak!r}, {self.swing_pitch_flat!r}")
-        if not np.isfinite(self.swing_pitch) or abs(self.swing_pitch) > 0.6:
-            raise ControllerError(f"swing_pitch must be finite and within +-0.6 rad, got {self.swing_pitch!r}")
+        if not 0.0 <= self.swing_pitch <= 0.6:  # toes up would turn the heel below the ground about the toe tip
+            raise ControllerError(f"swing_pitch must lie in [0, 0.6] rad (toes down), got {self.swing_pitch!r}")
         if not isinstance(self.preview_steps, (int, np.integer)) or self.preview_steps < 2:
             raise ControllerError(f"preview_steps must be an int >= 2, got {self.preview_steps!r}")
 

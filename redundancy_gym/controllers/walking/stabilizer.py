@@ -100,12 +100,20 @@ class Stabilizer:
         ``zmp`` None (no loaded foot) keeps the last filtered value.
         """
         g = self.gains
+        if not np.isfinite(dt) or dt <= 0.0:
+            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         com_ref, dcm_ref, zmp_ref = (np.asarray(v, dtype=np.float64)[:2] for v in (com_ref, dcm_ref, zmp_ref))
         com, com_velocity = np.asarray(com, dtype=np.float64)[:2], np.asarray(com_velocity, dtype=np.float64)[:2]
+        for name, value in (("com_ref", com_ref), ("dcm_ref", dcm_ref), ("zmp_ref", zmp_ref), ("com", com),
+                            ("com_velocity", com_velocity)):
+            if value.shape != (2,) or not np.all(np.isfinite(value)):
+                raise ControllerError(f"{name} must be a finite (x, y), got {value!r}")
         dcm_error = com + com_velocity / self.omega - dcm_ref
         desired = zmp_ref + g.dcm * dcm_error
         if zmp is not None:
-            zmp = np.asarray(zmp, dtype=np.float64)
+            zmp = np.asarray(zmp, dtype=np.float64)[:2]
+            if zmp.shape != (2,) or not np.all(np.isfinite(zmp)):
+                raise ControllerError(f"zmp must be None or a finite (x, y), got {zmp!r}")
             if self._zmp is None:
                 self._zmp = zmp.copy()
             else:

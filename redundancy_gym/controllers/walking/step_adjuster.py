@@ -11,8 +11,10 @@ stance foot, no crossing of the feet), the single support is shortened: the foot
 has run away less (step timing); if no timing is enough, the shortest one is taken with the landing clipped
 into the box, and the next step takes the rest.
 
-Adjustments start when the DCM error exceeds ``activation`` (above what undisturbed walking shows) and then
-follow the measurement at every control period of that step while the error exceeds ``tracking``.
+Only the part of the DCM error beyond ``ankle_margin`` is taken by stepping: up to that margin the
+stabilizer's ZMP shift inside the stance foot holds it (and undisturbed walking, whose errors stay inside it, is
+unchanged). The landing follows the measurement at every control period while the error exceeds the margin.
+A shorter timing is chosen only when it brings the landing at least ``timing_gain`` nearer the one wanted.
 """
 
 from __future__ import annotations
@@ -26,7 +28,12 @@ from numpy.typing import ArrayLike, NDArray
 from ..exceptions import ControllerError
 from .walking_pattern import ADJUSTED_OVER, LEFT, WalkingPattern
 
-__all__ = ["StepAdjuster", "StepAdjusterConfig", "StepAdjustment"]
+__all__ = ["LAST_MOMENT", "MIN_SHIFT", "StepAdjuster", "StepAdjusterConfig", "StepAdjustment"]
+
+LAST_MOMENT = 0.04
+"""Single support left [s] below which a swing is no longer adjusted (the foot is about to touch down)."""
+MIN_SHIFT = 0.005
+"""Smallest landing move [m] worth an adjustment at the planned timing."""
 
 
 @dataclass(frozen=True)
@@ -35,10 +42,12 @@ class StepAdjusterConfig:
 
     Attributes:
         enabled: adjust steps at all (False: the planned footholds and timing whatever happens).
-        activation: DCM error [m] that starts adjusting a step.
-        tracking: DCM error [m] above which an adjusted step keeps following the measurement.
-        min_remaining: shortest single support left when a step is re-timed [s]; no adjustment closer to touchdown.
-        timing_candidates: how many shortened timings are tried, from the planned one down to ``min_remaining``.
+        ankle_margin: DCM error (x, y) [m] left to the stabilizer's ZMP shift inside the stance foot.
+        timing_gain: how much nearer [m] a shorter single support must bring the landing to be chosen.
+        min_remaining: shortest single support left when a step is re-timed [s].
+        max_delay: longest delay of a touchdown [s] (a late push needs time for the foot to get there).
+        timing_candidates: how many timings are tried, from the planned one down to ``min_remaining``, then
+            (where none reaches) up to ``max_delay`` later.
         max_forward: farthest landing ahead of the stance foot [m].
         max_backward: farthest landing behind it [m].
         min_width, max_width: nearest and farthest landing beside it [m] (the feet never cross).
@@ -48,9 +57,10 @@ class StepAdjusterConfig:
     """
 
     enabled: bool = True
-    activation: float = 0.05
-    tracking: float = 0.02
+    ankle_margin: tuple[float, float] = (0.06, 0.035)
+    timing_gain: float = 0.0
     min_remaining: float = 0.2
+    max_delay: float = 0.15
     timing_candidates: int = 5
     max_forward: float = 0.65
     max_backward: float = 0.3
@@ -59,7 +69,11 @@ class StepAdjusterConfig:
     max_swing_acceleration: float = 40.0
 
     def __post_init__(self) -> None:
-        for name in ("activation", "tracking", "min_remaining", "max_forward", "max_backward", "min_width", "max_width",
+        margin = np.asarray(self.ankle_margin, dtype=object)
+        if margin.shape != (2,) or not all(isinstance(v, (int, float, np.floating, np.integer))
+                                            and not isinstance(v, bool) and np.isfinite(v) and v >= 0.0 for v in margin):
+            raise ControllerError(f"step adjuster ankle_margin must be two finite reals >= 0, got {self.ankle_margin!r}")
+        for name in ("timing_gain", "min_remaining", "max_delay", "max_forward", "max_backward", "min_width", "max_width",
                      "max_swing_acceleration"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
@@ -72,8 +86,6 @@ class StepAdjusterConfig:
             raise ControllerError(f"step adjuster timing_candidates must be an int >= 1, got {self.timing_candidates!r}")
         if self.min_width > self.max_width:
             raise ControllerError(f"min_width={self.min_width!r} exceeds max_width={self.max_width!r}")
-        if self.tracking > self.activation:
-            raise ControllerError(f"tracking={self.tracking!r} exceeds activation={self.activation!r}")
 
 
 class StepAdjustment(NamedTuple):
@@ -106,8 +118,7 @@ class StepAdjuster:
         self.reset()
 
     def reset(self) -> None:
-        """Forget the step being adjusted (a new walk)."""
-        self._active_step = -2
+        """Nothing is kept between periods; for symmetry with the other layers."""
 
     def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike) -> StepAdjustment | None:
         """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged."""
@@ -115,38 +126,49 @@ class StepAdjuster:
         if not c.enabled:
             return None
         k, s, remaining = pattern.swing_state(t)
-        if k < 0 or remaining <= c.min_remaining:
+        if k < 0 or remaining <= LAST_MOMENT:
             return None
         dcm = np.asarray(dcm, dtype=np.float64)[:2]
         if not np.all(np.isfinite(dcm)):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
         pattern.sample(t)  # the plan of step k
         error = dcm - pattern.dcm(t)
-        if float(np.linalg.norm(error)) < (c.tracking if k == self._active_step else c.activation):
+        margin = np.asarray(c.ankle_margin, dtype=np.float64)
+        excess = error - np.clip(error, -margin, margin)
+        if not np.any(excess):
             return None
-        self._active_step = k
+        wanted = dcm - (error - excess)  # the plan's DCM that leaves the stabilizer the error within the margin
         stance, landing = pattern.foothold(k + 1)[:2], pattern.foothold(k + 2)[:2]
         side = 1.0 if (k + 2) % 2 == LEFT else -1.0
         low = np.array([stance[0] - c.max_backward, stance[1] + (c.min_width if side > 0 else -c.max_width)])
         high = np.array([stance[0] + c.max_forward, stance[1] + (c.max_width if side > 0 else -c.min_width)])
         foot, foot_velocity = pattern.swing_foot(t)
         best: tuple[float, NDArray[np.float64], float] | None = None
-        for i in range(c.timing_candidates):
-            left = remaining if c.timing_candidates == 1 else \
-                remaining + (c.min_remaining - remaining) * i / (c.timing_candidates - 1)
-            single = s + left
+        n = c.timing_candidates
+        lefts = [remaining]
+        if n > 1:
+            if remaining > c.min_remaining:
+                lefts += list(np.linspace(remaining, c.min_remaining, n)[1:])
+            if c.max_delay > 0.0:
+                lefts += list(remaining + np.linspace(0.0, c.max_delay, n)[1:])
+        for left in lefts:
+            single = s + float(left)
+            if single > 2.0 * pattern.single_support:
+                break
             base = pattern.preview_dcm(t, np.zeros(2), single)
             gain = pattern.preview_dcm(t, np.ones(2), single) - base
-            target = landing + (dcm - base) / gain
+            target = landing + (wanted - base) / gain
             reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
             miss = float(np.linalg.norm(reachable - target))
-            if best is None or miss < best[0] - 1e-9:
+            if best is None or miss < best[0] - c.timing_gain:
                 best = (miss, reachable - landing, single)
             if miss <= 1e-9:
                 break
         assert best is not None
         miss, shift, single = best
         clipped = miss > 1e-9
+        if float(np.max(np.abs(shift))) < MIN_SHIFT and single == s + remaining:
+            return None  # nothing worth replanning the swing for
         pattern.adjust_step(t, shift, single)
         return StepAdjustment(k, shift, single, error, clipped)
 

@@ -26,6 +26,10 @@ from .quintic import PiecewiseQuintic, Quintic
 __all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
 
 RIGHT, LEFT = 0, 1
+MIN_ADJUSTED_SWING = 0.01
+"""Shortest swing left [s] that :meth:`WalkingPattern.adjust_step` replans."""
+MAX_SHIFT = 2.0
+"""Largest foothold move [m] of one :meth:`WalkingPattern.adjust_step` (twice a leg's length)."""
 ADJUSTED_RISE = 0.35
 """Share of the remaining single support in which an adjusted swing rises to the step height."""
 ADJUSTED_OVER = 0.7
@@ -125,10 +129,16 @@ class WalkingPattern:
                  speed: float, correction: ZmpCorrection | None = None) -> None:
         self.config = config
         self.correction = correction
-        start = np.array([right_foot, left_foot], dtype=np.float64)
+        try:
+            start = np.array([right_foot, left_foot], dtype=np.float64)
+        except (TypeError, ValueError):
+            start = np.zeros(0)
         if start.shape != (2, 3) or not np.all(np.isfinite(start)):
-            raise ControllerError(f"right_foot and left_foot must be finite 3-vectors, got {start.tolist()}")
-        com = np.asarray(com, dtype=np.float64)
+            raise ControllerError(f"right_foot and left_foot must be finite 3-vectors, got {right_foot!r}, {left_foot!r}")
+        try:
+            com = np.asarray(com, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ControllerError(f"com must be a finite (x, y), got {com!r}") from None
         if com.shape != (2,) or not np.all(np.isfinite(com)):
             raise ControllerError(f"com must be a finite (x, y), got {com!r}")
         self.step_length, self.step_duration = config.timing(speed)
@@ -170,8 +180,13 @@ class WalkingPattern:
                 h[:2] += shift
         return h
 
+    @property
+    def single_support(self) -> float:
+        """Planned single-support duration [s] of every step."""
+        return self._single
+
     def step_single(self, k: int) -> float:
-        """Single-support duration [s] of step ``k`` (shorter than nominal after a re-timing by :meth:`adjust_step`)."""
+        """Single-support duration [s] of step ``k`` (other than nominal after a re-timing by :meth:`adjust_step`)."""
         return self._singles.get(k, self._single)
 
     def step_start(self, k: int) -> float:
@@ -189,9 +204,10 @@ class WalkingPattern:
         k = int((t - self.config.start_duration) // self.step_duration)
         if not self._singles:
             return k
-        k += int(sum(self._single - v for v in self._singles.values()) // self.step_duration) + 1
         while k > 0 and self.step_start(k) > t:
             k -= 1
+        while self.step_start(k + 1) <= t:
+            k += 1
         return k
 
     def _zmp_point(self, j: int, along: float) -> NDArray[np.float64]:
@@ -354,11 +370,12 @@ class WalkingPattern:
             times, zmp = self._knots_from(t, k)
         finally:
             self._shifts, self._singles = shifts, singles
-        return self.planner.dcm_at_knots(times, zmp)[0]
+        return self.planner.first_dcm(times, zmp)
 
     def adjust_step(self, t: float, shift: ArrayLike, single: float) -> None:
         """Move the swing foot's landing and every later foothold by ``shift`` (x, y) [m] and end the current single
-        support ``single`` [s] after the step's start; the swing and the CoM plan are replanned from ``t`` on.
+        support ``single`` [s] after the step's start (sooner or later than planned, at most twice the nominal
+        single support); the swing and the CoM plan are replanned from ``t`` on.
 
         The swing foot continues from its state at ``t`` (position, velocity and acceleration: the reference
         stays C2) along a new quintic to the new landing; its height and pitch follow the planned profiles,
@@ -369,9 +386,12 @@ class WalkingPattern:
             ControllerError: ``t`` is not inside a single support or ``single`` ends before ``t``.
         """
         k, s, _ = self._check_adjustable(t, single)
-        shift = np.asarray(shift, dtype=np.float64)
-        if shift.shape != (2,) or not np.all(np.isfinite(shift)):
-            raise ControllerError(f"shift must be a finite (x, y), got {shift!r}")
+        try:
+            shift = np.asarray(shift, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ControllerError(f"shift must be a finite (x, y) [m], got {shift!r}") from None
+        if shift.shape != (2,) or not np.all(np.isfinite(shift)) or float(np.max(np.abs(shift))) > MAX_SHIFT:
+            raise ControllerError(f"shift must be a finite (x, y) within +-{MAX_SHIFT} m, got {shift!r}")
         (xy, vxy, axy), (z, vz, az) = self._swing_kinematics(k, s)
         nominal, _ = self._nominal_swing_time(k, s)
         com = self._plan.sample(t).position
@@ -399,8 +419,9 @@ class WalkingPattern:
             self._replan(k)
         if remaining <= 0.0:
             raise ControllerError(f"a step can be adjusted in single support only; t={t!r} is not in one")
-        if not np.isfinite(single) or single <= s or single > self._single + 1e-12:
-            raise ControllerError(f"single must lie in ({s!r}, {self._single!r}] s, got {single!r}")
+        if not np.isfinite(single) or single < s + MIN_ADJUSTED_SWING or single > 2.0 * self._single:
+            raise ControllerError(f"single must lie in [{s + MIN_ADJUSTED_SWING!r}, {2.0 * self._single!r}] s (at "
+                                  f"least {MIN_ADJUSTED_SWING} s of swing left), got {single!r}")
         return k, s, remaining
 
     def _knots_from(self, t: float, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -217,6 +217,8 @@ class WholeBodyIk:
             start = WholeBodyReference.from_array(start)
         if not isinstance(end, WholeBodyReference):
             end = WholeBodyReference.from_array(end)
+        if not (np.all(np.isfinite(start.to_array())) and np.all(np.isfinite(end.to_array()))):
+            raise ControllerError("the references must be finite")
         q = self.model.check_configuration(q)
         jac, err, j_lz = self.build(q, start)
         rhs = self.reference_velocity(start) + self.gain * err

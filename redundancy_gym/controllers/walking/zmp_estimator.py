@@ -50,6 +50,9 @@ def estimate_zmp(rotations: ArrayLike, ankles: ArrayLike, forces: ArrayLike, tor
     torques = np.asarray(torques, dtype=np.float64)
     if rotations.shape != (2, 3, 3) or ankles.shape != (2, 3) or forces.shape != (2, 3) or torques.shape != (2, 3):
         raise ControllerError("need rotations (2, 3, 3) and ankles, forces, torques (2, 3)")
+    for name, value in (("rotations", rotations), ("ankles", ankles), ("forces", forces), ("torques", torques)):
+        if not np.all(np.isfinite(value)):
+            raise ControllerError(f"the ankle sensor {name} must be finite, got {value.tolist()}")
     reaction = -(rotations @ forces[:, :, None])[:, :, 0]
     moment = -(rotations @ torques[:, :, None])[:, :, 0]
     cop = np.full((2, 2), np.nan)
