@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from collections.abc import Sequence
 from typing import Any
 
@@ -117,13 +118,15 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
                          "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
                          "pik: predictive IK against local CLIK and the global optimum; "
                          "soak: random, bang-bang and reference-policy actions on every env, counting exceptions "
-                         "and non-finite values (exit status 1 when any)")
+                         "and non-finite values (exit status 1 when any); "
+                         "push: the largest torso push the walking reference recovers from, with and without step "
+                         "adjustment (also writes a PNG beside the JSON)")
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
     be.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the benchmark's scenes")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
@@ -134,6 +137,9 @@ def _parser() -> argparse.ArgumentParser:
                              "--quick: 1)")
     budget.add_argument("--steps", type=int, metavar="N",
                         help="soak only: steps per env instead of --seconds, split over the action sources")
+
+    be.add_argument("--trials", type=int, metavar="N",
+                    help="push only: trials per impulse level (default: 20, --quick: 5)")
 
     de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
@@ -217,6 +223,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.command == "bench" and args.name != "soak" and (args.seconds is not None or args.steps is not None):
         parser.error("--seconds and --steps apply to bench soak only")
+    if args.command == "bench" and args.name != "push" and args.trials is not None:
+        parser.error("--trials applies to bench push only")
     from .controllers.exceptions import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
@@ -282,6 +290,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"wrote {write_soak_bench(report, json_path)}")
                 if not report["ok"]:
                     return 1
+            elif args.name == "push":
+                from .eval.bench_push import format_push_bench, plot_push_bench, run_push_bench
+                from .eval.bench_ssv import write_ssv_bench as write_push_bench
+
+                trials = args.trials if args.trials is not None else (5 if args.quick else 20)
+                report = run_push_bench(seed=args.seed, trials=trials, progress=not args.no_progress)
+                print(format_push_bench(report))
+                print(f"wrote {write_push_bench(report, json_path)}")
+                print(f"wrote {plot_push_bench(report, str(Path(json_path).with_suffix('.png')))}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

@@ -37,7 +37,6 @@ class WalkingPolicyConfig:
         backend: whole-body IK implementation, ``"compiled"`` or ``"python"``.
         push_recovery: step adjustment from the measured DCM (:class:`StepAdjuster`: landing and timing of the
             current step) on.
-        step_activation: DCM error [m] that starts a step adjustment.
         step_min_remaining: shortest single support left after a re-timing [s].
         step_max_forward, step_max_backward: reachable landing ahead of / behind the stance foot [m].
         step_min_width, step_max_width: reachable landing beside the stance foot [m].
@@ -58,7 +57,6 @@ class WalkingPolicyConfig:
     self_collision_slope: float = WalkingIkConfig.self_collision_slope
     backend: str = WalkingIkConfig.backend
     push_recovery: bool = StepAdjusterConfig.enabled
-    step_activation: float = StepAdjusterConfig.activation
     step_min_remaining: float = StepAdjusterConfig.min_remaining
     step_max_forward: float = StepAdjusterConfig.max_forward
     step_max_backward: float = StepAdjusterConfig.max_backward
@@ -110,8 +108,7 @@ class WalkingPolicy(PerEnvPolicy):
                                  self_collision_activation=c.self_collision_activation,
                                  self_collision_slope=c.self_collision_slope, backend=c.backend)
             stepping = StepAdjusterConfig(
-                enabled=c.push_recovery, activation=c.step_activation,
-                tracking=min(StepAdjusterConfig.tracking, c.step_activation), min_remaining=c.step_min_remaining,
+                enabled=c.push_recovery, min_remaining=c.step_min_remaining,
                 max_forward=c.step_max_forward, max_backward=c.step_max_backward, min_width=c.step_min_width,
                 max_width=c.step_max_width)
             self.controller = WalkingController(

@@ -11,9 +11,9 @@ stance foot, no crossing of the feet), the single support is shortened: the foot
 has run away less (step timing); if no timing is enough, the shortest one is taken with the landing clipped
 into the box, and the next step takes the rest.
 
-Only the part of the DCM error beyond ``ankle_margin`` is taken by stepping: up to that margin the
-stabilizer's ZMP shift inside the stance foot holds it (and undisturbed walking, whose errors stay inside it, is
-unchanged). The landing follows the measurement at every control period while the error exceeds the margin.
+A DCM error within ``ankle_margin`` is left to the stabilizer's ZMP shift inside the stance foot (undisturbed
+walking, whose errors stay inside it, is unchanged). An axis beyond it is stepped back to ``ankle_share`` of the
+margin, and adjusted again whenever it leaves the margin again.
 A shorter timing is chosen only when it brings the landing at least ``timing_gain`` nearer the one wanted.
 """
 
@@ -43,6 +43,8 @@ class StepAdjusterConfig:
     Attributes:
         enabled: adjust steps at all (False: the planned footholds and timing whatever happens).
         ankle_margin: DCM error (x, y) [m] left to the stabilizer's ZMP shift inside the stance foot.
+        ankle_share: share of the margin an adjustment leaves on an axis that went beyond it, in [0, 1].
+        error_filter: time constant [s] of the low-pass on the DCM error (0: none).
         timing_gain: how much nearer [m] a shorter single support must bring the landing to be chosen.
         min_remaining: shortest single support left when a step is re-timed [s].
         max_delay: longest delay of a touchdown [s] (a late push needs time for the foot to get there).
@@ -58,7 +60,9 @@ class StepAdjusterConfig:
 
     enabled: bool = True
     ankle_margin: tuple[float, float] = (0.06, 0.035)
-    timing_gain: float = 0.0
+    ankle_share: float = 1.0
+    error_filter: float = 0.02
+    timing_gain: float = 0.05
     min_remaining: float = 0.2
     max_delay: float = 0.15
     timing_candidates: int = 5
@@ -73,7 +77,10 @@ class StepAdjusterConfig:
         if margin.shape != (2,) or not all(isinstance(v, (int, float, np.floating, np.integer))
                                             and not isinstance(v, bool) and np.isfinite(v) and v >= 0.0 for v in margin):
             raise ControllerError(f"step adjuster ankle_margin must be two finite reals >= 0, got {self.ankle_margin!r}")
-        for name in ("timing_gain", "min_remaining", "max_delay", "max_forward", "max_backward", "min_width", "max_width",
+        if not isinstance(self.ankle_share, (int, float, np.integer, np.floating)) or isinstance(self.ankle_share, bool) \
+                or not 0.0 <= self.ankle_share <= 1.0:
+            raise ControllerError(f"step adjuster ankle_share must lie in [0, 1], got {self.ankle_share!r}")
+        for name in ("error_filter", "timing_gain", "min_remaining", "max_delay", "max_forward", "max_backward", "min_width", "max_width",
                      "max_swing_acceleration"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
@@ -118,7 +125,9 @@ class StepAdjuster:
         self.reset()
 
     def reset(self) -> None:
-        """Nothing is kept between periods; for symmetry with the other layers."""
+        """Forget the filtered DCM error (a new walk)."""
+        self._error: NDArray[np.float64] | None = None
+        self._time = 0.0
 
     def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike) -> StepAdjustment | None:
         """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged."""
@@ -132,12 +141,23 @@ class StepAdjuster:
         if not np.all(np.isfinite(dcm)):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
         pattern.sample(t)  # the plan of step k
-        error = dcm - pattern.dcm(t)
+        raw = dcm - pattern.dcm(t)
+        if self._error is None or c.error_filter <= 0.0:
+            self._error = raw
+        else:  # the swing leg's lift-off and landing shake the measured DCM for a few periods
+            self._error = self._error + min(1.0, (t - self._time) / c.error_filter) * (raw - self._error)
+        self._time = t
+        error = self._error
+        dcm = pattern.dcm(t) + error
         margin = np.asarray(c.ankle_margin, dtype=np.float64)
-        excess = error - np.clip(error, -margin, margin)
-        if not np.any(excess):
+        beyond = np.abs(error) > margin
+        if not np.any(beyond):
             return None
-        wanted = dcm - (error - excess)  # the plan's DCM that leaves the stabilizer the error within the margin
+        # an axis beyond the margin is stepped back to a share of it (hysteresis: no creeping re-adjustment at
+        # the margin's edge, where a tiny excess early in the swing would move the landing by centimetres);
+        # the other axis keeps its error for the stabilizer
+        kept = np.where(beyond, np.clip(error, -c.ankle_share * margin, c.ankle_share * margin), error)
+        wanted = dcm - kept
         stance, landing = pattern.foothold(k + 1)[:2], pattern.foothold(k + 2)[:2]
         side = 1.0 if (k + 2) % 2 == LEFT else -1.0
         low = np.array([stance[0] - c.max_backward, stance[1] + (c.min_width if side > 0 else -c.max_width)])
@@ -170,6 +190,7 @@ class StepAdjuster:
         if float(np.max(np.abs(shift))) < MIN_SHIFT and single == s + remaining:
             return None  # nothing worth replanning the swing for
         pattern.adjust_step(t, shift, single)
+        self._error = dcm - pattern.dcm(t)  # what the new plan leaves
         return StepAdjustment(k, shift, single, error, clipped)
 
     def _reachable(self, target: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64],
