@@ -41,6 +41,10 @@ __all__ = ["AgriReachEnv", "default_config"]
 _REACH = 1.29  # [m] shoulder axis to TCP
 _SHOULDER_Z = (0.55, 1.35)  # [m] shoulder height over the lift range
 _ARM_RADIUS = 0.075  # [m] thickest arm volume
+MAX_PREGRASP_DISTANCE = 0.5
+"""Longest ``pregrasp_distance`` [m]: the pre-grasp point must stay within the arm's reach of the near row."""
+MIN_FRUIT_DIAMETER = 0.07
+"""Smallest ``fruit_diameter`` [m] whose peppers leave the approach corridor clear of their own stem."""
 _CORRIDOR = (0.02, 0.55, 0.05)  # behind the grasp point along -approach: from, to [m], radius [m]
 _OBSTACLE_FEATURES = 15  # mask, one-hot kind (3), hard, 9 vertex coordinates, radius
 
@@ -157,10 +161,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``shoot_probability`` (occluding side shoots) and ``cluster_spread`` (fruit clusters); each may be given
       explicitly instead (``None`` keeps the preset).
     - ``row_distance``, ``row_gap``, ``row_length`` [m] (> 0); ``stem_spacing``, ``stem_diameter``,
-      ``fruit_diameter`` (ranges (low, high) [m], both > 0; the stem spacing at least the largest stem diameter);
+      ``fruit_diameter`` (ranges (low, high) [m], both > 0, fruits at least 0.07 m; the stem spacing at least the largest stem diameter);
       ``harvest_band`` ((low, high) [m], >= 0, at least ``cluster_spread`` high).
     - ``prune`` (bool): place only the parts within the arm's reach.
-    - ``pregrasp_distance`` [m]; ``approach_elevation`` ((min, max) [deg] of the upward tilt of the approach).
+    - ``pregrasp_distance`` [m], in (0, 0.5]; ``approach_elevation`` ((min, max) [deg] of the upward tilt of the approach).
     - ``observed_obstacles`` (K >= 0).
     - ``max_joint_speed`` [rad/s], ``max_lift_speed`` [m/s]: velocity commands at action 1.
     - ``position_weight``, ``orientation_weight``, ``energy_weight``, ``leaf_penalty``, ``collision_penalty``,
@@ -240,13 +244,21 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         if scene["stem_spacing"][0] < scene["stem_diameter"][1]:
             raise EnvConfigError(f"stem_spacing must not let stems overlap: its low {scene['stem_spacing'][0]:g} m "
                                  f"is below the largest stem_diameter {scene['stem_diameter'][1]:g} m")
+        if scene["fruit_diameter"][0] < MIN_FRUIT_DIAMETER:
+            raise EnvConfigError(f"fruit_diameter must be at least {MIN_FRUIT_DIAMETER} m (a smaller pepper sits so close "
+                                 f"to its stem that the gripper's approach corridor, {_CORRIDOR[2]} m in radius, "
+                                 f"touches the stem), got {fruit_diameter!r}")
+        if scene["row_length"] < 2.0 * scene["stem_spacing"][1]:
+            raise EnvConfigError(f"row_length must hold at least two plants: >= 2 x the largest stem_spacing = "
+                                 f"{2.0 * scene['stem_spacing'][1]:g} m, got {scene['row_length']:g} m")
         if scene["harvest_band"][1] - scene["harvest_band"][0] < scene["cluster_spread"]:
             raise EnvConfigError(f"harvest_band must be at least cluster_spread = {scene['cluster_spread']:g} m high, "
                                  f"got {harvest_band!r}")
         self._scene = scene
         self._difficulty = difficulty
         self._prune = check_bool("prune", prune)
-        self._pregrasp_distance = check_real("pregrasp_distance", pregrasp_distance, **positive)
+        self._pregrasp_distance = check_real("pregrasp_distance", pregrasp_distance, high=MAX_PREGRASP_DISTANCE,
+                                             **positive)
         elevation = check_range_pair("approach_elevation", approach_elevation, low=0.0, high=60.0, unit="deg")
         self._elevation = np.deg2rad(elevation)
         self._k = check_int("observed_obstacles", observed_obstacles, low=0)
@@ -322,8 +334,12 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             if self._fits(row):
                 break
         else:
-            raise EnvConfigError("no reachable pepper with a clear approach in 50 generated rows; loosen the scene "
-                                 "(fewer shoots or clusters, a wider harvest_band, a row_distance near 1.05 m)")
+            s = self._scene
+            raise EnvConfigError(
+                "no reachable pepper with a clear approach in 50 generated rows; loosen the scene (fewer shoots or "
+                "clusters, a wider harvest_band, a row_distance near 1.05 m, a longer row_length): row_distance="
+                f"{s['row_distance']:g} m, row_length={s['row_length']:g} m, stem_spacing={s['stem_spacing']}, "
+                f"harvest_band={s['harvest_band']}")
         self._row = row
         self._target = target
         self._place_scene(row, target)

@@ -60,6 +60,14 @@ def default_config() -> dict[str, Any]:
     }
 
 
+MIN_OBSTACLE_RADIUS = 1e-6
+"""Smallest ``obstacle_radius`` [m] (MuJoCo's XML parser rejects subnormal numbers)."""
+MAX_OBSTACLE_RADIUS = 2.0
+"""Largest ``obstacle_radius`` [m] (the arm reaches 1.4 m)."""
+MAX_OBSTACLE_DISTANCE = 10.0
+"""Largest ``obstacle_center`` coordinate [m]."""
+
+
 class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     r"""## Description
     A planar 4-DoF arm moving in the vertical x-z plane (the motivational example of monograph 5.6.2,
@@ -121,7 +129,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
 
     ## Arguments
     - ``obstacle`` (bool): include the sphere obstacle in the scene.
-    - ``obstacle_center`` ((x, z) [m]), ``obstacle_radius`` ([m], > 0).
+    - ``obstacle_center`` ((x, z) [m], within +-10 m), ``obstacle_radius`` ([m], in [1e-6, 2]).
     - ``line_start``, ``line_end`` ((x, z) [m]): the TCP line, both inside the reach of 1.4 m.
     - ``duration`` ([s], > 0): time to traverse the line.
     - ``initial_configuration`` (4 angles [rad]): seed of the starting posture.
@@ -180,7 +188,12 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
             k: (self.OBSERVATION_LAYOUT[k],) for k in ("q", "qdot", "tcp")}, ("q", "qdot", "tcp"))
         self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
-        self._obstacle_radius = check_real("obstacle_radius", obstacle_radius, low=0.0, low_open=True, unit="m")
+        if np.max(np.abs(self._obstacle_center)) > MAX_OBSTACLE_DISTANCE:
+            raise EnvConfigError(f"obstacle_center must lie within +-{MAX_OBSTACLE_DISTANCE} m of the base in x and z, "
+                                 f"got {tuple(self._obstacle_center)}")
+        # an obstacle larger than the workspace (1.4 m reach) makes no task; MuJoCo's geometry overflows far beyond
+        self._obstacle_radius = check_real("obstacle_radius", obstacle_radius, low=MIN_OBSTACLE_RADIUS,
+                                           high=MAX_OBSTACLE_RADIUS, unit="m")
         self._line_start = _point(line_start, "line_start")
         self._line_end = _point(line_end, "line_end")
         for name, p in (("line_start", self._line_start), ("line_end", self._line_end)):
@@ -399,4 +412,5 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
 
 
 def _point(value: Sequence[float], name: str) -> NDArray[np.float64]:
-    return check_real_array(name, value, shape=(2,), what="an (x, z) pair [m] of finite real numbers")
+    point = check_real_array(name, value, shape=(2,), what="an (x, z) pair [m] of finite real numbers")
+    return np.round(point, 12) + 0.0  # to the picometre: MuJoCo's XML parser rejects subnormal numbers (no -0.0)

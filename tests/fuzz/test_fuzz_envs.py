@@ -60,7 +60,13 @@ def _make_and_check(env_id: str, kwargs: dict) -> None:
     except ENV_ERRORS:
         return
     try:
-        obs, _ = env.reset(seed=0)
+        try:
+            obs, _ = env.reset(seed=0)
+        except EnvConfigError as exc:
+            # a scene whose arguments pass one by one but hold no reachable pepper together is only found by
+            # drawing it: the error then names the scene's arguments
+            assert env_id == "redundancy_gym/AgriReach-v0" and "loosen the scene" in str(exc), exc
+            return
         _check_obs(env, obs)
         obs, reward, terminated, truncated, _ = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
         _check_obs(env, obs)

@@ -7,9 +7,11 @@ to step: put the next foothold where the DCM will be. The pattern's DCM at the c
 shift of the landing foot and all later footholds (:meth:`WalkingPattern.preview_dcm`), so one division gives
 the shift for which the replanned DCM equals the measured one (Englsberger et al.'s capture-point step
 adjustment on the previewed plan). Where that landing lies outside the reachable region (a step box around the
-stance foot, no crossing of the feet), the single support is shortened: the foot lands sooner, when the DCM
-has run away less (step timing); if no timing is enough, the shortest one is taken with the landing clipped
-into the box, and the next step takes the rest.
+stance foot, no crossing of the feet), other timings are tried: a shorter single support lands the foot sooner,
+when the DCM has run away less, a delayed one gives a late swing time to get there; the timing whose landing
+comes nearest the one wanted is taken, clipped into the box, and the next step takes the rest. (Where the DCM
+has gone past the stance foot's side, the swing foot cannot cross to catch it: these pushes are the ones still
+lost, see ``bench push``.)
 
 A DCM error within ``ankle_margin`` is left to the stabilizer's ZMP shift inside the stance foot (undisturbed
 walking, whose errors stay inside it, is unchanged). An axis beyond it is stepped back to ``ankle_share`` of the

@@ -107,9 +107,9 @@ def test_an_error_beyond_the_ankle_margin_is_stepped_out_inside_the_box() -> Non
         assert np.sign(landing[axis] - nominal[axis]) == np.sign(error[axis])  # steps where it is pushed
         assert config.min_width <= stance[1] - landing[1] <= config.max_width
         assert -config.max_backward <= landing[0] - stance[0] <= config.max_forward
-        if not adjustment.clipped:  # the plan then holds exactly the margin on the pushed axis
+        if not adjustment.clipped:  # the plan then leaves exactly ankle_share of the margin on the pushed axis
             left = planned + error - pattern.sample(t).dcm
-            assert abs(left[axis]) == pytest.approx(config.ankle_margin[axis], abs=1e-9)
+            assert abs(left[axis]) == pytest.approx(config.ankle_share * config.ankle_margin[axis], abs=1e-9)
 
 
 def test_a_push_towards_the_stance_foot_is_clipped_at_the_narrowest_step() -> None:
