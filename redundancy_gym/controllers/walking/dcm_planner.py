@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..exceptions import ControllerError
 
-__all__ = ["GRAVITY", "ComState", "DcmPlan", "DcmPlanner"]
+__all__ = ["GRAVITY", "MAX_EXPONENT", "OMEGA_RANGE", "ComState", "DcmPlan", "DcmPlanner", "horizontal_point"]
 
 GRAVITY = 9.81
 """Gravitational acceleration [m/s^2] of the reduced model."""
@@ -35,6 +35,17 @@ OMEGA_RANGE = (0.1, 100.0)
 Outside it the exponentials of a step over- or underflow."""
 MAX_EXPONENT = 700.0
 """Largest ``omega s`` evaluated (``e^700`` ~ 1e304): a plan sampled long after it diverged stays finite."""
+
+
+def horizontal_point(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    """``value`` as a finite (x, y) [m]; ControllerError naming ``name`` otherwise."""
+    try:
+        point = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ControllerError(f"{name} must be a finite (x, y), got {value!r}") from None
+    if point.shape != (2,) or not np.all(np.isfinite(point)):
+        raise ControllerError(f"{name} must be a finite (x, y), got {value!r}")
+    return point
 
 
 def _divergent(c: NDArray[np.float64], exponent: float) -> NDArray[np.float64]:
@@ -159,7 +170,7 @@ class DcmPlanner:
     def plan(self, times: ArrayLike, zmp: ArrayLike, com: ArrayLike) -> DcmPlan:
         """The plan from the CoM ``com`` (x, y) [m] at the first knot; the DCM comes from :meth:`dcm_at_knots`."""
         times, zmp = self._check(times, zmp)
-        com = self._check_com(com)
+        com = horizontal_point("com", com)
         dcm = self.dcm_at_knots(times, zmp)
         x = np.empty_like(zmp)
         x[0] = com
@@ -180,7 +191,7 @@ class DcmPlanner:
         """
         times, zmp = self._check(times, zmp)
         zmp = zmp.copy()
-        com = self._check_com(com)
+        com = horizontal_point("com", com)
         zmp[0] = 0.0
         offset = self.dcm_at_knots(times, zmp)[0]
         zmp[0] = 1.0
@@ -190,16 +201,6 @@ class DcmPlanner:
                                   f"segment of {times[1] - times[0]!r} s is too short for a start from rest")
         zmp[0] = (com - offset) / gain
         return zmp
-
-    @staticmethod
-    def _check_com(com: ArrayLike) -> NDArray[np.float64]:
-        try:
-            value = np.asarray(com, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ControllerError(f"com must be a finite (x, y), got {com!r}") from None
-        if value.shape != (2,) or not np.all(np.isfinite(value)):
-            raise ControllerError(f"com must be a finite (x, y), got {com!r}")
-        return value
 
     @staticmethod
     def _check(times: ArrayLike, zmp: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

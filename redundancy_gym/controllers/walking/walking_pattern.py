@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..exceptions import ControllerError
-from .dcm_planner import DcmPlan, DcmPlanner
+from .dcm_planner import DcmPlan, DcmPlanner, horizontal_point
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
 
@@ -135,12 +135,7 @@ class WalkingPattern:
             start = np.zeros(0)
         if start.shape != (2, 3) or not np.all(np.isfinite(start)):
             raise ControllerError(f"right_foot and left_foot must be finite 3-vectors, got {right_foot!r}, {left_foot!r}")
-        try:
-            com = np.asarray(com, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ControllerError(f"com must be a finite (x, y), got {com!r}") from None
-        if com.shape != (2,) or not np.all(np.isfinite(com)):
-            raise ControllerError(f"com must be a finite (x, y), got {com!r}")
+        com = horizontal_point("com", com)
         self.step_length, self.step_duration = config.timing(speed)
         self.speed = self.step_length / self.step_duration
         self.ground = float(start[:, 2].mean())
@@ -386,11 +381,8 @@ class WalkingPattern:
             ControllerError: ``t`` is not inside a single support or ``single`` ends before ``t``.
         """
         k, s, _ = self._check_adjustable(t, single)
-        try:
-            shift = np.asarray(shift, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ControllerError(f"shift must be a finite (x, y) [m], got {shift!r}") from None
-        if shift.shape != (2,) or not np.all(np.isfinite(shift)) or float(np.max(np.abs(shift))) > MAX_SHIFT:
+        shift = horizontal_point("shift", shift)
+        if float(np.max(np.abs(shift))) > MAX_SHIFT:
             raise ControllerError(f"shift must be a finite (x, y) within +-{MAX_SHIFT} m, got {shift!r}")
         (xy, vxy, axy), (z, vz, az) = self._swing_kinematics(k, s)
         nominal, _ = self._nominal_swing_time(k, s)
