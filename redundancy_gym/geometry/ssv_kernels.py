@@ -572,6 +572,7 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
 # before the closest-point routines: their squared lengths and 2x2 determinants (fourth powers) would underflow
 # to zero below ~1e-80 m (every triangle and segment pair taken for degenerate) or overflow above ~1e77 m.
 _SCALE_LOW = 2.0 ** -100
+_SUBNORMAL = 2.0 ** -1000  # below, the scale 2^-exponent itself overflows: such a pair is left as it is (distance ~0)
 _SCALE_HIGH = 2.0 ** 100
 
 
@@ -598,7 +599,7 @@ def _closest(v, kinds, i, j, g):
     b0, b1, b2 = _load(v, j, ox, oy, oz)
     extent = max(_extent(a0, a1, a2), _extent(b0, b1, b2))
     scale = 1.0
-    if extent > 0.0 and (extent < _SCALE_LOW or extent > _SCALE_HIGH):
+    if extent > _SUBNORMAL and (extent < _SCALE_LOW or extent > _SCALE_HIGH):
         scale = math.ldexp(1.0, -math.frexp(extent)[1])
         a1, a2, b0, b1, b2 = _times(a1, scale), _times(a2, scale), _times(b0, scale), _times(b1, scale), \
             _times(b2, scale)

@@ -199,3 +199,17 @@ def test_crossing_segments_and_a_point_over_a_face_keep_their_closed_form_at_eve
     through = distance(LSS([0.2 * s, 0.2 * s, -s], [0.2 * s, 0.2 * s, s], 0.1 * s),
                        TSS([0, 0, 0], [s, 0, 0], [0, s, 0], 0.05 * s))
     assert through.distance / s == pytest.approx(-0.15, rel=1e-12)
+
+
+@pytest.mark.parametrize("gap", [2.2250738585e-313, 5e-324, 1e-305])
+@pytest.mark.parametrize("kinds", [("PSS", "PSS"), ("PSS", "LSS"), ("LSS", "TSS")])
+def test_subnormal_separation_is_finite_and_about_zero(gap: float, kinds: tuple[str, str]) -> None:
+    """Volumes a subnormal distance apart (nightly fuzz: the power-of-two rescaling of tiny pairs overflowed to inf
+    and gave NaN): the distance is finite and within a few subnormals of the gap."""
+    make = {"PSS": lambda o: PSS(o, 0.0), "LSS": lambda o: LSS(o, o + [0.0, 0.0, gap], 0.0),
+            "TSS": lambda o: TSS(o, o + [gap, 0.0, 0.0], o + [0.0, gap, 0.0], 0.0)}
+    a = make[kinds[0]](np.zeros(3))
+    b = make[kinds[1]](np.array([0.0, 0.0, 2.0 * gap]))
+    result = distance(a, b)
+    assert np.isfinite(result.distance) and abs(result.distance) <= 4.0 * gap
+    assert np.all(np.isfinite(result.point_a)) and np.all(np.isfinite(result.point_b))
