@@ -373,9 +373,10 @@ class WalkingPattern:
         single support); the swing and the CoM plan are replanned from ``t`` on.
 
         The swing foot continues from its state at ``t`` (position, velocity and acceleration: the reference
-        stays C2) along a new quintic to the new landing; its height and pitch follow the planned profiles,
-        time-scaled to the remaining single support. The CoM plan restarts at ``t`` from the current plan's CoM;
-        its DCM at ``t`` follows from the new footholds (:meth:`preview_dcm`).
+        stays C2): it rises to the step height, is above its landing at ``ADJUSTED_OVER`` of the time left and
+        then comes straight down; its toes-down pitch follows the planned profile, time-scaled. The CoM plan
+        restarts at ``t`` from the current plan's CoM; its DCM at ``t`` follows from the new footholds and
+        timing (:meth:`preview_dcm`).
 
         Raises:
             ControllerError: ``t`` is not inside a single support or ``single`` ends before ``t``.
