@@ -157,9 +157,8 @@ class StepAdjuster:
         beyond = np.abs(error) > margin
         if not np.any(beyond):
             return None
-        # an axis beyond the margin is stepped back to a share of it (hysteresis: no creeping re-adjustment at
-        # the margin's edge, where a tiny excess early in the swing would move the landing by centimetres);
-        # the other axis keeps its error for the stabilizer
+        # an axis beyond the margin is stepped back to ankle_share of it (below 1, a hysteresis against
+        # re-adjusting at the margin's edge); the other axis keeps its error for the stabilizer
         kept = np.where(beyond, np.clip(error, -c.ankle_share * margin, c.ankle_share * margin), error)
         wanted = dcm - kept
         stance, landing = pattern.foothold(k + 1)[:2], pattern.foothold(k + 2)[:2]
