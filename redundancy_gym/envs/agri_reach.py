@@ -26,6 +26,7 @@ from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
 from .validation import (
+    MAX_FRAME_SKIP,
     check_bool,
     check_choice,
     check_int,
@@ -171,7 +172,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``success_bonus`` (>= 0): reward weights.
     - ``success_position_tolerance`` [m], ``success_angle_tolerance`` [deg].
     - ``clearance_horizon`` [m]: pairs farther than this (by bounding spheres) are not computed exactly.
-    - ``reset_noise_scale`` [m, rad]; ``frame_skip`` (physics steps of 10 ms per control step).
+    - ``reset_noise_scale`` [m, rad]; ``frame_skip`` (int in [1, 1000]: physics steps of 10 ms per control step).
     - ``reference_speed`` [m/s], ``reference_turn_rate`` [rad/s], ``reference_min_duration`` [s],
       ``reference_approach_speed`` [m/s]: the timing of the reference path (average TCP speed and tool-axis turn
       rate of the move to the pre-grasp pose, its shortest duration, the approach speed). The shortest
@@ -279,7 +280,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             check_real("reference_approach_speed", reference_approach_speed, low=0.0, low_open=True, unit="m/s"))
         self._path: GraspPath | None = None
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0)
-        self.frame_skip = check_int("frame_skip", frame_skip, low=1)
+        self.frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
         check_choice("camera_name", camera_name, ("side", "front"))
         width, height = check_render_arguments(render_mode, width, height, camera_name,
                                                tuple(self.metadata["render_modes"]))

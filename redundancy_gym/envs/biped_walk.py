@@ -23,7 +23,8 @@ from ..geometry import PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
-from .validation import check_bool, check_int, check_noise, check_real, check_render_arguments, render_modes
+from .validation import (MAX_FRAME_SKIP, check_bool, check_int, check_noise, check_real, check_render_arguments,
+                         render_modes)
 
 __all__ = ["MAX_TARGET_SPEED", "NOMINAL_POSTURE", "STANDING_PELVIS_HEIGHT", "SUCCESS_SPEED_TOLERANCE",
            "BipedWalkEnv", "default_config"]
@@ -148,7 +149,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - ``reset_noise_scale`` ([rad], >= 0): upper-body joint noise of the starting posture.
     - ``velocity_feedforward`` (bool): servo velocity feedforward from the target rate.
     - ``floor_friction`` (> 0): sliding friction of the floor.
-    - ``frame_skip`` (int >= 1): physics steps of 2 ms per control step.
+    - ``frame_skip`` (int in [1, 1000]): physics steps of 2 ms per control step.
     - ``sensor_noise`` (fault, default None = off): zero-mean Gaussian noise added to the observation's sensor
       channels at every step and reset, drawn from the env's generator (``reset(seed=...)`` reproduces it). A
       float is the std of every sensor group, in each group's unit; a dict gives a std per group (others get
@@ -227,7 +228,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
         self._velocity_feedforward = check_bool("velocity_feedforward", velocity_feedforward)
         self._floor_friction = check_real("floor_friction", floor_friction, low=0.0, low_open=True)
-        frame_skip = check_int("frame_skip", frame_skip, low=1)
+        frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
         self._torque_scale = check_real("actuator_torque_scale", actuator_torque_scale, low=0.0, high=1.0,
                                         low_open=True, note="a fraction of the servos' torque limits")
         layout = self.OBSERVATION_LAYOUT

@@ -23,6 +23,7 @@ from ..assets import (
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .exceptions import EnvConfigError, InvalidActionError
 from .validation import (
+    MAX_FRAME_SKIP,
     check_bool,
     check_int,
     check_noise,
@@ -137,7 +138,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - ``tracking_weight``, ``energy_weight``, ``collision_penalty`` (>= 0): reward weights.
     - ``reset_noise_scale`` ([rad], >= 0): joint noise of the starting posture.
     - ``success_tolerance`` ([m], > 0): largest TCP error of a successful episode.
-    - ``frame_skip`` (int >= 1): physics steps of 1 ms per control step.
+    - ``frame_skip`` (int in [1, 1000]): physics steps of 1 ms per control step.
     - ``obs_noise`` (fault, default None = off): zero-mean Gaussian noise added to the measured channels of the
       observation at every step and reset, drawn from the env's generator (``reset(seed=...)`` reproduces it);
       a float std applies to ``q`` [rad], ``qdot`` [rad/s] and ``tcp`` [m] alike, a dict gives one per group
@@ -206,7 +207,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._collision_penalty = check_real("collision_penalty", collision_penalty, low=0.0)
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
         self._success_tolerance = check_real("success_tolerance", success_tolerance, low=0.0, low_open=True, unit="m")
-        frame_skip = check_int("frame_skip", frame_skip, low=1)
+        frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
         seed_q = check_real_array("initial_configuration", initial_configuration, shape=(4,),
                                   what="4 joint angles [rad], finite real numbers")
         width, height = check_render_arguments(render_mode, width, height, camera_name)

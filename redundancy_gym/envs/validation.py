@@ -16,9 +16,14 @@ from .. import validation as _checks
 from ..rendering_backend import can_open_window, require_render_backend, require_window
 from .exceptions import EnvConfigError
 
-__all__ = ["RENDER_MODES", "check_bool", "check_choice", "check_int", "check_noise", "check_range_pair", "check_real",
+__all__ = ["MAX_FRAME_SKIP", "RENDER_MODES", "check_bool", "check_choice", "check_int", "check_noise", "check_range_pair", "check_real",
            "check_real_array", "check_render_arguments", "check_render_backend", "non_negative", "positive",
            "render_modes", "warn_if_time_limit_short"]
+
+
+MAX_FRAME_SKIP = 1000
+"""Largest ``frame_skip`` of every env: physics steps per control step (a control period of seconds; beyond, one
+``step`` would run for minutes)."""
 
 
 def render_modes(*offscreen: str) -> list[str]:
