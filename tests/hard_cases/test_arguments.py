@@ -59,7 +59,7 @@ def test_width_as_a_string_is_rejected(env_id: str) -> None:
     (PLANAR, {"duration": "2.0"}, r"duration must be a finite real number > 0.*'2.0'"),
     (PLANAR, {"obstacle_radius": True}, r"obstacle_radius must be a finite real number in \[1e-06, 2\] \[m\], got True"),
     (PLANAR, {"obstacle_center": ("0.7", "-0.12")}, r"obstacle_center must be .*real numbers"),
-    (PLANAR, {"frame_skip": 2.0}, r"frame_skip must be an int >= 1"),
+    (PLANAR, {"frame_skip": 2.0}, r"frame_skip must be an int in \[1, 1000\], got 2.0"),
     (PLANAR, {"height": 0}, r"height must be an int >= 1"),
     (AGRI, {"observed_obstacles": True}, r"observed_obstacles must be an int >= 0"),
     (AGRI, {"difficulty": "extreme"}, r"difficulty must be one of easy, medium, hard; got 'extreme'"),
