@@ -98,6 +98,8 @@ class WalkingPolicy(PerEnvPolicy):
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         lower, upper = base.joint_limits
         c = self.config
+        if c.step_min_width > c.step_max_width:
+            raise PolicyError(f"step_min_width={c.step_min_width!r} exceeds step_max_width={c.step_max_width!r} [m]")
         try:
             gait = GaitConfig(step_duration=c.step_duration, com_height=c.com_height,
                               min_step_duration=min(GaitConfig.min_step_duration, c.step_duration))

@@ -193,16 +193,25 @@ def plot_push_bench(report: dict[str, Any], path: str) -> str:
     for ax, direction in zip(axes, DIRECTIONS):
         for name, style in (("step_adjustment", "o-"), ("baseline", "s--")):
             rows = report["results"][name][direction]["levels"]
-            ax.plot([r["impulse"] for r in rows], [r["recovered"] / r["trials_run"] for r in rows], style,
-                    label=f"{labels[name]}: {report['results'][name][direction]['impulse_recovered']:g} N s")
+            x, y = [r["impulse"] for r in rows], [r["recovered"] / r["trials_run"] for r in rows]
+            line, = ax.plot(x, y, style,
+                            label=f"{labels[name]}: {report['results'][name][direction]['impulse_recovered']:g} N s")
+            for xi, yi, r in zip(x, y, rows):  # recovered / run: a stopped level ran fewer trials
+                ax.annotate(f"{r['recovered']}/{r['trials_run']}", (xi, yi), textcoords="offset points",
+                            xytext=(4, -12 if name == "baseline" else 5), fontsize=7, color=line.get_color())
         ax.axhline(report["recovery_target"], color="grey", lw=0.8, ls=":")
+        lowest = min(r["recovered"] / r["trials_run"] for name in labels
+                     for r in report["results"][name][direction]["levels"])
+        ax.set_ylim(min(lowest, report["recovery_target"]) - 0.08, 1.06)  # room for the labels
         ax.set_title(f"{direction} pushes, {report['push_duration']} s on the torso")
         ax.set_xlabel("impulse [N s]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower left")
     axes[0].set_ylabel("share of trials recovered")
-    fig.suptitle(f"BipedWalk-v0 at {report['speed']} m/s: largest impulse recovered in >= "
-                 f"{report['recovery_target']:.0%} of trials (a level stops at the first >10 % falls)", fontsize=10)
+    fig.suptitle(f"BipedWalk-v0 at {report['speed']} m/s, {report['trials_per_level']} trials per impulse: the largest "
+                 f"impulse recovered in >= {report['recovery_target']:.0%} of them\n(a level stops once more than "
+                 f"{1.0 - report['recovery_target']:.0%} of its trials have fallen; labels: recovered / run)",
+                 fontsize=10)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
