@@ -137,7 +137,6 @@ def _parser() -> argparse.ArgumentParser:
                              "--quick: 1)")
     budget.add_argument("--steps", type=int, metavar="N",
                         help="soak only: steps per env instead of --seconds, split over the action sources")
-
     be.add_argument("--trials", type=int, metavar="N",
                     help="push only: trials per impulse level (default: 20, --quick: 5)")
 

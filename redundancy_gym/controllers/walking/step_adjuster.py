@@ -144,15 +144,15 @@ class StepAdjuster:
         dcm = np.asarray(dcm, dtype=np.float64)[:2]
         if not np.all(np.isfinite(dcm)):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
-        pattern.sample(t)  # the plan of step k
-        raw = dcm - pattern.dcm(t)
+        planned = pattern.dcm(t)
+        raw = dcm - planned
         if self._error is None or c.error_filter <= 0.0:
             self._error = raw
         else:  # the swing leg's lift-off and landing shake the measured DCM for a few periods
             self._error = self._error + min(1.0, (t - self._time) / c.error_filter) * (raw - self._error)
         self._time = t
         error = self._error
-        dcm = pattern.dcm(t) + error
+        dcm = planned + error
         margin = np.asarray(c.ankle_margin, dtype=np.float64)
         beyond = np.abs(error) > margin
         if not np.any(beyond):

@@ -349,7 +349,10 @@ class WalkingPattern:
         return np.asarray(xy, dtype=np.float64).copy(), np.asarray(vxy, dtype=np.float64).copy()
 
     def dcm(self, t: float) -> NDArray[np.float64]:
-        """The planned DCM (x, y) [m] at ``t`` (the current plan; :meth:`sample` replans at step starts)."""
+        """The planned DCM (x, y) [m] at ``t`` (replanned at a step start, as :meth:`sample` does)."""
+        k = self.step_at(t)
+        if k > self._plan_step:
+            self._replan(k)
         return self._plan.sample(t).dcm
 
     def preview_dcm(self, t: float, shift: ArrayLike, single: float) -> NDArray[np.float64]:
