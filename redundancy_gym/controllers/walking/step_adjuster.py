@@ -133,8 +133,12 @@ class StepAdjuster:
         self._error: NDArray[np.float64] | None = None
         self._time = 0.0
 
-    def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike) -> StepAdjustment | None:
-        """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged."""
+    def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike,
+               planned: NDArray[np.float64] | None = None) -> StepAdjustment | None:
+        """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged.
+
+        ``planned`` is the pattern's DCM at ``t`` where the caller has sampled it already (else it is read here).
+        """
         c = self.config
         if not c.enabled:
             return None
@@ -144,7 +148,7 @@ class StepAdjuster:
         dcm = np.asarray(dcm, dtype=np.float64)[:2]
         if not np.all(np.isfinite(dcm)):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
-        planned = pattern.dcm(t)
+        planned = pattern.dcm(t) if planned is None else planned[:2]
         raw = dcm - planned
         if self._error is None or c.error_filter <= 0.0:
             self._error = raw

@@ -286,10 +286,11 @@ class WalkingController:
         v = np.asarray(v, dtype=np.float64)
         com, com_velocity, rotations, positions = model.measure(q, v, self._ankles)
         contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
-        adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega)
-        if adjustment is not None:
-            self._next = None  # the plan changed from now on
         start = self._next if self._next is not None and self._next.time == self.time else self.pattern.sample(self.time)
+        adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega,
+                                               planned=start.dcm)
+        if adjustment is not None:
+            start = self.pattern.sample(self.time)  # the plan changed from now on
         end = self.pattern.sample(self.time + self.dt)
         self._next = end
         feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
