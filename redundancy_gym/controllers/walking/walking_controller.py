@@ -84,7 +84,7 @@ class WalkingCommand(NamedTuple):
         joint_targets: position targets of the actuated joints [rad].
         pattern: the pattern sample at the start of the period.
         stabilizer: the stabilizer output.
-        contact: the ZMP estimate from the ankle sensors.
+        contact: the ZMP estimate from the ankle sensors (in the stance foot's frame where ``stance_frame``).
         ik: the whole-body IK result (``ik.q`` is the kinematic model's configuration).
         adjustment: the step adjustment made in this period (push recovery), or None.
     """
@@ -112,13 +112,15 @@ class WalkingController:
         torso_frame: frame of the upper body whose orientation is kept upright.
         correction_iterations: kinematic rollouts that estimate the multi-body ZMP correction (0: plain LIPM).
         correction_samples: knots per step of the correction (``double_support_ratio`` must fall on one).
+        stance_frame: measure the CoM, its velocity and the ZMP relative to the stance foot's sole, moved onto its
+            planned pose (False: in the world frame).
     """
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
                  gait: GaitConfig | None = None, gains: StabilizerGains | None = None,
                  ik: WalkingIkConfig | None = None, stepping: StepAdjusterConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
-                 correction_iterations: int = 3, correction_samples: int = 20) -> None:
+                 correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -147,6 +149,7 @@ class WalkingController:
         self._corrections: dict[tuple[float, bool], ZmpCorrection] = {}
         self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
         self.step_adjuster = StepAdjuster(stepping)
+        self.stance_frame = stance_frame
         self._mass = model.total_mass
         self.pattern: WalkingPattern | None = None
         self.ik: WholeBodyIk | None = None
@@ -268,6 +271,31 @@ class WalkingController:
         a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
         return a
 
+    def _in_stance_frame(self, sample: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
+                         rotations: NDArray[np.float64], positions: NDArray[np.float64]
+                         ) -> tuple[NDArray[np.float64], ...]:
+        """The measurement moved rigidly (yaw about z and a horizontal shift) so that the measured stance sole lies on
+        its planned pose (rows 2, 3 of ``rotations``/``positions``: the soles right, left).
+
+        The IK's kinematic model stands on the planned footholds; the real robot stands where its feet landed and
+        turns with its stance foot when that slips about the vertical (a long, quick swing). Its joints track the
+        model's, so the real swing foot lands where the plan puts it relative to the real stance foot: measuring
+        the CoM, its velocity and the ZMP relative to the stance foot keeps the plan, the stabilizer and the step
+        adjuster in one frame (in the world frame a 10 deg yaw slip made footholds 0.17 m off the plan, which the
+        feedback then pulled the CoM towards).
+        """
+        k = sample.step
+        stance = (k + 1) % 2 if k >= 0 else 1  # the standing start: the left foot, the first stance foot
+        rotation = rotations[2 + stance]
+        yaw = math.atan2(rotation[1, 0], rotation[0, 0])
+        c, s = math.cos(yaw), math.sin(yaw)
+        turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # R_z(-yaw)
+        planned = sample.feet[stance]
+        real = positions[2 + stance]
+        shift = np.array([planned[0], planned[1], 0.0]) - turn @ np.array([real[0], real[1], 0.0])
+        return (turn @ com + shift, turn @ com_velocity, turn @ rotations,
+                positions @ turn.T + shift)
+
     def _reference(self, sample: PatternSample, offset: NDArray[np.float64],
                    rate: NDArray[np.float64]) -> WholeBodyReference:
         return WholeBodyReference.from_array(self._reference_array(sample, offset, rate))
@@ -284,9 +312,13 @@ class WalkingController:
         model = self.model
         q = model.check_configuration(q)
         v = np.asarray(v, dtype=np.float64)
-        com, com_velocity, rotations, positions = model.measure(q, v, self._ankles)
-        contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
         start = self._next if self._next is not None and self._next.time == self.time else self.pattern.sample(self.time)
+        com, com_velocity, rotations, positions = model.measure(q, v, self._ankles + self._feet)
+        if self.stance_frame:
+            com, com_velocity, rotations, positions = self._in_stance_frame(start, com, com_velocity, rotations,
+                                                                             positions)
+        rotations, positions = rotations[:2], positions[:2]
+        contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
         adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega,
                                                planned=start.dcm)
         if adjustment is not None:
