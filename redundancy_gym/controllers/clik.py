@@ -68,7 +68,8 @@ class ClikResult(NamedTuple):
 
 
 class Clik:
-    """Velocity-level CLIK ``qdot = J#_W (wdot_d + K e) - alpha N_W W^-1 (dH/dq)^T`` (5.5), (5.14).
+    """Velocity-level CLIK ``qdot = J#_W (wdot_d + K e) - alpha N_W W^-1 (dH/dq)^T`` (5.5), (5.14), plus an
+    optional nullspace input ``N_W u`` (5.100) given to :meth:`step`.
 
     Solved as in Algorithm 10 (Cholesky of ``J W^-1 J^T``, no explicit pseudoinverse). Variants:
     ``"pseudoinverse"`` (exact; reports singular configurations), ``"dls"`` (damped least squares (5.22) whose
@@ -157,9 +158,17 @@ class Clik:
         value, gradient = sum_objectives(self.objectives, self.model, q)
         return ClikProblem(q, jacobian, error, velocity, gradient, value)
 
-    def solve(self, problem: ClikProblem) -> ClikResult:
-        """Joint velocities for a built problem."""
+    def solve(self, problem: ClikProblem, nullspace_input: ArrayLike | None = None) -> ClikResult:
+        """Joint velocities for a built problem; ``nullspace_input``: the ``u`` of (5.100) (nv) [rad/s or m/s],
+        added as ``N u`` beside the objectives' ``-alpha N W^-1 dH/dq`` (ignored by ``"transpose"``, which has no
+        projector)."""
         z = self.nullspace_gain * problem.gradient if self.objectives else None
+        if nullspace_input is not None:
+            u = check_finite(nullspace_input, "nullspace_input")
+            if u.shape != (self.model.nv,):
+                raise ControllerError(f"nullspace_input must be finite with shape ({self.model.nv},), got {u.shape}")
+            wu = self.weights.apply(u)
+            z = -wu if z is None else z - wu
         res = resolve(problem.jacobian, problem.velocity, z, self.weights, method=self.method,
                       singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,
                       dls_max_damping=self.dls_max_damping)
@@ -167,6 +176,7 @@ class Clik:
         return ClikResult(qdot, problem.error, float(np.linalg.norm(problem.error)), res.sigma_min, res.damping,
                           problem.objective, res.success, res.status, limited)
 
-    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
-        """``solve(build(q, target, target_velocity))``."""
-        return self.solve(self.build(q, target, target_velocity))
+    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None,
+             nullspace_input: ArrayLike | None = None) -> ClikResult:
+        """``solve(build(q, target, target_velocity), nullspace_input)``."""
+        return self.solve(self.build(q, target, target_velocity), nullspace_input)

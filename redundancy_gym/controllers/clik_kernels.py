@@ -265,9 +265,9 @@ def _bound(f, i, nv, nb, q, x):
 
 
 @njit(**_JIT)
-def clik_step(f, i, has_velocity):
+def clik_step(f, i, has_velocity, has_input):
     """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
-    (6)) and writes ``outputs`` (qdot, bounded by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics);
+    (6), nullspace input ``u`` of (5.100) (nv), used where ``has_input``) and writes ``outputs`` (qdot, bounded by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics);
     returns a code (0 ok, 1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target
     velocity)."""
     dims = _iv(i, _I_DIMS)
@@ -371,13 +371,19 @@ def clik_step(f, i, has_velocity):
     elif not sigma >= singular_threshold:
         extra[1], extra[2], extra[4] = sigma, 0.0, 2.0
         return OK
+    # z = alpha dH/dq - W u: the nullspace term -N W^-1 z is the objectives' descent plus N u (5.100)
+    u = inputs[nq + 12:nq + 12 + nv]
+    nullspace = objectives or has_input
     lam = scratch[102:108]
     for r in range(m):
         lam[r] = rhs[r]
-        if objectives:
+        if nullspace:
             acc = 0.0
             for k in range(nv):
-                acc += jac[r, k] * winv[k] * alpha * gradient[k]
+                z = alpha * gradient[k] if objectives else 0.0
+                if has_input:
+                    z -= u[k] / winv[k]
+                acc += jac[r, k] * winv[k] * z
             lam[r] += acc
     if not _cholesky_solve(b, m, lam, scratch[108:144]):
         extra[1], extra[2], extra[4] = sigma, damping, 2.0
@@ -389,6 +395,8 @@ def clik_step(f, i, has_velocity):
             acc += jac[r, k] * lam[r]
         if objectives:
             acc -= alpha * gradient[k]
+        if has_input:
+            acc += u[k] / winv[k]
         x[k] = winv[k] * acc
         finite = finite and np.isfinite(x[k])
     if not finite:

@@ -108,7 +108,7 @@ class CompiledClik:
                                            o.potential.switch_ratio, o.weight) for o in limits]),
             "posture_reference": np.array([o.reference for o in postures]),
             "posture_weights": np.array([o.weights for o in postures]),
-            "inputs": np.zeros(nq + 12), "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
+            "inputs": np.zeros(nq + 12 + nv), "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
             "jacobian6": np.zeros((6, nv)), "jacobian": np.zeros((m, nv)), "gradient": np.zeros(nv),
             "scratch": np.zeros(SCRATCH_SIZE),
             "max_velocity": clik.bounds.max_velocity, "position_lower": clik.bounds.lower,
@@ -133,7 +133,7 @@ class CompiledClik:
         self._outputs = self._field("outputs")
         self._version = -1
         self._refresh_environment()
-        self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean)")
+        self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
@@ -187,7 +187,8 @@ class CompiledClik:
             world[s] = rotation @ centers[s] + translation
         self._version = model.version
 
-    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None) -> ClikResult:
+    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None,
+             nullspace_input: ArrayLike | None = None) -> ClikResult:
         """:meth:`Clik.step` (same arguments, same result to round-off) in one kernel call."""
         if self.collision is not None and self.collision.collision_model.version != self._version:
             self._refresh_environment()
@@ -208,7 +209,13 @@ class CompiledClik:
             if velocity.shape != (width,):
                 raise ControllerError(f"target_velocity must have shape ({width},), got {velocity.shape}")
             inputs[nq + 6:nq + 6 + width] = velocity
-        code = self._kernel(self._f, self._i, has_velocity)
+        has_input = nullspace_input is not None
+        if has_input:
+            u = as_float_array(nullspace_input, "nullspace_input")
+            if u.shape != (self._nv,) or not np.all(np.isfinite(u)):
+                raise ControllerError(f"nullspace_input must be finite with shape ({self._nv},), got {u.shape}")
+            inputs[nq + 12:nq + 12 + self._nv] = u
+        code = self._kernel(self._f, self._i, has_velocity, has_input)
         if code != OK:
             self._raise(code, q, target, target_velocity)
         out = self._outputs
@@ -231,6 +238,12 @@ class CompiledClik:
         elif code == ZERO_AXIS:
             raise ControllerError("the target axis must not be zero")
         raise ControllerError(f"the CLIK kernel returned code {code}")  # not reached: each check above raises
+
+    @property
+    def last_gradient(self) -> NDArray[np.float64]:
+        """``(dH/dq)^T`` of the summed objectives at the last step's configuration (nv), as :class:`ClikProblem`
+        gives it (zeros when the controller has no objectives)."""
+        return self._field("gradient").copy()
 
     @property
     def last_min_distance(self) -> float:
