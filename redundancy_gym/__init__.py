@@ -28,8 +28,8 @@ register_envs()
 def make_policy(name: str, env: Any, **kwargs: Any) -> Any:
     """Build a policy for ``env`` by name (``clik``, ``zero``, ``random``) or from a stable-baselines3 ``.zip``.
 
-    See :func:`redundancy_gym.controllers.policies.make_policy`.
+    See :func:`redundancy_gym.policies.make_policy`.
     """
-    from .controllers.policies import make_policy as _make_policy
+    from .policies import make_policy as _make_policy
 
     return _make_policy(name, env, **kwargs)

@@ -156,7 +156,7 @@ def list_envs() -> list[dict[str, Any]]:
     import gymnasium as gym
 
     from . import ENV_IDS
-    from .controllers.policies import supported_policies
+    from .policies import supported_policies
 
     rows = []
     for env_id in ENV_IDS:
@@ -224,7 +224,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--seconds and --steps apply to bench soak only")
     if args.command == "bench" and args.name != "push" and args.trials is not None:
         parser.error("--trials applies to bench push only")
-    from .controllers.exceptions import PolicyError
+    from .policies import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
 

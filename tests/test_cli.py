@@ -6,7 +6,7 @@ import pytest
 
 import redundancy_gym
 from redundancy_gym.cli import _parser, main
-from redundancy_gym.controllers import PolicyError
+from redundancy_gym.policies import PolicyError
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"

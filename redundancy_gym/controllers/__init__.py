@@ -1,14 +1,14 @@
 """Model-based controllers of monograph chapter 5 (numpy + pinocchio; no simulator inside).
 
-The core never imports gymnasium, mujoco, envs or eval; :mod:`.policies` joins controllers and envs by duck
-typing and is imported on demand (``redundancy_gym.make_policy``).
+The core never imports gymnasium, mujoco, envs, policies, wrappers or eval: :mod:`redundancy_gym.policies` and
+:mod:`redundancy_gym.wrappers` join controllers and envs.
 """
 
 from .acceleration_clik import AccelerationClik, AccelerationClikResult
 from .clik import Clik, ClikProblem, ClikResult
 from .collision_objective import CollisionObjective
 from .compiled_clik import CompiledClik
-from .exceptions import ControllerError, PolicyError
+from .exceptions import ControllerError
 from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
@@ -34,7 +34,6 @@ __all__ = [
     "JointLimitObjective",
     "Objective",
     "ObjectiveValue",
-    "PolicyError",
     "PostureObjective",
     "PredictiveIk",
     "PredictiveResult",

@@ -197,6 +197,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
     ROBOT_XML = AGRI_ARM_XML
     TCP_FRAME = AGRI_ARM_TCP
+    # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
+    CAPABILITIES = frozenset({"grasp_task"})
 
     def __init__(self, difficulty: str = "medium", leaves_per_stem: int | None = None,
                  fruits_per_stem: Sequence[int] | None = None, shoot_probability: float | None = None,

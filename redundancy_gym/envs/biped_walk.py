@@ -194,6 +194,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     ROBOT_XML = BIPED_XML
     JOINTS = BIPED_JOINTS
     SOFT_LIMIT_MARGIN = BIPED_SOFT_LIMIT_MARGIN
+    # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
+    CAPABILITIES = frozenset({"biped"})
 
     def __init__(self, target_speed: float = 0.5, speed_weight: float = 1.0, lateral_weight: float = 0.5,
                  healthy_reward: float = 1.0, energy_weight: float = 0.001, fall_penalty: float = 10.0,

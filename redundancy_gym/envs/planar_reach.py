@@ -169,6 +169,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     ROBOT_XML = PLANAR_ARM_XML
     TCP_FRAME = PLANAR_ARM_TCP
     TASK_AXES = "xz"
+    # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
+    CAPABILITIES = frozenset({"tcp_tracking", "tcp_reference"})
 
     def __init__(self, obstacle: bool = True, obstacle_center: Sequence[float] = (0.7, -0.12),
                  obstacle_radius: float = 0.1, line_start: Sequence[float] = (0.9, 0.45),

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
-from ..controllers.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
+from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..geometry import LSS, PSS, Segment, distance
 from ..sb3_import import install_hint
 from .bench_ssv import write_ssv_bench as write_ik_bench

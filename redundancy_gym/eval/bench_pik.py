@@ -35,8 +35,8 @@ from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
-from ..controllers.policies import make_policy  # noqa: E402
-from ..controllers.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
+from ..policies import make_policy  # noqa: E402
+from ..policies.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
 from ..controllers.receding_horizon import RecedingHorizon  # noqa: E402
 from .evaluate import evaluate  # noqa: E402
 from .exceptions import EvalError  # noqa: E402

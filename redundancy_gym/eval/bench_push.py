@@ -58,7 +58,7 @@ def push_trial(impulse: float, direction: NDArrayLike, start: float, env_seed: i
         duration: push duration [s].
         push_recovery: the walking policy's step adjustment.
     """
-    from ..controllers.policies import make_policy
+    from ..policies import make_policy
 
     unit = np.asarray(direction, dtype=np.float64)
     force = [float(unit[0] * impulse / duration), float(unit[1] * impulse / duration), 0.0]

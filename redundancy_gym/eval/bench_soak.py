@@ -88,7 +88,7 @@ def machine_info() -> dict[str, Any]:
 def _reference_name(env: gym.Env) -> str | None:
     """``walking`` or ``clik``, whichever the env supports (None: neither, or the env is not ours)."""
     try:
-        from ..controllers.policies import supported_policies
+        from ..policies import supported_policies
 
         supported = supported_policies(env)
     except Exception:  # noqa: BLE001 - an env the policy layer does not know has no reference

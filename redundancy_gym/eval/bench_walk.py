@@ -27,7 +27,7 @@ from tqdm.auto import tqdm
 
 from ..controllers import CollisionObjective
 from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
-from ..controllers.walking_policy import WalkingPolicy
+from ..policies.walking_policy import WalkingPolicy
 from .evaluate import make_env
 from .exceptions import EvalError
 

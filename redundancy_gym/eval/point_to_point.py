@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..assets import AGRI_ARM_TCP, AGRI_ARM_XML
-from ..controllers.grasp_clik_policy import GraspClikPolicy, GraspPath
+from ..policies.grasp_clik_policy import GraspClikPolicy, GraspPath
 from ..model import RobotModel, collision_model_from_mjcf
 from .exceptions import EvalError
 
@@ -104,7 +104,7 @@ class PointToPointSetup(NamedTuple):
 def prepare_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
                            **policy_options: float | str) -> PointToPointSetup:
     """The grasp CLIK reference (``policy_options``: fields of
-    :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikConfig`), its controller, the self-clearance
+    :class:`~redundancy_gym.policies.grasp_clik_policy.GraspClikConfig`), its controller, the self-clearance
     monitor and the TCP path of ``scenario``."""
     policy = GraspClikPolicy(_Robot(), collision_avoidance="on" if collision_avoidance else "off",
                              **policy_options)
@@ -128,7 +128,7 @@ def prepare_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collisi
 def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
                            **policy_options: float | str) -> PointToPointTrace:
     """Kinematic CLIK rollout of ``scenario``; ``policy_options`` are fields of
-    :class:`~redundancy_gym.controllers.grasp_clik_policy.GraspClikConfig` (defaults otherwise)."""
+    :class:`~redundancy_gym.policies.grasp_clik_policy.GraspClikConfig` (defaults otherwise)."""
     setup = prepare_point_to_point(scenario, collision_avoidance=collision_avoidance, **policy_options)
     model: RobotModel = setup.policy.model
     q = setup.q_start.copy()

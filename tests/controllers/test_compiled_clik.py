@@ -154,7 +154,7 @@ def test_tracking_rollout_matches_clik() -> None:
 
 def test_grasp_path_sampler_meets_its_boundary_conditions_and_derivatives() -> None:
     """The compiled GraspPath sample: rest-to-rest ends, unit axis on the great circle, velocities = d/dt."""
-    from redundancy_gym.controllers.grasp_clik_policy import GraspPath
+    from redundancy_gym.policies.grasp_clik_policy import GraspPath
 
     start, pregrasp, grasp = np.array([0.2, -0.3, 0.9]), np.array([0.5, 0.1, 1.1]), np.array([0.62, 0.1, 1.05])
     start_axis, approach = np.array([0.0, 0.0, 1.0]), np.array([0.8, 0.0, -0.2])

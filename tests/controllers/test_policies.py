@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 import redundancy_gym
-from redundancy_gym.controllers import PolicyError
-from redundancy_gym.controllers.policies import ClikPolicy, Policy
+from redundancy_gym.policies import PolicyError
+from redundancy_gym.policies import ClikPolicy, Policy
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
 

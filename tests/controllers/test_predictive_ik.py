@@ -163,7 +163,7 @@ def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -
     from the same start, drift from the planned joint path (the nullspace has no restoring term) until the arm
     whips through a different self-motion; following the plan with :meth:`PredictiveRollout.follow` keeps it
     within 0.1 rad (open loop: more than 1 rad)."""
-    from redundancy_gym.controllers.predictive_policy import PredictivePolicyConfig, predictive_problem  # noqa: PLC0415
+    from redundancy_gym.policies.predictive_policy import PredictivePolicyConfig, predictive_problem  # noqa: PLC0415
     from redundancy_gym.eval.point_to_point import FIG_5_10, prepare_point_to_point  # noqa: PLC0415
 
     setup = prepare_point_to_point(FIG_5_10)

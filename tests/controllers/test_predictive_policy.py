@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import redundancy_gym  # noqa: F401  (registers the env ids)
-from redundancy_gym.controllers import ControllerError, PolicyError
-from redundancy_gym.controllers.policies import make_policy
-from redundancy_gym.controllers.predictive_policy import TASK_DEFAULTS, PredictivePolicyConfig
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.policies import PolicyError
+from redundancy_gym.policies import make_policy
+from redundancy_gym.policies.predictive_policy import TASK_DEFAULTS, PredictivePolicyConfig
 from redundancy_gym.controllers.receding_horizon import RecedingHorizon
 from redundancy_gym.eval.evaluate import evaluate
 

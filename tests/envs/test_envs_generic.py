@@ -1,4 +1,4 @@
-"""Checks every registered env must pass."""
+"""Checks every registered env must pass: the raw envs and the wrapped ones (``<Env>-<Wrapper>-v0``)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,14 @@ import redundancy_gym
 from redundancy_gym.envs import EnvConfigError, InvalidActionError
 
 ENV_IDS = redundancy_gym.ENV_IDS
+_MAKE_WRAPPERS = (gym.wrappers.TimeLimit, gym.wrappers.OrderEnforcing, gym.wrappers.PassiveEnvChecker)
+
+
+def _checked(env: gym.Env) -> gym.Env:
+    """The env under gymnasium's ``make`` wrappers: the raw env, or the action wrapper of a wrapped id."""
+    while isinstance(env, _MAKE_WRAPPERS):
+        env = env.env
+    return env
 
 
 def _rollout(env: gym.Env, seed: int, steps: int) -> tuple[list[np.ndarray], list[float], list[dict]]:
@@ -30,7 +38,7 @@ def _rollout(env: gym.Env, seed: int, steps: int) -> tuple[list[np.ndarray], lis
 @pytest.mark.parametrize("env_id", ENV_IDS)
 def test_gymnasium_check_env(env_id: str) -> None:
     env = gym.make(env_id)
-    gym_check_env(env.unwrapped, skip_render_check=True)
+    gym_check_env(_checked(env), skip_render_check=True)
     env.close()
 
 

@@ -13,11 +13,12 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import redundancy_gym
-from redundancy_gym.controllers import ControllerError, PolicyError
-from redundancy_gym.controllers.grasp_clik_policy import GraspClikConfig
-from redundancy_gym.controllers.policies import ClikPolicyConfig
-from redundancy_gym.controllers.predictive_policy import PredictivePolicyConfig
-from redundancy_gym.controllers.walking_policy import WalkingPolicyConfig
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.policies import PolicyError
+from redundancy_gym.policies.grasp_clik_policy import GraspClikConfig
+from redundancy_gym.policies import ClikPolicyConfig
+from redundancy_gym.policies.predictive_policy import PredictivePolicyConfig
+from redundancy_gym.policies.walking_policy import WalkingPolicyConfig
 
 from .strategies import ANY_FLOATS, JUNK
 from .test_fuzz_envs import mutations

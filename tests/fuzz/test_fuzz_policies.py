@@ -10,7 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import redundancy_gym
-from redundancy_gym.controllers import ControllerError, PolicyError
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.policies import PolicyError
 
 from .strategies import ANY_FLOATS, JUNK
 

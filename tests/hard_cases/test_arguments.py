@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import redundancy_gym  # noqa: F401 - registers the ids
-from redundancy_gym.controllers import PolicyError
+from redundancy_gym.policies import PolicyError
 from redundancy_gym.envs import EnvConfigError
 from redundancy_gym.geometry import LSS, PSS, TSS, GeometryError, PackedVolumes, indexed_distances
 
@@ -179,11 +179,11 @@ def test_policy_options_are_checked_from_their_types(envs: dict[str, gym.Env], p
 
 def test_every_numeric_policy_option_has_a_range() -> None:
     """A new float or int option of a config class gets a range in policy_options.py, or this test says so."""
-    from redundancy_gym.controllers.grasp_clik_policy import GraspClikConfig
-    from redundancy_gym.controllers.policies import ClikPolicyConfig
-    from redundancy_gym.controllers.policy_options import option_rule
-    from redundancy_gym.controllers.predictive_policy import PredictivePolicyConfig
-    from redundancy_gym.controllers.walking_policy import WalkingPolicyConfig
+    from redundancy_gym.policies.grasp_clik_policy import GraspClikConfig
+    from redundancy_gym.policies import ClikPolicyConfig
+    from redundancy_gym.policies.options import option_rule
+    from redundancy_gym.policies.predictive_policy import PredictivePolicyConfig
+    from redundancy_gym.policies.walking_policy import WalkingPolicyConfig
 
     for config in (ClikPolicyConfig, GraspClikConfig, PredictivePolicyConfig, WalkingPolicyConfig):
         for f in fields(config):

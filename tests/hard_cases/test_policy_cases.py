@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import redundancy_gym
-from redundancy_gym.controllers import ControllerError, PolicyError
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.policies import PolicyError
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"

@@ -19,7 +19,7 @@ import pytest
 from numpy.typing import NDArray
 
 import redundancy_gym
-from redundancy_gym.controllers import PolicyError
+from redundancy_gym.policies import PolicyError
 from redundancy_gym.eval.evaluate import EpisodeSummary, evaluate
 
 pytest.importorskip("stable_baselines3")

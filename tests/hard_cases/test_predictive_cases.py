@@ -13,11 +13,11 @@ from redundancy_gym.controllers import (
     ControllerError,
     FramePositionTask,
     JointLimitObjective,
-    PolicyError,
     PredictiveIk,
 )
 from redundancy_gym.controllers.receding_horizon import RecedingHorizon
 from redundancy_gym.model import RobotModel
+from redundancy_gym.policies import PolicyError
 
 from ..controllers.test_predictive_ik import _planar
 

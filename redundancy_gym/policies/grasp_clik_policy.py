@@ -4,7 +4,7 @@ a straight radial approach, and velocity-level CLIK with nullspace collision and
 Monograph 5.3 (Baur et al. 2012 setup): the 5-D task (TCP position and tool axis) leaves four of the nine
 degrees of freedom to the nullspace, where the gradient of the self- and plant-collision potential (5.49)-(5.61)
 and of the joint-limit potential is projected (5.14); with ``W = I`` the particular solution is the minimum
-joint-velocity one. Like :mod:`.policies` it reads the env by duck typing and imports no simulator.
+joint-velocity one. Like :mod:`.clik_policy` it reads the env by duck typing and imports no simulator.
 """
 
 from __future__ import annotations
@@ -18,14 +18,14 @@ from numpy.typing import NDArray
 from ..geometry import LSS, PSS, SSV, TSS, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf
-from .clik import Clik, ClikResult
-from .collision_objective import CollisionObjective
-from .compiled_clik import CompiledClik
+from ..controllers.clik import Clik, ClikResult
+from ..controllers.collision_objective import CollisionObjective
+from ..controllers.compiled_clik import CompiledClik
 from .exceptions import PolicyError
-from .frame_axis_task import FrameAxisTask
-from .joint_limit_objective import JointLimitObjective
-from .policies import PerEnvPolicy
-from .policy_options import config_from_options, env_with_attributes
+from ..controllers.frame_axis_task import FrameAxisTask
+from ..controllers.joint_limit_objective import JointLimitObjective
+from .per_env_policy import PerEnvPolicy
+from .options import config_from_options, control_period, env_with_attributes
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
@@ -98,7 +98,7 @@ class GraspClikPolicy(PerEnvPolicy):
     At the first observation of an episode (``episode_start``, or the observation's ``time`` ~0 or going back) it
     plans the path from the observed TCP pose and builds its collision model: the robot's own segments from the
     robot MJCF (non-adjacent links, the lift column) and one segment per observed obstacle. A batch of observations
-    gets one such state per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
+    gets one such state per env index (:class:`~redundancy_gym.policies.PerEnvPolicy`).
     :attr:`last_result` keeps the last :class:`ClikResult`.
 
     Args:
@@ -116,6 +116,7 @@ class GraspClikPolicy(PerEnvPolicy):
                                    "grasp clik")
         self._layout = dict(base.observation_layout)
         self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
+        self._period = control_period(base)  # the command keeps every joint inside its range over one period
         env_timing = getattr(base, "reference_timing", None)
         env_timing = env_timing if isinstance(env_timing, GraspPathTiming) else GraspPathTiming()
         c = self.config
@@ -145,7 +146,7 @@ class GraspClikPolicy(PerEnvPolicy):
                                                 slope=self.config.collision_slope, weight=self.config.collision_weight)
             objectives.append(self.collision)
         clik = Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
-                    nullspace_gain=self.config.nullspace_gain, objectives=objectives)
+                    nullspace_gain=self.config.nullspace_gain, objectives=objectives, period=self._period)
         return CompiledClik(clik) if self.config.backend == "compiled" else clik
 
     def plan(self, obs: NDArray[np.float64]) -> None:
@@ -164,13 +165,27 @@ class GraspClikPolicy(PerEnvPolicy):
         if self.controller is None or self.config.collision_avoidance == "on":
             self.controller = self.build_controller(environment)
 
-    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
-        """Normalized joint velocity command for one observation."""
+    @property
+    def max_joint_speeds(self) -> NDArray[np.float64]:
+        """The env's joint speed limits [rad/s or m/s] (nv): an action of 1 commands them."""
+        return self._speeds.copy()
+
+    def task_reference(self, obs: NDArray[np.float64], starting: bool
+                       ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The configuration, task target ``[p_d, a_d]`` and target velocity ``[v_d, omega_d]`` of one observation,
+        for :attr:`controller`; at a new episode (``starting``, or the observation's time ~0 or going back) it
+        plans the path and builds the controller first (:meth:`plan`)."""
         if self._new_episode(obs, starting) or self.path is None:
             self.plan(obs)
         assert self.path is not None and self.controller is not None and self._time is not None
         target, velocity = self.path(obs.item(self._time))
-        result = self.controller.step(obs[self._layout["q"]], target, velocity)
+        return obs[self._layout["q"]], target, velocity
+
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
+        """Normalized joint velocity command for one observation."""
+        q, target, velocity = self.task_reference(obs, starting)
+        assert self.controller is not None
+        result = self.controller.step(q, target, velocity)
         self.last_result = result
         return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
 

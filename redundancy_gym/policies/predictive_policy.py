@@ -5,7 +5,7 @@ Both command the CLIK law with the optimized nullspace input, ``qdot = J# (wdot 
 (5.100): the task is tracked with feedback, the redundancy follows the optimal control problem of
 :class:`PredictiveIk` (pseudoenergy (5.131), joint limits (5.58), collision (5.49)). ``predictive`` solves it
 over ``horizon`` seconds at every step, warm-started; ``global`` solves it once over the whole episode at the
-start and follows that plan. Like :mod:`.policies` they read the env by duck typing and import no simulator.
+start and follows that plan. Like :mod:`.clik_policy` they read the env by duck typing and import no simulator.
 """
 
 from __future__ import annotations
@@ -16,18 +16,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .collision_objective import CollisionObjective
-from .compiled_clik import CompiledClik
+from ..controllers.collision_objective import CollisionObjective
+from ..controllers.compiled_clik import CompiledClik
 from ..model import RobotModel
 from .exceptions import PolicyError
-from .frame_axis_task import FrameAxisTask
-from .frame_position_task import FramePositionTask
+from ..controllers.frame_axis_task import FrameAxisTask
+from ..controllers.frame_position_task import FramePositionTask
 from .grasp_clik_policy import GraspClikPolicy
-from .joint_limit_objective import JointLimitObjective
-from .policies import ClikPolicy, PerEnvPolicy
-from .policy_options import config_from_options
-from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
-from .receding_horizon import HorizonUpdate, RecedingHorizon
+from ..controllers.joint_limit_objective import JointLimitObjective
+from .clik_policy import ClikPolicy
+from .per_env_policy import PerEnvPolicy
+from .options import config_from_options
+from ..controllers.predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
+from ..controllers.receding_horizon import HorizonUpdate, RecedingHorizon
 
 __all__ = ["MODES", "TASK_DEFAULTS", "PredictivePolicy", "PredictivePolicyConfig", "predictive_problem"]
 
@@ -128,7 +129,7 @@ class PredictivePolicy(PerEnvPolicy):
 
     An episode starts (the reference table and the problem are built, ``global`` solves it) at ``episode_start``
     or where the observation's time (PlanarReach: its ``phase``) is ~0 or went back; a batch of observations gets
-    one such state per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
+    one such state per env index (:class:`~redundancy_gym.policies.PerEnvPolicy`).
 
     Args:
         env: the environment.

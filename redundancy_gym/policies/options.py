@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import types
 import typing
 from collections.abc import Mapping
@@ -9,12 +10,11 @@ from dataclasses import dataclass, fields
 from typing import Any, TypeVar
 
 from .. import validation as checks
+from ..controllers import DESCENT_METHODS, METHODS
 from .exceptions import PolicyError
-from .predictive_ik import DESCENT_METHODS
-from .redundancy_resolution import METHODS
 
-__all__ = ["BACKENDS", "OPTION_RULES", "OptionRule", "SUFFIX_RULES", "config_from_options", "env_with_attributes",
-           "option_rule"]
+__all__ = ["BACKENDS", "OPTION_RULES", "OptionRule", "SUFFIX_RULES", "config_from_options", "control_period", "env_name",
+           "env_with_attributes", "option_rule"]
 
 C = TypeVar("C")
 # how a CLIK policy runs its controller: one fused compiled kernel (CompiledClik) or the Python Clik
@@ -186,14 +186,26 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
 def env_with_attributes(env: Any, required: tuple[str, ...], policy: str) -> Any:
     """The unwrapped env, after checking that it has every attribute in ``required``.
 
-    :func:`~redundancy_gym.controllers.policies.make_policy` checks support first and names the registered envs a
+    :func:`~redundancy_gym.policies.make_policy` checks support first and names the registered envs a
     policy supports; this is the check of a policy class built directly.
     """
     base = getattr(env, "unwrapped", env)
     missing = [name for name in required if not hasattr(base, name)]
     if missing:
-        spec = getattr(env, "spec", None) or getattr(base, "spec", None)
-        name = getattr(spec, "id", None) or type(base).__name__
-        raise PolicyError(f"policy {policy!r} does not support {name} "
+        raise PolicyError(f"policy {policy!r} does not support {env_name(env)} "
                           f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})")
     return base
+
+
+def env_name(env: Any) -> str:
+    """The env's registered id (``env.spec.id``) when it has one, else its class name."""
+    spec = getattr(env, "spec", None) or getattr(getattr(env, "unwrapped", env), "spec", None)
+    env_id = getattr(spec, "id", None)
+    return str(env_id) if env_id else type(getattr(env, "unwrapped", env)).__name__
+
+
+def control_period(base: Any) -> float | None:
+    """The env's control period ``dt`` [s], over which a CLIK command must keep every joint inside its range;
+    None when the env has none."""
+    dt = getattr(base, "dt", None)
+    return float(dt) if isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0 else None

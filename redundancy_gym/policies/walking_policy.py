@@ -10,9 +10,9 @@ from numpy.typing import NDArray
 
 from ..model import RobotModel
 from .exceptions import PolicyError
-from .policies import PerEnvPolicy
-from .policy_options import config_from_options, env_with_attributes
-from .walking import GaitConfig, StabilizerGains, StepAdjusterConfig, WalkingCommand, WalkingController, WalkingIkConfig
+from .per_env_policy import PerEnvPolicy
+from .options import config_from_options, env_with_attributes
+from ..controllers.walking import GaitConfig, StabilizerGains, StepAdjusterConfig, WalkingCommand, WalkingController, WalkingIkConfig
 
 __all__ = ["WalkingPolicy", "WalkingPolicyConfig"]
 
@@ -69,7 +69,7 @@ class WalkingPolicy(PerEnvPolicy):
 
     The controller restarts (a new walking pattern from the observed standing state) at every episode start:
     ``episode_start``, or the observation's ``time`` ~0 or going back. A batch of observations gets one controller
-    per env index (:class:`~redundancy_gym.controllers.policies.PerEnvPolicy`).
+    per env index (:class:`~redundancy_gym.policies.PerEnvPolicy`).
     The last :class:`WalkingCommand` is kept in :attr:`last_command` for diagnostics and plots.
 
     Args:

@@ -1,0 +1,68 @@
+"""A stable-baselines3 model loaded from a ``.zip`` as a policy."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from .exceptions import PolicyError
+from .options import env_name
+
+__all__ = ["SB3_ALGOS", "Sb3Policy"]
+
+SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
+
+
+class Sb3Policy:
+    """A stable-baselines3 model loaded from a ``.zip``; ``predict`` is the model's own.
+
+    Args:
+        path: the ``.zip`` written by ``model.save``.
+        env: the environment (checked against the model's spaces by SB3).
+        algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG when omitted.
+    """
+
+    def __init__(self, path: str | Path, env: Any = None, algo: str | None = None) -> None:
+        path = Path(path)
+        if not path.is_file():
+            raise PolicyError(f"policy file not found: {path}")
+        try:
+            sb3 = import_stable_baselines3()
+        except ImportError as exc:  # the 'learn' extra
+            raise PolicyError(f"loading a .zip policy needs stable-baselines3: {LEARN_EXTRA_HINT}") from exc
+        names = (algo,) if algo else SB3_ALGOS
+        errors = []
+        for name in names:
+            cls = getattr(sb3, name, None)
+            if cls is None:
+                raise PolicyError(f"unknown SB3 algorithm {name!r}; valid: {', '.join(SB3_ALGOS)}")
+            try:
+                self.model = cls.load(str(path), device="cpu")
+                self.algo = name
+                break
+            except Exception as exc:  # SB3 raises assorted errors for a class mismatch
+                errors.append(f"{name}: {type(exc).__name__}")
+        else:
+            raise PolicyError(f"{path} is not a stable-baselines3 model of {', '.join(names)} ({'; '.join(errors)})")
+        if env is not None:
+            self._check_spaces(path, env)
+
+    def _check_spaces(self, path: Path, env: Any) -> None:
+        """A model trained on another env fails here, naming both, instead of at its first ``predict``."""
+        for kind in ("observation", "action"):
+            trained = getattr(self.model, f"{kind}_space", None)
+            here = getattr(env, f"{kind}_space", None)
+            shapes = (getattr(trained, "shape", None), getattr(here, "shape", None))
+            if None not in shapes and shapes[0] != shapes[1]:
+                raise PolicyError(f"{path} was trained with {kind} shape {shapes[0]}, but {env_name(env)} has "
+                                  f"{shapes[1]}: it was trained on another env (or other env kwargs)")
+
+    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+        """The SB3 model's action."""
+        return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
+

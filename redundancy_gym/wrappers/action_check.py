@@ -1,0 +1,36 @@
+"""The check every wrapper applies to the learner's action before it reaches a controller."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from .exceptions import WrapperActionError
+
+__all__ = ["check_action", "normalized_box"]
+
+
+def normalized_box(dim: int) -> spaces.Box:
+    """The action space of a wrapper: ``[-1, 1]^dim`` (float32); each wrapper scales it by its bounds."""
+    return spaces.Box(-1.0, 1.0, shape=(dim,), dtype=np.float32)
+
+
+def check_action(action: Any, space: spaces.Box, wrapper: str) -> NDArray[np.float64]:
+    """``action`` as float64 after checking it is an array of ``space``'s shape with finite entries; entries
+    outside the box are clipped into it (as the envs clip theirs).
+
+    Raises:
+        WrapperActionError: not numbers, a wrong shape, or a NaN/inf entry (naming the wrapper and the shape).
+    """
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise WrapperActionError(f"{wrapper}: action must be an array of numbers, got {type(action).__name__}") from exc
+    if a.shape != space.shape:
+        raise WrapperActionError(f"{wrapper}: action must have shape {space.shape}, got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise WrapperActionError(f"{wrapper}: action must be finite, got {a.tolist()}")
+    return np.clip(a, space.low, space.high)

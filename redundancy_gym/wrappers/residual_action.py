@@ -1,0 +1,133 @@
+"""ResidualAction: the learner's action is a correction added to the env's reference policy."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from ..policies import PolicyError, make_policy, supported_policies
+from ..validation import check_bool, check_real
+from .action_check import check_action
+from .exceptions import WrapperError
+
+__all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
+
+REFERENCE_POLICIES: tuple[str, ...] = ("clik", "walking")
+"""The reference policies a residual is added to, in the order they are tried (the first the env supports)."""
+
+
+@dataclass(frozen=True)
+class ResidualActionConfig:
+    """Options of :class:`ResidualAction`.
+
+    Attributes:
+        scale: the residual's bound as a fraction of the env's action range: the applied action is
+            ``clip(reference + scale * a)`` for ``a`` in ``[-1, 1]`` (> 0, <= 2).
+        policy: the reference policy (a registered name); None: the first of :data:`REFERENCE_POLICIES` that the
+            env supports (``clik`` on the arms, ``walking`` on the biped).
+        policy_kwargs: options of the reference policy.
+        observe_reference: append the reference action to the observation.
+    """
+
+    scale: float = 0.2
+    policy: str | None = None
+    policy_kwargs: dict[str, Any] = field(default_factory=dict)
+    observe_reference: bool = False
+
+
+class ResidualAction(gym.Wrapper):
+    """Residual learning on an analytic controller: the applied action is the reference policy's action plus a
+    bounded correction.
+
+    ## Description
+    Every step the reference policy (``clik`` on PlanarReach and AgriReach, ``walking`` on BipedWalk) computes its
+    action from the current observation; the env receives ``clip(reference + scale * a, low, high)``. With
+    ``a = 0`` the episode is the reference policy's, bit for bit, so a learner starts from the analytic
+    controller and learns what it lacks.
+
+    ## Action Space
+    ``Box(-1, 1, (n,), float32)`` with ``n`` the env's action dimension: the residual in units of ``scale`` times
+    the env's action range. Non-finite actions raise :class:`WrapperError`.
+
+    ## Observation Space
+    The env's; with ``observe_reference=True`` the reference action (``n`` entries in the env's action bounds)
+    is appended.
+
+    ## Rewards, Starting State, Episode End
+    The env's. ``info`` keeps every entry of the env's and adds ``reference_action`` (the reference policy's
+    action of this step) and ``residual_action`` (the applied minus the reference action, after clipping).
+
+    ## Arguments
+    ``env`` and the fields of :class:`ResidualActionConfig` as keyword arguments: ``scale``, ``policy``,
+    ``policy_kwargs``, ``observe_reference``.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
+    CAPABILITIES: frozenset[str] = frozenset()
+
+    def __init__(self, env: gym.Env, scale: float = ResidualActionConfig.scale, policy: str | None = None,
+                 policy_kwargs: dict[str, Any] | None = None, observe_reference: bool = False) -> None:
+        super().__init__(env)
+        self.config = ResidualActionConfig(
+            scale=check_real("scale", scale, low=0.0, high=2.0, low_open=True, error=WrapperError),
+            policy=policy, policy_kwargs=dict(policy_kwargs or {}),
+            observe_reference=check_bool("observe_reference", observe_reference, error=WrapperError))
+        space = env.action_space
+        if not isinstance(space, spaces.Box) or not (np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))):
+            raise WrapperError(f"ResidualAction needs a bounded Box action space, got {space}")
+        if policy is None:
+            offered = supported_policies(env)
+            policy = next((p for p in REFERENCE_POLICIES if p in offered), None)
+            if policy is None:
+                raise WrapperError(f"ResidualAction: the env offers none of the reference policies "
+                                   f"{', '.join(REFERENCE_POLICIES)} (it offers {', '.join(offered)})")
+        try:
+            self.reference = make_policy(policy, env, **self.config.policy_kwargs)
+        except PolicyError as exc:
+            raise WrapperError(f"ResidualAction: {exc}") from exc
+        self.policy_name = policy
+        self._low = space.low.astype(space.dtype)
+        self._high = space.high.astype(space.dtype)
+        self._dtype = space.dtype
+        self._range = (space.high.astype(np.float64) - space.low.astype(np.float64)) / 2.0
+        self.action_space = spaces.Box(-1.0, 1.0, shape=space.shape, dtype=np.float32)
+        if self.config.observe_reference:
+            obs = env.observation_space
+            self.observation_space = spaces.Box(np.concatenate([obs.low, space.low]).astype(obs.dtype),
+                                                np.concatenate([obs.high, space.high]).astype(obs.dtype),
+                                                dtype=obs.dtype)
+        self._reference_action: NDArray[Any] | None = None
+        self._starting = True
+
+    def _observe(self, obs: NDArray[np.floating], starting: bool) -> NDArray[np.floating]:
+        """Compute the reference action of ``obs`` (kept for the next step) and the wrapper's observation."""
+        action, _ = self.reference.predict(obs, episode_start=np.array([starting]))
+        self._reference_action = np.asarray(action, dtype=self._dtype)
+        if self.config.observe_reference:
+            return np.concatenate([obs, self._reference_action.astype(obs.dtype)])
+        return obs
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        return self._observe(obs, True), info
+
+    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+        if self._reference_action is None:
+            raise WrapperError("ResidualAction: call reset() before step()")
+        a = check_action(action, self.action_space, "ResidualAction")
+        reference = self._reference_action
+        # in the env's dtype, so that a = 0 gives the reference action bit for bit
+        residual = (self.config.scale * self._range * a).astype(self._dtype)
+        applied = np.clip(reference + residual, self._low, self._high)
+        obs, reward, terminated, truncated, info = self.env.step(applied)
+        info = {**info, "reference_action": reference, "residual_action": applied - reference}
+        return self._observe(obs, False), reward, terminated, truncated, info
