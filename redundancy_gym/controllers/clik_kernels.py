@@ -21,12 +21,12 @@ from numpy.typing import NDArray
 
 from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import chain_forward, chain_jacobian, place_frame
-from .collision_kernels import collision_potential
+from .collision_kernels import close_pair_rows, collision_potential
 from .kernel_buffers import float_field, int_field, pack_fields
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
-__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_step",
-           "pack_buffers"]
+__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_close_pairs",
+           "clik_step", "pack_buffers"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
     "placement_rotation", "placement_translation", "axis", "rotation", "position", "world_axis",
@@ -162,6 +162,21 @@ def _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, q_
         _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3)), _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
         _fv(f, i, _F_RADII), _fv(f, i, _F_COLLISION_PARAMETERS), parent, joint_type, v_index, q_rotation, position,
         world_axis, gradient, scratch)
+
+
+@njit(**_JIT)
+def clik_close_pairs(f, i, limit, distances, rows):
+    """:func:`~.collision_kernels.close_pair_rows` at the configuration of the last :func:`clik_step` (which placed
+    the volumes and computed the kinematics in the buffers); returns how many pairs it filled."""
+    dims = _iv(i, _I_DIMS)
+    nj, ns, nvol, npairs = dims[0], dims[6], dims[7], dims[8]
+    return close_pair_rows(
+        _iv(i, _I_SEGMENT_JOINT), _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)), _iv(i, _I_PAIR_STARTS),
+        _iv(i, _I_VOLUME_A), _iv(i, _I_VOLUME_B), _fv(f, i, _F_SEGMENT_RADIUS),
+        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)), _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
+        _fv(f, i, _F_RADII), _iv(i, _I_KINDS), _iv(i, _I_PARENT), _iv(i, _I_JOINT_TYPE), _iv(i, _I_V_INDEX),
+        _fv(f, i, _F_ROTATION).reshape((nj, 3, 3)), _fv(f, i, _F_POSITION).reshape((nj, 3)),
+        _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3)), limit, distances, rows)
 
 
 @njit(**_JIT)

@@ -19,7 +19,7 @@ from ..model import RobotModel
 from ..model.chain_kernels import chain_jacobian_transpose_times, place_frame
 from .collision_objective import CollisionObjective
 
-__all__ = ["CollisionFields", "bounding_spheres", "collision_fields", "collision_potential"]
+__all__ = ["CollisionFields", "bounding_spheres", "collision_fields", "collision_potential", "close_pair_rows"]
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
@@ -92,6 +92,57 @@ def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vo
     return value, smallest
 
 
+
+
+@njit(**_JIT)
+def close_pair_rows(seg_joint, seg_pairs, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds,
+                    parent, joint_type, v_index, rotation, position, world_axis, limit, distances, rows):
+    """Distances and ``dd/dq = n^T (J_b(p_b) - J_a(p_a))`` rows (5.61) of the pairs nearer than ``limit``, at the
+    placement that :func:`collision_potential` last left in ``vertices`` and ``seg_world`` (and the kinematics in
+    ``rotation``, ``position``, ``world_axis``); returns how many. At most ``rows.shape[0]`` pairs are kept: the
+    nearest ones. ``distances`` (K) and ``rows`` (K x nv) are filled from the start."""
+    count = 0
+    capacity = rows.shape[0]
+    for p in range(seg_pairs.shape[0]):
+        a = seg_pairs[p, 0]
+        b = seg_pairs[p, 1]
+        dx = seg_world[a, 0] - seg_world[b, 0]
+        dy = seg_world[a, 1] - seg_world[b, 1]
+        dz = seg_world[a, 2] - seg_world[b, 2]
+        reach = seg_radius[a] + seg_radius[b] + limit
+        if dx * dx + dy * dy + dz * dz > reach * reach:
+            continue
+        best = np.inf
+        best_pa = (0.0, 0.0, 0.0)
+        best_pb = (0.0, 0.0, 0.0)
+        best_n = (0.0, 0.0, 1.0)
+        for k in range(pair_starts[p], pair_starts[p + 1]):
+            d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
+            if d < best:
+                best, best_pa, best_pb, best_n = d, pa, pb, n
+        if not best < limit:
+            continue
+        slot = count
+        if count == capacity:  # full: replace the farthest kept pair if this one is nearer
+            slot = 0
+            for r in range(1, capacity):
+                if distances[r] > distances[slot]:
+                    slot = r
+            if not best < distances[slot]:
+                continue
+        else:
+            count += 1
+        distances[slot] = best
+        rows[slot, :] = 0.0
+        if seg_joint[b] >= 0:
+            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[b],
+                                           best_pb[0], best_pb[1], best_pb[2], best_n[0], best_n[1], best_n[2],
+                                           1.0, rows[slot])
+        if seg_joint[a] >= 0:
+            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[a],
+                                           best_pa[0], best_pa[1], best_pa[2], best_n[0], best_n[1], best_n[2],
+                                           -1.0, rows[slot])
+    return count
 
 
 class CollisionFields(NamedTuple):

@@ -20,6 +20,7 @@ from .clik_kernels import (
     SCRATCH_SIZE,
     STATUS_NAMES,
     ZERO_AXIS,
+    clik_close_pairs,
     clik_step,
     pack_buffers,
 )
@@ -134,6 +135,10 @@ class CompiledClik:
         self._version = -1
         self._refresh_environment()
         self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
+        self._close_pairs = clik_close_pairs
+        self._pair_distances = np.zeros(8)
+        self._pair_rows = np.zeros((8, nv))
+        self._stepped = False
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
@@ -216,6 +221,7 @@ class CompiledClik:
                 raise ControllerError(f"nullspace_input must be finite with shape ({self._nv},), got {u.shape}")
             inputs[nq + 12:nq + 12 + self._nv] = u
         code = self._kernel(self._f, self._i, has_velocity, has_input)
+        self._stepped = code == OK
         if code != OK:
             self._raise(code, q, target, target_velocity)
         out = self._outputs
@@ -244,6 +250,19 @@ class CompiledClik:
         """``(dH/dq)^T`` of the summed objectives at the last step's configuration (nv), as :class:`ClikProblem`
         gives it (zeros when the controller has no objectives)."""
         return self._field("gradient").copy()
+
+    def close_pairs(self, limit: float, capacity: int = 8) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The collision pairs nearer than ``limit`` [m] at the configuration of the last :meth:`step`: their
+        distances [m] (k) and gradients ``dd/dq`` (5.61) (k x nv), at most ``capacity`` of them (the nearest).
+        Empty when the controller has no collision objective (or no step was made yet)."""
+        nv = self._nv
+        if self.collision is None or not self._stepped:
+            return np.zeros(0), np.zeros((0, nv))
+        if self._pair_rows.shape[0] != capacity:
+            self._pair_distances = np.zeros(capacity)
+            self._pair_rows = np.zeros((capacity, nv))
+        count = self._close_pairs(self._f, self._i, float(limit), self._pair_distances, self._pair_rows)
+        return self._pair_distances[:count].copy(), self._pair_rows[:count].copy()
 
     @property
     def last_min_distance(self) -> float:

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..controllers import ClikResult
+from ..geometry import LSS, PSS, SSV, TSS, Segment
 from ..policies import PolicyError, make_policy
 from ..validation import check_real
 from .action_check import check_action, normalized_box
@@ -17,8 +18,15 @@ from .exceptions import WrapperError
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
 
-# control periods over which the guard looks ahead: the velocity servos take about one to reach a command
-_LOOKAHEAD = 3.0
+# control periods over which the joint ranges are kept: the velocity servos take about one to reach a command
+_LOOKAHEAD = 2.0
+# sweeps of the cyclic projection onto the violated collision constraints
+_PROJECTIONS = 10
+# the fraction of a commanded velocity change the envs' servos make within one control period (measured on
+# AgriReach's arm at its speed limits: 0.3-0.6)
+_SERVO_RESPONSE = 0.35
+# how far inside its range [rad or m] the wrapper keeps each joint, for the servos' overshoot
+_RANGE_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -32,10 +40,10 @@ class TaskSpaceActionConfig:
             cannot follow (a joint limit, an obstacle, the workspace's edge) the target waits for it instead of
             winding up.
         max_lead_angle: the same for the tool axis [rad] (> 0, <= 1.5).
-        guard_distance: collision distance [m] below which each command is checked ahead (0 < guard <= 0.2).
-        stop_distance: the distance [m] the guard keeps (0 <= stop < guard): a command that would bring a pair
-            nearer than this is slowed down, to a stop if need be. The nullspace avoidance cannot keep the TCP
-            itself off an obstacle the learner drives it into; this guard does.
+        guard_distance: collision distance [m] below which a pair's approach speed is limited (0 < guard <= 0.2).
+        stop_distance: the distance [m] at which the approach speed reaches zero (0 <= stop < guard). The
+            nullspace avoidance cannot keep the TCP itself off an obstacle the learner drives it into; this
+            velocity damper can, at the cost of the task where they conflict.
         policy_kwargs: options of the ``clik`` reference whose controller (task gain, joint-limit and collision
             objectives, self-collision) turns the command into joint velocities.
     """
@@ -80,6 +88,23 @@ def _perpendicular_basis(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64]
     return u, _cross(axis, u)
 
 
+def _scene_obstacles(base: Any) -> list[Segment] | None:
+    """One segment per hard plant part of the episode but the target (AgriReach's ``crop_row`` and
+    ``target_index``: what the env counts as a collision), or None for an env without them."""
+    row = getattr(base, "crop_row", None)
+    target = getattr(base, "target_index", None)
+    if row is None or target is None:
+        return None
+    segments = []
+    for k in np.flatnonzero(np.asarray(row.hard)):
+        if k == target:
+            continue
+        v, r, kind = row.vertices[k], float(row.radius[k]), int(row.kind[k])
+        volume: SSV = PSS(v[0], r) if kind == 0 else (LSS(v[0], v[1], r) if kind == 1 else TSS(v[0], v[1], v[2], r))
+        segments.append(Segment(f"part_{k}", (volume,)))
+    return segments
+
+
 class TaskSpaceAction(gym.Wrapper):
     """The action is a task-space velocity; the compiled CLIK of the ``clik`` reference, with joint-limit and
     collision avoidance (self and environment) in its nullspace, turns it into the env's joint command.
@@ -88,8 +113,10 @@ class TaskSpaceAction(gym.Wrapper):
     Every control step the wrapper moves a TCP target by the commanded velocity and CLIK
     ``qdot = J# (wdot_d + K e) - alpha N dH/dq`` (5.5), (5.14) tracks it, with the reference's nullspace
     objectives: the joint-limit potential and the swept-sphere collision potential (5.49)-(5.61) on the robot's
-    own segments and the env's obstacles (PlanarReach: the sphere; AgriReach: stems and fruits, and leaves when
-    the reference avoids them). The learner never has to learn inverse kinematics or avoidance. The target is
+    own segments and the env's obstacles (PlanarReach: the sphere; AgriReach: every stem, shoot and fruit of the
+    episode but the target, since the learner may take the arm anywhere, not only near the K observed parts).
+    A velocity damper on the pairs nearer than ``guard_distance`` limits how fast each may close in, so a
+    command that drives the TCP itself at an obstacle (which no nullspace motion can avoid) slows to a stop. The learner never has to learn inverse kinematics or avoidance. The target is
     kept within ``max_lead`` of the TCP, so a command the arm cannot follow does not wind up.
 
     ## Action Space
@@ -148,8 +175,11 @@ class TaskSpaceAction(gym.Wrapper):
         self._grasp = "grasp_position" in self._layout
         self._dt = float(base.dt)
         self._speeds = self.reference.max_joint_speeds
+        model = self.reference.model
+        self._lower, self._upper = model.lower_limits + _RANGE_MARGIN, model.upper_limits - _RANGE_MARGIN
         self.action_space = normalized_box(5 if self._grasp else 2)
         self._obs: NDArray[np.float64] | None = None
+        self.last_result: ClikResult | None = None  # the command of the last step, for diagnostics
         self._position = np.zeros(3 if self._grasp else 2)
         self._axis = np.array([1.0, 0.0, 0.0])
 
@@ -165,6 +195,9 @@ class TaskSpaceAction(gym.Wrapper):
         self._obs = np.asarray(obs, dtype=np.float64)
         # the reference plans its episode here (AgriReach: the controller with the observed obstacles)
         self.reference.task_reference(self._obs, True)
+        scene = _scene_obstacles(self.env.unwrapped)
+        if scene is not None:  # the learner may take the arm anywhere: every hard plant part, not the K observed
+            self.reference.controller = self.reference.build_controller(scene)
         position, axis = self._tcp(self._obs)
         self._position = position.copy()
         if axis is not None:
@@ -202,40 +235,67 @@ class TaskSpaceAction(gym.Wrapper):
 
     def _guarded(self, q: NDArray[np.float64], target: NDArray[np.float64],
                  velocity: NDArray[np.float64]) -> ClikResult:
-        """The CLIK step, slowed down where it would bring the robot nearer than ``stop_distance`` to an obstacle
-        or itself: once the smallest collision distance is below ``guard_distance``, the distance at the
-        configuration the command reaches in ``_LOOKAHEAD`` periods is checked (one more kernel call each), and
-        the command is scaled by 1/2, 1/4, then 0 until it no longer closes in past ``stop_distance``."""
+        """The CLIK step with a velocity damper on every collision pair nearer than ``guard_distance``: the
+        pair's distance may shrink at most at ``max_speed`` times ``(d - stop_distance) / (guard_distance -
+        stop_distance)`` (zero at ``stop_distance``, growing below it), enforced by projecting ``qdot`` onto each
+        violated constraint in turn; then every joint is kept inside its range over ``_LOOKAHEAD`` periods."""
         controller = self.reference.controller
         result = controller.step(q, target, velocity)
         c = self.config
-        closest = self._closest(controller, q)
-        if not closest < c.guard_distance:
-            return result
+        distances, rows = self._close_pairs(controller, q, c.guard_distance)
+        qdot = result.qdot
+        top = float(np.max(np.abs(qdot) / self._speeds))
+        changed = top > 1.0
+        if changed:  # the env would clip each joint, turning the command: slower instead, same direction
+            qdot = qdot / top
+        if distances.size:
+            floor = -c.max_speed * (distances - c.stop_distance) / (c.guard_distance - c.stop_distance)
+            # the servos make only part of a velocity change within one period: ask for the rate that brings the
+            # joints' actual velocity onto the floor by the next period
+            actual = rows @ self._obs[self._layout["qdot"]]
+            floor = (floor - (1.0 - _SERVO_RESPONSE) * actual) / _SERVO_RESPONSE
+            norms = np.einsum("ij,ij->i", rows, rows)
+            qdot = qdot.copy()
+            for _ in range(_PROJECTIONS):
+                violated = False
+                for k in range(distances.size):
+                    gap = floor[k] - float(rows[k] @ qdot)
+                    if gap > 1e-12 and norms[k] > 1e-18:
+                        qdot += (gap / norms[k]) * rows[k]
+                        violated = changed = True
+                if not violated:
+                    break
+            top = float(np.max(np.abs(qdot) / self._speeds))
+            if top > 1.0:  # the projection may ask for more than the joints can do
+                qdot /= top
         horizon = _LOOKAHEAD * self._dt
-        floor = min(closest, c.stop_distance)
-        for scale in (1.0, 0.5, 0.25):
-            qdot = scale * result.qdot
-            controller.step(q + qdot * horizon, target, velocity)
-            ahead = self._closest(controller, q + qdot * horizon)
-            if ahead >= floor or ahead >= closest:
-                return result if scale == 1.0 else result._replace(qdot=qdot, limited=True)
-        return result._replace(qdot=np.zeros_like(result.qdot), limited=True)
+        actual = (1.0 - _SERVO_RESPONSE) * self._obs[self._layout["qdot"]]
+        low = ((self._lower - q) / horizon - actual) / _SERVO_RESPONSE
+        high = ((self._upper - q) / horizon - actual) / _SERVO_RESPONSE
+        bounded = np.clip(qdot, np.minimum(low, 0.0), np.maximum(high, 0.0))
+        if changed or not np.array_equal(bounded, qdot):
+            return result._replace(qdot=bounded, limited=True)
+        return result
 
-    def _closest(self, controller: Any, q: NDArray[np.float64]) -> float:
-        """The smallest collision distance [m] at ``q``, which the controller's last step was evaluated at."""
-        closest = getattr(controller, "last_min_distance", None)
-        if closest is not None:
-            return float(closest)
-        collision = self.reference.collision  # the Python backend: its collision model at the model's q
-        return np.inf if collision is None else float(
-            np.min(collision.collision_model.evaluate(self.reference.model).distance, initial=np.inf))
+    def _close_pairs(self, controller: Any, q: NDArray[np.float64], limit: float
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Distances and ``dd/dq`` rows of the collision pairs nearer than ``limit`` at ``q`` (the compiled
+        controller's last step, or the Python controller's collision model)."""
+        if hasattr(controller, "close_pairs"):
+            return controller.close_pairs(limit)
+        collision = self.reference.collision
+        if collision is None:
+            return np.zeros(0), np.zeros((0, q.size))
+        model = collision.collision_model
+        state = model.evaluate(self.reference.model)  # the step left the robot model at q
+        near = np.flatnonzero(state.distance < limit)
+        return state.distance[near], model.distance_gradient(self.reference.model, state, near)
 
     def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
         if self._obs is None:
             raise WrapperError("TaskSpaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "TaskSpaceAction")
-        result = self.command(a)
+        result = self.last_result = self.command(a)
         joint_action = np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = np.asarray(obs, dtype=np.float64)
