@@ -201,3 +201,72 @@ def test_robot_segment_on_a_world_fixed_frame_is_placed_once(rng) -> None:
         assert_same(clik.step(q, [0.5, 0.2]), compiled.step(q, [0.5, 0.2]))
         active += int(compiled.last_min_distance < 0.3)
     assert active > 5
+
+
+@pytest.mark.parametrize("method", ["dls", "pseudoinverse"])
+def test_nullspace_input_is_n_u_in_both_backends(method: str, rng: np.random.Generator) -> None:
+    """(5.100): the input u adds N u to the command: J N u = 0, and the compiled kernel gives Clik's result."""
+    clik, _ = agri_clik(method)
+    compiled = CompiledClik(clik)
+    checked = 0
+    for _ in range(40):
+        q = rng.uniform(clik.model.lower_limits * 0.5, clik.model.upper_limits * 0.5)
+        clik.model.update(q)  # a target near the TCP: a command inside the speed limits
+        target = clik.task.value(clik.model) + np.concatenate([rng.normal(0.0, 0.01, 3), np.zeros(3)])
+        u = rng.normal(0.0, 0.1, clik.model.nv)
+        plain, moved = clik.step(q, target), clik.step(q, target, nullspace_input=u)
+        assert_same(moved, compiled.step(q, target, nullspace_input=u))
+        if plain.damping > 0.0 or plain.limited or moved.limited:
+            continue  # damped or bounded: N is no longer the exact projector
+        checked += 1
+        clik.model.update(q)
+        jacobian = clik.task.jacobian(clik.model)
+        projector = np.eye(clik.model.nv) - np.linalg.pinv(jacobian) @ jacobian
+        np.testing.assert_allclose(moved.qdot - plain.qdot, projector @ u, atol=1e-9)
+        assert np.abs(jacobian @ (moved.qdot - plain.qdot)).max() < 1e-9
+    assert checked > 10
+
+
+def test_nullspace_input_must_be_finite_with_nv_entries(planar_model: RobotModel) -> None:
+    clik = Clik(planar_model, FramePositionTask(PLANAR_ARM_TCP, "xz"))
+    compiled = CompiledClik(clik)
+    q, target = np.full(4, 0.3), np.array([0.9, 0.1])
+    for controller in (clik, compiled):
+        with pytest.raises(ControllerError, match="nullspace_input"):
+            controller.step(q, target, nullspace_input=np.zeros(3))
+        with pytest.raises(ControllerError, match="nullspace_input"):
+            controller.step(q, target, nullspace_input=np.array([0.0, np.nan, 0.0, 0.0]))
+
+
+def test_close_pairs_give_the_distances_and_their_finite_difference_gradients(rng: np.random.Generator) -> None:
+    clik, collision = agri_clik("dls")
+    compiled = CompiledClik(clik)
+    model = clik.model
+    checked = 0
+    for _ in range(200):
+        q = rng.uniform(model.lower_limits, model.upper_limits)
+        target = np.concatenate([[0.5, 0.0, 1.0], [1.0, 0.0, 0.0]])
+        compiled.step(q, target)
+        distances, rows = compiled.close_pairs(0.05, capacity=4)
+        model.update(q)
+        state = collision.collision_model.evaluate(model)
+        near = np.sort(state.distance[state.distance < 0.05])[:4]
+        np.testing.assert_allclose(np.sort(distances), near, atol=1e-9)  # the nearest four within the limit
+        if distances.size == 0:
+            continue
+        k = int(np.argmin(distances))
+        eps = 1e-6
+        numeric = np.zeros(model.nv)
+        for j in range(model.nv):
+            step = np.zeros(model.nq)
+            step[j] = eps
+            model.update(q + step)
+            ahead = collision.collision_model.evaluate(model).distance.min()
+            model.update(q - step)
+            behind = collision.collision_model.evaluate(model).distance.min()
+            numeric[j] = (ahead - behind) / (2 * eps)
+        np.testing.assert_allclose(rows[k], numeric, atol=1e-5)
+        checked += 1
+        if checked == 8:
+            break
+    assert checked == 8
