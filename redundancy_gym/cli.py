@@ -27,6 +27,8 @@ EPILOG = """examples:
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
 POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip "
                "(redundancy-gym list shows which envs each accepts)")
+WRAPPER_HELP = ("task_space | nullspace | residual: the env in that action wrapper (the same as its id "
+                "<Env>-<Wrapper>-v0; redundancy-gym list shows them)")
 
 
 def _json_object(text: str) -> dict[str, Any]:
@@ -67,6 +69,9 @@ def _parser() -> argparse.ArgumentParser:
 
     ev = _add_parser(sub, "eval", "evaluate a policy; prints a table and writes the evaluation-contract JSON")
     ev.add_argument("env_id", help=ENV_HELP)
+    ev.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
+    ev.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object of the wrapper's options (with --wrapper)")
     ev.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
     ev.add_argument("--episodes", type=int, default=10, metavar="N", help="number of episodes")
     ev.add_argument("--seed", type=int, default=0, metavar="N", help="episode i is reset with seed + i")
@@ -84,6 +89,9 @@ def _parser() -> argparse.ArgumentParser:
     tr = _add_parser(sub, "train", "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
                                    "return, success rate and length of recent episodes as it goes")
     tr.add_argument("env_id", help=ENV_HELP)
+    tr.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
+    tr.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object of the wrapper's options (with --wrapper)")
     tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="stable-baselines3 algorithm")
     tr.add_argument("--config", metavar="YAML",
                     help="rl-zoo3 style YAML keyed by env id (see configs/); its n_timesteps and n_envs are the "
@@ -108,6 +116,9 @@ def _parser() -> argparse.ArgumentParser:
 
     re = _add_parser(sub, "render", "record one episode as .mp4 or .gif")
     re.add_argument("env_id", help=ENV_HELP)
+    re.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
+    re.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
+                    help="JSON object of the wrapper's options (with --wrapper)")
     re.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
     re.add_argument("--out", required=True, metavar="PATH", help="output .mp4 or .gif path")
     re.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the episode")
@@ -156,7 +167,7 @@ def list_envs() -> list[dict[str, Any]]:
     import gymnasium as gym
 
     from . import ENV_IDS
-    from .policies import supported_policies
+    from .policies import missing_capabilities, registered, supported_policies
 
     rows = []
     for env_id in ENV_IDS:
@@ -173,10 +184,28 @@ def list_envs() -> list[dict[str, Any]]:
                 "max_episode_steps": steps,
                 "episode_s": None if dt is None or steps is None else round(float(dt) * steps, 6),
                 "policies": [*supported_policies(env), "SB3 .zip"],
+                "wrappers": [e.name for e in registered("wrapper")
+                             if not missing_capabilities(e.name, env, "wrapper")],
             })
         finally:
             env.close()
     return rows
+
+
+def format_registry() -> str:
+    """The registered policies and action wrappers, with the env ids each supports, as a text table."""
+    from . import ENV_IDS
+    from .policies import registered, supported_env_ids
+
+    table = [("name", "kind", "supports", "what it does")]
+    for entry in registered("policy") + registered("wrapper"):
+        supported = supported_env_ids(entry.name, entry.kind)
+        ids = "every env" if set(supported) == set(ENV_IDS) else \
+            ", ".join(i.split("/")[-1] for i in supported) or "-"
+        table.append((entry.name, entry.kind, ids, entry.summary))
+    widths = [max(len(r[i]) for r in table) for i in range(3)]
+    return "\n".join("  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3]
+                     for r in table)
 
 
 def format_env_list(rows: list[dict[str, Any]]) -> str:
@@ -193,6 +222,24 @@ def format_env_list(rows: list[dict[str, Any]]) -> str:
     widths = [max(len(r[i]) for r in table) for i in range(len(header) - 1)]
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(r[:-1], widths)) + "  " + r[-1] for r in table]
     return "\n".join(lines)
+
+
+def _apply_wrapper(args: argparse.Namespace) -> None:
+    """``--wrapper NAME``: the env id becomes the wrapped id, ``--wrapper-kwargs`` its ``wrapper_kwargs``."""
+    from .eval.exceptions import EvalError
+    from .registration import WRAPPED_ENV_IDS, wrapped_env_id
+
+    if args.wrapper is None:
+        if args.wrapper_kwargs:
+            raise EvalError("--wrapper-kwargs needs --wrapper")
+        return
+    wrapped = wrapped_env_id(args.env_id, args.wrapper)
+    if wrapped is None:
+        raise EvalError(f"no registered {args.wrapper!r} wrapper for {args.env_id}; the wrapped ids are "
+                        f"{', '.join(WRAPPED_ENV_IDS)}")
+    args.env_id = wrapped
+    if args.wrapper_kwargs:
+        args.env_kwargs = {**args.env_kwargs, "wrapper_kwargs": args.wrapper_kwargs}
 
 
 def _train(args: argparse.Namespace) -> None:
@@ -229,9 +276,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .eval.exceptions import EvalError
 
     try:
+        if args.command in ("eval", "train", "render"):
+            _apply_wrapper(args)
         if args.command == "list":
             rows = list_envs()
-            print(json.dumps(rows, indent=2) if args.json else format_env_list(rows))
+            print(json.dumps(rows, indent=2) if args.json else f"{format_env_list(rows)}\n\n{format_registry()}")
         elif args.command == "eval":
             from .eval.evaluate import evaluate, format_report
 

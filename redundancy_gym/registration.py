@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import gymnasium as gym
 
-__all__ = ["BASE_ENV_IDS", "ENV_IDS", "WRAPPED_ENV_IDS", "register_envs"]
+__all__ = ["BASE_ENV_IDS", "ENV_IDS", "WRAPPED_ENV_IDS", "register_envs", "wrapped_env_id"]
 
 BASE_ENV_IDS: tuple[str, ...] = ("redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0",
                                  "redundancy_gym/BipedWalk-v0")
@@ -49,3 +49,9 @@ def register_envs() -> None:
             gym.register(id=wrapped, entry_point="redundancy_gym.wrappers.wrapped_env:make_wrapped_env",
                          max_episode_steps=gym.spec(base).max_episode_steps,
                          kwargs={"env_id": base, "wrapper": wrapper})
+
+
+def wrapped_env_id(env_id: str, wrapper: str) -> str | None:
+    """The registered id of ``env_id`` in the wrapper ``wrapper`` (``redundancy_gym/AgriReach-v0`` and
+    ``nullspace``: ``redundancy_gym/AgriReach-Nullspace-v0``), or None when there is none."""
+    return next((w for w, base, name in _WRAPPED if base == env_id and name == wrapper), None)

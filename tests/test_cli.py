@@ -79,3 +79,33 @@ def test_eval_help_shows_episodes_and_seed_defaults(capsys) -> None:
         main(["eval", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "number of episodes (default: 10)" in text and "(default: 0)" in text
+
+
+def test_list_shows_the_registry_and_each_envs_wrappers(capsys) -> None:
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name in ("clik", "walking", "task_space", "nullspace", "residual"):
+        assert any(line.startswith(name + " ") for line in out.splitlines()), name
+    assert main(["list", "--json"]) == 0
+    rows = {row["id"]: row for row in json.loads(capsys.readouterr().out)}
+    assert rows[PLANAR]["wrappers"] == ["task_space", "nullspace", "residual"]
+    assert rows[BIPED]["wrappers"] == ["residual"]
+    assert rows["redundancy_gym/PlanarReach-Nullspace-v0"]["policies"] == ["zero", "random", "SB3 .zip"]
+
+
+def test_eval_with_a_wrapper_is_the_wrapped_id(tmp_path, capsys) -> None:
+    by_flag, by_id = tmp_path / "flag.json", tmp_path / "id.json"
+    assert main(["eval", PLANAR, "--wrapper", "nullspace", "--wrapper-kwargs", '{"objectives": true}', "--policy",
+                 "zero", "--episodes", "1", "--no-progress", "--json", str(by_flag)]) == 0
+    assert main(["eval", "redundancy_gym/PlanarReach-Nullspace-v0", "--env-kwargs",
+                 '{"wrapper_kwargs": {"objectives": true}}', "--policy", "zero", "--episodes", "1", "--no-progress",
+                 "--json", str(by_id)]) == 0
+    flag, direct = json.loads(by_flag.read_text()), json.loads(by_id.read_text())
+    assert flag["env"] == "redundancy_gym/PlanarReach-Nullspace-v0" and flag["success_rate"] == 1.0
+    assert flag["episode_return"] == direct["episode_return"]
+    assert main(["eval", BIPED, "--wrapper", "nullspace", "--policy", "zero", "--no-progress"]) == 2
+    assert "no registered 'nullspace' wrapper for redundancy_gym/BipedWalk-v0" in capsys.readouterr().err
+    assert main(["eval", PLANAR, "--wrapper-kwargs", "{}", "--policy", "zero", "--no-progress"]) == 0
+    assert main(["eval", PLANAR, "--wrapper-kwargs", '{"objectives": true}', "--policy", "zero",
+                 "--no-progress"]) == 2
+    assert "--wrapper-kwargs needs --wrapper" in capsys.readouterr().err
