@@ -98,7 +98,7 @@ class WalkingPolicy(PerEnvPolicy):
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         lower, upper = base.joint_limits
         c = self.config
-        if c.step_min_width > c.step_max_width:
+        if c.step_min_width > c.step_max_width:  # StepAdjusterConfig checks it too, without the options' names
             raise PolicyError(f"step_min_width={c.step_min_width!r} exceeds step_max_width={c.step_max_width!r} [m]")
         try:
             gait = GaitConfig(step_duration=c.step_duration, com_height=c.com_height,
@@ -125,15 +125,24 @@ class WalkingPolicy(PerEnvPolicy):
     def _state(self, obs: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         return self.model.from_mujoco_state(obs[self._qpos], obs[self._qvel])
 
-    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
-        """Normalized joint position targets for one observation."""
+    def begin(self, obs: NDArray[np.float64]) -> None:
+        """Start a walk from the observed standing state at the observation's commanded speed."""
+        q, _ = self._state(obs)
+        self.controller.start(q, float(obs[self._command][0]))
+
+    def command(self, obs: NDArray[np.float64]) -> NDArray[np.float32]:
+        """One control period of the walk under way: normalized joint position targets for ``obs``."""
         q, v = self._state(obs)
-        if self._new_episode(obs, starting) or self.controller.pattern is None:
-            self.controller.start(q, float(obs[self._command][0]))
         wrench = obs[self._wrench].reshape(2, 6)
         command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])
         self.last_command = command
         return np.clip((command.joint_targets - self._nominal) / self._scale, -1.0, 1.0).astype(np.float32)
+
+    def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
+        """Normalized joint position targets for one observation."""
+        if self._new_episode(obs, starting) or self.controller.pattern is None:
+            self.begin(obs)
+        return self.command(obs)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

@@ -38,6 +38,10 @@ BACKENDS = ("compiled", "python")
 """Whole-body IK implementations of :class:`WalkingIkConfig`."""
 
 
+COMMAND_REPLAN_INTERVAL = 0.04
+"""Shortest time [s] between two CoM replans for new walking commands (:meth:`WalkingController.set_command`)."""
+
+
 @dataclass(frozen=True)
 class WalkingIkConfig:
     """Whole-body IK settings of :class:`WalkingController`.
@@ -157,6 +161,7 @@ class WalkingController:
         self._collision_model: CollisionModel | None = None
         self.q_ref: NDArray[np.float64] | None = None
         self.time = 0.0
+        self._command_replan = -np.inf
         self._next: PatternSample | None = None
 
     # ------------------------------------------------------------------ start
@@ -205,7 +210,24 @@ class WalkingController:
         self.stabilizer.reset()
         self.step_adjuster.reset()
         self.time = 0.0
+        self._command_replan = -np.inf
         self._next: PatternSample | None = None
+
+    def set_command(self, forward: float, lateral: float = 0.0) -> None:
+        """Walk at ``forward`` and ``lateral`` [m/s] from the next step that has not begun
+        (:meth:`WalkingPattern.set_velocity`); the ZMP correction stays the one estimated at :meth:`start`.
+
+        The CoM plan follows a new command at once, but at most every :data:`COMMAND_REPLAN_INTERVAL` (a command
+        changed every period would replan every period, 1 ms each); in between, the footholds change and the plan
+        catches up at the next replan or step start.
+        """
+        if self.pattern is None:
+            raise ControllerError("call WalkingController.start(q, speed) before set_command()")
+        replan = self.time - self._command_replan >= COMMAND_REPLAN_INTERVAL - 1e-9
+        self.pattern.set_velocity(self.time, forward, lateral, replan=replan)
+        if replan:
+            self._command_replan = self.time
+            self._next = None  # the plan may have changed from now on
 
     @staticmethod
     def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],

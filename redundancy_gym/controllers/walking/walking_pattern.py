@@ -147,6 +147,11 @@ class WalkingPattern:
         # step adjustments (push recovery, :meth:`adjust_step`): foothold shifts from a foothold index on, the
         # single supports that were shortened, and the re-timed swings
         self._shifts: list[tuple[int, NDArray[np.float64]]] = []
+        # velocity commands (:meth:`set_velocity`): from foothold index ``first`` on, each foothold moves by
+        # ``(j - first + 1) * delta`` (the step displacement the command adds); merged per first index
+        self._velocity = np.array([self.speed, 0.0])
+        self._velocity_changes: dict[int, NDArray[np.float64]] = {}
+        self._stale = False  # footholds changed since the CoM plan was made
         self._singles: dict[int, float] = {}
         self._retimed: dict[int, _RetimedSwing] = {}
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
@@ -158,6 +163,7 @@ class WalkingPattern:
             Quintic.from_boundary(self._single - flat, 0.0, 0.0)])
         times, zmp = self._knots(-1)
         zmp = self.planner.start_zmp(times, zmp, com)
+        self._start_zmp = zmp[0].copy()  # the first knot of the standing start, for a replan within it
         self._plan: DcmPlan = self.planner.plan(times, zmp, com)
         self._plan_step = -1
 
@@ -173,7 +179,61 @@ class WalkingPattern:
         for first, shift in self._shifts:
             if j >= first:
                 h[:2] += shift
+        for first, delta in self._velocity_changes.items():
+            if j >= first:
+                h[:2] += (j - first + 1) * delta
         return h
+
+    @property
+    def velocity(self) -> NDArray[np.float64]:
+        """The commanded walking velocity (forward, lateral) [m/s] (:meth:`set_velocity`)."""
+        return self._velocity.copy()
+
+    def set_velocity(self, t: float, forward: float, lateral: float = 0.0, replan: bool = True) -> bool:
+        """Walk at ``forward`` and ``lateral`` [m/s] from the next step that has not begun: the footholds after the
+        landing of the step under way at ``t`` (after the first landing during the standing start) move so that
+        each step covers ``(forward, lateral) * step_duration``; with ``replan`` the CoM plan is replanned from
+        ``t`` on (its CoM continues, its DCM follows from the new footholds, as after :meth:`adjust_step`),
+        otherwise at the next step's start or the next call with ``replan``. Returns whether the velocity changed.
+
+        Raises:
+            ControllerError: a speed that is not finite, ``forward`` outside ``[0, max_step_length /
+                step_duration]``, or ``lateral`` so large that the feet would come closer than half the step
+                width (``|lateral| step_duration > step_width / 2``).
+        """
+        if not (np.isfinite(t) and t >= 0.0):
+            raise ControllerError(f"time must be finite and >= 0, got {t!r}")
+        fastest = self.config.max_step_length / self.step_duration
+        if not (np.isfinite(forward) and 0.0 <= forward <= fastest + 1e-12):
+            raise ControllerError(f"forward must lie in [0, {fastest:g}] m/s, got {forward!r}")
+        widest = 0.5 * self.config.step_width / self.step_duration
+        if not (np.isfinite(lateral) and abs(lateral) <= widest + 1e-12):
+            raise ControllerError(f"lateral must lie in [-{widest:g}, {widest:g}] m/s, got {lateral!r}")
+        velocity = np.array([float(forward), float(lateral)])
+        if np.array_equal(velocity, self._velocity):
+            if replan and self._stale:
+                self._replan_from(t)
+            return False
+        k = self.step_at(t)
+        if k > self._plan_step:
+            self._replan(k)
+        first = k + 3 if k >= 0 else 2
+        delta = (velocity - self._velocity) * self.step_duration
+        self._velocity_changes[first] = self._velocity_changes.get(first, np.zeros(2)) + delta
+        self._velocity = velocity
+        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}  # later swings land elsewhere
+        self._stale = True
+        if replan:
+            self._replan_from(t)
+        return True
+
+    def _replan_from(self, t: float) -> None:
+        """The CoM plan from ``t`` on, with the footholds as they are now."""
+        k = self.step_at(t)
+        com = self._plan.sample(t).position
+        times, zmp = self._knots_from(t, k)
+        self._plan = self.planner.plan(times, zmp, com)
+        self._stale = False
 
     @property
     def single_support(self) -> float:
@@ -288,6 +348,7 @@ class WalkingPattern:
         times, zmp = self._knots(k)
         self._plan = self.planner.plan(times, zmp, com)
         self._plan_step = k
+        self._stale = False
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i >= k}
         self._retimed = {i: v for i, v in self._retimed.items() if i >= k}
 
@@ -421,8 +482,11 @@ class WalkingPattern:
         return k, s, remaining
 
     def _knots_from(self, t: float, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """The ZMP knots of step ``k`` on, cut at ``t`` (its ZMP interpolated)."""
+        """The ZMP knots of step ``k`` on (the standing start for ``k = -1``), cut at ``t`` (its ZMP
+        interpolated)."""
         times, zmp = self._knots(k)
+        if k < 0:
+            zmp[0] = self._start_zmp
         i = int(np.searchsorted(times, t, side="right"))
         if i >= times.size:
             raise ControllerError(f"t={t!r} lies past the preview")

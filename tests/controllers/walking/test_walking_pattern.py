@@ -112,3 +112,40 @@ def test_steady_speed_is_the_command_and_bad_input_raises() -> None:
     # faster than the longest step at the nominal duration: the step gets shorter in time
     length, duration = GaitConfig().timing(0.9)
     assert length == pytest.approx(0.6) and duration == pytest.approx(0.6 / 0.9)
+
+
+def test_a_new_velocity_moves_only_the_footholds_after_the_current_landing() -> None:
+    pattern = WalkingPattern(GaitConfig(), FEET[0], FEET[1], [0.025, 0.0], 0.5)
+    t = pattern.step_start(2) + 0.1  # in the swing of step 2, which lands on foothold 4
+    before = [pattern.foothold(j) for j in range(8)]
+    com = pattern.sample(t).com
+    assert pattern.set_velocity(t, 0.3, 0.05)
+    after = [pattern.foothold(j) for j in range(8)]
+    for j in range(5):
+        assert np.array_equal(after[j], before[j])
+    duration = pattern.step_duration
+    for j in range(5, 8):  # each later step covers the new velocity times the step duration
+        assert after[j][0] - after[j - 1][0] == pytest.approx(0.3 * duration, abs=1e-12)
+        if j >= 6:  # the same foot, two steps on
+            assert after[j][1] - after[j - 2][1] == pytest.approx(2 * 0.05 * duration, abs=1e-12)
+    np.testing.assert_allclose(pattern.sample(t).com, com, atol=1e-12)  # the CoM plan continues from here
+    np.testing.assert_array_equal(pattern.velocity, [0.3, 0.05])
+    assert not pattern.set_velocity(t + 0.01, 0.3, 0.05)  # the same command again changes nothing
+
+
+def test_a_steady_new_velocity_is_walked() -> None:
+    pattern = WalkingPattern(GaitConfig(), FEET[0], FEET[1], [0.025, 0.0], 0.5)
+    pattern.set_velocity(1.0, 0.3, -0.05)
+    a, b = pattern.step_start(6), pattern.step_start(10)
+    for t in np.arange(1.0, b + 1e-9, 0.01):
+        s = pattern.sample(t)
+        if abs(t - a) < 1e-9:
+            start = s.com[:2]
+    np.testing.assert_allclose((s.com[:2] - start) / (b - a), [0.3, -0.05], rtol=1e-3, atol=1e-4)
+
+
+def test_velocities_that_the_gait_cannot_walk_raise() -> None:
+    pattern = WalkingPattern(GaitConfig(), FEET[0], FEET[1], [0.025, 0.0], 0.5)
+    for forward, lateral in ((-0.1, 0.0), (0.8, 0.0), (0.5, 0.2), (np.nan, 0.0)):
+        with pytest.raises(ControllerError, match="forward|lateral"):
+            pattern.set_velocity(1.0, forward, lateral)
