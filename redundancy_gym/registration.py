@@ -14,9 +14,10 @@ _WRAPPED: tuple[tuple[str, str, str], ...] = tuple(
     (f"redundancy_gym/{env}-{suffix}-v0", f"redundancy_gym/{env}-v0", wrapper)
     for env, wrappers in (("PlanarReach", ("TaskSpace", "Nullspace", "Residual")),
                           ("AgriReach", ("TaskSpace", "Nullspace", "Residual")),
-                          ("BipedWalk", ("Residual",)))
+                          ("BipedWalk", ("Residual", "WalkingCommand")))
     for suffix in wrappers
-    for wrapper in ({"TaskSpace": "task_space", "Nullspace": "nullspace", "Residual": "residual"}[suffix],)
+    for wrapper in ({"TaskSpace": "task_space", "Nullspace": "nullspace", "Residual": "residual",
+                     "WalkingCommand": "walking_command"}[suffix],)
 )
 WRAPPED_ENV_IDS: tuple[str, ...] = tuple(w for w, _, _ in _WRAPPED)
 """The env ids of an env in an action wrapper (``redundancy_gym.wrappers``): ``<Env>-<Wrapper>-v0``."""

@@ -89,7 +89,7 @@ def test_list_shows_the_registry_and_each_envs_wrappers(capsys) -> None:
     assert main(["list", "--json"]) == 0
     rows = {row["id"]: row for row in json.loads(capsys.readouterr().out)}
     assert rows[PLANAR]["wrappers"] == ["task_space", "nullspace", "residual"]
-    assert rows[BIPED]["wrappers"] == ["residual"]
+    assert rows[BIPED]["wrappers"] == ["residual", "walking_command"]
     assert rows["redundancy_gym/PlanarReach-Nullspace-v0"]["policies"] == ["zero", "random", "SB3 .zip"]
 
 

@@ -384,6 +384,8 @@ register("nullspace", "wrapper", _wrapper(_ARMS, "nullspace_action", "NullspaceA
          "CLIK tracks the env's reference; the action is the nullspace input u of (5.100)")
 register("residual", "wrapper", _wrapper((*_ARMS, {"biped"}), "residual_action", "ResidualAction"),
          "the action is a bounded correction added to the reference policy's")
+register("walking_command", "wrapper", _wrapper(({"biped"},), "walking_command_action", "WalkingCommandAction"),
+         "the action is the walking velocity; the walking reference moves the joints")
 
 WRAPPER_NAMES: tuple[str, ...] = tuple(e.name for e in registered("wrapper"))
 """The built-in wrapper names."""

@@ -17,7 +17,7 @@ from redundancy_gym.wrappers import WrapperError, make_wrapper
 
 def test_every_name_is_registered_once_with_known_capabilities() -> None:
     assert POLICY_NAMES == ("clik", "walking", "predictive", "global", "zero", "random")
-    assert WRAPPER_NAMES == ("task_space", "nullspace", "residual")
+    assert WRAPPER_NAMES == ("task_space", "nullspace", "residual", "walking_command")
     for entry in registered("policy") + registered("wrapper"):
         for impl in entry.implementations:
             assert impl.capabilities <= set(CAPABILITY_ATTRIBUTES)
@@ -50,7 +50,7 @@ def test_unknown_and_unsupported_names_list_the_valid_choices() -> None:
         make_policy("mpc", planar)
     with pytest.raises(PolicyError, match="supports redundancy_gym/BipedWalk-v0.*lacks the capabilities biped"):
         make_policy("walking", planar)
-    with pytest.raises(WrapperError, match="valid: task_space, nullspace, residual"):
+    with pytest.raises(WrapperError, match="valid: task_space, nullspace, residual, walking_command"):
         make_wrapper("joint", planar)
     biped = gym.make("redundancy_gym/BipedWalk-v0")
     with pytest.raises(WrapperError, match="supports redundancy_gym/PlanarReach-v0, redundancy_gym/AgriReach-v0"):

@@ -1,0 +1,127 @@
+"""WalkingCommandAction: the learner commands the walking velocity; the walking reference moves the joints."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+from ..policies import PolicyError, make_policy
+from ..validation import check_int, check_real
+from .action_check import check_action, normalized_box
+from .exceptions import WrapperError
+
+__all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
+
+
+@dataclass(frozen=True)
+class WalkingCommandActionConfig:
+    """Options of :class:`WalkingCommandAction`.
+
+    Attributes:
+        min_forward_speed, max_forward_speed: the forward speed of an action of -1 and +1 [m/s]
+            (0 <= min < max <= 0.75, the fastest speed of the gait's 0.8 s steps).
+        max_lateral_speed: the sideways speed of an action of +-1 [m/s] (0 <= max <= 0.1: faster, the feet of a
+            sideways step come within 0.1 m of each other).
+        command_period: control periods each action is held for (>= 1); the rewards of the periods are summed.
+        policy_kwargs: options of the ``walking`` reference (``WalkingPolicyConfig`` fields).
+    """
+
+    min_forward_speed: float = 0.2
+    max_forward_speed: float = 0.6
+    max_lateral_speed: float = 0.05
+    command_period: int = 1
+    policy_kwargs: dict[str, Any] = field(default_factory=dict)
+
+
+class WalkingCommandAction(gym.Wrapper):
+    """The action is a walking velocity; the ``walking`` reference (DCM pattern, stabilizer, step adjustment,
+    whole-body CLIK) turns it into the biped's joint targets every control period.
+
+    ## Description
+    Each action sets the velocity of the walk (:meth:`~redundancy_gym.controllers.walking.WalkingController.
+    set_command`): the footholds after the landing of the step under way move so that each later step covers
+    the commanded velocity times the step duration, and the CoM plan is replanned from now on. The walk starts
+    at ``reset`` from the standing robot at the env's ``target_speed``. A learner chooses where to walk, not how.
+    Turning (a yaw rate) is not offered: the walking pattern walks along its starting heading.
+
+    ## Action Space
+    ``Box(-1, 1, (2,), float32)``: forward speed from ``min_forward_speed`` (-1) to ``max_forward_speed`` (+1)
+    [m/s], and sideways speed (+ to the left) times ``max_lateral_speed`` [m/s]. Non-finite actions raise
+    :class:`WrapperError`.
+
+    ## Observation Space, Rewards, Starting State, Episode End
+    The env's (its reward still measures the walk against its ``target_speed``); with ``command_period`` > 1
+    the rewards of the periods are summed and the episode ends in the period it ends. ``info`` keeps every
+    entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s] and
+    ``step_adjusted`` (the push-recovery step adjustment acted in this period).
+
+    ## Arguments
+    ``env`` and the fields of :class:`WalkingCommandActionConfig` as keyword arguments.
+
+    ## Version History
+    - v0: initial version.
+    """
+
+    # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
+    CAPABILITIES: frozenset[str] = frozenset()
+
+    def __init__(self, env: gym.Env, min_forward_speed: float = WalkingCommandActionConfig.min_forward_speed,
+                 max_forward_speed: float = WalkingCommandActionConfig.max_forward_speed,
+                 max_lateral_speed: float = WalkingCommandActionConfig.max_lateral_speed,
+                 command_period: int = WalkingCommandActionConfig.command_period,
+                 policy_kwargs: dict[str, Any] | None = None) -> None:
+        super().__init__(env)
+        self.config = WalkingCommandActionConfig(
+            min_forward_speed=check_real("min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s",
+                                         error=WrapperError),
+            max_forward_speed=check_real("max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s",
+                                         error=WrapperError),
+            max_lateral_speed=check_real("max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s",
+                                         error=WrapperError),
+            command_period=check_int("command_period", command_period, low=1, high=1000, error=WrapperError),
+            policy_kwargs=dict(policy_kwargs or {}))
+        if self.config.min_forward_speed >= self.config.max_forward_speed:
+            raise WrapperError(f"min_forward_speed={min_forward_speed!r} must be below "
+                               f"max_forward_speed={max_forward_speed!r} [m/s]")
+        try:
+            self.reference: Any = make_policy("walking", env, **self.config.policy_kwargs)
+        except PolicyError as exc:
+            raise WrapperError(f"WalkingCommandAction: {exc}") from exc
+        self.action_space = normalized_box(2)
+        self._obs: NDArray[np.float64] | None = None
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._obs = np.asarray(obs, dtype=np.float64)
+        self.reference.begin(self._obs)
+        return obs, info
+
+    def velocity(self, action: NDArray[np.float64]) -> tuple[float, float]:
+        """The (forward, lateral) speed [m/s] of a normalized action."""
+        c = self.config
+        forward = c.min_forward_speed + 0.5 * (float(action[0]) + 1.0) * (c.max_forward_speed - c.min_forward_speed)
+        return forward, float(action[1]) * c.max_lateral_speed
+
+    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+        if self._obs is None:
+            raise WrapperError("WalkingCommandAction: call reset() before step()")
+        forward, lateral = self.velocity(check_action(action, self.action_space, "WalkingCommandAction"))
+        self.reference.controller.set_command(forward, lateral)
+        total = 0.0
+        adjusted = False
+        for _ in range(self.config.command_period):
+            joint_action = self.reference.command(self._obs)
+            adjusted |= self.reference.last_command.adjustment is not None
+            obs, reward, terminated, truncated, info = self.env.step(joint_action)
+            self._obs = np.asarray(obs, dtype=np.float64)
+            total += float(reward)
+            if terminated or truncated:
+                break
+        info = {**info, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
+                "step_adjusted": adjusted}
+        return obs, total, terminated, truncated, info

@@ -1,0 +1,53 @@
+"""WalkingCommandAction: the biped walks at the commanded velocity, and random commands do not make it fall."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import redundancy_gym  # noqa: F401  (registers the ids)
+from redundancy_gym.wrappers import WalkingCommandAction, WrapperError
+
+ID = "redundancy_gym/BipedWalk-WalkingCommand-v0"
+
+
+def _walk(env: gym.Env, seed: int, actions) -> tuple[bool, int, np.ndarray]:
+    env.reset(seed=seed)
+    steps = 0
+    while True:
+        _, _, terminated, truncated, info = env.step(actions(steps).astype(np.float32))
+        steps += 1
+        if terminated or truncated:
+            return terminated, steps, env.unwrapped.data.qpos[:2].copy()
+
+
+@pytest.mark.parametrize("speed", [0.5, 0.3])
+def test_a_constant_command_walks_ten_seconds_at_that_speed(speed: float) -> None:
+    env = gym.make(ID)
+    action = np.array([2.0 * (speed - 0.2) / 0.4 - 1.0, 0.0])  # default forward range [0.2, 0.6] m/s
+    fell, steps, position = _walk(env, 0, lambda k: action)
+    assert not fell and steps == 2500
+    assert position[0] / 10.0 == pytest.approx(speed, abs=0.05)  # less the standing start and the first step
+
+
+def test_sideways_commands_walk_sideways() -> None:
+    fell, _, position = _walk(gym.make(ID), 0, lambda k: np.array([-1.0, 1.0]))
+    assert not fell and position[1] > 0.3  # 0.05 m/s to the left for about 9 s
+
+
+@pytest.mark.parametrize("seed", range(600, 610))
+def test_random_commands_changed_every_step_do_not_make_it_fall(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    fell, steps, _ = _walk(gym.make(ID), seed, lambda k: rng.uniform(-1, 1, 2))
+    assert not fell and steps == 2500
+
+
+def test_bad_options_raise_naming_them() -> None:
+    env = gym.make("redundancy_gym/BipedWalk-v0")
+    with pytest.raises(WrapperError, match="max_forward_speed"):
+        WalkingCommandAction(env, max_forward_speed=0.9)
+    with pytest.raises(WrapperError, match="min_forward_speed"):
+        WalkingCommandAction(env, min_forward_speed=0.5, max_forward_speed=0.4)
+    with pytest.raises(WrapperError, match="command_period"):
+        WalkingCommandAction(env, command_period=0)
