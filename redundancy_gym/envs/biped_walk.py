@@ -118,8 +118,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - ``reward_fall = -fall_penalty`` on the step that ends the episode by a fall or a self-collision
 
     ``info`` also holds ``forward_speed`` (``v_x``), ``distance`` [m] (pelvis x travelled since the reset),
-    ``time`` [s], ``cop`` (centre of pressure (x, y) per foot from the contact forces, rows right and left; NaN
-    for a foot off the ground), ``zmp`` ((x, y) of both feet; NaN in flight), ``normal_force`` [N] per foot,
+    ``time`` [s], ``cop`` (centre of pressure (x, y) per foot from the contact forces, rows right and left; 0
+    for a foot off the ground, which ``cop_valid`` (one flag per foot) tells), ``zmp`` ((x, y) of both feet; 0 in
+    flight, which ``zmp_valid`` tells), ``normal_force`` [N] per foot,
     ``contact_moments`` (ankle sensor moments in the world frame [N m], rows right and left),
     ``angular_momentum`` (whole-body, about the CoM, world frame [kg m^2/s]), ``com`` [m],
     ``min_self_clearance`` and ``min_clearance`` [m] (smallest swept-sphere distance between non-adjacent
@@ -176,7 +177,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - v0: initial version. Before release, the fault arguments ``sensor_noise``, ``push`` and
       ``actuator_torque_scale`` (all off by default: behaviour unchanged) and ``info["push_force"]`` were added;
       ``info["task_error"]`` (``|v_x - target_speed|``) was renamed
-      ``speed_error`` and ``mean_speed_error`` was added; rewards and dynamics are unchanged.
+      ``speed_error`` and ``mean_speed_error`` was added; ``info["cop"]`` of an unloaded foot and ``info["zmp"]``
+      in flight became 0 with the flags ``cop_valid`` and ``zmp_valid`` (they were NaN); rewards and dynamics are
+      unchanged.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 250}
@@ -405,6 +408,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         m, d = self.model, self.data
         qdot = d.qvel[6:]
         cop, zmp, normal = self._contact_pressure()
+        # finite values with validity flags rather than NaN: tools that compare infos (Gymnasium's check_env)
+        # take NaN for a difference
+        cop_valid, zmp_valid = ~np.isnan(cop[:, 0]), bool(not np.isnan(zmp[0]))
         torso = d.xmat[self._torso].reshape(3, 3)
         tilt = float(np.arccos(np.clip(torso[2, 2], -1.0, 1.0)))
         fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
@@ -422,8 +428,10 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "forward_speed": float(forward_speed),
             "lateral_speed": float(d.qvel[1]),
             "distance": distance,
-            "cop": cop,
-            "zmp": zmp,
+            "cop": np.where(cop_valid[:, None], cop, 0.0),
+            "cop_valid": cop_valid,
+            "zmp": zmp if zmp_valid else np.zeros(2),
+            "zmp_valid": zmp_valid,
             "normal_force": normal,
             "contact_moments": moments,
             "angular_momentum": d.subtree_angmom[self._pelvis].copy(),

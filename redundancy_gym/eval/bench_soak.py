@@ -7,7 +7,8 @@ Each env is stepped by three action sources, one after the other, for a share of
 - ``bang_bang``: each action entry at the low or the high bound of the box (-1 or +1 here), each entry
   switching with probability :data:`BANG_BANG_SWITCH` per step, from a seeded generator;
 - ``reference``: the env's model-based reference policy (``walking`` where the env supports it, else ``clik``;
-  :func:`redundancy_gym.make_policy`), given ``episode_start`` after every reset.
+  :func:`redundancy_gym.make_policy`), given ``episode_start`` after every reset; on a wrapped env
+  (``<Env>-<Wrapper>-v0``) the zero action, which leaves the wrapper's own controller in charge.
 
 Episodes end on termination or truncation and the env is reset with consecutive seeds ``seed``, ``seed + 1``,
 ... An exception (from ``reset``, ``step`` or the policy) is caught and counted with its type and message, the
@@ -48,11 +49,10 @@ DEFAULT_SHARES: dict[str, dict[str, float]] = {
     "redundancy_gym/BipedWalk-v0": {"random": 0.4, "bang_bang": 0.4, "reference": 0.2},
 }
 """Shares of the per-env budget by source, where they are not equal (they are normalized over the sources run)."""
-DOCUMENTED_NAN: dict[str, tuple[str, ...]] = {
-    "redundancy_gym/BipedWalk-v0": ("cop", "zmp"),
-}
-"""``info`` keys that are NaN by design (BipedWalk: the centre of pressure of an unloaded foot, the ZMP with no
-contact): NaN there is counted as ``documented_nan``, not as non-finite; an infinite value still is."""
+DOCUMENTED_NAN: dict[str, tuple[str, ...]] = {}
+"""``info`` keys that an env documents as NaN by design, per env id (none today: BipedWalk's centre of pressure and
+ZMP are 0 with validity flags where undefined): NaN there is counted as ``documented_nan``, not as non-finite; an
+infinite value still is."""
 MAX_MESSAGES = 5
 """How many exception messages and non-finite keys each source keeps."""
 MAX_CONSECUTIVE_FAILURES = 20
@@ -86,7 +86,8 @@ def machine_info() -> dict[str, Any]:
 
 
 def _reference_name(env: gym.Env) -> str | None:
-    """``walking`` or ``clik``, whichever the env supports (None: neither, or the env is not ours)."""
+    """``walking`` or ``clik``, whichever the env supports; ``zero`` for an env in one of our action wrappers
+    (the wrapper's own controller acting alone); None: neither, or the env is not ours."""
     try:
         from ..policies import supported_policies
 
@@ -96,6 +97,13 @@ def _reference_name(env: gym.Env) -> str | None:
     for name in ("walking", "clik"):
         if name in supported:
             return name
+    from .. import wrappers
+
+    inner = env
+    while isinstance(inner, gym.Wrapper):
+        if type(inner).__module__.startswith(wrappers.__name__ + "."):
+            return "zero"
+        inner = inner.env
     return None
 
 

@@ -58,7 +58,7 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
             rows["time"].append(info["time"])
             rows["com"].append(info["com"])
             rows["com_ref"].append(command.pattern.com)
-            rows["zmp"].append(info["zmp"])
+            rows["zmp"].append(info["zmp"] if info["zmp_valid"] else np.full(2, np.nan))  # a gap in flight
             rows["zmp_ref"].append(command.pattern.zmp)
             rows["feet"].append(command.pattern.feet)
             rows["contact"].append(command.pattern.contact)

@@ -64,3 +64,20 @@ def test_bad_arguments_and_actions_raise() -> None:
     env.reset(seed=0)
     with pytest.raises(InvalidActionError):
         env.step(np.full(22, np.nan))
+
+
+def test_an_unloaded_foot_has_a_flagged_finite_centre_of_pressure() -> None:
+    """No NaN in info (Gymnasium's check_env compares infos, and NaN never equals itself): an unloaded foot's CoP
+    is 0 and ``cop_valid`` says so."""
+    env = gym.make("redundancy_gym/BipedWalk-v0")
+    policy = make_policy("walking", env)
+    obs, _ = env.reset(seed=0)
+    unloaded = 0
+    for _ in range(500):
+        action, _ = policy.predict(obs)
+        obs, _, _, _, info = env.step(action)
+        assert np.all(np.isfinite(info["cop"])) and np.all(np.isfinite(info["zmp"]))
+        unloaded += int(not info["cop_valid"].all())
+        assert np.all(info["cop"][~info["cop_valid"]] == 0.0)
+        assert info["zmp_valid"]
+    assert unloaded > 100  # single supports
