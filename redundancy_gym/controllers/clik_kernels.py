@@ -65,7 +65,7 @@ _NF = len(FLOAT_FIELDS)
  _I_POSITION_V_INDEX) = range(_NF, _NF + len(INT_FIELDS))
 
 # return codes of clik_step
-OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY = range(5)
+OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
@@ -284,7 +284,7 @@ def clik_step(f, i, has_velocity, has_input):
     """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
     (6), nullspace input ``u`` of (5.100) (nv), used where ``has_input``) and writes ``outputs`` (qdot, bounded by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics);
     returns a code (0 ok, 1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target
-    velocity)."""
+    velocity, 5 non-finite nullspace input)."""
     dims = _iv(i, _I_DIMS)
     nj, nv, nq, m = dims[0], dims[1], dims[2], dims[3]
     n_limits, n_postures, method, collision, objectives = dims[4], dims[5], dims[13], dims[14], dims[15]
@@ -388,6 +388,10 @@ def clik_step(f, i, has_velocity, has_input):
         return OK
     # z = alpha dH/dq - W u: the nullspace term -N W^-1 z is the objectives' descent plus N u (5.100)
     u = inputs[nq + 12:nq + 12 + nv]
+    if has_input:
+        for k in range(nv):
+            if not np.isfinite(u[k]):
+                return BAD_INPUT
     nullspace = objectives or has_input
     lam = scratch[102:108]
     for r in range(m):

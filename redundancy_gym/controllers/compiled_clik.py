@@ -10,6 +10,7 @@ from ..model import ModelError
 from .clik import Clik, ClikResult
 from .clik_kernels import (
     BAD_CONFIGURATION,
+    BAD_INPUT,
     BAD_TARGET,
     BAD_VELOCITY,
     DIMS,
@@ -38,6 +39,18 @@ __all__ = ["CompiledClik"]
 
 SUPPORTED_TASKS = (FrameAxisTask, FramePositionTask)
 SUPPORTED_OBJECTIVES = (JointLimitObjective, PostureObjective, CollisionObjective)
+
+
+def _vector(values: ArrayLike, name: str, size: int, error: type[Exception]) -> NDArray[np.float64]:
+    """``values`` as a float64 vector of ``size`` entries (a float64 array of that shape passes as it is: the hot
+    path); ``error`` naming ``name`` otherwise (finiteness is the kernel's check)."""
+    if type(values) is np.ndarray and values.dtype == np.float64 and values.shape == (size,):
+        return values
+    array = as_float_array(values, name)
+    if array.shape != (size,):
+        what = "configuration" if name == "q" else name
+        raise error(f"{what} must have shape ({size},), got {array.shape}")
+    return array
 
 
 class CompiledClik:
@@ -199,27 +212,28 @@ class CompiledClik:
             self._refresh_environment()
         nq = self._nq
         inputs = self._inputs
-        q = as_float_array(q, "q")
         width = self._width
-        if q.shape != (nq,):
-            raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
-        target = as_float_array(target, "target")
-        if target.shape != (width,):
-            raise ControllerError(f"target must have shape ({width},), got {target.shape}")
+        q = _vector(q, "q", nq, ModelError)
+        target = _vector(target, "target", width, ControllerError)
         inputs[:nq] = q
         inputs[nq:nq + width] = target
         has_velocity = target_velocity is not None
         if has_velocity:
-            velocity = as_float_array(target_velocity, "target_velocity")
-            if velocity.shape != (width,):
-                raise ControllerError(f"target_velocity must have shape ({width},), got {velocity.shape}")
-            inputs[nq + 6:nq + 6 + width] = velocity
+            inputs[nq + 6:nq + 6 + width] = _vector(target_velocity, "target_velocity", width, ControllerError)
         has_input = nullspace_input is not None
-        if has_input:
-            u = as_float_array(nullspace_input, "nullspace_input")
-            if u.shape != (self._nv,) or not np.all(np.isfinite(u)):
-                raise ControllerError(f"nullspace_input must be finite with shape ({self._nv},), got {u.shape}")
-            inputs[nq + 12:nq + 12 + self._nv] = u
+        if has_input:  # the kernel checks finiteness (BAD_INPUT)
+            if getattr(nullspace_input, "shape", None) != (self._nv,):  # an array of nv is the fast path
+                try:
+                    nullspace_input = np.asarray(nullspace_input, dtype=np.float64)
+                except (TypeError, ValueError):
+                    nullspace_input = np.zeros(0)
+                if nullspace_input.shape != (self._nv,):
+                    raise ControllerError(f"nullspace_input must be finite with shape ({self._nv},), got "
+                                          f"{nullspace_input.shape}")
+            try:
+                inputs[nq + 12:nq + 12 + self._nv] = nullspace_input
+            except (TypeError, ValueError) as exc:  # an array of strings or objects
+                raise ControllerError("nullspace_input must be an array of finite numbers") from exc
         code = self._kernel(self._f, self._i, has_velocity, has_input)
         self._stepped = code == OK
         if code != OK:
@@ -241,6 +255,8 @@ class CompiledClik:
             check_finite(target, "target")
         elif code == BAD_VELOCITY:
             check_finite(np.asarray(target_velocity, dtype=np.float64), "target_velocity")
+        elif code == BAD_INPUT:
+            raise ControllerError("nullspace_input must be finite")
         elif code == ZERO_AXIS:
             raise ControllerError("the target axis must not be zero")
         raise ControllerError(f"the CLIK kernel returned code {code}")  # not reached: each check above raises

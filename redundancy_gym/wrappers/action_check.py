@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -20,11 +21,16 @@ def normalized_box(dim: int) -> spaces.Box:
 
 def check_action(action: Any, space: spaces.Box, wrapper: str) -> NDArray[np.float64]:
     """``action`` as float64 after checking it is an array of ``space``'s shape with finite entries; entries
-    outside the box are clipped into it (as the envs clip theirs).
+    outside ``[-1, 1]`` (every wrapper's box, :func:`normalized_box`) are clipped into it, as the envs clip
+    theirs.
 
     Raises:
         WrapperActionError: not numbers, a wrong shape, or a NaN/inf entry (naming the wrapper and the shape).
     """
+    if type(action) is np.ndarray and action.shape == space.shape and action.dtype.kind == "f":  # the hot path
+        a = action.astype(np.float64)
+        if math.isfinite(float(a.sum())):  # finite entries sum to a finite number (or overflow: checked below)
+            return a.clip(-1.0, 1.0)
     try:
         a = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -33,4 +39,4 @@ def check_action(action: Any, space: spaces.Box, wrapper: str) -> NDArray[np.flo
         raise WrapperActionError(f"{wrapper}: action must have shape {space.shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):
         raise WrapperActionError(f"{wrapper}: action must be finite, got {a.tolist()}")
-    return np.clip(a, space.low, space.high)
+    return a.clip(-1.0, 1.0)

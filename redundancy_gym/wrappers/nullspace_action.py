@@ -116,7 +116,8 @@ class NullspaceAction(gym.Wrapper):
         controller = self.reference.controller
         result = controller.step(q, target, velocity, nullspace_input=u)
         fraction = 1.0
-        if np.any(u) and np.max(np.abs(result.qdot) / self._speeds) >= 1.0 - 1e-9:
+        # ``limited``: the controller bounded the command (to the env's joint speeds, or a joint at its range)
+        if result.limited and np.max(np.abs(result.qdot) / self._speeds) >= 1.0 - 1e-9 and np.any(u):
             for fraction in _SHRINK:
                 result = controller.step(q, target, velocity, nullspace_input=fraction * u)
                 if np.max(np.abs(result.qdot) / self._speeds) < 1.0 - 1e-9:
@@ -128,9 +129,9 @@ class NullspaceAction(gym.Wrapper):
             raise WrapperError("NullspaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "NullspaceAction")
         result, fraction = self.command(a * self._scale)
-        joint_action = np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
+        joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
-        self._obs = np.asarray(obs, dtype=np.float64)
-        info = {**info, "clik_sigma_min": result.sigma_min, "clik_damping": result.damping,
-                "clik_limited": result.limited, "nullspace_fraction": fraction}
+        self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
+        info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
+                    nullspace_fraction=fraction)
         return obs, reward, terminated, truncated, info

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +28,7 @@ _PROJECTIONS = 10
 _SERVO_RESPONSE = 0.35
 # how far inside its range [rad or m] the wrapper keeps each joint, for the servos' overshoot
 _RANGE_MARGIN = 0.01
+_NO_PAIRS = (np.zeros(0), np.zeros((0, 0)))
 
 
 @dataclass(frozen=True)
@@ -57,34 +59,45 @@ class TaskSpaceActionConfig:
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
 
 
-def _tool_axis(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
+# Small 3-vector algebra on Python floats: numpy's per-call overhead on 3 entries is larger than the arithmetic
+Vec = tuple[float, float, float]
+
+
+def _tool_axis(quaternion: NDArray[np.float64]) -> Vec:
     """The x axis of the rotation ``(w, x, y, z)``."""
-    w, x, y, z = quaternion / np.linalg.norm(quaternion)
-    return np.array([1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y)])
+    w, x, y, z = quaternion.tolist()
+    n = 1.0 / (w * w + x * x + y * y + z * z)
+    return (1.0 - 2.0 * n * (y * y + z * z), 2.0 * n * (x * y + w * z), 2.0 * n * (x * z - w * y))
 
 
-def _cross(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``a x b`` of two 3-vectors (``np.cross`` costs tens of microseconds on such small arrays)."""
-    a0, a1, a2 = a.tolist()
-    b0, b1, b2 = b.tolist()
-    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+def _cross(a: Vec, b: Vec) -> Vec:
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-def _rotate(vector: NDArray[np.float64], rotation: NDArray[np.float64]) -> NDArray[np.float64]:
+def _dot(a: Vec, b: Vec) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _unit(a: Vec) -> Vec:
+    n = math.sqrt(_dot(a, a))
+    return (a[0] / n, a[1] / n, a[2] / n)
+
+
+def _rotate(vector: Vec, rotation: Vec) -> Vec:
     """``vector`` turned by the rotation vector ``rotation`` (Rodrigues)."""
-    angle = float(np.linalg.norm(rotation))
+    angle = math.sqrt(_dot(rotation, rotation))
     if angle < 1e-12:
-        return vector.copy()
-    k = rotation / angle
-    return (vector * np.cos(angle) + _cross(k, vector) * np.sin(angle)
-            + k * (k @ vector) * (1.0 - np.cos(angle)))
+        return vector
+    k = (rotation[0] / angle, rotation[1] / angle, rotation[2] / angle)
+    c, s = math.cos(angle), math.sin(angle)
+    kxv, kv = _cross(k, vector), _dot(k, vector) * (1.0 - c)
+    return tuple(vector[i] * c + kxv[i] * s + k[i] * kv for i in range(3))  # type: ignore[return-value]
 
 
-def _perpendicular_basis(axis: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _perpendicular_basis(axis: Vec) -> tuple[Vec, Vec]:
     """Two unit vectors orthogonal to ``axis`` and to each other (right-handed with it)."""
-    helper = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    u = _cross(helper, axis)
-    u /= np.linalg.norm(u)
+    helper = (0.0, 0.0, 1.0) if abs(axis[2]) < 0.9 else (1.0, 0.0, 0.0)
+    u = _unit(_cross(helper, axis))
     return u, _cross(axis, u)
 
 
@@ -177,17 +190,18 @@ class TaskSpaceAction(gym.Wrapper):
         self._speeds = self.reference.max_joint_speeds
         model = self.reference.model
         self._lower, self._upper = model.lower_limits + _RANGE_MARGIN, model.upper_limits - _RANGE_MARGIN
+        # farther from its range than this, no joint can reach it within the look-ahead, whatever its speed
+        reach = float(np.max(self._speeds)) * _LOOKAHEAD * self._dt / _SERVO_RESPONSE
+        self._safe_lower, self._safe_upper = (self._lower + reach).tolist(), (self._upper - reach).tolist()
         self.action_space = normalized_box(5 if self._grasp else 2)
         self._obs: NDArray[np.float64] | None = None
         self.last_result: ClikResult | None = None  # the command of the last step, for diagnostics
-        self._position = np.zeros(3 if self._grasp else 2)
-        self._axis = np.array([1.0, 0.0, 0.0])
+        self._position: list[float] = [0.0] * (3 if self._grasp else 2)  # the TCP target [m]
+        self._axis: Vec = (1.0, 0.0, 0.0)  # the tool-axis target
 
-    def _tcp(self, obs: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
-        """The observed TCP position and (AgriReach) tool axis."""
-        if self._grasp:
-            return obs[self._layout["tcp_position"]], _tool_axis(obs[self._layout["tcp_quaternion"]])
-        return obs[self._layout["tcp"]], None
+    def _tcp(self, obs: NDArray[np.float64]) -> list[float]:
+        """The observed TCP position [m]."""
+        return obs[self._layout["tcp_position" if self._grasp else "tcp"]].tolist()
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[NDArray[np.floating], dict[str, Any]]:
@@ -198,40 +212,45 @@ class TaskSpaceAction(gym.Wrapper):
         scene = _scene_obstacles(self.env.unwrapped)
         if scene is not None:  # the learner may take the arm anywhere: every hard plant part, not the K observed
             self.reference.controller = self.reference.build_controller(scene)
-        position, axis = self._tcp(self._obs)
-        self._position = position.copy()
-        if axis is not None:
-            self._axis = axis
+        self._position = self._tcp(self._obs)
+        if self._grasp:
+            self._axis = _tool_axis(self._obs[self._layout["tcp_quaternion"]])
         return obs, info
 
     def command(self, a: NDArray[np.float64]) -> ClikResult:
         """The CLIK result for the normalized task velocity ``a`` at the last observation (moves the target)."""
         assert self._obs is not None
-        c = self.config
-        position, axis = self._tcp(self._obs)
-        velocity = a[:self._position.size] * c.max_speed
-        target = self._position + velocity * self._dt
-        lead = target - position
-        distance = float(np.linalg.norm(lead))
-        if distance > c.max_lead:
-            target = position + lead * (c.max_lead / distance)
-        self._position = target
-        q = self._obs[self._layout["q"]]
+        c, obs, lay = self.config, self._obs, self._layout
+        entries = a.tolist()
+        q = obs[lay["q"]]
         if not self._grasp:
-            self.reference.update_obstacle(self._obs)
-            return self._guarded(q, target, velocity)
-        assert axis is not None
+            position = obs[lay["tcp"]].tolist()
+        else:
+            position = obs[lay["tcp_position"]].tolist()
+        n = len(position)
+        velocity = [entries[i] * c.max_speed for i in range(n)]
+        target = [self._position[i] + velocity[i] * self._dt for i in range(n)]
+        lead = [target[i] - position[i] for i in range(n)]
+        distance = math.hypot(*lead)
+        if distance > c.max_lead:
+            target = [position[i] + lead[i] * (c.max_lead / distance) for i in range(n)]
+        self._position = target
+        if not self._grasp:
+            self.reference.update_obstacle(obs)
+            return self._guarded(q, np.array(target), np.array(velocity))
+        axis = _tool_axis(obs[lay["tcp_quaternion"]])
         u, v = _perpendicular_basis(axis)
-        omega = (a[3] * u + a[4] * v) * c.max_turn_rate
-        target_axis = _rotate(self._axis, omega * self._dt)
-        angle = float(np.arccos(np.clip(target_axis @ axis, -1.0, 1.0)))
+        rate = c.max_turn_rate
+        omega = tuple((entries[3] * u[i] + entries[4] * v[i]) * rate for i in range(3))
+        target_axis = _rotate(self._axis, tuple(w * self._dt for w in omega))
+        angle = math.acos(max(-1.0, min(1.0, _dot(target_axis, axis))))
         if angle > c.max_lead_angle:  # turn the target axis back towards the tool axis, onto the allowed cone
             turn = _cross(axis, target_axis)
-            norm = float(np.linalg.norm(turn))
+            norm = math.sqrt(_dot(turn, turn))
             if norm > 1e-12:
-                target_axis = _rotate(axis, turn / norm * c.max_lead_angle)
-        self._axis = target_axis / np.linalg.norm(target_axis)
-        return self._guarded(q, np.concatenate([target, self._axis]), np.concatenate([velocity, omega]))
+                target_axis = _rotate(axis, tuple(x / norm * c.max_lead_angle for x in turn))
+        self._axis = _unit(target_axis)
+        return self._guarded(q, np.array([*target, *self._axis]), np.array([*velocity, *omega]))
 
     def _guarded(self, q: NDArray[np.float64], target: NDArray[np.float64],
                  velocity: NDArray[np.float64]) -> ClikResult:
@@ -242,12 +261,11 @@ class TaskSpaceAction(gym.Wrapper):
         controller = self.reference.controller
         result = controller.step(q, target, velocity)
         c = self.config
-        distances, rows = self._close_pairs(controller, q, c.guard_distance)
-        qdot = result.qdot
-        top = float(np.max(np.abs(qdot) / self._speeds))
-        changed = top > 1.0
-        if changed:  # the env would clip each joint, turning the command: slower instead, same direction
-            qdot = qdot / top
+        closest = getattr(controller, "last_min_distance", 0.0)  # the compiled kernel's: no pair is nearer
+        distances, rows = self._close_pairs(controller, q, c.guard_distance) if closest < c.guard_distance else \
+            _NO_PAIRS
+        qdot = result.qdot  # within the env's joint speeds: the reference's controller is bounded to them
+        changed = False
         if distances.size:
             floor = -c.max_speed * (distances - c.stop_distance) / (c.guard_distance - c.stop_distance)
             # the servos make only part of a velocity change within one period: ask for the rate that brings the
@@ -266,16 +284,17 @@ class TaskSpaceAction(gym.Wrapper):
                 if not violated:
                     break
             top = float(np.max(np.abs(qdot) / self._speeds))
-            if top > 1.0:  # the projection may ask for more than the joints can do
-                qdot /= top
-        horizon = _LOOKAHEAD * self._dt
-        actual = (1.0 - _SERVO_RESPONSE) * self._obs[self._layout["qdot"]]
-        low = ((self._lower - q) / horizon - actual) / _SERVO_RESPONSE
-        high = ((self._upper - q) / horizon - actual) / _SERVO_RESPONSE
-        bounded = np.clip(qdot, np.minimum(low, 0.0), np.maximum(high, 0.0))
-        if changed or not np.array_equal(bounded, qdot):
-            return result._replace(qdot=bounded, limited=True)
-        return result
+            if top > 1.0:  # the projection may ask for more than the joints can do: slower, in the same direction
+                qdot /= top  # (the env would clip each joint, turning the command)
+        if any(not lo < x < hi for x, lo, hi in zip(q.tolist(), self._safe_lower, self._safe_upper, strict=True)):
+            horizon = _LOOKAHEAD * self._dt
+            actual = (1.0 - _SERVO_RESPONSE) * self._obs[self._layout["qdot"]]
+            low = ((self._lower - q) / horizon - actual) / _SERVO_RESPONSE
+            high = ((self._upper - q) / horizon - actual) / _SERVO_RESPONSE
+            bounded = np.clip(qdot, np.minimum(low, 0.0), np.maximum(high, 0.0))
+            changed = changed or not np.array_equal(bounded, qdot)
+            qdot = bounded
+        return result._replace(qdot=qdot, limited=True) if changed else result
 
     def _close_pairs(self, controller: Any, q: NDArray[np.float64], limit: float
                      ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -296,10 +315,10 @@ class TaskSpaceAction(gym.Wrapper):
             raise WrapperError("TaskSpaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "TaskSpaceAction")
         result = self.last_result = self.command(a)
-        joint_action = np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
+        joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
-        self._obs = np.asarray(obs, dtype=np.float64)
-        lag = float(np.linalg.norm(self._position - self._tcp(self._obs)[0]))
-        info = {**info, "clik_sigma_min": result.sigma_min, "clik_damping": result.damping,
-                "clik_limited": result.limited, "target_lag": lag}
+        self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
+        lag = math.dist(self._position, self._tcp(self._obs))
+        info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
+                    target_lag=lag)
         return obs, reward, terminated, truncated, info
