@@ -27,8 +27,8 @@ EPILOG = """examples:
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
 POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip "
                "(redundancy-gym list shows which envs each accepts)")
-WRAPPER_HELP = ("task_space | nullspace | residual: the env in that action wrapper (the same as its id "
-                "<Env>-<Wrapper>-v0; redundancy-gym list shows them)")
+WRAPPER_HELP = ("task_space | nullspace | residual | walking_command: the env in that action wrapper (the same as "
+                "its id <Env>-<Wrapper>-v0; redundancy-gym list shows which env takes which)")
 
 
 def _json_object(text: str) -> dict[str, Any]:
@@ -227,16 +227,22 @@ def format_env_list(rows: list[dict[str, Any]]) -> str:
 def _apply_wrapper(args: argparse.Namespace) -> None:
     """``--wrapper NAME``: the env id becomes the wrapped id, ``--wrapper-kwargs`` its ``wrapper_kwargs``."""
     from .eval.exceptions import EvalError
+    from .policies import registered
     from .registration import WRAPPED_ENV_IDS, wrapped_env_id
 
     if args.wrapper is None:
         if args.wrapper_kwargs:
-            raise EvalError("--wrapper-kwargs needs --wrapper")
+            raise EvalError("--wrapper-kwargs needs --wrapper (on a wrapped id, pass the options in --env-kwargs "
+                            "as '{\"wrapper_kwargs\": {...}}')")
         return
     wrapped = wrapped_env_id(args.env_id, args.wrapper)
     if wrapped is None:
-        raise EvalError(f"no registered {args.wrapper!r} wrapper for {args.env_id}; the wrapped ids are "
-                        f"{', '.join(WRAPPED_ENV_IDS)}")
+        names = [e.name for e in registered("wrapper")]
+        if args.wrapper not in names:
+            raise EvalError(f"unknown wrapper {args.wrapper!r}; valid: {', '.join(names)}")
+        here = [name for name in names if wrapped_env_id(args.env_id, name)]
+        raise EvalError(f"no registered {args.wrapper!r} wrapper for {args.env_id}; its wrappers: "
+                        f"{', '.join(here) or 'none'} (the wrapped ids: {', '.join(WRAPPED_ENV_IDS)})")
     args.env_id = wrapped
     if args.wrapper_kwargs:
         args.env_kwargs = {**args.env_kwargs, "wrapper_kwargs": args.wrapper_kwargs}

@@ -104,7 +104,11 @@ def test_eval_with_a_wrapper_is_the_wrapped_id(tmp_path, capsys) -> None:
     assert flag["env"] == "redundancy_gym/PlanarReach-Nullspace-v0" and flag["success_rate"] == 1.0
     assert flag["episode_return"] == direct["episode_return"]
     assert main(["eval", BIPED, "--wrapper", "nullspace", "--policy", "zero", "--no-progress"]) == 2
-    assert "no registered 'nullspace' wrapper for redundancy_gym/BipedWalk-v0" in capsys.readouterr().err
+    assert "no registered 'nullspace' wrapper for redundancy_gym/BipedWalk-v0; its wrappers: residual, " \
+           "walking_command" in capsys.readouterr().err
+    assert main(["eval", PLANAR, "--wrapper", "nulspace", "--policy", "zero", "--no-progress"]) == 2
+    assert "unknown wrapper 'nulspace'; valid: task_space, nullspace, residual, walking_command" in \
+        capsys.readouterr().err
     assert main(["eval", PLANAR, "--wrapper-kwargs", "{}", "--policy", "zero", "--no-progress"]) == 0
     assert main(["eval", PLANAR, "--wrapper-kwargs", '{"objectives": true}', "--policy", "zero",
                  "--no-progress"]) == 2

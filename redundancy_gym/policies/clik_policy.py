@@ -110,7 +110,7 @@ class ClikPolicy(PerEnvPolicy):
         clik = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES), method=self.config.method,
                     gain=self.config.gain, nullspace_gain=self.config.nullspace_gain, objectives=objectives,
                     dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping,
-                    period=control_period(base), max_joint_velocity=self._speed)  # the speed an action of 1 commands
+                    period=control_period(base))
         self.controller: Clik | CompiledClik = CompiledClik(clik) if self.config.backend == "compiled" else clik
         self.last_result: ClikResult | None = None
         self._init_per_env(env, kwargs)  # a velocity-level law: no episode state

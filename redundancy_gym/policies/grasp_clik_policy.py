@@ -146,8 +146,7 @@ class GraspClikPolicy(PerEnvPolicy):
                                                 slope=self.config.collision_slope, weight=self.config.collision_weight)
             objectives.append(self.collision)
         clik = Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
-                    nullspace_gain=self.config.nullspace_gain, objectives=objectives, period=self._period,
-                    max_joint_velocity=self._speeds)  # the speeds an action of 1 commands
+                    nullspace_gain=self.config.nullspace_gain, objectives=objectives, period=self._period)
         return CompiledClik(clik) if self.config.backend == "compiled" else clik
 
     def plan(self, obs: NDArray[np.float64]) -> None:

@@ -148,6 +148,19 @@ def lookup(name: Any, kind: str, error: type[Exception] = PolicyError) -> Regist
     return entry
 
 
+def _action_wrapper(env: Any) -> Any:
+    """The outermost wrapper in ``env``'s chain that declares ``CAPABILITIES`` itself (an action wrapper of this
+    package), or None."""
+    current, seen = env, 0
+    while current is not None and seen < 64:
+        if "CAPABILITIES" in type(current).__dict__ and hasattr(current, "env") and current is not getattr(
+                current, "unwrapped", current):
+            return current
+        nxt = getattr(current, "env", None)
+        current, seen = (nxt if nxt is not current else None), seen + 1
+    return None
+
+
 def _declared(env: Any) -> frozenset[str]:
     """``CAPABILITIES`` of the outermost object of the wrapper chain that declares them."""
     current, seen = env, 0
@@ -259,6 +272,12 @@ def unsupported_error(name: str, env: Any, missing: list[str], kind: str = "poli
     entry = lookup(name, kind, error)
     ids = supported_env_ids(name, kind)
     supports = ", ".join(ids) if ids else "no registered env"
+    wrapper = _action_wrapper(env)
+    if wrapper is not None:  # the env offers what the policy needs, but its action is now the wrapper's
+        offered = ", ".join(e.name for e in registered("policy") if not missing_capabilities(e.name, env))
+        return error(f"{kind} {name!r} supports {supports}; got {env_name(env)}, which is in the action wrapper "
+                     f"{type(wrapper).__name__}: its action is the wrapper's, so it takes {offered} or an SB3 .zip "
+                     "(build the policy on the env without the wrapper)")
     base = getattr(env, "unwrapped", env)
     return error(f"{kind} {name!r} supports {supports}; got {env_name(env)} (for an env of your own: "
                  f"{type(base).__name__} lacks the capabilities {', '.join(missing)}; {name!r} needs "

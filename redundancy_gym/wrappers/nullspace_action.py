@@ -116,8 +116,8 @@ class NullspaceAction(gym.Wrapper):
         controller = self.reference.controller
         result = controller.step(q, target, velocity, nullspace_input=u)
         fraction = 1.0
-        # ``limited``: the controller bounded the command (to the env's joint speeds, or a joint at its range)
-        if result.limited and np.max(np.abs(result.qdot) / self._speeds) >= 1.0 - 1e-9 and np.any(u):
+        # beyond the env's joint speeds (which may be below the model's, which the controller bounds to)
+        if np.any(u) and np.max(np.abs(result.qdot) / self._speeds) >= 1.0 - 1e-9:
             for fraction in _SHRINK:
                 result = controller.step(q, target, velocity, nullspace_input=fraction * u)
                 if np.max(np.abs(result.qdot) / self._speeds) < 1.0 - 1e-9:

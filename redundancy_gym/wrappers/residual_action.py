@@ -26,8 +26,9 @@ class ResidualActionConfig:
     """Options of :class:`ResidualAction`.
 
     Attributes:
-        scale: the residual's bound as a fraction of the env's action range: the applied action is
-            ``clip(reference + scale * a)`` for ``a`` in ``[-1, 1]`` (> 0, <= 2).
+        scale: the residual's bound as a fraction of half the env's action range: the applied action is
+            ``clip(reference + scale * half_range * a)`` for ``a`` in ``[-1, 1]`` (> 0, <= 2; ``half_range`` is 1
+            for a ``[-1, 1]`` box).
         policy: the reference policy (a registered name); None: the first of :data:`REFERENCE_POLICIES` that the
             env supports (``clik`` on the arms, ``walking`` on the biped).
         policy_kwargs: options of the reference policy.
@@ -52,7 +53,7 @@ class ResidualAction(gym.Wrapper):
 
     ## Action Space
     ``Box(-1, 1, (n,), float32)`` with ``n`` the env's action dimension: the residual in units of ``scale`` times
-    the env's action range. Non-finite actions raise :class:`WrapperError`.
+    half the env's action range (1 for a ``[-1, 1]`` box). Non-finite actions raise :class:`WrapperError`.
 
     ## Observation Space
     The env's; with ``observe_reference=True`` the reference action (``n`` entries in the env's action bounds)

@@ -264,8 +264,13 @@ class TaskSpaceAction(gym.Wrapper):
         closest = getattr(controller, "last_min_distance", 0.0)  # the compiled kernel's: no pair is nearer
         distances, rows = self._close_pairs(controller, q, c.guard_distance) if closest < c.guard_distance else \
             _NO_PAIRS
-        qdot = result.qdot  # within the env's joint speeds: the reference's controller is bounded to them
-        changed = False
+        qdot = result.qdot
+        # the controller bounds the command to the model's joint speeds, the env's may be lower (AgriReach: half):
+        # the env would clip each joint, turning the command; slower instead, in the same direction
+        top = float(np.max(np.abs(qdot) / self._speeds))
+        changed = top > 1.0
+        if changed:
+            qdot = qdot / top
         if distances.size:
             floor = -c.max_speed * (distances - c.stop_distance) / (c.guard_distance - c.stop_distance)
             # the servos make only part of a velocity change within one period: ask for the rate that brings the
@@ -284,8 +289,8 @@ class TaskSpaceAction(gym.Wrapper):
                 if not violated:
                     break
             top = float(np.max(np.abs(qdot) / self._speeds))
-            if top > 1.0:  # the projection may ask for more than the joints can do: slower, in the same direction
-                qdot /= top  # (the env would clip each joint, turning the command)
+            if top > 1.0:  # the projection may ask for more than the joints can do
+                qdot /= top
         if any(not lo < x < hi for x, lo, hi in zip(q.tolist(), self._safe_lower, self._safe_upper, strict=True)):
             horizon = _LOOKAHEAD * self._dt
             actual = (1.0 - _SERVO_RESPONSE) * self._obs[self._layout["qdot"]]

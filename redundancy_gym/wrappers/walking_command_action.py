@@ -26,7 +26,8 @@ class WalkingCommandActionConfig:
             (0 <= min < max <= 0.75, the fastest speed of the gait's 0.8 s steps).
         max_lateral_speed: the sideways speed of an action of +-1 [m/s] (0 <= max <= 0.1: faster, the feet of a
             sideways step come within 0.1 m of each other).
-        command_period: control periods each action is held for (>= 1); the rewards of the periods are summed.
+        command_period: control periods each action is held for (>= 1); the rewards of the periods are summed, and
+            the episode still ends at the env's time limit (its ``max_episode_steps`` control periods).
         policy_kwargs: options of the ``walking`` reference (``WalkingPolicyConfig`` fields).
     """
 
@@ -54,8 +55,9 @@ class WalkingCommandAction(gym.Wrapper):
     :class:`WrapperError`.
 
     ## Observation Space, Rewards, Starting State, Episode End
-    The env's (its reward still measures the walk against its ``target_speed``); with ``command_period`` > 1
-    the rewards of the periods are summed and the episode ends in the period it ends. ``info`` keeps every
+    The env's: its reward and ``is_success`` still measure the walk against its ``target_speed``, not against
+    the commanded speed (pass ``target_speed`` to ``gym.make`` for another). With ``command_period`` > 1 the
+    rewards of the periods are summed, and the episode ends at the env's time limit in control periods (10 s). ``info`` keeps every
     entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s] and
     ``step_adjusted`` (the push-recovery step adjustment acted in this period).
 
@@ -93,13 +95,24 @@ class WalkingCommandAction(gym.Wrapper):
             raise WrapperError(f"WalkingCommandAction: {exc}") from exc
         self.action_space = normalized_box(2)
         self._obs: NDArray[np.float64] | None = None
+        self._periods = 0  # control periods of the episode so far
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self._obs = np.asarray(obs, dtype=np.float64)
         self.reference.begin(self._obs)
+        self._periods = 0
         return obs, info
+
+    def _period_limit(self) -> int | None:
+        """The env's time limit in control periods (its registered ``max_episode_steps``), or None."""
+        spec = getattr(self.env.unwrapped, "spec", None)
+        limit = getattr(spec, "max_episode_steps", None)
+        base = (getattr(spec, "kwargs", None) or {}).get("env_id")  # a wrapped id's spec names its base env
+        if not limit and isinstance(base, str) and base in gym.registry:
+            limit = gym.spec(base).max_episode_steps
+        return int(limit) if limit else None
 
     def velocity(self, action: NDArray[np.float64]) -> tuple[float, float]:
         """The (forward, lateral) speed [m/s] of a normalized action."""
@@ -114,12 +127,16 @@ class WalkingCommandAction(gym.Wrapper):
         self.reference.controller.set_command(forward, lateral)
         total = 0.0
         adjusted = False
+        limit = self._period_limit() if self.config.command_period > 1 else None
         for _ in range(self.config.command_period):
             joint_action = self.reference.command(self._obs)
             adjusted |= self.reference.last_command.adjustment is not None
             obs, reward, terminated, truncated, info = self.env.step(joint_action)
             self._obs = np.asarray(obs, dtype=np.float64)
+            self._periods += 1
             total += float(reward)
+            if limit is not None and self._periods >= limit:
+                truncated = True  # the time limit counts this wrapper's steps, each command_period periods long
             if terminated or truncated:
                 break
         info = {**info, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,

@@ -7,6 +7,7 @@ from typing import Any
 import gymnasium as gym
 
 from ..policies.registry import build, lookup
+from ..envs.exceptions import EnvConfigError
 from .exceptions import WrapperError
 
 __all__ = ["make_wrapped_env", "make_wrapper", "wrapper_option_names"]
@@ -49,6 +50,9 @@ def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] |
     sets one of each.
     """
     options = set(wrapper_option_names(wrapper))
+    if wrapper_kwargs is not None and not isinstance(wrapper_kwargs, dict):
+        raise WrapperError(f"wrapper_kwargs must be a dict of {wrapper} options ({', '.join(sorted(options))}), "
+                           f"got {type(wrapper_kwargs).__name__}")
     own = {k: v for k, v in kwargs.items() if k in options}
     clash = sorted(set(own) & set(wrapper_kwargs or {}))
     if clash:
@@ -57,7 +61,13 @@ def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] |
     spec = gym.spec(env_id)
     creator = gym.envs.registration.load_env_creator(spec.entry_point) if isinstance(spec.entry_point, str) \
         else spec.entry_point
-    env = creator(**{**spec.kwargs, **env_kwargs})
+    try:
+        env = creator(**{**spec.kwargs, **env_kwargs})
+    except EnvConfigError as exc:
+        if "unknown keyword" in str(exc):  # a typo may have meant a wrapper option: name those too
+            raise EnvConfigError(f"{exc}; or an option of the {wrapper} wrapper: {', '.join(sorted(options))}") \
+                from exc
+        raise
     env.spec = spec  # the base env's spec, so that make_policy and messages name the env it is
     return make_wrapper(wrapper, env, **{**own, **(wrapper_kwargs or {})})
 

@@ -101,3 +101,20 @@ def test_a_registered_policy_of_ones_own_is_built_and_listed() -> None:
         registry._REGISTRY.pop("hold", None)
         registry._registered_support.cache_clear()
         sys.modules.pop("_own_policies", None)
+
+
+def test_errors_on_a_wrapped_env_say_it_is_wrapped() -> None:
+    wrapped = gym.make("redundancy_gym/PlanarReach-Nullspace-v0")
+    with pytest.raises(PolicyError, match="in the action wrapper NullspaceAction.*takes zero, random or an SB3 .zip"):
+        make_policy("clik", wrapped)
+    with pytest.raises(WrapperError, match="in the action wrapper NullspaceAction"):
+        make_wrapper("task_space", wrapped)
+
+
+def test_wrapped_ids_name_the_wrapper_options_on_a_typo_and_want_a_dict() -> None:
+    from redundancy_gym.envs import EnvConfigError
+
+    with pytest.raises(EnvConfigError, match="or an option of the task_space wrapper: .*max_speed"):
+        gym.make("redundancy_gym/AgriReach-TaskSpace-v0", max_sped=0.2)
+    with pytest.raises(WrapperError, match="wrapper_kwargs must be a dict of residual options"):
+        gym.make("redundancy_gym/PlanarReach-Residual-v0", wrapper_kwargs=[("scale", 0.1)])

@@ -51,3 +51,16 @@ def test_bad_options_raise_naming_them() -> None:
         WalkingCommandAction(env, min_forward_speed=0.5, max_forward_speed=0.4)
     with pytest.raises(WrapperError, match="command_period"):
         WalkingCommandAction(env, command_period=0)
+
+
+def test_a_held_command_keeps_the_ten_second_episode() -> None:
+    env = gym.make(ID, command_period=4)
+    env.reset(seed=0)
+    steps, total = 0, 0.0
+    while True:
+        _, reward, terminated, truncated, info = env.step(np.array([0.5, 0.0], dtype=np.float32))
+        steps += 1
+        total += reward
+        if terminated or truncated:
+            break
+    assert truncated and not terminated and steps == 625 and info["time"] == pytest.approx(10.0)
