@@ -25,6 +25,28 @@ _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", 
 
 
 @njit(**_JIT)
+def _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds, margin):
+    """``(distance, p_a, p_b, n)`` of segment pair ``p``'s (segments ``a``, ``b``) closest volume pair, or an
+    infinite distance when the segments' bounding spheres are farther apart than ``margin`` (the pair cannot be
+    nearer than that)."""
+    dx = seg_world[a, 0] - seg_world[b, 0]
+    dy = seg_world[a, 1] - seg_world[b, 1]
+    dz = seg_world[a, 2] - seg_world[b, 2]
+    reach = seg_radius[a] + seg_radius[b] + margin
+    best = np.inf
+    best_pa = (0.0, 0.0, 0.0)
+    best_pb = (0.0, 0.0, 0.0)
+    best_n = (0.0, 0.0, 1.0)
+    if dx * dx + dy * dy + dz * dz > reach * reach:
+        return best, best_pa, best_pb, best_n
+    for k in range(pair_starts[p], pair_starts[p + 1]):
+        d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
+        if d < best:
+            best, best_pa, best_pb, best_n = d, pa, pb, n
+    return best, best_pa, best_pb, best_n
+
+
+@njit(**_JIT)
 def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b, seg_rot, seg_pos,
                         seg_center, seg_radius, seg_world, local, vertices, radii, params, parent, joint_type,
                         v_index, rotation, position, world_axis, gradient, scratch):
@@ -61,20 +83,10 @@ def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vo
     for p in range(npairs):
         a = seg_pairs[p, 0]
         b = seg_pairs[p, 1]
-        dx = seg_world[a, 0] - seg_world[b, 0]
-        dy = seg_world[a, 1] - seg_world[b, 1]
-        dz = seg_world[a, 2] - seg_world[b, 2]
-        reach = seg_radius[a] + seg_radius[b] + da
-        if dx * dx + dy * dy + dz * dz > reach * reach:
+        best, best_pa, best_pb, best_n = _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world,
+                                                          vertices, radii, kinds, da)
+        if best == np.inf:
             continue
-        best = np.inf
-        best_pa = (0.0, 0.0, 0.0)
-        best_pb = (0.0, 0.0, 0.0)
-        best_n = (0.0, 0.0, 1.0)
-        for k in range(pair_starts[p], pair_starts[p + 1]):
-            d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
-            if d < best:
-                best, best_pa, best_pb, best_n = d, pa, pb, n
         smallest = min(smallest, best)
         if not best < da:
             continue
@@ -106,20 +118,8 @@ def close_pair_rows(seg_joint, seg_pairs, pair_starts, vol_a, vol_b, seg_radius,
     for p in range(seg_pairs.shape[0]):
         a = seg_pairs[p, 0]
         b = seg_pairs[p, 1]
-        dx = seg_world[a, 0] - seg_world[b, 0]
-        dy = seg_world[a, 1] - seg_world[b, 1]
-        dz = seg_world[a, 2] - seg_world[b, 2]
-        reach = seg_radius[a] + seg_radius[b] + limit
-        if dx * dx + dy * dy + dz * dz > reach * reach:
-            continue
-        best = np.inf
-        best_pa = (0.0, 0.0, 0.0)
-        best_pb = (0.0, 0.0, 0.0)
-        best_n = (0.0, 0.0, 1.0)
-        for k in range(pair_starts[p], pair_starts[p + 1]):
-            d, pa, pb, n = volume_pair_distance(vertices, radii, kinds, vol_a[k], vol_b[k])
-            if d < best:
-                best, best_pa, best_pb, best_n = d, pa, pb, n
+        best, best_pa, best_pb, best_n = _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world,
+                                                          vertices, radii, kinds, limit)
         if not best < limit:
             continue
         slot = count
