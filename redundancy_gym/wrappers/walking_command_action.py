@@ -26,6 +26,8 @@ class WalkingCommandActionConfig:
             (0 <= min < max <= 0.75, the fastest speed of the gait's 0.8 s steps).
         max_lateral_speed: the sideways speed of an action of +-1 [m/s] (0 <= max <= 0.1: faster, the feet of a
             sideways step come within 0.1 m of each other).
+        max_yaw_rate: the yaw rate of an action of +-1 [rad/s] (+: turning left; 0 <= max <= 0.5, a heading change
+            of 0.4 rad per 0.8 s step).
         command_period: control periods each action is held for (>= 1); the rewards of the periods are summed, and
             the episode still ends at the env's time limit (its ``max_episode_steps`` control periods).
         policy_kwargs: options of the ``walking`` reference (``WalkingPolicyConfig`` fields).
@@ -34,38 +36,42 @@ class WalkingCommandActionConfig:
     min_forward_speed: float = 0.2
     max_forward_speed: float = 0.6
     max_lateral_speed: float = 0.05
+    max_yaw_rate: float = 0.3
     command_period: int = 1
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
 
 
 class WalkingCommandAction(gym.Wrapper):
-    """The action is a walking velocity; the ``walking`` reference (DCM pattern, stabilizer, step adjustment,
+    """The action is a walking velocity and yaw rate; the ``walking`` reference (DCM pattern, stabilizer, step adjustment,
     whole-body CLIK) turns it into the biped's joint targets every control period.
 
     ## Description
-    Each action sets the velocity of the walk (:meth:`~redundancy_gym.controllers.walking.WalkingController.
-    set_command`): the footholds after the landing of the step under way move so that each later step covers
-    the commanded velocity times the step duration, and the CoM plan is replanned from now on. The walk starts
-    at ``reset`` from the standing robot at the env's ``target_speed``. A learner chooses where to walk, not how.
-    Turning (a yaw rate) is not offered: the walking pattern walks along its starting heading.
+    Each action sets the velocity and the turning rate of the walk
+    (:meth:`~redundancy_gym.controllers.walking.WalkingController.set_command`): the footholds after the landing
+    of the step under way move so that each later step covers the commanded velocity times the step duration
+    along the walker's heading, and turns that heading by the yaw rate times the step duration (the feet, the
+    ZMP plan and the torso turn with it); the CoM plan is replanned from now on. The walk starts at ``reset``
+    from the standing robot at the env's ``target_speed``, along +x. A learner chooses where to walk, not how.
 
     ## Action Space
-    ``Box(-1, 1, (2,), float32)``: forward speed from ``min_forward_speed`` (-1) to ``max_forward_speed`` (+1)
-    [m/s], and sideways speed (+ to the left) times ``max_lateral_speed`` [m/s]. Non-finite actions raise
-    :class:`WrapperError`.
+    ``Box(-1, 1, (3,), float32)``: forward speed from ``min_forward_speed`` (-1) to ``max_forward_speed`` (+1)
+    [m/s], sideways speed (+ to the left) times ``max_lateral_speed`` [m/s], and yaw rate (+ turning left,
+    counter-clockwise seen from above) times ``max_yaw_rate`` [rad/s]; forward and sideways are in the frame of
+    the walker's current heading. Non-finite actions raise :class:`WrapperError`.
 
     ## Observation Space, Rewards, Starting State, Episode End
     The env's: its reward and ``is_success`` still measure the walk against its ``target_speed``, not against
-    the commanded speed (pass ``target_speed`` to ``gym.make`` for another). With ``command_period`` > 1 the
+    the commanded speed (pass ``target_speed`` to ``gym.make`` for another); they reward progress along +x, so a
+    walker that turns away from +x scores less. With ``command_period`` > 1 the
     rewards of the periods are summed, and the episode ends at the env's time limit in control periods (10 s). ``info`` keeps every
-    entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s] and
+    entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s], ``commanded_yaw_rate`` [rad/s] and
     ``step_adjusted`` (the push-recovery step adjustment acted in this period).
 
     ## Arguments
     ``env`` and the fields of :class:`WalkingCommandActionConfig` as keyword arguments.
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version; the yaw rate (the action's third entry) was added later under the same id.
     """
 
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
@@ -74,6 +80,7 @@ class WalkingCommandAction(gym.Wrapper):
     def __init__(self, env: gym.Env, min_forward_speed: float = WalkingCommandActionConfig.min_forward_speed,
                  max_forward_speed: float = WalkingCommandActionConfig.max_forward_speed,
                  max_lateral_speed: float = WalkingCommandActionConfig.max_lateral_speed,
+                 max_yaw_rate: float = WalkingCommandActionConfig.max_yaw_rate,
                  command_period: int = WalkingCommandActionConfig.command_period,
                  policy_kwargs: dict[str, Any] | None = None) -> None:
         super().__init__(env)
@@ -84,6 +91,8 @@ class WalkingCommandAction(gym.Wrapper):
                                          error=WrapperError),
             max_lateral_speed=check_real("max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s",
                                          error=WrapperError),
+            max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s",
+                                    error=WrapperError),
             command_period=check_int("command_period", command_period, low=1, high=1000, error=WrapperError),
             policy_kwargs=dict(policy_kwargs or {}))
         if self.config.min_forward_speed >= self.config.max_forward_speed:
@@ -93,7 +102,7 @@ class WalkingCommandAction(gym.Wrapper):
             self.reference: Any = make_policy("walking", env, **self.config.policy_kwargs)
         except PolicyError as exc:
             raise WrapperError(f"WalkingCommandAction: {exc}") from exc
-        self.action_space = normalized_box(2)
+        self.action_space = normalized_box(3)
         self._obs: NDArray[np.float64] | None = None
         self._periods = 0  # control periods of the episode so far
 
@@ -114,17 +123,17 @@ class WalkingCommandAction(gym.Wrapper):
             limit = gym.spec(base).max_episode_steps
         return int(limit) if limit else None
 
-    def velocity(self, action: NDArray[np.float64]) -> tuple[float, float]:
-        """The (forward, lateral) speed [m/s] of a normalized action."""
+    def velocity(self, action: NDArray[np.float64]) -> tuple[float, float, float]:
+        """The (forward, lateral) speed [m/s] and the yaw rate [rad/s] of a normalized action."""
         c = self.config
         forward = c.min_forward_speed + 0.5 * (float(action[0]) + 1.0) * (c.max_forward_speed - c.min_forward_speed)
-        return forward, float(action[1]) * c.max_lateral_speed
+        return forward, float(action[1]) * c.max_lateral_speed, float(action[2]) * c.max_yaw_rate
 
     def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
         if self._obs is None:
             raise WrapperError("WalkingCommandAction: call reset() before step()")
-        forward, lateral = self.velocity(check_action(action, self.action_space, "WalkingCommandAction"))
-        self.reference.controller.set_command(forward, lateral)
+        forward, lateral, yaw_rate = self.velocity(check_action(action, self.action_space, "WalkingCommandAction"))
+        self.reference.controller.set_command(forward, lateral, yaw_rate)
         total = 0.0
         adjusted = False
         limit = self._period_limit() if self.config.command_period > 1 else None
@@ -140,5 +149,6 @@ class WalkingCommandAction(gym.Wrapper):
             if terminated or truncated:
                 break
         info = {**info, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
+                "commanded_yaw_rate": yaw_rate,
                 "step_adjusted": adjusted}
         return obs, total, terminated, truncated, info

@@ -41,7 +41,8 @@ MIN_SHIFT = 0.005
 
 @dataclass(frozen=True)
 class StepAdjusterConfig:
-    """Parameters of :class:`StepAdjuster` (lengths relative to the stance foot's sole point, walking along +x).
+    """Parameters of :class:`StepAdjuster` (lengths relative to the stance foot's sole point, in the stance foot's
+    frame: x along its heading, y to its left).
 
     Attributes:
         enabled: adjust steps at all (False: the planned footholds and timing whatever happens).
@@ -157,19 +158,31 @@ class StepAdjuster:
         self._time = t
         error = self._error
         dcm = planned + error
+        # the margin and the step box lie in the stance foot's frame (turned by its heading about its sole point)
+        heading = pattern.heading(k + 1)
+        turn = None
+        if heading != 0.0:
+            ch, sh = np.cos(heading), np.sin(heading)
+            turn = np.array([[ch, -sh], [sh, ch]])  # stance frame -> world
+        local_error = error if turn is None else turn.T @ error
         margin = np.asarray(c.ankle_margin, dtype=np.float64)
-        beyond = np.abs(error) > margin
+        beyond = np.abs(local_error) > margin
         if not np.any(beyond):
             return None
         # an axis beyond the margin is stepped back to ankle_share of it (below 1, a hysteresis against
         # re-adjusting at the margin's edge); the other axis keeps its error for the stabilizer
-        kept = np.where(beyond, np.clip(error, -c.ankle_share * margin, c.ankle_share * margin), error)
-        wanted = dcm - kept
+        kept = np.where(beyond, np.clip(local_error, -c.ankle_share * margin, c.ankle_share * margin), local_error)
+        wanted = dcm - (kept if turn is None else turn @ kept)
         stance, landing = pattern.foothold(k + 1)[:2], pattern.foothold(k + 2)[:2]
         side = 1.0 if (k + 2) % 2 == LEFT else -1.0
-        low = np.array([stance[0] - c.max_backward, stance[1] + (c.min_width if side > 0 else -c.max_width)])
-        high = np.array([stance[0] + c.max_forward, stance[1] + (c.max_width if side > 0 else -c.min_width)])
         foot, foot_velocity = pattern.swing_foot(t)
+        if turn is None:
+            low = np.array([stance[0] - c.max_backward, stance[1] + (c.min_width if side > 0 else -c.max_width)])
+            high = np.array([stance[0] + c.max_forward, stance[1] + (c.max_width if side > 0 else -c.min_width)])
+        else:  # the box about the stance foot's origin in its frame; the targets and the swing foot moved into it
+            low = np.array([-c.max_backward, c.min_width if side > 0 else -c.max_width])
+            high = np.array([c.max_forward, c.max_width if side > 0 else -c.min_width])
+            foot, foot_velocity = turn.T @ (foot - stance), turn.T @ foot_velocity
         best: tuple[float, NDArray[np.float64], float] | None = None
         n = c.timing_candidates
         lefts = [remaining]
@@ -185,7 +198,11 @@ class StepAdjuster:
             base = pattern.preview_dcm(t, np.zeros(2), single)
             gain = pattern.preview_dcm(t, np.ones(2), single) - base
             target = landing + (wanted - base) / gain
-            reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
+            if turn is None:
+                reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
+            else:
+                local = self._reachable(turn.T @ (target - stance), low, high, foot, foot_velocity, ADJUSTED_OVER * left)
+                reachable = stance + turn @ local
             miss = float(np.linalg.norm(reachable - target))
             if best is None or miss < best[0] - c.timing_gain:
                 best = (miss, reachable - landing, single)

@@ -102,7 +102,7 @@ class WalkingCommand(NamedTuple):
 
 
 class WalkingController:
-    """Walks straight ahead at a commanded speed from a standing start.
+    """Walks from a standing start at a commanded velocity and yaw rate (:meth:`set_command`).
 
     Args:
         model: the floating-base model (from the robot's MJCF).
@@ -213,9 +213,10 @@ class WalkingController:
         self._command_replan = -np.inf
         self._next: PatternSample | None = None
 
-    def set_command(self, forward: float, lateral: float = 0.0) -> None:
-        """Walk at ``forward`` and ``lateral`` [m/s] from the next step that has not begun
-        (:meth:`WalkingPattern.set_velocity`); the ZMP correction stays the one estimated at :meth:`start`.
+    def set_command(self, forward: float, lateral: float = 0.0, yaw_rate: float = 0.0) -> None:
+        """Walk at ``forward`` and ``lateral`` [m/s] (in the frame of the walker's heading), turning at ``yaw_rate``
+        [rad/s] (positive: to the left), from the next step that has not begun (:meth:`WalkingPattern.set_velocity`);
+        the ZMP correction stays the one estimated at :meth:`start` (turned with the stance foot).
 
         The CoM plan follows a new command at once, but at most every :data:`COMMAND_REPLAN_INTERVAL` (a command
         changed every period would replan every period, 1 ms each); in between, the footholds change and the plan
@@ -224,7 +225,7 @@ class WalkingController:
         if self.pattern is None:
             raise ControllerError("call WalkingController.start(q, speed) before set_command()")
         replan = self.time - self._command_replan >= COMMAND_REPLAN_INTERVAL - 1e-9
-        self.pattern.set_velocity(self.time, forward, lateral, replan=replan)
+        self.pattern.set_velocity(self.time, forward, lateral, replan=replan, yaw_rate=yaw_rate)
         if replan:
             self._command_replan = self.time
             self._next = None  # the plan may have changed from now on
@@ -278,26 +279,41 @@ class WalkingController:
     def _reference_array(sample: PatternSample, offset: NDArray[np.float64],
                          rate: NDArray[np.float64]) -> NDArray[np.float64]:
         """The IK reference of a pattern sample, packed (:meth:`WholeBodyReference.to_array`): the CoM moved by the
-        stabilizer's ``offset`` [m] at ``rate`` [m/s], soles pitched about y, torso upright."""
+        stabilizer's ``offset`` [m] at ``rate`` [m/s], soles ``R_z(yaw) R_y(pitch)`` (angular velocity
+        ``R_z(yaw) (0, pitch rate, 0) + (0, 0, yaw rate)``), torso upright along the mean heading of the feet."""
         a = np.zeros(REFERENCE_SIZE)
         com, velocity = sample.com, sample.com_velocity
         a[0:3] = com[0] + offset[0], com[1] + offset[1], com[2]
         a[3:6] = velocity[0] + rate[0], velocity[1] + rate[1], velocity[2]
         a[6:12] = sample.feet.ravel()
+        yaws, yaw_rates = sample.feet_yaw, sample.feet_yaw_rate
         for i in range(2):
             pitch = float(sample.feet_pitch[i])
             c, s = math.cos(pitch), math.sin(pitch)
-            a[12 + 9 * i:21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
             a[30 + 6 * i:33 + 6 * i] = sample.feet_velocity[i]
-            a[34 + 6 * i] = sample.feet_pitch_rate[i]
-        a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+            yaw, yaw_rate = float(yaws[i]), float(yaw_rates[i])
+            if yaw == 0.0 and yaw_rate == 0.0:
+                a[12 + 9 * i:21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
+                a[34 + 6 * i] = sample.feet_pitch_rate[i]
+                continue
+            cz, sz = math.cos(yaw), math.sin(yaw)
+            a[12 + 9 * i:21 + 9 * i] = cz * c, -sz, cz * s, sz * c, cz, sz * s, -s, 0.0, c
+            pitch_rate = float(sample.feet_pitch_rate[i])
+            a[33 + 6 * i:36 + 6 * i] = -sz * pitch_rate, cz * pitch_rate, yaw_rate
+        torso, torso_rate = 0.5 * (float(yaws[0]) + float(yaws[1])), 0.5 * (float(yaw_rates[0]) + float(yaw_rates[1]))
+        if torso == 0.0 and torso_rate == 0.0:
+            a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
+        else:
+            cz, sz = math.cos(torso), math.sin(torso)
+            a[42:51] = cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0
+            a[53] = torso_rate
         return a
 
     def _in_stance_frame(self, sample: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
                          rotations: NDArray[np.float64], positions: NDArray[np.float64]
                          ) -> tuple[NDArray[np.float64], ...]:
         """The measurement moved rigidly (yaw about z and a horizontal shift) so that the measured stance sole lies on
-        its planned pose (rows 2, 3 of ``rotations``/``positions``: the soles right, left).
+        its planned pose (its planned position and heading) (rows 2, 3 of ``rotations``/``positions``: the soles right, left).
 
         The IK's kinematic model stands on the planned footholds; the real robot stands where its feet landed and
         turns with its stance foot when that slips about the vertical (a long, quick swing). Its joints track the
@@ -310,6 +326,9 @@ class WalkingController:
         stance = (k + 1) % 2 if k >= 0 else 1  # the standing start: the left foot, the first stance foot
         rotation = rotations[2 + stance]
         yaw = math.atan2(rotation[1, 0], rotation[0, 0])
+        planned_yaw = float(sample.feet_yaw[stance])
+        if planned_yaw != 0.0:  # turned: onto the planned heading (R_z(planned - measured))
+            yaw -= planned_yaw
         c, s = math.cos(yaw), math.sin(yaw)
         turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])  # R_z(-yaw)
         planned = sample.feet[stance]

@@ -15,6 +15,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -34,6 +36,11 @@ ADJUSTED_RISE = 0.35
 """Share of the remaining single support in which an adjusted swing rises to the step height."""
 ADJUSTED_OVER = 0.7
 """Share of the remaining single support after which an adjusted swing is above its landing (then only descends)."""
+TURN_WIDENING = 1.0
+"""Outward shift of a turned foothold [m] per radian of heading change from the previous foothold, in toe lengths."""
+MAX_STEP_TURN = 0.4
+"""Largest heading change [rad] per step of a yaw-rate command (:meth:`WalkingPattern.set_velocity`): 0.5 rad/s at
+0.8 s steps."""
 
 
 @dataclass(frozen=True)
@@ -50,6 +57,9 @@ class PatternSample:
         feet_velocity: [m/s], rows right and left.
         feet_pitch: sole pitch about the lateral axis [rad] (positive: toes down), rows right and left.
         feet_pitch_rate: [rad/s].
+        feet_yaw: sole heading about the vertical [rad] (0: the starting heading, +x), rows right and left; zeros
+            while no yaw rate has been commanded (:meth:`WalkingPattern.set_velocity`).
+        feet_yaw_rate: [rad/s].
         contact: which feet are planned on the ground (right, left).
         right_load: share of the weight the right foot carries [0, 1] (the ZMP's place between the feet).
         step: index of the current step (-1 during the start).
@@ -64,6 +74,8 @@ class PatternSample:
     feet_velocity: NDArray[np.float64]
     feet_pitch: NDArray[np.float64]
     feet_pitch_rate: NDArray[np.float64]
+    feet_yaw: NDArray[np.float64]
+    feet_yaw_rate: NDArray[np.float64]
     contact: tuple[bool, bool]
     right_load: float
     step: int
@@ -115,7 +127,8 @@ class _RetimedSwing:
 
 
 class WalkingPattern:
-    """Walking straight ahead (+x) at a commanded speed from a standing start.
+    """Walking from a standing start along the starting heading (+x) at a commanded speed; later commands
+    (:meth:`set_velocity`) change the velocity and turn the heading.
 
     Args:
         config: gait parameters.
@@ -151,6 +164,14 @@ class WalkingPattern:
         # ``(j - first + 1) * delta`` (the step displacement the command adds); merged per first index
         self._velocity = np.array([self.speed, 0.0])
         self._velocity_changes: dict[int, NDArray[np.float64]] = {}
+        # yaw-rate commands: from foothold index ``first`` on, each foothold's heading turns by
+        # ``(j - first + 1) * delta``; until the first one (``_turned`` False) the footholds are computed as for
+        # straight walking (bit for bit), after it along the turned headings (``_path``, cached per foothold)
+        self._yaw_rate = 0.0
+        self._heading_changes: dict[int, float] = {}
+        self._turned = False
+        self._path_cache: dict[int, tuple[float, float, float]] = {}
+        self._yaw_cache: dict[int, tuple[float, float, Quintic]] = {}
         self._stale = False  # footholds changed since the CoM plan was made
         self._singles: dict[int, float] = {}
         self._retimed: dict[int, _RetimedSwing] = {}
@@ -174,6 +195,18 @@ class WalkingPattern:
         if j < 2:
             return self._start_feet[j].copy()
         side = RIGHT if j % 2 == 0 else LEFT
+        if self._turned:
+            x, y, heading = self._path(j)
+            # a turned foot is set wider by its heading change times the toe length: the feet of a turn would
+            # otherwise come closer (the chord of the arc, the outer foot's toes turned in); without it the thighs
+            # touched under random commands of 0.3 rad/s
+            widen = TURN_WIDENING * self.config.toe_length * abs(heading - self.heading(j - 1))
+            offset = (-1.0 if side == RIGHT else 1.0) * (0.5 * self.config.step_width + widen)
+            h = np.array([x - math.sin(heading) * offset, y + math.cos(heading) * offset, self.ground])
+            for first, shift in self._shifts:
+                if j >= first:
+                    h[:2] += shift
+            return h
         y = self._center[1] + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
         h = np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
         for first, shift in self._shifts:
@@ -184,22 +217,63 @@ class WalkingPattern:
                 h[:2] += (j - first + 1) * delta
         return h
 
+    def heading(self, j: int) -> float:
+        """Heading [rad] of foothold ``h_j`` about the vertical (0: the starting heading, +x; positive: to the
+        left), turned by the yaw-rate commands so far (:meth:`set_velocity`)."""
+        if j < 2 or not self._turned:
+            return 0.0
+        return sum((j - first + 1) * delta for first, delta in self._heading_changes.items() if j >= first)
+
+    def _path(self, j: int) -> tuple[float, float, float]:
+        """The walking line's point (x, y) [m] of foothold ``h_j`` (``j >= 1``, before step adjustments) and its
+        heading [rad]: each step moves it by the step displacement (the velocity times the step duration) turned
+        by the mean heading of the step's two footholds; the foothold lies half the step width beside it,
+        perpendicular to its heading."""
+        cached = self._path_cache.get(j)
+        if cached is not None:
+            return cached
+        i = j - 1
+        while i > 1 and i not in self._path_cache:
+            i -= 1
+        x, y, previous = self._path_cache[i] if i > 1 else (float(self._center[0]), float(self._center[1]), 0.0)
+        for n in range(i + 1, j + 1):
+            dx, dy = self.step_length, 0.0
+            for first, delta in self._velocity_changes.items():
+                if n >= first:  # each step from ``first`` on is longer by ``delta``
+                    dx += float(delta[0])
+                    dy += float(delta[1])
+            heading = self.heading(n)
+            mean = 0.5 * (previous + heading)
+            c, s = math.cos(mean), math.sin(mean)
+            x, y, previous = x + c * dx - s * dy, y + s * dx + c * dy, heading
+            self._path_cache[n] = (x, y, heading)
+        return self._path_cache[j]
+
     @property
     def velocity(self) -> NDArray[np.float64]:
         """The commanded walking velocity (forward, lateral) [m/s] (:meth:`set_velocity`)."""
         return self._velocity.copy()
 
-    def set_velocity(self, t: float, forward: float, lateral: float = 0.0, replan: bool = True) -> bool:
-        """Walk at ``forward`` and ``lateral`` [m/s] from the next step that has not begun: the footholds after the
-        landing of the step under way at ``t`` (after the first landing during the standing start) move so that
-        each step covers ``(forward, lateral) * step_duration``; with ``replan`` the CoM plan is replanned from
-        ``t`` on (its CoM continues, its DCM follows from the new footholds, as after :meth:`adjust_step`),
-        otherwise at the next step's start or the next call with ``replan``. Returns whether the velocity changed.
+    @property
+    def yaw_rate(self) -> float:
+        """The commanded yaw rate [rad/s] (:meth:`set_velocity`)."""
+        return self._yaw_rate
+
+    def set_velocity(self, t: float, forward: float, lateral: float = 0.0, replan: bool = True,
+                     yaw_rate: float = 0.0) -> bool:
+        """Walk at ``forward`` and ``lateral`` [m/s], turning at ``yaw_rate`` [rad/s] (positive: to the left), from
+        the next step that has not begun: the footholds after the landing of the step under way at ``t`` (after
+        the first landing during the standing start) move so that each step covers ``(forward, lateral) *
+        step_duration`` in the frame of its heading, and each turns the heading by ``yaw_rate * step_duration``;
+        with ``replan`` the CoM plan is replanned from ``t`` on (its CoM continues, its DCM follows from the new
+        footholds, as after :meth:`adjust_step`), otherwise at the next step's start or the next call with
+        ``replan``. Returns whether the command changed.
 
         Raises:
             ControllerError: a speed that is not finite, ``forward`` outside ``[0, max_step_length /
-                step_duration]``, or ``lateral`` so large that the feet would come closer than half the step
-                width (``|lateral| step_duration > step_width / 2``).
+                step_duration]``, ``lateral`` so large that the feet would come closer than half the step
+                width (``|lateral| step_duration > step_width / 2``), or ``|yaw_rate| step_duration`` above
+                :data:`MAX_STEP_TURN`.
         """
         if not (np.isfinite(t) and t >= 0.0):
             raise ControllerError(f"time must be finite and >= 0, got {t!r}")
@@ -209,8 +283,12 @@ class WalkingPattern:
         widest = 0.5 * self.config.step_width / self.step_duration
         if not (np.isfinite(lateral) and abs(lateral) <= widest + 1e-12):
             raise ControllerError(f"lateral must lie in [-{widest:g}, {widest:g}] m/s, got {lateral!r}")
+        sharpest = MAX_STEP_TURN / self.step_duration
+        if not (np.isfinite(yaw_rate) and abs(yaw_rate) <= sharpest + 1e-12):
+            raise ControllerError(f"yaw_rate must lie in [-{sharpest:g}, {sharpest:g}] rad/s, got {yaw_rate!r}")
         velocity = np.array([float(forward), float(lateral)])
-        if np.array_equal(velocity, self._velocity):
+        yaw_rate = float(yaw_rate)
+        if np.array_equal(velocity, self._velocity) and yaw_rate == self._yaw_rate:
             if replan and self._stale:
                 self._replan_from(t)
             return False
@@ -218,9 +296,16 @@ class WalkingPattern:
         if k > self._plan_step:
             self._replan(k)
         first = k + 3 if k >= 0 else 2
-        delta = (velocity - self._velocity) * self.step_duration
-        self._velocity_changes[first] = self._velocity_changes.get(first, np.zeros(2)) + delta
-        self._velocity = velocity
+        if not np.array_equal(velocity, self._velocity):
+            delta = (velocity - self._velocity) * self.step_duration
+            self._velocity_changes[first] = self._velocity_changes.get(first, np.zeros(2)) + delta
+            self._velocity = velocity
+        if yaw_rate != self._yaw_rate:
+            turn = (yaw_rate - self._yaw_rate) * self.step_duration
+            self._heading_changes[first] = self._heading_changes.get(first, 0.0) + turn
+            self._yaw_rate = yaw_rate
+            self._turned = True
+        self._path_cache = {}
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}  # later swings land elsewhere
         self._stale = True
         if replan:
@@ -268,6 +353,11 @@ class WalkingPattern:
     def _zmp_point(self, j: int, along: float) -> NDArray[np.float64]:
         h = self.foothold(j)
         inward = 1.0 if j % 2 == 0 else -1.0  # right feet (even) shift towards +y
+        if self._turned:  # along and across the foot's heading
+            heading = self.heading(j)
+            c, s = math.cos(heading), math.sin(heading)
+            across = inward * self.config.zmp_inset
+            return np.array([h[0] + c * along - s * across, h[1] + s * along + c * across])
         return np.array([h[0] + along, h[1] + inward * self.config.zmp_inset])
 
     def _knots(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -290,7 +380,12 @@ class WalkingPattern:
             stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
             landing = self._zmp_point(k + 2, -a)
             ratio = self._single / self.step_duration
-            for phase, offset in zip(correction.phases, correction.offsets[k % 2]):
+            offsets = correction.offsets[k % 2]
+            if self._turned:  # the tables are in the stance foot's frame (estimated walking along +x)
+                heading = self.heading(k + 1)
+                c, s = math.cos(heading), math.sin(heading)
+                offsets = offsets @ np.array([[c, s], [-s, c]])
+            for phase, offset in zip(correction.phases, offsets):
                 if phase < ratio:
                     base = stance + (swing_to - stance) * (phase / ratio)
                 else:
@@ -318,11 +413,14 @@ class WalkingPattern:
         feet = np.array([self.foothold(0), self.foothold(1)])
         feet_velocity = np.zeros((2, 3))
         pitch, pitch_rate = np.zeros(2), np.zeros(2)
+        yaw, yaw_rate = np.zeros(2), np.zeros(2)
         contact = [True, True]
         if k >= 0:
             swing_side = RIGHT if k % 2 == 0 else LEFT
             feet[swing_side] = self.foothold(k + 2)
             feet[1 - swing_side] = self.foothold(k + 1)
+            if self._turned:
+                yaw[swing_side], yaw[1 - swing_side] = self.heading(k + 2), self.heading(k + 1)
             s = t - self.step_start(k)
             if s < self.step_single(k):
                 position, velocity = self._swing(k, s)
@@ -331,16 +429,43 @@ class WalkingPattern:
                 angle, rate = float(angle), float(rate) * scale
                 # the pitched foot turns about its toe tip, which follows the swing path: no toe scuffing
                 toe = self.config.toe_length
-                position += toe * np.array([1.0 - np.cos(angle), 0.0, np.sin(angle)])
-                velocity += toe * rate * np.array([np.sin(angle), 0.0, np.cos(angle)])
+                if self._turned:  # the toe tip ahead along the foot's heading, which turns over the single support
+                    heading, heading_rate = self._swing_yaw(k, nominal)
+                    heading_rate *= scale
+                    c, s_ = math.cos(heading), math.sin(heading)
+                    ahead = toe * (1.0 - math.cos(angle))
+                    ahead_rate = toe * rate * math.sin(angle)
+                    position += np.array([c * ahead, s_ * ahead, toe * math.sin(angle)])
+                    velocity += np.array([c * ahead_rate - s_ * ahead * heading_rate,
+                                          s_ * ahead_rate + c * ahead * heading_rate, toe * rate * math.cos(angle)])
+                    yaw[swing_side], yaw_rate[swing_side] = heading, heading_rate
+                else:
+                    position += toe * np.array([1.0 - np.cos(angle), 0.0, np.sin(angle)])
+                    velocity += toe * rate * np.array([np.sin(angle), 0.0, np.cos(angle)])
                 feet[swing_side], feet_velocity[swing_side] = position, velocity
                 pitch[swing_side], pitch_rate[swing_side] = angle, rate
                 contact[swing_side] = False
         return PatternSample(
             time=float(t), com=np.array([*state.position, self.ground + self.config.com_height]),
             com_velocity=np.array([*state.velocity, 0.0]), zmp=state.zmp, dcm=state.dcm, feet=feet,
-            feet_velocity=feet_velocity, feet_pitch=pitch, feet_pitch_rate=pitch_rate, contact=(contact[0], contact[1]),
+            feet_velocity=feet_velocity, feet_pitch=pitch, feet_pitch_rate=pitch_rate, feet_yaw=yaw,
+            feet_yaw_rate=yaw_rate, contact=(contact[0], contact[1]),
             right_load=self._right_load(state.zmp, feet, contact), step=k)
+
+    def _swing_yaw(self, k: int, nominal: float) -> tuple[float, float]:
+        """Heading [rad] and its rate [rad/s] of step ``k``'s swing foot at nominal swing time ``nominal`` [s]: a
+        quintic (C2, at rest at both ends) from the lift-off foothold's heading to the landing's over the single
+        support."""
+        start, end = self.heading(k), self.heading(k + 2)
+        cached = self._yaw_cache.get(k)
+        if cached is None or cached[0] != start or cached[1] != end:
+            cached = (start, end, Quintic.from_boundary(self._single, start, end))
+            self._yaw_cache = {i: v for i, v in self._yaw_cache.items() if i >= k - 1}
+            self._yaw_cache[k] = cached
+        if start == end:
+            return start, 0.0
+        angle, rate, _ = cached[2].evaluate(min(nominal, self._single))
+        return float(angle), float(rate)
 
     def _replan(self, k: int) -> None:
         start = self.step_start(k)
