@@ -404,7 +404,7 @@ register("nullspace", "wrapper", _wrapper(_ARMS, "nullspace_action", "NullspaceA
 register("residual", "wrapper", _wrapper((*_ARMS, {"biped"}), "residual_action", "ResidualAction"),
          "the action is a bounded correction added to the reference policy's")
 register("walking_command", "wrapper", _wrapper(({"biped"},), "walking_command_action", "WalkingCommandAction"),
-         "the action is the walking velocity; the walking reference moves the joints")
+         "the action is the walking velocity and yaw rate; the walking reference moves the joints")
 
 WRAPPER_NAMES: tuple[str, ...] = tuple(e.name for e in registered("wrapper"))
 """The built-in wrapper names."""
