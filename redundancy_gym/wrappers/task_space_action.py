@@ -189,6 +189,8 @@ class TaskSpaceAction(gym.Wrapper):
         self._dt = float(base.dt)
         self._speeds = self.reference.max_joint_speeds
         model = self.reference.model
+        # whether the controller's speed bound (the model's) lets a command exceed the env's joint speeds
+        self._model_faster = bool(np.any(np.asarray(model.velocity_limits) > self._speeds))
         self._lower, self._upper = model.lower_limits + _RANGE_MARGIN, model.upper_limits - _RANGE_MARGIN
         # farther from its range than this, no joint can reach it within the look-ahead, whatever its speed
         reach = float(np.max(self._speeds)) * _LOOKAHEAD * self._dt / _SERVO_RESPONSE
@@ -267,10 +269,12 @@ class TaskSpaceAction(gym.Wrapper):
         qdot = result.qdot
         # the controller bounds the command to the model's joint speeds, the env's may be lower (AgriReach: half):
         # the env would clip each joint, turning the command; slower instead, in the same direction
-        top = float(np.max(np.abs(qdot) / self._speeds))
-        changed = top > 1.0
-        if changed:
-            qdot = qdot / top
+        changed = False
+        if self._model_faster:
+            top = float(np.max(np.abs(qdot) / self._speeds))
+            changed = top > 1.0
+            if changed:
+                qdot = qdot / top
         if distances.size:
             floor = -c.max_speed * (distances - c.stop_distance) / (c.guard_distance - c.stop_distance)
             # the servos make only part of a velocity change within one period: ask for the rate that brings the
