@@ -13,7 +13,7 @@ import redundancy_gym
 from redundancy_gym.controllers import ControllerError
 from redundancy_gym.policies import PolicyError
 
-from .strategies import ANY_FLOATS, JUNK
+from .strategies import ANY_FLOATS
 
 CASES = [("redundancy_gym/PlanarReach-v0", "clik"), ("redundancy_gym/PlanarReach-v0", "zero"),
          ("redundancy_gym/PlanarReach-v0", "random"),
