@@ -13,9 +13,24 @@ from typing import Any
 from .exceptions import PolicyError
 from .options import config_from_options, env_name
 from .per_env_policy import PerEnvPolicy, Policy, observation_time_index
-from .registry import (CAPABILITY_ATTRIBUTES, KINDS, POLICY_NAMES, WRAPPER_NAMES, Implementation, RegistryEntry,
-                       capability_problems, env_capabilities, lookup, make_policy, missing_capabilities,
-                       policy_supports, register, registered, supported_env_ids, supported_policies)
+from .registry import (
+    CAPABILITY_ATTRIBUTES,
+    KINDS,
+    POLICY_NAMES,
+    WRAPPER_NAMES,
+    Implementation,
+    RegistryEntry,
+    capability_problems,
+    env_capabilities,
+    lookup,
+    make_policy,
+    missing_capabilities,
+    policy_supports,
+    register,
+    registered,
+    supported_env_ids,
+    supported_policies,
+)
 
 __all__ = [
     "CAPABILITY_ATTRIBUTES",

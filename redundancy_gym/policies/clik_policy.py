@@ -10,8 +10,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers import (Clik, ClikResult, CollisionObjective, CompiledClik, FramePositionTask, JointLimitObjective,
-                           PostureObjective)
+from ..controllers import (
+    Clik,
+    ClikResult,
+    CollisionObjective,
+    CompiledClik,
+    FramePositionTask,
+    JointLimitObjective,
+    PostureObjective,
+)
 from ..geometry import PSS, Segment
 from ..model import RobotModel, collision_model_from_mjcf
 from .exceptions import PolicyError

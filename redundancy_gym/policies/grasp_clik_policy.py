@@ -15,17 +15,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..geometry import LSS, PSS, SSV, TSS, Segment
-from ..geometry.grasp_path import GraspPath, GraspPathTiming
-from ..model import RobotModel, collision_geometry_from_mjcf
 from ..controllers.clik import Clik, ClikResult
 from ..controllers.collision_objective import CollisionObjective
 from ..controllers.compiled_clik import CompiledClik
-from .exceptions import PolicyError
 from ..controllers.frame_axis_task import FrameAxisTask
 from ..controllers.joint_limit_objective import JointLimitObjective
-from .per_env_policy import PerEnvPolicy
+from ..geometry import LSS, PSS, SSV, TSS, Segment
+from ..geometry.grasp_path import GraspPath, GraspPathTiming
+from ..model import RobotModel, collision_geometry_from_mjcf
+from .exceptions import PolicyError
 from .options import config_from_options, control_period, env_with_attributes
+from .per_env_policy import PerEnvPolicy
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 

@@ -13,8 +13,17 @@ from .. import validation as checks
 from ..controllers import DESCENT_METHODS, METHODS
 from .exceptions import PolicyError
 
-__all__ = ["BACKENDS", "OPTION_RULES", "OptionRule", "SUFFIX_RULES", "config_from_options", "control_period", "env_name",
-           "env_with_attributes", "option_rule"]
+__all__ = [
+    "BACKENDS",
+    "OPTION_RULES",
+    "SUFFIX_RULES",
+    "OptionRule",
+    "config_from_options",
+    "control_period",
+    "env_name",
+    "env_with_attributes",
+    "option_rule",
+]
 
 C = TypeVar("C")
 # how a CLIK policy runs its controller: one fused compiled kernel (CompiledClik) or the Python Clik

@@ -18,17 +18,22 @@ from numpy.typing import NDArray
 
 from ..controllers.collision_objective import CollisionObjective
 from ..controllers.compiled_clik import CompiledClik
-from ..model import RobotModel
-from .exceptions import PolicyError
 from ..controllers.frame_axis_task import FrameAxisTask
 from ..controllers.frame_position_task import FramePositionTask
-from .grasp_clik_policy import GraspClikPolicy
 from ..controllers.joint_limit_objective import JointLimitObjective
-from .clik_policy import ClikPolicy
-from .per_env_policy import PerEnvPolicy
-from .options import config_from_options
-from ..controllers.predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
+from ..controllers.predictive_ik import (
+    DESCENT_METHODS,
+    PredictiveIk,
+    PredictiveResult,
+    PredictiveRollout,
+)
 from ..controllers.receding_horizon import HorizonUpdate, RecedingHorizon
+from ..model import RobotModel
+from .clik_policy import ClikPolicy
+from .exceptions import PolicyError
+from .grasp_clik_policy import GraspClikPolicy
+from .options import config_from_options
+from .per_env_policy import PerEnvPolicy
 
 __all__ = ["MODES", "TASK_DEFAULTS", "PredictivePolicy", "PredictivePolicyConfig", "predictive_problem"]
 

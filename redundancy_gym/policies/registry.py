@@ -26,10 +26,26 @@ from .exceptions import PolicyError
 from .options import env_name
 from .per_env_policy import Policy
 
-__all__ = ["CAPABILITY_ATTRIBUTES", "KINDS", "POLICY_NAMES", "WRAPPER_NAMES", "Implementation", "RegistryEntry", "capability_problems",
-           "env_capabilities", "lookup", "make_policy", "missing_capabilities", "policy_supports", "register",
-           "registered", "supported_env_ids", "supported_policies", "build",
-           "unsupported_error"]
+__all__ = [
+    "CAPABILITY_ATTRIBUTES",
+    "KINDS",
+    "POLICY_NAMES",
+    "WRAPPER_NAMES",
+    "Implementation",
+    "RegistryEntry",
+    "build",
+    "capability_problems",
+    "env_capabilities",
+    "lookup",
+    "make_policy",
+    "missing_capabilities",
+    "policy_supports",
+    "register",
+    "registered",
+    "supported_env_ids",
+    "supported_policies",
+    "unsupported_error",
+]
 
 KINDS: tuple[str, ...] = ("policy", "wrapper")
 

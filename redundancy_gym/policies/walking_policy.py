@@ -8,11 +8,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..controllers.walking import (
+    GaitConfig,
+    StabilizerGains,
+    StepAdjusterConfig,
+    WalkingCommand,
+    WalkingController,
+    WalkingIkConfig,
+)
 from ..model import RobotModel
 from .exceptions import PolicyError
-from .per_env_policy import PerEnvPolicy
 from .options import config_from_options, env_with_attributes
-from ..controllers.walking import GaitConfig, StabilizerGains, StepAdjusterConfig, WalkingCommand, WalkingController, WalkingIkConfig
+from .per_env_policy import PerEnvPolicy
 
 __all__ = ["WalkingPolicy", "WalkingPolicyConfig"]
 

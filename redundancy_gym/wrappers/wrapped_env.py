@@ -6,8 +6,8 @@ from typing import Any
 
 import gymnasium as gym
 
-from ..policies.registry import build, lookup
 from ..envs.exceptions import EnvConfigError
+from ..policies.registry import build, lookup
 from .exceptions import WrapperError
 
 __all__ = ["make_wrapped_env", "make_wrapper", "wrapper_option_names"]
