@@ -1,4 +1,5 @@
-"""The check every wrapper applies to the learner's action before it reaches a controller."""
+"""The checks every wrapper applies to its input: the learner's action before it reaches a controller, and the
+reference policy's options."""
 
 from __future__ import annotations
 
@@ -9,9 +10,9 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from .exceptions import WrapperActionError
+from .exceptions import WrapperActionError, WrapperError
 
-__all__ = ["check_action", "normalized_box"]
+__all__ = ["check_action", "check_policy_kwargs", "normalized_box"]
 
 
 def normalized_box(dim: int) -> spaces.Box:
@@ -40,3 +41,13 @@ def check_action(action: Any, space: spaces.Box, wrapper: str) -> NDArray[np.flo
     if not np.all(np.isfinite(a)):
         raise WrapperActionError(f"{wrapper}: action must be finite, got {a.tolist()}")
     return a.clip(-1.0, 1.0)
+
+
+def check_policy_kwargs(value: Any, wrapper: str) -> dict[str, Any]:
+    """``policy_kwargs`` as a dict (None: empty), else :class:`WrapperError` naming it."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+        raise WrapperError(f"{wrapper}: policy_kwargs must be a dict of the reference policy's options, got "
+                           f"{value!r} ({type(value).__name__})")
+    return dict(value)

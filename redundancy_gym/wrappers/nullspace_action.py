@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
 from ..validation import check_bool, check_real
-from .action_check import check_action, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
@@ -87,7 +87,7 @@ class NullspaceAction(gym.Wrapper):
             max_nullspace_speed=check_real("max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0,
                                            low_open=True, error=WrapperError),
             objectives=check_bool("objectives", objectives, error=WrapperError),
-            policy_kwargs=dict(policy_kwargs or {}))
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "NullspaceAction"))
         options = dict(self.config.policy_kwargs) if objectives else {**_without_objectives(env),
                                                                       **self.config.policy_kwargs}
         try:

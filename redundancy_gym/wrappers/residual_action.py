@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy, supported_policies
 from ..validation import check_bool, check_real
-from .action_check import check_action
+from .action_check import check_action, check_policy_kwargs
 from .exceptions import WrapperError
 
 __all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
@@ -79,7 +79,7 @@ class ResidualAction(gym.Wrapper):
         super().__init__(env)
         self.config = ResidualActionConfig(
             scale=check_real("scale", scale, low=0.0, high=2.0, low_open=True, error=WrapperError),
-            policy=policy, policy_kwargs=dict(policy_kwargs or {}),
+            policy=policy, policy_kwargs=check_policy_kwargs(policy_kwargs, "ResidualAction"),
             observe_reference=check_bool("observe_reference", observe_reference, error=WrapperError))
         space = env.action_space
         if not isinstance(space, spaces.Box) or not (np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))):

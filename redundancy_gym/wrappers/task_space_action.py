@@ -14,7 +14,7 @@ from ..controllers import ClikResult
 from ..geometry import LSS, PSS, SSV, TSS, Segment
 from ..policies import PolicyError, make_policy
 from ..validation import check_real
-from .action_check import check_action, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
@@ -175,7 +175,7 @@ class TaskSpaceAction(gym.Wrapper):
             guard_distance=check_real("guard_distance", guard_distance, low=0.0, high=0.2, low_open=True, unit="m",
                                       error=WrapperError),
             stop_distance=check_real("stop_distance", stop_distance, low=0.0, unit="m", error=WrapperError),
-            policy_kwargs=dict(policy_kwargs or {}))
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "TaskSpaceAction"))
         if self.config.stop_distance >= self.config.guard_distance:
             raise WrapperError(f"stop_distance={stop_distance!r} must be below guard_distance={guard_distance!r} [m]")
         options = {"collision_avoidance": "on", **self.config.policy_kwargs}

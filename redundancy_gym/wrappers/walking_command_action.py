@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy
 from ..validation import check_int, check_real
-from .action_check import check_action, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
@@ -94,7 +94,7 @@ class WalkingCommandAction(gym.Wrapper):
             max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s",
                                     error=WrapperError),
             command_period=check_int("command_period", command_period, low=1, high=1000, error=WrapperError),
-            policy_kwargs=dict(policy_kwargs or {}))
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "WalkingCommandAction"))
         if self.config.min_forward_speed >= self.config.max_forward_speed:
             raise WrapperError(f"min_forward_speed={min_forward_speed!r} must be below "
                                f"max_forward_speed={max_forward_speed!r} [m/s]")

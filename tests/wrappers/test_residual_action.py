@@ -73,6 +73,8 @@ def test_bad_options_and_actions_raise_naming_them() -> None:
         ResidualAction(env, scale=0.0)
     with pytest.raises(WrapperError, match="walking"):
         ResidualAction(env, policy="walking")
+    with pytest.raises(WrapperError, match="policy_kwargs must be a dict"):  # found by tests/fuzz
+        ResidualAction(env, policy_kwargs=[1, 2])
     wrapped = ResidualAction(env)
     with pytest.raises(WrapperError, match="reset"):
         wrapped.step(np.zeros(4))
