@@ -130,7 +130,8 @@ def _parser() -> argparse.ArgumentParser:
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
     be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push"),
-                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid; "
+                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid, and "
+                         "every wrapped id against its raw env; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
                          "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
                          "pik: predictive IK against local CLIK and the global optimum; "
