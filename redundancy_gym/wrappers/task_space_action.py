@@ -209,11 +209,12 @@ class TaskSpaceAction(gym.Wrapper):
               ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self._obs = np.asarray(obs, dtype=np.float64)
-        # the reference plans its episode here (AgriReach: the controller with the observed obstacles)
-        self.reference.task_reference(self._obs, True)
-        scene = _scene_obstacles(self.env.unwrapped)
-        if scene is not None:  # the learner may take the arm anywhere: every hard plant part, not the K observed
-            self.reference.controller = self.reference.build_controller(scene)
+        if self._grasp:  # the controller of this episode's obstacles (PlanarReach's is placed in command())
+            scene = _scene_obstacles(self.env.unwrapped)
+            if scene is not None:  # the learner may take the arm anywhere: every hard plant part, not the K observed
+                self.reference.controller = self.reference.build_controller(scene)
+            else:  # an env without its crop row: the observed obstacles, as the reference plans them
+                self.reference.plan(self._obs)
         self._position = self._tcp(self._obs)
         if self._grasp:
             self._axis = _tool_axis(self._obs[self._layout["tcp_quaternion"]])
