@@ -97,14 +97,9 @@ def _reference_name(env: gym.Env) -> str | None:
     for name in ("walking", "clik"):
         if name in supported:
             return name
-    from .. import wrappers
+    from ..policies.registry import action_wrapper
 
-    inner = env
-    while isinstance(inner, gym.Wrapper):
-        if type(inner).__module__.startswith(wrappers.__name__ + "."):
-            return "zero"
-        inner = inner.env
-    return None
+    return "zero" if action_wrapper(env) is not None else None
 
 
 class _Counter:

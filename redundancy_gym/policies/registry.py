@@ -33,6 +33,7 @@ __all__ = [
     "WRAPPER_NAMES",
     "Implementation",
     "RegistryEntry",
+    "action_wrapper",
     "build",
     "capability_problems",
     "env_capabilities",
@@ -164,7 +165,7 @@ def lookup(name: Any, kind: str, error: type[Exception] = PolicyError) -> Regist
     return entry
 
 
-def _action_wrapper(env: Any) -> Any:
+def action_wrapper(env: Any) -> Any:
     """The outermost wrapper in ``env``'s chain that declares ``CAPABILITIES`` itself (an action wrapper of this
     package), or None."""
     current, seen = env, 0
@@ -288,7 +289,7 @@ def unsupported_error(name: str, env: Any, missing: list[str], kind: str = "poli
     entry = lookup(name, kind, error)
     ids = supported_env_ids(name, kind)
     supports = ", ".join(ids) if ids else "no registered env"
-    wrapper = _action_wrapper(env)
+    wrapper = action_wrapper(env)
     if wrapper is not None:  # the env offers what the policy needs, but its action is now the wrapper's
         offered = ", ".join(e.name for e in registered("policy") if not missing_capabilities(e.name, env))
         return error(f"{kind} {name!r} supports {supports}; got {env_name(env)}, which is in the action wrapper "

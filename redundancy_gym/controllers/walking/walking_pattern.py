@@ -13,9 +13,8 @@ decays as ``e^(-omega T)`` per step (about 5e-5 of a step after four 0.8 s steps
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
