@@ -5,6 +5,7 @@ from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
+from .ssta import OBSTACLE_CLASSES, ObstacleBox, ObstacleDecision, Ssta, SstaConfig, SwingModification, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
@@ -16,6 +17,7 @@ __all__ = [
     "BACKENDS",
     "CompiledWholeBodyIk",
     "GRAVITY",
+    "OBSTACLE_CLASSES",
     "REFERENCE_LAYOUT",
     "REFERENCE_SIZE",
     "TASK_ROWS",
@@ -23,15 +25,20 @@ __all__ = [
     "DcmPlan",
     "DcmPlanner",
     "GaitConfig",
+    "ObstacleBox",
+    "ObstacleDecision",
     "PatternSample",
     "PiecewiseQuintic",
     "Quintic",
+    "Ssta",
+    "SstaConfig",
     "Stabilizer",
     "StabilizerGains",
     "StabilizerOutput",
     "StepAdjuster",
     "StepAdjusterConfig",
     "StepAdjustment",
+    "SwingModification",
     "WalkingCommand",
     "WalkingController",
     "WalkingIkConfig",
@@ -41,5 +48,6 @@ __all__ = [
     "WholeBodyReference",
     "ZmpCorrection",
     "ZmpEstimate",
+    "bounding_boxes",
     "estimate_zmp",
 ]

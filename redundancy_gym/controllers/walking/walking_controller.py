@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ...geometry import CollisionModel
+from ...geometry import SSV, CollisionModel
 from ...model import RobotModel, collision_model_from_mjcf
 from ..actuated_objective import ActuatedObjective
 from ..collision_objective import CollisionObjective
@@ -27,6 +27,7 @@ from ..posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
+from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
@@ -118,13 +119,16 @@ class WalkingController:
         correction_samples: knots per step of the correction (``double_support_ratio`` must fall on one).
         stance_frame: measure the CoM, its velocity and the ZMP relative to the stance foot's sole, moved onto its
             planned pose (False: in the world frame).
+        ssta: obstacle planning (:class:`Ssta`) for :meth:`set_obstacles` (None: the defaults, with the gait's step
+            height, longest step and foot lanes).
     """
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
                  gait: GaitConfig | None = None, gains: StabilizerGains | None = None,
                  ik: WalkingIkConfig | None = None, stepping: StepAdjusterConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
-                 correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True) -> None:
+                 correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True,
+                 ssta: SstaConfig | None = None) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -163,6 +167,11 @@ class WalkingController:
         self.time = 0.0
         self._command_replan = -np.inf
         self._next: PatternSample | None = None
+        self.ssta_config = ssta or SstaConfig(step_height=self.gait.step_height,
+                                              max_step_length=self.gait.max_step_length,
+                                              toe_length=self.gait.toe_length)
+        self.ssta: Ssta | None = None
+        self.obstacle_boxes: tuple[ObstacleBox, ...] = ()
 
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
@@ -207,6 +216,8 @@ class WalkingController:
         if key not in self._corrections and self.correction_iterations:
             self._corrections[key] = self._estimate_correction(q_ref, speed)
         self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, self._corrections.get(key))
+        self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
+        self.obstacle_boxes = ()
         self.stabilizer.reset()
         self.step_adjuster.reset()
         self.time = 0.0
@@ -229,6 +240,26 @@ class WalkingController:
         if replan:
             self._command_replan = self.time
             self._next = None  # the plan may have changed from now on
+
+    def set_obstacles(self, volumes: tuple[SSV, ...] | list[SSV]) -> bool:
+        """Plan around obstacles given as swept-sphere volumes (world frame): their bounding boxes go to SSTA
+        (:meth:`WalkingPattern.set_obstacles`, monograph 5.4.2), which moves the footholds not yet begun and
+        raises or shifts the swings that pass them. Call it again when more obstacles come into view; boxes
+        already planned around are kept. Returns whether the plan changed.
+        """
+        if self.pattern is None or self.ssta is None:
+            raise ControllerError("call WalkingController.start(q, speed) before set_obstacles()")
+        boxes = bounding_boxes(list(volumes))
+        known = list(self.obstacle_boxes)
+        new = [b for b in boxes if not any(np.array_equal(b.lower, o.lower) and np.array_equal(b.upper, o.upper)
+                                           for o in known)]
+        if not new:
+            return False
+        self.obstacle_boxes = tuple(sorted(known + new, key=lambda b: (float(b.lower[0]), float(b.lower[1]))))
+        changed = self.pattern.set_obstacles(self.time, self.obstacle_boxes, self.ssta)
+        if changed:
+            self._next = None
+        return changed
 
     @staticmethod
     def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],

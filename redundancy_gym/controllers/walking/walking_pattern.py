@@ -23,6 +23,7 @@ from ..exceptions import ControllerError
 from .dcm_planner import DcmPlan, DcmPlanner, horizontal_point
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
+from .ssta import ObstacleBox, Ssta, SwingModification
 
 __all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
 
@@ -174,6 +175,12 @@ class WalkingPattern:
         self._stale = False  # footholds changed since the CoM plan was made
         self._singles: dict[int, float] = {}
         self._retimed: dict[int, _RetimedSwing] = {}
+        # obstacles (:meth:`set_obstacles`): the SSTA, the boxes it plans around, the swings it changed, and the
+        # first foothold that would have to pass a box too large to pass (the walk stops in front of it)
+        self._ssta: Ssta | None = None
+        self._boxes: tuple[ObstacleBox, ...] = ()
+        self._modifications: dict[int, SwingModification] = {}
+        self._stop: int | None = None
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -194,6 +201,11 @@ class WalkingPattern:
         if j < 2:
             return self._start_feet[j].copy()
         side = RIGHT if j % 2 == 0 else LEFT
+        if self._stop is not None and j >= self._stop:
+            # stopped in front of a box too large to pass: the feet step in place beside the last foothold
+            last = self.foothold(self._stop - 1)
+            own = self.foothold(self._stop - 1 if (self._stop - 1) % 2 == j % 2 else self._stop - 2)
+            return np.array([last[0], own[1], own[2]])
         if self._turned:
             x, y, heading = self._path(j)
             # a turned foot is set wider by its heading change times the toe length: the feet of a turn would
@@ -310,6 +322,86 @@ class WalkingPattern:
         if replan:
             self._replan_from(t)
         return True
+
+    # ------------------------------------------------------------------ obstacles (SSTA)
+    @property
+    def obstacle_boxes(self) -> tuple[ObstacleBox, ...]:
+        """The obstacle bounding boxes the footholds and swings are planned around (:meth:`set_obstacles`)."""
+        return self._boxes
+
+    @property
+    def stop_index(self) -> int | None:
+        """The first foothold that stays in front of a box too large to pass (None: no such box)."""
+        return self._stop
+
+    def swing_modification(self, k: int) -> SwingModification | None:
+        """How SSTA changed step ``k``'s swing (None: the nominal swing)."""
+        if self._ssta is None or k < 0:
+            return None
+        self._nominal_swing(k)
+        return self._modifications.get(k)
+
+    def set_obstacles(self, t: float, boxes: tuple[ObstacleBox, ...], ssta: Ssta) -> bool:
+        """Plan the footholds and swings not yet begun at ``t`` [s] around obstacle ``boxes`` with ``ssta``
+        (monograph 5.4.2): a foothold whose sole would overlap a box moves along the walking direction to just
+        in front of or behind it (the later footholds with it); a swing that passes a box in its lane steps over
+        it or around it (:meth:`Ssta.swing`); a box too large to pass stops the walk in front of it. The CoM plan
+        is replanned from ``t`` when a foothold moved. Planning is for walking straight along +x.
+
+        The landing of the swing under way at ``t`` (and during the standing start, the first landing) is kept:
+        it was planned when its swing began. Returns whether a foothold or a step timing changed.
+
+        Raises:
+            ControllerError: the walk was turned by a yaw-rate command (:meth:`set_velocity`).
+        """
+        if self._turned:
+            raise ControllerError("obstacle planning (SSTA) plans for walking straight; a yaw rate was commanded")
+        if not (np.isfinite(t) and t >= 0.0):
+            raise ControllerError(f"time must be finite and >= 0, got {t!r}")
+        k = self.step_at(t)
+        if k > self._plan_step:
+            self._replan(k)
+        self._ssta, self._boxes = ssta, tuple(boxes)
+        first = k + 3 if k >= 0 else 2
+        changed = False
+        if self._stop is not None and self._stop >= first:
+            self._stop = None
+            changed = True
+        walls = [ssta.foothold_band(b)[0] for b in self._boxes if ssta.classify(b).classification == "too_large"]
+        wall = min(walls, default=np.inf)
+        reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
+        j = first
+        while self._stop is None and self.foothold(j)[0] <= reach:
+            h, previous = self.foothold(j), self.foothold(j - 1)
+            move = ssta.foothold_shift(h, previous, self._boxes)
+            if move is None or h[0] + (move or 0.0) > wall:
+                self._stop = j
+                changed = True
+                break
+            if move != 0.0:
+                self._shifts.append((j, np.array([move, 0.0])))
+                changed = True
+            j += 1
+        # the swings from the first step not yet begun: their modification and (stepping over) their timing
+        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}
+        self._modifications = {i: v for i, v in self._modifications.items() if i <= k}
+        single = ssta.config.step_over_single
+        if single is not None:
+            for i in range(max(k + 1, 0), j):
+                side = RIGHT if i % 2 == 0 else LEFT
+                modification = ssta.swing(self.foothold(i), self.foothold(i + 2), side, self._boxes)
+                over = modification is not None and modification.kind == "over"
+                if over and self._singles.get(i) != single:
+                    self._singles[i] = float(single)
+                    changed = True
+                elif not over and i in self._singles:
+                    del self._singles[i]
+                    changed = True
+        if changed:
+            self._path_cache = {}
+            self._stale = True
+            self._replan_from(t)
+        return changed
 
     def _replan_from(self, t: float) -> None:
         """The CoM plan from ``t`` on, with the footholds as they are now."""
@@ -495,10 +587,19 @@ class WalkingPattern:
             return horizontal.evaluate(s), vertical.evaluate(s)
         return retimed.horizontal.evaluate(s - retimed.since), retimed.vertical.evaluate(s - retimed.since)
 
-    def _nominal_swing(self, k: int) -> tuple[PiecewiseQuintic, Quintic]:
-        """Step ``k``'s planned swing: height over the nominal single support, and the horizontal path."""
+    def _nominal_swing(self, k: int) -> tuple[PiecewiseQuintic, Quintic | PiecewiseQuintic]:
+        """Step ``k``'s planned swing: height over the nominal single support, and the horizontal path (changed by
+        SSTA where it passes an obstacle box)."""
         if k not in self._swing_cache:
             start, end = self.foothold(k), self.foothold(k + 2)
+            if self._ssta is not None and self._boxes:
+                side = RIGHT if k % 2 == 0 else LEFT
+                modification = self._ssta.swing(start, end, side, self._boxes)
+                if modification is not None:
+                    self._modifications[k] = modification
+                    self._swing_cache[k] = self._modified_swing(start, end, self.step_single(k), modification)
+                    return self._swing_cache[k]
+                self._modifications.pop(k, None)
             half = 0.5 * self._single
             height = self.config.step_height
             # apex acceleration of the parabola through the same apex: the two pieces join C2
@@ -509,10 +610,58 @@ class WalkingPattern:
                                     Quintic.from_boundary(self._single, start[:2], end[:2]))
         return self._swing_cache[k]
 
+    def _modified_swing(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float,
+                        modification: SwingModification) -> tuple[PiecewiseQuintic, PiecewiseQuintic]:
+        """An SSTA swing (monograph 5.4.2): its control points at the ends of the band where it passes the box,
+        raised to the box's height (``"over"``) or shifted sideways by the overlap (``"around"``); C2 throughout.
+
+        Three pieces: lift-off to the band's start, across the band, down to the landing; their durations share
+        ``single`` in proportion to the distance each covers (at least a fifth each). Along x the sole moves
+        forward only: at the band's ends its speed is the crossing speed, at most twice the mean speed of the
+        outer pieces.
+        """
+        a, e = float(start[0]), float(end[0])
+        b0 = min(max(modification.band[0], a), e)
+        b1 = min(max(modification.band[1], b0), e)
+        top = self.ground + modification.height
+        lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else 0.0)
+        cross = b1 - b0 + abs(modification.lateral)
+        land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else 0.0)
+        total = lift + cross + land
+        weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
+        t1, t2, t3 = single * weights / weights.sum()
+        speed = (b1 - b0) / t2
+        v1, v2 = min(speed, 2.0 * (b0 - a) / t1), min(speed, 2.0 * (e - b1) / t3)
+        # the nominal lateral path (start to end) plus the shift, which holds across the band
+        lateral = Quintic.from_boundary(single, start[1], end[1])
+        y1, vy1, ay1 = (float(x) for x in lateral.evaluate(t1))
+        y2, vy2, ay2 = (float(x) for x in lateral.evaluate(t1 + t2))
+        d = modification.lateral
+        horizontal = PiecewiseQuintic([
+            Quintic.from_boundary(t1, start[:2], [b0, y1 + d], 0.0, [v1, vy1], 0.0, [0.0, ay1]),
+            Quintic.from_boundary(t2, [b0, y1 + d], [b1, y2 + d], [v1, vy1], [v2, vy2], [0.0, ay1], [0.0, ay2]),
+            Quintic.from_boundary(t3, [b1, y2 + d], end[:2], [v2, vy2], 0.0, [0.0, ay2], 0.0)])
+        if modification.kind == "over":
+            vertical = PiecewiseQuintic([Quintic.from_boundary(t1, start[2], top),
+                                         Quintic.from_boundary(t2, top, top),
+                                         Quintic.from_boundary(t3, top, end[2])])
+        else:
+            half = 0.5 * single
+            height = self.config.step_height
+            apex_acceleration = -8.0 * height / single**2
+            vertical = PiecewiseQuintic([
+                Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration),
+                Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)])
+        return vertical, horizontal
+
     def _nominal_swing_time(self, k: int, s: float) -> tuple[float, float]:
         """The nominal swing time [s] at swing time ``s`` of step ``k``, and its rate (1 unless re-timed)."""
         retimed = self._retimed.get(k)
         if retimed is None:
+            single = self._singles.get(k)
+            if single is not None and single != self._single:  # a longer (or shorter) swing: the same profile
+                rate = self._single / single
+                return min(s * rate, self._single), rate
             return s, 1.0
         return min(retimed.nominal_since + (s - retimed.since) * retimed.rate, self._single), retimed.rate
 

@@ -1,0 +1,342 @@
+"""SSTA: step sequence and heuristic trajectory adaption from obstacle bounding boxes (monograph 5.4.2).
+
+The first, planning layer of obstacle avoidance. Each obstacle's axis-aligned bounding box (from its swept-sphere
+volumes) is classified against the two feet's lanes (the strips the soles sweep when walking straight):
+
+1. no lane meets it: the feet pass beside it (``"beside"``);
+2. a lane meets it: that foot steps over it (its swing's control points raised to the box's height) or swings
+   around it (shifted sideways by the overlap), whichever modification is smaller and feasible
+   (``"step_over"`` when a foot steps over, else ``"swing_around"``);
+3. neither is feasible for a foot whose lane meets it: too large (``"too_large"``): the walk stops in front of it.
+
+Footholds keep a margin to every box their sole would overlap: a foothold that falls into a box's band moves
+to just in front of or just behind it, whichever changes the step length less and keeps it feasible; the later
+footholds move with it, so every other step keeps its length.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+from typing import Literal, NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...geometry import SSV
+from ..exceptions import ControllerError
+
+__all__ = ["OBSTACLE_CLASSES", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig", "SwingModification",
+           "bounding_boxes"]
+
+OBSTACLE_CLASSES = ("beside", "step_over", "swing_around", "too_large")
+"""The classes of :meth:`Ssta.classify`, in the monograph's order (one foot next to it / over it / too large)."""
+
+
+@dataclass(frozen=True)
+class ObstacleBox:
+    """An axis-aligned bounding box [m] (world frame, z up).
+
+    Attributes:
+        lower: ``(x, y, z)`` of the lower corner.
+        upper: ``(x, y, z)`` of the upper corner.
+    """
+
+    lower: NDArray[np.float64]
+    upper: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        lower = np.asarray(self.lower, dtype=np.float64)
+        upper = np.asarray(self.upper, dtype=np.float64)
+        if lower.shape != (3,) or upper.shape != (3,) or not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+            raise ControllerError(f"a box needs finite 3-vector corners, got {self.lower!r}, {self.upper!r}")
+        if np.any(upper < lower):
+            raise ControllerError(f"a box's upper corner must not lie below its lower one, got {lower}, {upper}")
+        object.__setattr__(self, "lower", lower)
+        object.__setattr__(self, "upper", upper)
+
+    @classmethod
+    def of_volume(cls, volume: SSV) -> ObstacleBox:
+        """The bounding box of a swept-sphere volume: its vertices' box grown by its radius."""
+        points = volume.points
+        return cls(points.min(axis=0) - volume.radius, points.max(axis=0) + volume.radius)
+
+    @property
+    def height(self) -> float:
+        """Top of the box [m] (z of the upper corner)."""
+        return float(self.upper[2])
+
+    @property
+    def depth(self) -> float:
+        """Extent along the walking direction x [m]."""
+        return float(self.upper[0] - self.lower[0])
+
+    def overlaps(self, other: ObstacleBox) -> bool:
+        """Whether the two boxes share a point."""
+        return bool(np.all(self.lower <= other.upper) and np.all(other.lower <= self.upper))
+
+    def union(self, other: ObstacleBox) -> ObstacleBox:
+        """The smallest box holding both."""
+        return ObstacleBox(np.minimum(self.lower, other.lower), np.maximum(self.upper, other.upper))
+
+
+def bounding_boxes(volumes: Sequence[SSV]) -> tuple[ObstacleBox, ...]:
+    """The bounding boxes of obstacle volumes, overlapping ones merged (an obstacle modelled by several volumes,
+    a box by the two triangles of a rectangle, gives one box), ordered by their lower x."""
+    boxes = [ObstacleBox.of_volume(v) for v in volumes]
+    merged = True
+    while merged:  # a merge can make a box meet one it did not meet before
+        merged = False
+        out: list[ObstacleBox] = []
+        for box in boxes:
+            for i, other in enumerate(out):
+                if box.overlaps(other):
+                    out[i] = other.union(box)
+                    merged = True
+                    break
+            else:
+                out.append(box)
+        boxes = out
+    return tuple(sorted(boxes, key=lambda b: (float(b.lower[0]), float(b.lower[1]))))
+
+
+@dataclass(frozen=True)
+class SstaConfig:
+    """Margins and limits of :class:`Ssta` (the foot's size defaults to the Lola-like biped's sole).
+
+    Attributes:
+        foothold_margin: distance [m] kept along the walking direction between a standing sole and a box in its lane.
+        lateral_margin: distance [m] kept sideways between a sole's edge and a box it passes beside (also what
+            makes a lane meet a box).
+        clearance: height [m] of a swing sole above a box it steps over, and its distance along x from the box while
+            it rises and descends.
+        step_height: the nominal swing apex [m] (a foot stepping over needs ``height + clearance - step_height``
+            more: the cost compared with a sideways shift).
+        max_step_over_height: highest swing sole [m] above the ground (the leg's reach).
+        max_step_over_depth: deepest box [m] along x a foot steps over.
+        max_outward_shift: largest sideways shift [m] of a swing foot away from the other foot.
+        max_inward_shift: largest sideways shift [m] towards the other foot (the stance leg stands there).
+        toe_length: sole point to toe tip [m].
+        heel_length: sole point to heel [m].
+        foot_half_width: half the sole's width [m].
+        max_step_length: longest step [m] between the two feet's footholds that a moved foothold may make.
+        min_step_length: shortest (most negative) step [m]: a moved foothold never lands behind the other foot by
+            more than this.
+        step_over_single: single-support duration [s] of a step over a box (None: the nominal one); a slower swing
+            lifts the foot to the box's height with smaller accelerations (Lola stepped over with 1 s steps).
+    """
+
+    foothold_margin: float = 0.04
+    lateral_margin: float = 0.02
+    clearance: float = 0.03
+    step_height: float = 0.07
+    max_step_over_height: float = 0.3
+    max_step_over_depth: float = 0.3
+    max_outward_shift: float = 0.12
+    max_inward_shift: float = 0.0
+    toe_length: float = 0.165
+    heel_length: float = 0.095
+    foot_half_width: float = 0.075
+    max_step_length: float = 0.6
+    min_step_length: float = 0.0
+    step_over_single: float | None = None
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "step_over_single" and value is None:
+                continue
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ControllerError(f"{f.name} must be a real number, got {value!r}")
+            if not np.isfinite(value):
+                raise ControllerError(f"{f.name} must be finite, got {value!r}")
+            if f.name != "min_step_length" and value < 0.0:
+                raise ControllerError(f"{f.name} must be >= 0, got {value!r}")
+        for name in ("max_step_over_height", "max_step_length", "toe_length", "heel_length", "foot_half_width"):
+            if getattr(self, name) <= 0.0:
+                raise ControllerError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if self.min_step_length >= self.max_step_length:
+            raise ControllerError("min_step_length must be below max_step_length")
+        if self.step_over_single is not None and self.step_over_single <= 0.0:
+            raise ControllerError(f"step_over_single must be > 0 or None, got {self.step_over_single!r}")
+
+
+class SwingModification(NamedTuple):
+    """How :class:`Ssta` changes one swing.
+
+    Attributes:
+        kind: ``"over"`` (control points raised) or ``"around"`` (shifted sideways).
+        height: the sole's height [m] above the ground while it passes the box (``"over"``; else the step height).
+        lateral: sideways shift [m] of the swing path while it passes the box (``"around"``; else 0); positive +y.
+        band: ``(start, end)`` x [m] of the sole point between which the modification holds (the box grown by the
+            toe, the heel and the clearance).
+    """
+
+    kind: Literal["over", "around"]
+    height: float
+    lateral: float
+    band: tuple[float, float]
+
+
+class ObstacleDecision(NamedTuple):
+    """The class of one obstacle box and what each foot does about it.
+
+    Attributes:
+        box: the bounding box.
+        classification: one of :data:`OBSTACLE_CLASSES`.
+        feet: per foot (right, left): ``"over"``, ``"around"``, ``"beside"`` or ``"blocked"``.
+        lateral: per foot, the sideways shift [m] ``"around"`` needs (0 otherwise).
+    """
+
+    box: ObstacleBox
+    classification: str
+    feet: tuple[str, str]
+    lateral: tuple[float, float]
+
+
+class Ssta:
+    """Step sequence and heuristic trajectory adaption (monograph 5.4.2), as pure functions of the footholds
+    and the obstacle boxes (the walking pattern applies them).
+
+    Args:
+        config: margins and limits.
+        lanes: the nominal lateral positions [m] of the right and left soles' centres (walking along +x).
+    """
+
+    def __init__(self, config: SstaConfig | None = None, lanes: ArrayLike = (-0.09, 0.09)) -> None:
+        self.config = config or SstaConfig()
+        lanes_a = np.asarray(lanes, dtype=np.float64)
+        if lanes_a.shape != (2,) or not np.all(np.isfinite(lanes_a)) or not lanes_a[0] < lanes_a[1]:
+            raise ControllerError(f"lanes must be finite (right, left) with right < left, got {lanes!r}")
+        self.lanes = lanes_a
+
+    # ------------------------------------------------------------------ classification
+    def _lateral_options(self, box: ObstacleBox, y: float, side: int) -> tuple[bool, float]:
+        """Whether a sole centred at ``y`` meets ``box`` sideways, and the shift [m] that clears it (signed; NaN
+        when no feasible shift does)."""
+        c = self.config
+        half = c.foot_half_width + c.lateral_margin
+        low, high = y - half, y + half
+        if high <= box.lower[1] or low >= box.upper[1]:
+            return False, 0.0
+        # clear it on the side of the box's centre away from the box: up moves the sole's lower edge above the box
+        up, down = float(box.upper[1]) - low, float(box.lower[1]) - high
+        outward_up = side == 1  # the left foot's outside is +y
+        limit_up = c.max_outward_shift if outward_up else c.max_inward_shift
+        limit_down = c.max_inward_shift if outward_up else c.max_outward_shift
+        candidates = [s for s, limit in ((up, limit_up), (down, limit_down)) if abs(s) <= limit + 1e-12]
+        if not candidates:
+            return True, float("nan")
+        return True, min(candidates, key=abs)
+
+    def _can_step_over(self, box: ObstacleBox) -> bool:
+        c = self.config
+        return box.height + c.clearance <= c.max_step_over_height and box.depth <= c.max_step_over_depth
+
+    def foot_decision(self, box: ObstacleBox, y: float, side: int) -> tuple[str, float]:
+        """What a foot with its sole centred at ``y`` [m] does about ``box``: ``("beside", 0)``, ``("over", 0)``,
+        ``("around", shift)`` or ``("blocked", 0)``; the smaller modification wins (the raise of the swing
+        above its step height against the sideways shift)."""
+        meets, shift = self._lateral_options(box, y, side)
+        if not meets:
+            return "beside", 0.0
+        c = self.config
+        raise_ = box.height + c.clearance - c.step_height if self._can_step_over(box) else float("inf")
+        around = abs(shift) if np.isfinite(shift) else float("inf")
+        if raise_ == around == float("inf"):
+            return "blocked", 0.0
+        if around <= raise_:
+            return "around", float(shift)
+        return "over", 0.0
+
+    def classify(self, box: ObstacleBox) -> ObstacleDecision:
+        """The class of ``box`` for feet walking in :attr:`lanes`."""
+        feet, lateral = [], []
+        for side in (0, 1):
+            decision, shift = self.foot_decision(box, float(self.lanes[side]), side)
+            feet.append(decision)
+            lateral.append(shift)
+        if "blocked" in feet:
+            classification = "too_large"
+        elif "over" in feet:
+            classification = "step_over"
+        elif "around" in feet:
+            classification = "swing_around"
+        else:
+            classification = "beside"
+        return ObstacleDecision(box, classification, (feet[0], feet[1]), (lateral[0], lateral[1]))
+
+    # ------------------------------------------------------------------ footholds
+    def foothold_band(self, box: ObstacleBox) -> tuple[float, float]:
+        """The x range [m] in which a sole point standing in the box's lane would overlap it (with the margin)."""
+        c = self.config
+        return (float(box.lower[0]) - c.foothold_margin - c.toe_length,
+                float(box.upper[0]) + c.foothold_margin + c.heel_length)
+
+    def in_lane(self, box: ObstacleBox, y: float) -> bool:
+        """Whether a sole centred at ``y`` [m] meets ``box`` sideways (with the lateral margin)."""
+        half = self.config.foot_half_width + self.config.lateral_margin
+        return bool(y + half > box.lower[1] and y - half < box.upper[1])
+
+    def foothold_shift(self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox]
+                       ) -> float | None:
+        """The move along x [m] that takes a foothold out of every box's band, changing the step from
+        ``previous`` (the other foot's foothold) least within the step-length limits: 0 when it stands clear,
+        None when no move does (a box the step cannot clear: too deep or too close to the previous foothold).
+
+        Moves are tried in growing size; a move that lands in another box's band is not taken.
+        """
+        h = np.asarray(foothold, dtype=np.float64)
+        p = np.asarray(previous, dtype=np.float64)
+        c = self.config
+        hits = [self.foothold_band(b) for b in boxes if self.in_lane(b, float(h[1]))
+                and self.foothold_band(b)[0] < h[0] < self.foothold_band(b)[1]]
+        if not hits:
+            return 0.0
+        bands = [self.foothold_band(b) for b in boxes if self.in_lane(b, float(h[1]))]
+        candidates = sorted({band[0] - h[0] for band in bands} | {band[1] - h[0] for band in bands}, key=abs)
+        for move in candidates:
+            x = h[0] + move
+            step = x - p[0]
+            if not c.min_step_length - 1e-12 <= step <= c.max_step_length + 1e-12:
+                continue
+            if any(band[0] + 1e-9 < x < band[1] - 1e-9 for band in bands):
+                continue
+            return float(move)
+        return None
+
+    # ------------------------------------------------------------------ swing
+    def swing(self, start: ArrayLike, end: ArrayLike, side: int, boxes: Sequence[ObstacleBox]
+              ) -> SwingModification | None:
+        """The modification of a swing of foot ``side`` (0 right, 1 left) from foothold ``start`` to ``end``
+        [m], or None when its path passes no box in its lane.
+
+        A swing that passes several boxes takes the largest height or shift over the band that holds them all.
+        """
+        a, b = np.asarray(start, dtype=np.float64), np.asarray(end, dtype=np.float64)
+        c = self.config
+        y = 0.5 * float(a[1] + b[1])
+        low, high = min(a[0], b[0]), max(a[0], b[0])
+        kind: str | None = None
+        height, lateral = c.step_height, 0.0
+        band = (np.inf, -np.inf)
+        for box in boxes:
+            reach = (float(box.lower[0]) - c.toe_length - c.clearance, float(box.upper[0]) + c.heel_length + c.clearance)
+            if reach[1] <= low or reach[0] >= high:
+                continue  # the swing's sole does not pass over the box along x
+            decision, shift = self.foot_decision(box, y, side)
+            if decision in ("beside", "blocked"):
+                continue
+            band = (min(band[0], reach[0]), max(band[1], reach[1]))
+            if decision == "over":
+                kind = "over"
+                height = max(height, box.height + c.clearance)
+            else:
+                kind = kind or "around"
+                if abs(shift) > abs(lateral):
+                    lateral = shift
+        if kind is None:
+            return None
+        if kind == "over":
+            lateral = 0.0
+        return SwingModification(kind, float(height), float(lateral), (float(band[0]), float(band[1])))

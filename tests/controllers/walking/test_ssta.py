@@ -1,0 +1,216 @@
+"""SSTA (monograph 5.4.2): classification, footholds and swing control points on hand-made obstacle boxes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.controllers.walking import (
+    GaitConfig,
+    ObstacleBox,
+    Ssta,
+    SstaConfig,
+    WalkingPattern,
+    bounding_boxes,
+)
+from redundancy_gym.geometry import LSS, TSS
+
+LANES = (-0.09, 0.09)
+FEET = ([0.0, -0.09, 0.0], [0.0, 0.09, 0.0])
+
+
+def rectangle(x: float, width: float, height: float, depth: float, y: float = 0.0) -> list[TSS]:
+    """A block as the env models it: a vertical rectangle across the path swept by half its depth."""
+    r = 0.5 * depth
+    p = np.array([[x, y - width / 2, 0.0], [x, y + width / 2, 0.0], [x, y + width / 2, height], [x, y - width / 2, height]])
+    return [TSS(p[0], p[1], p[2], r), TSS(p[0], p[2], p[3], r)]
+
+
+def beam() -> list[TSS]:
+    return rectangle(1.28, 0.35, 0.161, 0.08)
+
+
+def triangle() -> list[TSS]:
+    return [TSS([1.28, -0.065, 0.0], [1.28, 0.065, 0.0], [1.28, 0.0, 0.3], 0.045)]
+
+
+def pattern_with(volumes: list, config: SstaConfig | None = None) -> tuple[WalkingPattern, Ssta]:
+    pattern = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    ssta = Ssta(config or SstaConfig(), LANES)
+    pattern.set_obstacles(0.0, bounding_boxes(volumes), ssta)
+    return pattern, ssta
+
+
+def test_the_two_triangles_of_a_block_merge_into_its_swept_sphere_bounding_box():
+    boxes = bounding_boxes(beam())
+    assert len(boxes) == 1
+    np.testing.assert_allclose(boxes[0].lower, [1.24, -0.215, -0.04])
+    np.testing.assert_allclose(boxes[0].upper, [1.32, 0.215, 0.201])
+
+
+def test_separate_obstacles_stay_separate_and_sorted_along_the_path():
+    boxes = bounding_boxes(rectangle(3.0, 0.4, 0.1, 0.1) + [LSS([1.0, 0.3, 0.0], [1.0, 0.3, 0.3], 0.05)])
+    assert [round(float(b.lower[0]), 3) for b in boxes] == [0.95, 2.95]
+
+
+def test_the_monograph_beam_is_stepped_over_with_both_feet():
+    decision = Ssta(lanes=LANES).classify(bounding_boxes(beam())[0])
+    assert decision.classification == "step_over"
+    assert decision.feet == ("over", "over")
+
+
+def test_the_monograph_triangle_is_passed_by_swinging_both_feet_around_it_outwards():
+    decision = Ssta(lanes=LANES).classify(bounding_boxes(triangle())[0])
+    assert decision.classification == "swing_around"
+    assert decision.feet == ("around", "around")
+    right, left = decision.lateral
+    # the sole's edge plus the margin clear the box's side: 0.11 m half-width of the box, 0.075 + 0.02 of the sole
+    assert right == pytest.approx(-(0.11 - (0.09 - 0.095)))
+    assert left == pytest.approx(0.11 - (0.09 - 0.095))
+
+
+def test_the_smaller_feasible_modification_wins():
+    # 2.5 cm into the left lane from outside, 20 cm high: stepping over (16 cm more raise) unless the foot may move
+    # 2.5 cm inwards, towards the stance leg
+    box = ObstacleBox(np.array([1.0, 0.16, 0.0]), np.array([1.1, 0.6, 0.2]))
+    assert Ssta(lanes=LANES).classify(box).feet == ("beside", "over")
+    decision = Ssta(SstaConfig(max_inward_shift=0.03), lanes=LANES).classify(box)
+    assert decision.feet == ("beside", "around")
+    assert decision.lateral[1] == pytest.approx(0.16 - (0.09 + 0.095))
+
+
+def test_a_box_beside_the_path_changes_nothing():
+    volumes = rectangle(1.28, 0.2, 0.3, 0.1, y=0.5)
+    decision = Ssta(lanes=LANES).classify(bounding_boxes(volumes)[0])
+    assert decision.classification == "beside"
+    plain = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    pattern, _ = pattern_with(volumes)
+    for j in range(2, 12):
+        np.testing.assert_array_equal(pattern.foothold(j), plain.foothold(j))
+    assert all(pattern.swing_modification(k) is None for k in range(10))
+
+
+def test_a_wall_is_too_large_and_the_walk_stops_in_front_of_it():
+    volumes = rectangle(1.5, 2.0, 1.0, 0.2)
+    ssta = Ssta(lanes=LANES)
+    box = bounding_boxes(volumes)[0]
+    assert ssta.classify(box).classification == "too_large"
+    pattern, _ = pattern_with(volumes)
+    assert pattern.stop_index is not None
+    front = ssta.foothold_band(box)[0]
+    for j in range(2, 20):
+        assert pattern.foothold(j)[0] <= front + 1e-12
+
+
+def test_footholds_keep_the_margin_and_take_the_smaller_step_change():
+    box = bounding_boxes(beam())[0]
+    ssta = Ssta(lanes=LANES)
+    low, high = ssta.foothold_band(box)
+    assert low == pytest.approx(1.24 - 0.04 - 0.165)
+    assert high == pytest.approx(1.32 + 0.04 + 0.095)
+    # a foothold at the beam's centre: 0.175 m forward beats 0.245 m back
+    assert ssta.foothold_shift([1.28, 0.09, 0.0], [0.96, -0.09, 0.0], [box]) == pytest.approx(high - 1.28)
+    # forward would make a 0.675 m step (> 0.6): back it goes
+    assert ssta.foothold_shift([1.28, 0.09, 0.0], [0.78, -0.09, 0.0], [box]) == pytest.approx(low - 1.28)
+    # clear of the band: no move
+    assert ssta.foothold_shift([0.9, 0.09, 0.0], [0.6, -0.09, 0.0], [box]) == 0.0
+    # neither fits: behind the previous foothold (back) or a step longer than the limit (forward, 0.405 m)
+    short = Ssta(SstaConfig(max_step_length=0.3), lanes=LANES)
+    assert short.foothold_shift([1.28, 0.09, 0.0], [1.05, -0.09, 0.0], [box]) is None
+
+
+@pytest.mark.parametrize("course", [beam, triangle])
+def test_no_planned_sole_overlaps_the_box_and_every_step_stays_feasible(course):
+    pattern, ssta = pattern_with(course())
+    box = pattern.obstacle_boxes[0]
+    low, high = ssta.foothold_band(box)
+    config = ssta.config
+    for j in range(2, 14):
+        h = pattern.foothold(j)
+        if ssta.in_lane(box, float(h[1])):
+            assert not low + 1e-9 < h[0] < high - 1e-9, (j, h)
+        step = h[0] - pattern.foothold(j - 1)[0]
+        assert config.min_step_length - 1e-9 <= step <= config.max_step_length + 1e-9
+    # some foothold moved next to the box: the plan hugs it
+    assert any(abs(pattern.foothold(j)[0] - high) < 1e-9 or abs(pattern.foothold(j)[0] - low) < 1e-9
+               for j in range(2, 14))
+
+
+def _swing_samples(pattern: WalkingPattern, k: int, n: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Swing path (x, y, z), its velocity and acceleration over step ``k``'s single support (no toe pitch)."""
+    single = pattern.step_single(k)
+    s = np.linspace(0.0, single, n)
+    out = [pattern._swing_kinematics(k, x) for x in s]  # noqa: SLF001 (the path itself, before the toe offset)
+    position = np.array([[*h[0], v[0]] for h, v in out])
+    velocity = np.array([[*h[1], v[1]] for h, v in out])
+    acceleration = np.array([[*h[2], v[2]] for h, v in out])
+    return position, velocity, acceleration
+
+
+def test_a_swing_over_the_beam_is_above_it_wherever_the_sole_is_over_it():
+    pattern, ssta = pattern_with(beam())
+    box = pattern.obstacle_boxes[0]
+    overs = [k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "over"]
+    assert len(overs) == 2  # both feet step over it
+    config = ssta.config
+    for k in overs:
+        position, _, _ = _swing_samples(pattern, k)
+        front, back = position[:, 0] + config.toe_length, position[:, 0] - config.heel_length
+        above = (front > box.lower[0]) & (back < box.upper[0])
+        assert above.any()
+        assert np.all(position[above, 2] >= box.height + config.clearance - 1e-9)
+        np.testing.assert_allclose(position[-1], pattern.foothold(k + 2), atol=1e-12)
+        np.testing.assert_allclose(position[0], pattern.foothold(k), atol=1e-12)
+        assert np.all(np.diff(position[:, 0]) >= -1e-12)  # forward only: no backing into the box
+
+
+def test_a_swing_around_the_triangle_is_beside_it_wherever_the_sole_passes_it():
+    pattern, ssta = pattern_with(triangle())
+    box = pattern.obstacle_boxes[0]
+    config = ssta.config
+    arounds = [k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "around"]
+    assert len(arounds) == 2
+    for k in arounds:
+        position, _, _ = _swing_samples(pattern, k)
+        front, back = position[:, 0] + config.toe_length, position[:, 0] - config.heel_length
+        alongside = (front > box.lower[0]) & (back < box.upper[0])
+        assert alongside.any()
+        inner = np.where(position[:, 1] > 0, position[:, 1] - config.foot_half_width,
+                         -(position[:, 1] + config.foot_half_width))
+        assert np.all(inner[alongside] >= box.upper[1] - 1e-9)
+        np.testing.assert_allclose(position[-1], pattern.foothold(k + 2), atol=1e-12)
+
+
+@pytest.mark.parametrize("course", [beam, triangle])
+def test_modified_swings_are_c2(course):
+    pattern, _ = pattern_with(course())
+    k = next(k for k in range(8) if pattern.swing_modification(k) is not None)
+    position, velocity, acceleration = _swing_samples(pattern, k, n=4000)
+    single = pattern.step_single(k)
+    h = single / 3999
+    # finite differences agree with the analytic derivatives (no jump anywhere, the piece joints included)
+    np.testing.assert_allclose(np.gradient(position, h, axis=0)[1:-1], velocity[1:-1], atol=5e-3 * np.abs(velocity).max())
+    np.testing.assert_allclose(np.gradient(velocity, h, axis=0)[1:-1], acceleration[1:-1],
+                               atol=2e-2 * np.abs(acceleration).max())
+    np.testing.assert_allclose(velocity[[0, -1]], 0.0, atol=1e-12)
+    np.testing.assert_allclose(acceleration[[0, -1]], 0.0, atol=1e-9)
+
+
+def test_a_slower_step_over_reschedules_the_later_steps():
+    pattern, _ = pattern_with(beam(), SstaConfig(step_over_single=0.9))
+    overs = [k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "over"]
+    plain = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    assert [pattern.step_single(k) for k in overs] == [0.9, 0.9]
+    assert pattern.step_start(overs[-1] + 1) == pytest.approx(plain.step_start(overs[-1] + 1) + 2 * (0.9 - plain.single_support))
+
+
+def test_bad_configs_and_boxes_raise_naming_the_value():
+    with pytest.raises(ControllerError, match="clearance"):
+        SstaConfig(clearance=-0.1)
+    with pytest.raises(ControllerError, match="step_over_single"):
+        SstaConfig(step_over_single=0.0)
+    with pytest.raises(ControllerError, match="upper corner"):
+        ObstacleBox(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 1.0]))
+    with pytest.raises(ControllerError, match="lanes"):
+        Ssta(lanes=(0.1, -0.1))
