@@ -5,6 +5,7 @@ from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
+from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
 from .ssta import OBSTACLE_CLASSES, ObstacleBox, ObstacleDecision, Ssta, SstaConfig, SwingModification, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
@@ -17,6 +18,7 @@ __all__ = [
     "BACKENDS",
     "CompiledWholeBodyIk",
     "GRAVITY",
+    "LEG_SEGMENTS",
     "OBSTACLE_CLASSES",
     "REFERENCE_LAYOUT",
     "REFERENCE_SIZE",
@@ -30,6 +32,9 @@ __all__ = [
     "PatternSample",
     "PiecewiseQuintic",
     "Quintic",
+    "Rca",
+    "RcaConfig",
+    "RcaState",
     "Ssta",
     "SstaConfig",
     "Stabilizer",
@@ -50,4 +55,5 @@ __all__ = [
     "ZmpEstimate",
     "bounding_boxes",
     "estimate_zmp",
+    "return_quintic_no_overshoot_time",
 ]

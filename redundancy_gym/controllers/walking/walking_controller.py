@@ -27,6 +27,7 @@ from ..posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
+from .rca import Rca, RcaConfig, RcaState
 from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
@@ -92,6 +93,8 @@ class WalkingCommand(NamedTuple):
         contact: the ZMP estimate from the ankle sensors (in the stance foot's frame where ``stance_frame``).
         ik: the whole-body IK result (``ik.q`` is the kinematic model's configuration).
         adjustment: the step adjustment made in this period (push recovery), or None.
+        avoidance: the swing foot's reactive collision-avoidance modification (RCA) at the period's end, or None
+            without obstacles or with RCA off.
     """
 
     joint_targets: NDArray[np.float64]
@@ -100,6 +103,7 @@ class WalkingCommand(NamedTuple):
     contact: ZmpEstimate
     ik: WholeBodyIkResult
     adjustment: StepAdjustment | None = None
+    avoidance: RcaState | None = None
 
 
 class WalkingController:
@@ -121,6 +125,8 @@ class WalkingController:
             planned pose (False: in the world frame).
         ssta: obstacle planning (:class:`Ssta`) for :meth:`set_obstacles` (None: the defaults, with the gait's step
             height, longest step and foot lanes).
+        rca: reactive swing-leg collision avoidance (:class:`Rca`) for :meth:`set_obstacles` (None: the defaults).
+        use_ssta, use_rca: switch either obstacle layer off (ablations); without both, obstacles are ignored.
     """
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
@@ -128,7 +134,8 @@ class WalkingController:
                  ik: WalkingIkConfig | None = None, stepping: StepAdjusterConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
                  correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True,
-                 ssta: SstaConfig | None = None) -> None:
+                 ssta: SstaConfig | None = None, rca: RcaConfig | None = None, use_ssta: bool = True,
+                 use_rca: bool = True) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -172,6 +179,9 @@ class WalkingController:
                                               toe_length=self.gait.toe_length)
         self.ssta: Ssta | None = None
         self.obstacle_boxes: tuple[ObstacleBox, ...] = ()
+        self.use_ssta, self.use_rca = bool(use_ssta), bool(use_rca)
+        self.rca = Rca(model, self.soft_lower, self.soft_upper, rca, feet_frames=feet_frames) if self.use_rca else None
+        self._obstacle_volumes: list[SSV] = []
 
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
@@ -218,6 +228,10 @@ class WalkingController:
         self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, self._corrections.get(key))
         self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
         self.obstacle_boxes = ()
+        self._obstacle_volumes = []
+        if self.rca is not None:
+            self.rca.reset()
+            self.rca.set_obstacles(())
         self.stabilizer.reset()
         self.step_adjuster.reset()
         self.time = 0.0
@@ -244,22 +258,27 @@ class WalkingController:
     def set_obstacles(self, volumes: tuple[SSV, ...] | list[SSV]) -> bool:
         """Plan around obstacles given as swept-sphere volumes (world frame): their bounding boxes go to SSTA
         (:meth:`WalkingPattern.set_obstacles`, monograph 5.4.2), which moves the footholds not yet begun and
-        raises or shifts the swings that pass them. Call it again when more obstacles come into view; boxes
-        already planned around are kept. Returns whether the plan changed.
+        raises or shifts the swings that pass them; the volumes go to RCA (:class:`Rca`), which keeps the swing
+        leg off them. Call it again when more obstacles come into view; obstacles already known are kept.
+        Returns whether anything new was given.
         """
         if self.pattern is None or self.ssta is None:
             raise ControllerError("call WalkingController.start(q, speed) before set_obstacles()")
-        boxes = bounding_boxes(list(volumes))
-        known = list(self.obstacle_boxes)
-        new = [b for b in boxes if not any(np.array_equal(b.lower, o.lower) and np.array_equal(b.upper, o.upper)
-                                           for o in known)]
-        if not new:
+        volumes = list(volumes)
+        for v in volumes:
+            if not isinstance(v, SSV):
+                raise ControllerError(f"obstacles must be swept-sphere volumes (PSS, LSS, TSS), got {type(v).__name__}")
+        new_volumes = [v for v in volumes if v not in self._obstacle_volumes]
+        if not new_volumes:
             return False
-        self.obstacle_boxes = tuple(sorted(known + new, key=lambda b: (float(b.lower[0]), float(b.lower[1]))))
-        changed = self.pattern.set_obstacles(self.time, self.obstacle_boxes, self.ssta)
-        if changed:
-            self._next = None
-        return changed
+        self._obstacle_volumes += new_volumes
+        if self.rca is not None:
+            self.rca.set_obstacles(self._obstacle_volumes)
+        if self.use_ssta:
+            self.obstacle_boxes = bounding_boxes(self._obstacle_volumes)
+            if self.pattern.set_obstacles(self.time, self.obstacle_boxes, self.ssta):
+                self._next = None
+        return True
 
     @staticmethod
     def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],
@@ -399,8 +418,27 @@ class WalkingController:
         self._next = end
         feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         offset_end = feedback.offset + feedback.rate * self.dt
-        result = self.solver.step(self.q_ref, self._reference_array(start, feedback.offset, feedback.rate),
-                                  self._reference_array(end, offset_end, feedback.rate), self.dt)
+        start_ref = self._reference_array(start, feedback.offset, feedback.rate)
+        end_ref = self._reference_array(end, offset_end, feedback.rate)
+        avoidance = None
+        if self.rca is not None and self._obstacle_volumes:
+            avoidance = self._avoid(start_ref, end_ref)
+        result = self.solver.step(self.q_ref, start_ref, end_ref, self.dt)
         self.q_ref = result.q
         self.time += self.dt
-        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result, adjustment)
+        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result, adjustment, avoidance)
+
+    def _avoid(self, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64]) -> RcaState:
+        """RCA (5.80)-(5.83): move the swing foot's position references of this period by the modification
+        before and after its update (on the IK's kinematic model)."""
+        assert self.rca is not None and self.pattern is not None and self.q_ref is not None
+        k, _, remaining = self.pattern.swing_state(self.time + self.dt)
+        before = self.rca.state
+        side = k % 2 if k >= 0 else 0
+        position, velocity = slice(6 + 3 * side, 9 + 3 * side), slice(30 + 6 * side, 33 + 6 * side)
+        after = self.rca.update(self.q_ref, side, k, remaining, self.dt, end_ref[position], self.pattern.ground)
+        start_ref[position] += before.offset
+        start_ref[velocity] += before.velocity
+        end_ref[position] += after.offset
+        end_ref[velocity] += after.velocity
+        return after
