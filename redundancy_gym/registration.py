@@ -7,7 +7,7 @@ import gymnasium as gym
 __all__ = ["BASE_ENV_IDS", "ENV_IDS", "WRAPPED_ENV_IDS", "register_envs", "wrapped_env_id"]
 
 BASE_ENV_IDS: tuple[str, ...] = ("redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0",
-                                 "redundancy_gym/BipedWalk-v0")
+                                 "redundancy_gym/BipedWalk-v0", "redundancy_gym/BipedObstacles-v0")
 
 # (wrapped id, base id, wrapper name of the registry in redundancy_gym.policies)
 _WRAPPED: tuple[tuple[str, str, str], ...] = tuple(
@@ -44,6 +44,14 @@ def register_envs() -> None:
             id="redundancy_gym/BipedWalk-v0",
             entry_point="redundancy_gym.envs.biped_walk:BipedWalkEnv",
             max_episode_steps=2500,
+        )
+    if "redundancy_gym/BipedObstacles-v0" not in gym.registry:
+        gym.register(
+            id="redundancy_gym/BipedObstacles-v0",
+            entry_point="redundancy_gym.envs.biped_obstacles:BipedObstaclesEnv",
+            # 45 s of 4 ms steps: the longest default random course takes 44.65 s at 0.4 m/s
+            # (redundancy_gym.envs.biped_obstacles.MAX_EPISODE_STEPS; not imported here: that would load MuJoCo)
+            max_episode_steps=11250,
         )
     for wrapped, base, wrapper in _WRAPPED:
         if wrapped not in gym.registry:

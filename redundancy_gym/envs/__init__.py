@@ -2,8 +2,9 @@
 :mod:`redundancy_gym.registration`)."""
 
 from .agri_reach import AgriReachEnv
+from .biped_obstacles import BipedObstaclesEnv
 from .biped_walk import BipedWalkEnv
 from .exceptions import EnvConfigError, InvalidActionError
 from .planar_reach import PlanarReachEnv
 
-__all__ = ["AgriReachEnv", "BipedWalkEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]
+__all__ = ["AgriReachEnv", "BipedObstaclesEnv", "BipedWalkEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]

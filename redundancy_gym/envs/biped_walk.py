@@ -269,8 +269,12 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._self_collided = False
 
     # ------------------------------------------------------------------ gymnasium API
+    def _scene_xml(self) -> str:
+        """MJCF text of the scene to simulate (a subclass adds to it)."""
+        return biped_scene_xml(floor_friction=self._floor_friction)
+
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
-        model = mujoco.MjModel.from_xml_string(biped_scene_xml(floor_friction=self._floor_friction))
+        model = mujoco.MjModel.from_xml_string(self._scene_xml())
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, self.width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, self.height)
         if abs(model.opt.timestep - _TIMESTEP) > 1e-12:
@@ -306,10 +310,14 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._time += self.dt
         metrics = self._metrics((float(self.data.qpos[0]) - x_before) / self.dt)
         reward, terms = self._get_rew(metrics)
-        terminated = bool(metrics["fell"] or metrics["self_collision"])
+        terminated = self._terminated(metrics)
         if self.render_mode == "human":
             self.render()
         return self._get_obs(), reward, terminated, False, {**terms, **metrics, "push_force": self._push_force.copy()}
+
+    def _terminated(self, metrics: dict[str, Any]) -> bool:
+        """Whether the step's ``metrics`` end the episode: a fall or a self-collision."""
+        return bool(metrics["fell"] or metrics["self_collision"])
 
     def _apply_push(self) -> None:
         """Set ``xfrc_applied`` for the coming control step from the push schedule (clear it after a push)."""
