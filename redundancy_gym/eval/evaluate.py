@@ -57,6 +57,8 @@ class EpisodeSummary:
         min_obstacle_clearance, min_self_clearance: the smallest of ``info``'s values over the episode [m].
         leaf_contacts: leaf contacts of the episode, summed over steps (``info["leaf_contacts_total"]`` at the
             end; a leaf touched for 10 steps counts 10).
+        obstacle_contact: whether ``info["obstacle_contact"]`` held at any step (BipedObstacles: a MuJoCo contact of
+            the robot with an obstacle).
     """
 
     seed: int
@@ -80,6 +82,7 @@ class EpisodeSummary:
     min_obstacle_clearance: float | None = None
     min_self_clearance: float | None = None
     leaf_contacts: int | None = None
+    obstacle_contact: bool | None = None
 
 
 @dataclass
@@ -148,8 +151,9 @@ class EvalReport:
         }
 
     def _clearance_metrics(self) -> dict[str, float | None]:
-        """``min_obstacle_clearance`` and ``min_self_clearance`` [m] (smallest over all steps) and
-        ``leaf_contacts`` (mean per episode of the leaf contacts summed over steps), for envs that report them."""
+        """``min_obstacle_clearance`` and ``min_self_clearance`` [m] (smallest over all steps and episodes),
+        ``leaf_contacts`` (mean per episode of the leaf contacts summed over steps) and ``obstacle_contact_rate``
+        (share of episodes with an obstacle contact), for envs that report them."""
         s = self.summaries
         out: dict[str, float | None] = {}
         for key in ("min_obstacle_clearance", "min_self_clearance"):
@@ -159,6 +163,9 @@ class EvalReport:
         leaves = [e.leaf_contacts for e in s if e.leaf_contacts is not None]
         if leaves:
             out["leaf_contacts"] = float(np.mean(leaves))
+        touched = [e.obstacle_contact for e in s if e.obstacle_contact is not None]
+        if touched:
+            out["obstacle_contact_rate"] = float(np.mean(touched))
         return out
 
     def _walking_metrics(self) -> dict[str, float]:
@@ -205,6 +212,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
     collision = False
     time_to_goal: float | None = None
     clearances = {"min_obstacle_clearance": math.inf, "min_self_clearance": math.inf}
+    obstacle_contact = False
     state = None
     episode_start = np.array([True])
     while True:
@@ -217,6 +225,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
             frames.append(env.render())
         ret += float(reward)
         collision = collision or bool(info.get("collision", False))
+        obstacle_contact = obstacle_contact or bool(info.get("obstacle_contact", False))
         now = float(info.get("time", len(rows) + 1))
         if time_to_goal is None and info.get("goal_reached", False):
             time_to_goal = now
@@ -250,6 +259,8 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
             setattr(summary, key, low)
     if "leaf_contacts_total" in info:
         summary.leaf_contacts = int(info["leaf_contacts_total"])
+    if "obstacle_contact" in info:
+        summary.obstacle_contact = obstacle_contact
     if "fell" in info and "distance" in info:
         elapsed = float(info.get("time", 0.0))
         summary.fell = bool(info["fell"])
@@ -331,6 +342,8 @@ def format_report(report: dict[str, Any]) -> str:
           for key, label in (("min_obstacle_clearance", "to obstacles"), ("min_self_clearance", "between own links"))
           if key in report),
         *((("leaf contacts per episode [leaf-steps]", f"{report['leaf_contacts']:.1f}"),) if "leaf_contacts" in report else ()),
+        *((("obstacle contact rate", f"{report['obstacle_contact_rate']:.3f}"),)
+          if "obstacle_contact_rate" in report else ()),
         ("step time median / p99 / mean [us]", f"{step['median']:.1f} / {step['p99']:.1f} / {step['mean']:.1f}"),
         ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
@@ -357,6 +370,10 @@ def _episode_row(e: EpisodeSummary) -> dict[str, Any]:
         row.update(fell=e.fell, forward_speed=e.forward_speed)
     if e.mean_speed_error is not None:
         row["speed_error"] = e.mean_speed_error
+    if e.min_obstacle_clearance is not None:
+        row["min_obstacle_clearance"] = _finite_or_none(e.min_obstacle_clearance)
+    if e.obstacle_contact is not None:
+        row["obstacle_contact"] = e.obstacle_contact
     return row
 
 
