@@ -4,7 +4,9 @@ block, argument checks, rendering after a course change, and the evaluation's ob
 
 from __future__ import annotations
 
+import gc
 import math
+import weakref
 
 import gymnasium as gym
 import mujoco
@@ -462,13 +464,20 @@ def test_renders_after_a_reset_that_changed_the_course() -> None:
     env.reset(seed=0)
     first = env.render()
     model = env.unwrapped.model
-    env.reset(seed=1)
+    old = weakref.ref(env.unwrapped.mujoco_renderer.viewer.con)
+    gc.disable()  # the old renderer must go by reference counting, not by a later collection
+    try:
+        env.reset(seed=1)
+        assert old() is None  # its MjrContext is freed before the new context exists
+    finally:
+        gc.enable()
     assert env.unwrapped.model is not model
     frame = env.render()
     assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
-    assert first.shape == frame.shape
-    env.step(np.zeros(22))
-    assert env.render().shape == (72, 96, 3)
+    assert first.shape == frame.shape and not np.array_equal(first, frame)  # another episode
+    for _ in range(3):
+        env.step(np.zeros(22))
+        assert env.render().std() > 0
     env.close()
 
 
