@@ -27,7 +27,8 @@ from ..geometry import SSV, PackedVolumes, PairBatch
 from .biped_walk import BipedWalkEnv
 from .biped_walk import default_config as _walk_config
 from .exceptions import EnvConfigError
-from .validation import check_choice, check_int, check_range_pair, check_real, check_real_array, warn_if_time_limit_short
+from .validation import (check_choice, check_int, check_range_pair, check_real, check_real_array,
+                         warn_if_time_limit_short)
 
 __all__ = ["COURSES", "MAX_EPISODE_STEPS", "OBSTACLE_FEATURES", "OBSTACLE_LOOKBEHIND", "WALK_START_TIME",
            "BipedObstaclesEnv", "default_config"]
@@ -38,7 +39,8 @@ OBSTACLE_FEATURES = 14
 """Entries per observed obstacle volume: mask, one-hot kind (PSS, LSS, TSS), three vertices, radius."""
 OBSTACLE_LOOKBEHIND = 0.6
 """An obstacle volume is observed while its bounding box's largest x is at least the pelvis x minus this [m]: the
-rear foot is still passing it (the trailing heel is up to about 0.5 m behind the pelvis in a step)."""
+rear foot may still be passing it (with 0.32 m steps the trailing heel stays within about 0.4 m behind the pelvis;
+0.6 m leaves room for longer steps)."""
 WALK_START_TIME = 0.4
 """Duration [s] of the walking reference's weight shift before its first step (``GaitConfig.start_duration``)."""
 _WALK_SPEED = 0.4  # [m/s] default target speed: the monograph's experiments
@@ -71,7 +73,8 @@ def _longest_random_course_time() -> float:
     return WALK_START_TIME + end / _WALK_SPEED
 
 
-MAX_EPISODE_STEPS = int(math.ceil(_longest_random_course_time() / 0.004 / 250.0)) * 250
+_CONTROL_RATE = 250  # [1/s] control steps per second at the default frame_skip (2 physics steps of 2 ms)
+MAX_EPISODE_STEPS = int(math.ceil(_longest_random_course_time())) * _CONTROL_RATE
 """The registered time limit: 11250 steps of 4 ms (45 s), the longest default random course at 0.4 m/s (44.65 s:
 0.4 s start, 17.7 m) rounded up to whole seconds."""
 
@@ -95,8 +98,9 @@ class BipedObstaclesEnv(BipedWalkEnv):
     A fixed course is compiled once. A random course changes at every reset, and the scene is recompiled with it
     (a triangular prism of new dimensions needs a new mesh): about 7 ms per reset against 0.3 ms for a fixed course
     (measured here: 0.6 ms to add the obstacles to the cached scene text, 4.3 ms to compile, 0.7 ms for the ids and
-    the collision pairs, the rest for MjData and the reset itself); an episode of the course takes seconds. ``model``, ``data`` and the renderer are then new objects: read ``env.unwrapped.model``
-    after the reset. A reset with the same seed draws the same course and does not recompile.
+    the collision pairs, the rest for MjData and the reset itself), while an episode of a course takes seconds.
+    ``model``, ``data`` and the renderer are then new objects: read ``env.unwrapped.model`` after the reset. A reset
+    with the same seed draws the same course and does not recompile.
 
     ## Action Space
     As BipedWalk: ``Box(-1, 1, (22,), float32)``, joint position targets normalized around the standing posture.
@@ -438,7 +442,11 @@ class BipedObstaclesEnv(BipedWalkEnv):
             if d <= margin:
                 self._clearance_hint = max(d, 0.0) + 0.05
                 return d
-            margin = max(2.0 * margin, d)
+            if margin == math.inf:  # every pair computed: a non-finite state (NaN) gives its NaN back
+                return d
+            margin = max(2.0 * margin, d) if math.isfinite(d) else 2.0 * margin
+            if margin > 1e6:  # beyond any course: compute every pair
+                margin = math.inf
 
     def _touching_obstacle(self) -> bool:
         """Whether MuJoCo's current contacts include an obstacle geom (obstacles only collide with the robot)."""
