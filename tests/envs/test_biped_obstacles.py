@@ -506,3 +506,12 @@ def test_eval_reports_obstacle_contacts_and_clearance() -> None:
     assert report["per_episode"][1]["obstacle_contact"] is True
     text = format_report(report)
     assert "obstacle contact rate" in text and "to obstacles" in text
+
+
+def test_clearance_search_ends_on_a_non_finite_state() -> None:
+    """A robot state of NaN (a simulation gone unstable) must not make the widening margin search loop forever."""
+    env = gym.make(ENV_ID, course="beam")
+    env.reset(seed=0)
+    base = env.unwrapped
+    base._batch.vertices[:] = np.nan  # the robot's volumes as _self_clearance would place them from NaN frames
+    assert not math.isfinite(base._obstacle_clearance())
