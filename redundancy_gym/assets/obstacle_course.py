@@ -209,14 +209,17 @@ class Obstacle:
 
     # ------------------------------------------------------------------ (b) swept-sphere model
     def volumes(self) -> tuple[SSV, ...]:
-        """The swept-sphere model [m], world coordinates; every volume set contains the shape.
+        """The swept-sphere model [m], world coordinates.
 
-        - box: a rectangle of two TSS in the box's mid-plane perpendicular to its smallest extent, radius half that
-          extent, the rectangle spanning the box's full other two extents. The rectangle swept by the sphere covers
-          the box (each box point lies within the half extent of its projection onto the rectangle), so the SSV
-          contains the box; it overhangs the box's faces by the radius with rounded edges.
+        - box: a rectangle of two TSS in the box's mid-plane perpendicular to its smallest extent, radius ``r`` half
+          that extent, the rectangle the box's other two extents less ``r`` on each side: the box with its edges
+          rounded by ``r``. It lies inside the box and touches all six faces, so its bounding box is the box's (what
+          the walking controller's step planning reads); a box point lies at most ``(sqrt 2 - 1) r`` outside it
+          along an edge, ``(sqrt 3 - 1) r`` at a corner. (A rectangle spanning the full extents would contain the box but overhang every face by
+          ``r``: a 15 cm deep, 18 cm high block would plan as 30 cm deep and 25 cm high, deeper than a step.)
         - prism: one TSS, the triangle in the mid-plane ``x = 0`` of its frame, radius ``depth / 2``: it contains
-          the prism (the triangle extruded by ``+-depth / 2``).
+          the prism (the triangle extruded by ``+-depth / 2``), overhanging its faces by the radius (a thin
+          triangle has no inset triangle of that radius).
         - cylinder: a vertical LSS of the cylinder's radius from the bottom face's centre (the ground, for an
           obstacle standing on it) to the top face's centre: it contains the cylinder, with rounded caps.
         """
@@ -233,11 +236,11 @@ class Obstacle:
         thin = int(np.argmin(extents))  # the rectangle is perpendicular to the smallest extent
         a, b = (k for k in range(3) if k != thin)
         corners = np.zeros((4, 3))
-        for row, (sa, sb) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):  # around the rectangle
-            corners[row, a] = 0.5 * sa * extents[a]
-            corners[row, b] = 0.5 * sb * extents[b]
-        p = self.to_world(corners)
         radius = 0.5 * float(extents[thin])
+        for row, (sa, sb) in enumerate(((-1, -1), (1, -1), (1, 1), (-1, 1))):  # around the rectangle
+            corners[row, a] = sa * (0.5 * extents[a] - radius)
+            corners[row, b] = sb * (0.5 * extents[b] - radius)
+        p = self.to_world(corners)
         return TSS(p[0], p[1], p[2], radius=radius), TSS(p[0], p[2], p[3], radius=radius)
 
     # ------------------------------------------------------------------ (c) bounding box

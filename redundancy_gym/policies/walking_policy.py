@@ -10,18 +10,42 @@ from numpy.typing import NDArray
 
 from ..controllers.walking import (
     GaitConfig,
+    RcaConfig,
+    SstaConfig,
     StabilizerGains,
     StepAdjusterConfig,
     WalkingCommand,
     WalkingController,
     WalkingIkConfig,
 )
+from ..geometry import LSS, PSS, SSV, TSS
 from ..model import RobotModel
 from .exceptions import PolicyError
 from .options import config_from_options, env_with_attributes
 from .per_env_policy import PerEnvPolicy
 
-__all__ = ["WalkingPolicy", "WalkingPolicyConfig"]
+__all__ = ["WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
+
+OBSTACLE_ROW = 14
+"""Entries of one obstacle row of the observation: ``[mask, PSS, LSS, TSS, v0 (3), v1 (3), v2 (3), radius]``."""
+
+
+def obstacle_volumes(rows: NDArray[np.float64]) -> list[SSV]:
+    """The swept-sphere volumes of the observation's obstacle rows (world frame; rows with mask 0 skipped)."""
+    rows = np.asarray(rows, dtype=np.float64).reshape(-1, OBSTACLE_ROW)
+    volumes: list[SSV] = []
+    for row in rows:
+        if row[0] < 0.5:
+            continue
+        kind = int(np.argmax(row[1:4]))
+        v, radius = row[4:13].reshape(3, 3), float(row[13])
+        if kind == 0:
+            volumes.append(PSS(v[0], radius))
+        elif kind == 1:
+            volumes.append(LSS(v[0], v[1], radius))
+        else:
+            volumes.append(TSS(v[0], v[1], v[2], radius))
+    return volumes
 
 
 @dataclass(frozen=True)
@@ -47,6 +71,11 @@ class WalkingPolicyConfig:
         step_min_remaining: shortest single support left after a re-timing [s].
         step_max_forward, step_max_backward: reachable landing ahead of / behind the stance foot [m].
         step_min_width, step_max_width: reachable landing beside the stance foot [m].
+        ssta: plan footholds and swings around the observed obstacles (step sequence and heuristic trajectory
+            adaption, monograph 5.4.2) on; needs the observation's ``obstacles`` rows (BipedObstacles-v0).
+        rca: reactive collision avoidance of the swing leg (task-space modification (5.80)) on.
+        obstacle_clearance: height [m] of a swing sole above an obstacle's bounding box it steps over.
+        step_over_duration: single-support duration [s] of a step over an obstacle (0: the nominal one).
     """
 
     momentum_minimization: bool = True
@@ -69,6 +98,10 @@ class WalkingPolicyConfig:
     step_max_backward: float = StepAdjusterConfig.max_backward
     step_min_width: float = StepAdjusterConfig.min_width
     step_max_width: float = StepAdjusterConfig.max_width
+    ssta: bool = True
+    rca: bool = True
+    obstacle_clearance: float = SstaConfig.clearance
+    step_over_duration: float = 0.0
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -100,6 +133,8 @@ class WalkingPolicy(PerEnvPolicy):
             raise PolicyError("the walking policy needs MuJoCo's qpos then qvel at the start of the observation")
         self._wrench = slice(layout["right_force"].start, layout["left_torque"].stop)
         self._command = layout["command"]
+        self._obstacles = layout.get("obstacles")
+        self._last_rows: NDArray[np.float64] | None = None
         self._nominal = np.asarray(base.nominal_configuration, dtype=np.float64)
         self._scale = np.asarray(base.action_scale, dtype=np.float64)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
@@ -120,10 +155,14 @@ class WalkingPolicy(PerEnvPolicy):
                 enabled=c.push_recovery, min_remaining=c.step_min_remaining,
                 max_forward=c.step_max_forward, max_backward=c.step_max_backward, min_width=c.step_min_width,
                 max_width=c.step_max_width)
+            ssta = SstaConfig(clearance=c.obstacle_clearance, step_height=gait.step_height,
+                              max_step_length=gait.max_step_length, toe_length=gait.toe_length,
+                              step_over_single=c.step_over_duration or None)
             self.controller = WalkingController(
                 self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
                 np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik, stepping=stepping,
-                correction_iterations=c.correction_iterations)
+                correction_iterations=c.correction_iterations, ssta=ssta, rca=RcaConfig(), use_ssta=c.ssta,
+                use_rca=c.rca)
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc
         self.last_command: WalkingCommand | None = None
@@ -136,9 +175,24 @@ class WalkingPolicy(PerEnvPolicy):
         """Start a walk from the observed standing state at the observation's commanded speed."""
         q, _ = self._state(obs)
         self.controller.start(q, float(obs[self._command][0]))
+        self._last_rows = None
+        self._observe_obstacles(obs)
+
+    def _observe_obstacles(self, obs: NDArray[np.float64]) -> None:
+        """Give the controller the obstacle volumes of the observation's rows when they changed."""
+        if self._obstacles is None or not (self.config.ssta or self.config.rca):
+            return
+        rows = obs[self._obstacles]
+        if self._last_rows is not None and np.array_equal(rows, self._last_rows):
+            return
+        self._last_rows = rows.copy()
+        volumes = obstacle_volumes(rows)
+        if volumes:
+            self.controller.set_obstacles(volumes)
 
     def command(self, obs: NDArray[np.float64]) -> NDArray[np.float32]:
         """One control period of the walk under way: normalized joint position targets for ``obs``."""
+        self._observe_obstacles(obs)
         q, v = self._state(obs)
         wrench = obs[self._wrench].reshape(2, 6)
         command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])

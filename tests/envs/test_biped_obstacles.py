@@ -1,4 +1,4 @@
-"""BipedObstacles-v0 and its obstacle courses: swept-sphere models that contain the shapes, bounding boxes, the
+"""BipedObstacles-v0 and its obstacle courses: swept-sphere models that fit the shapes, bounding boxes, the
 monograph's courses, seeded random courses within their ranges, contacts, clearances, the observation's obstacle
 block, argument checks, rendering after a course change, and the evaluation's obstacle fields."""
 
@@ -95,10 +95,23 @@ def _distance_to_volumes(points: np.ndarray, volumes: tuple[SSV, ...]) -> np.nda
 
 # ---------------------------------------------------------------------- obstacles
 @pytest.mark.parametrize("obstacle", SHAPES, ids=lambda o: f"{o.shape}-yaw{o.yaw:g}")
-def test_swept_sphere_model_contains_the_shape(obstacle: Obstacle) -> None:
+def test_swept_sphere_model_fits_the_shape(obstacle: Obstacle) -> None:
     points = _surface_points(obstacle, np.random.default_rng(0))
     volumes = obstacle.volumes()
-    assert np.max(_distance_to_volumes(points, volumes)) <= 1e-12
+    if obstacle.shape == "box":
+        # the box with rounded edges: inside the box, touching every face at its centre, and no box point
+        # farther from it than (sqrt 3 - 1) r (a corner; (sqrt 2 - 1) r along an edge)
+        radius = 0.5 * min(obstacle.size)
+        assert np.max(_distance_to_volumes(points, volumes)) <= (math.sqrt(3.0) - 1.0) * radius + 1e-12
+        half = 0.5 * np.asarray(obstacle.size)
+        faces = np.concatenate([np.diag(half), -np.diag(half)])
+        np.testing.assert_allclose(_distance_to_volumes(obstacle.to_world(faces), volumes), 0.0, atol=1e-12)
+        outside = obstacle.to_world(faces * 1.001 + np.sign(faces) * 1e-4)
+        assert np.all(_distance_to_volumes(outside, volumes) > 0.0)
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+        assert np.all(_distance_to_volumes(obstacle.to_world(corners), volumes) > 0.0)
+    else:
+        assert np.max(_distance_to_volumes(points, volumes)) <= 1e-12
     # and it is the model the docstring says: tight along the smallest extent
     if obstacle.shape == "box":
         assert [v.kind_name for v in volumes] == ["TSS", "TSS"]

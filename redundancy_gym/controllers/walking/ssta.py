@@ -7,7 +7,9 @@ volumes) is classified against the two feet's lanes (the strips the soles sweep 
 2. a lane meets it: that foot steps over it (its swing's control points raised to the box's height) or swings
    around it (shifted sideways by the overlap), whichever modification is smaller and feasible
    (``"step_over"`` when a foot steps over, else ``"swing_around"``);
-3. neither is feasible for a foot whose lane meets it: too large (``"too_large"``): the walk stops in front of it.
+3. neither is feasible for a foot whose lane meets it: the walking line moves sideways so that both lanes pass
+   beside it (``"sidestep"``, within ``max_line_shift``) or, failing that, too large (``"too_large"``): the walk
+   stops in front of it.
 
 Footholds keep a margin to every box their sole would overlap: a foothold that falls into a box's band moves
 to just in front of or just behind it, whichever changes the step length less and keeps it feasible; the later
@@ -29,8 +31,10 @@ from ..exceptions import ControllerError
 __all__ = ["OBSTACLE_CLASSES", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig", "SwingModification",
            "bounding_boxes"]
 
-OBSTACLE_CLASSES = ("beside", "step_over", "swing_around", "too_large")
-"""The classes of :meth:`Ssta.classify`, in the monograph's order (one foot next to it / over it / too large)."""
+OBSTACLE_CLASSES = ("beside", "sidestep", "step_over", "swing_around", "too_large")
+"""The classes of :meth:`Ssta.classify`: the monograph's (a foot next to it: ``"beside"``, or ``"sidestep"`` where
+the walking line moves sideways to put the feet next to it; over it; too large), with ``"swing_around"`` for
+swings shifted sideways."""
 
 
 @dataclass(frozen=True)
@@ -119,6 +123,8 @@ class SstaConfig:
         toe_length: sole point to toe tip [m].
         heel_length: sole point to heel [m].
         foot_half_width: half the sole's width [m].
+        max_line_shift: largest sideways move [m] of the walking line around a box neither foot can step over or
+            swing around.
         max_step_length: longest step [m] between the two feet's footholds that a moved foothold may make.
         min_step_length: shortest (most negative) step [m]: a moved foothold never lands behind the other foot by
             more than this.
@@ -126,17 +132,18 @@ class SstaConfig:
             lifts the foot to the box's height with smaller accelerations (Lola stepped over with 1 s steps).
     """
 
-    foothold_margin: float = 0.04
-    lateral_margin: float = 0.02
-    clearance: float = 0.03
+    foothold_margin: float = 0.07
+    lateral_margin: float = 0.04
+    clearance: float = 0.05
     step_height: float = 0.07
     max_step_over_height: float = 0.3
     max_step_over_depth: float = 0.3
-    max_outward_shift: float = 0.12
+    max_outward_shift: float = 0.15
     max_inward_shift: float = 0.0
     toe_length: float = 0.165
     heel_length: float = 0.095
     foot_half_width: float = 0.075
+    max_line_shift: float = 0.3
     max_step_length: float = 0.6
     min_step_length: float = 0.0
     step_over_single: float | None = None
@@ -186,12 +193,14 @@ class ObstacleDecision(NamedTuple):
         classification: one of :data:`OBSTACLE_CLASSES`.
         feet: per foot (right, left): ``"over"``, ``"around"``, ``"beside"`` or ``"blocked"``.
         lateral: per foot, the sideways shift [m] ``"around"`` needs (0 otherwise).
+        line_shift: the walking line's sideways move [m] of a ``"sidestep"`` (0 otherwise).
     """
 
     box: ObstacleBox
     classification: str
     feet: tuple[str, str]
     lateral: tuple[float, float]
+    line_shift: float = 0.0
 
 
 class Ssta:
@@ -257,6 +266,9 @@ class Ssta:
             feet.append(decision)
             lateral.append(shift)
         if "blocked" in feet:
+            shift = self.line_shift(box)
+            if shift is not None:
+                return ObstacleDecision(box, "sidestep", ("beside", "beside"), (0.0, 0.0), shift)
             classification = "too_large"
         elif "over" in feet:
             classification = "step_over"
@@ -265,6 +277,16 @@ class Ssta:
         else:
             classification = "beside"
         return ObstacleDecision(box, classification, (feet[0], feet[1]), (lateral[0], lateral[1]))
+
+    def line_shift(self, box: ObstacleBox) -> float | None:
+        """The smallest sideways move [m] of both lanes that puts ``box`` beside them (None: beyond
+        ``max_line_shift``)."""
+        half = self.config.foot_half_width + self.config.lateral_margin
+        right, left = float(self.lanes[0]), float(self.lanes[1])
+        # the lanes pass on the box's -y side (the left lane's upper edge below it) or its +y side
+        candidates = [float(box.lower[1]) - (left + half), float(box.upper[1]) - (right - half)]
+        shift = min(candidates, key=abs)
+        return shift if abs(shift) <= self.config.max_line_shift else None
 
     # ------------------------------------------------------------------ footholds
     def foothold_band(self, box: ObstacleBox) -> tuple[float, float]:
@@ -278,13 +300,15 @@ class Ssta:
         half = self.config.foot_half_width + self.config.lateral_margin
         return bool(y + half > box.lower[1] and y - half < box.upper[1])
 
-    def foothold_shift(self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox]
-                       ) -> float | None:
+    def foothold_shift(self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox],
+                       behind: float = -np.inf) -> float | None:
         """The move along x [m] that takes a foothold out of every box's band, changing the step from
         ``previous`` (the other foot's foothold) least within the step-length limits: 0 when it stands clear,
         None when no move does (a box the step cannot clear: too deep or too close to the previous foothold).
 
-        Moves are tried in growing size; a move that lands in another box's band is not taken.
+        Moves are tried in growing size; a move that lands in another box's band is not taken, nor one that does
+        not land ahead of ``behind`` (the same foot's previous foothold [m]: every swing moves forward, so the
+        planning cannot step in place before a box forever).
         """
         h = np.asarray(foothold, dtype=np.float64)
         p = np.asarray(previous, dtype=np.float64)
@@ -298,7 +322,7 @@ class Ssta:
         for move in candidates:
             x = h[0] + move
             step = x - p[0]
-            if not c.min_step_length - 1e-12 <= step <= c.max_step_length + 1e-12:
+            if not c.min_step_length - 1e-12 <= step <= c.max_step_length + 1e-9 or x <= behind + 1e-9:
                 continue
             if any(band[0] + 1e-9 < x < band[1] - 1e-9 for band in bands):
                 continue

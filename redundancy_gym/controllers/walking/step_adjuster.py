@@ -197,6 +197,8 @@ class StepAdjuster:
                 break
             base = pattern.preview_dcm(t, np.zeros(2), single)
             gain = pattern.preview_dcm(t, np.ones(2), single) - base
+            if np.any(np.abs(gain) < 1e-9):  # the landing does not move the DCM (a walk stopped in front of a box)
+                continue
             target = landing + (wanted - base) / gain
             if turn is None:
                 reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
@@ -208,7 +210,8 @@ class StepAdjuster:
                 best = (miss, reachable - landing, single)
             if miss <= 1e-9:
                 break
-        assert best is not None
+        if best is None:
+            return None
         miss, shift, single = best
         clipped = miss > 1e-9
         if float(np.max(np.abs(shift))) < MIN_SHIFT and single == s + remaining:

@@ -182,6 +182,8 @@ class WalkingController:
         self.use_ssta, self.use_rca = bool(use_ssta), bool(use_rca)
         self.rca = Rca(model, self.soft_lower, self.soft_upper, rca, feet_frames=feet_frames) if self.use_rca else None
         self._obstacle_volumes: list[SSV] = []
+        self._world_to_plan: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
+        self._obstacle_step = -1
 
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
@@ -229,6 +231,8 @@ class WalkingController:
         self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
         self.obstacle_boxes = ()
         self._obstacle_volumes = []
+        self._world_to_plan = (np.eye(3), np.zeros(3))
+        self._obstacle_step = -1
         if self.rca is not None:
             self.rca.reset()
             self.rca.set_obstacles(())
@@ -272,13 +276,23 @@ class WalkingController:
         if not new_volumes:
             return False
         self._obstacle_volumes += new_volumes
+        self._map_obstacles()
+        return True
+
+    def _map_obstacles(self) -> None:
+        """Give SSTA and RCA the obstacles in the plan's frame: the world volumes moved by the rigid map that puts
+        the measured stance sole on its planned pose (:meth:`_in_stance_frame`). The real robot drifts from the
+        plan's world frame (its feet land relative to the real stance foot, which slips and turns a little); the
+        obstacles are where they are relative to the real feet."""
+        assert self.pattern is not None and self.ssta is not None
+        rotation, translation = self._world_to_plan
+        mapped = [v.transformed(rotation, translation) for v in self._obstacle_volumes]
         if self.rca is not None:
-            self.rca.set_obstacles(self._obstacle_volumes)
-        if self.use_ssta:
-            self.obstacle_boxes = bounding_boxes(self._obstacle_volumes)
+            self.rca.set_obstacles(mapped)
+        if self.use_ssta and not self.pattern.turned:  # SSTA plans straight walks; RCA still acts on a turned one
+            self.obstacle_boxes = bounding_boxes(mapped)
             if self.pattern.set_obstacles(self.time, self.obstacle_boxes, self.ssta):
                 self._next = None
-        return True
 
     @staticmethod
     def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],
@@ -384,6 +398,7 @@ class WalkingController:
         planned = sample.feet[stance]
         real = positions[2 + stance]
         shift = np.array([planned[0], planned[1], 0.0]) - turn @ np.array([real[0], real[1], 0.0])
+        self._world_to_plan = (turn, shift)
         return (turn @ com + shift, turn @ com_velocity, turn @ rotations,
                 positions @ turn.T + shift)
 
@@ -408,6 +423,12 @@ class WalkingController:
         if self.stance_frame:
             com, com_velocity, rotations, positions = self._in_stance_frame(start, com, com_velocity, rotations,
                                                                              positions)
+        if self._obstacle_volumes and start.step != self._obstacle_step:
+            # once a step, the obstacles are mapped into the plan's frame again as the robot drifts from it
+            self._obstacle_step = start.step
+            self._map_obstacles()
+            if self._next is None:
+                start = self.pattern.sample(self.time)
         rotations, positions = rotations[:2], positions[:2]
         contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
         adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega,

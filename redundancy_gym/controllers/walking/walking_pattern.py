@@ -181,6 +181,7 @@ class WalkingPattern:
         self._boxes: tuple[ObstacleBox, ...] = ()
         self._modifications: dict[int, SwingModification] = {}
         self._stop: int | None = None
+        self._sidesteps: list[ObstacleBox] = []
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -205,7 +206,11 @@ class WalkingPattern:
             # stopped in front of a box too large to pass: the feet step in place beside the last foothold
             last = self.foothold(self._stop - 1)
             own = self.foothold(self._stop - 1 if (self._stop - 1) % 2 == j % 2 else self._stop - 2)
-            return np.array([last[0], own[1], own[2]])
+            h = np.array([last[0], own[1], own[2]])
+            for first, shift in self._shifts:  # push recovery still moves the steps in place
+                if self._stop <= first <= j:
+                    h[:2] += shift
+            return h
         if self._turned:
             x, y, heading = self._path(j)
             # a turned foot is set wider by its heading change times the toe length: the feet of a turn would
@@ -325,6 +330,11 @@ class WalkingPattern:
 
     # ------------------------------------------------------------------ obstacles (SSTA)
     @property
+    def turned(self) -> bool:
+        """Whether a yaw rate was commanded (:meth:`set_velocity`): the walk no longer goes along +x."""
+        return self._turned
+
+    @property
     def obstacle_boxes(self) -> tuple[ObstacleBox, ...]:
         """The obstacle bounding boxes the footholds and swings are planned around (:meth:`set_obstacles`)."""
         return self._boxes
@@ -367,13 +377,31 @@ class WalkingPattern:
         if self._stop is not None and self._stop >= first:
             self._stop = None
             changed = True
-        walls = [ssta.foothold_band(b)[0] for b in self._boxes if ssta.classify(b).classification == "too_large"]
+        decisions = [ssta.classify(b) for b in self._boxes]
+        walls = [ssta.foothold_band(d.box)[0] for d in decisions if d.classification == "too_large"]
         wall = min(walls, default=np.inf)
+        # sidesteps: the walking line moves beside the box from about three steps before it to two after, the foot
+        # on the side it moves to first (the stance widens, then narrows back); planned once per box
+        for d in decisions:
+            # a box mapped again (the robot drifted a little) is the same box: planned once
+            if d.classification != "sidestep" or any(np.max(np.abs(d.box.lower - b.lower)) < 0.2 for b in self._sidesteps):
+                continue
+            shift = d.line_shift
+            lead = int(shift > 0.0)  # left footholds are odd
+            j1 = first + ((lead - first) % 2)
+            while self.foothold(j1)[0] < float(d.box.lower[0]) - 3.0 * self.step_length:
+                j1 += 2
+            j2 = j1 + 2 + ((1 - lead) - j1) % 2
+            while self.foothold(j2)[0] < float(d.box.upper[0]) + 2.0 * self.step_length:
+                j2 += 2
+            self._shifts += [(j1, np.array([0.0, shift])), (j2, np.array([0.0, -shift]))]
+            self._sidesteps.append(d.box)
+            changed = True
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
         j = first
         while self._stop is None and self.foothold(j)[0] <= reach:
             h, previous = self.foothold(j), self.foothold(j - 1)
-            move = ssta.foothold_shift(h, previous, self._boxes)
+            move = ssta.foothold_shift(h, previous, self._boxes, behind=float(self.foothold(j - 2)[0]))
             if move is None or h[0] + (move or 0.0) > wall:
                 self._stop = j
                 changed = True
@@ -624,9 +652,12 @@ class WalkingPattern:
         b0 = min(max(modification.band[0], a), e)
         b1 = min(max(modification.band[1], b0), e)
         top = self.ground + modification.height
-        lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else 0.0)
-        cross = b1 - b0 + abs(modification.lateral)
-        land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else 0.0)
+        # each piece's share of the time follows the distance it covers: the rise (or the sideways shift) happens
+        # before the band, the descent (or the shift back) after it
+        shift = abs(modification.lateral)
+        lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else shift)
+        cross = b1 - b0
+        land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)
         total = lift + cross + land
         weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
         t1, t2, t3 = single * weights / weights.sum()

@@ -65,19 +65,21 @@ def test_the_monograph_triangle_is_passed_by_swinging_both_feet_around_it_outwar
     assert decision.classification == "swing_around"
     assert decision.feet == ("around", "around")
     right, left = decision.lateral
-    # the sole's edge plus the margin clear the box's side: 0.11 m half-width of the box, 0.075 + 0.02 of the sole
-    assert right == pytest.approx(-(0.11 - (0.09 - 0.095)))
-    assert left == pytest.approx(0.11 - (0.09 - 0.095))
+    # the sole's edge plus the margin clear the box's side: 0.11 m half-width of the box, 0.075 m of the sole
+    half = SstaConfig().foot_half_width + SstaConfig().lateral_margin
+    assert right == pytest.approx(-(0.11 - (0.09 - half)))
+    assert left == pytest.approx(0.11 - (0.09 - half))
 
 
 def test_the_smaller_feasible_modification_wins():
-    # 2.5 cm into the left lane from outside, 20 cm high: stepping over (16 cm more raise) unless the foot may move
-    # 2.5 cm inwards, towards the stance leg
+    # 2.5 cm into the left lane from outside (4.5 cm with the lateral margin), 20 cm high: stepping over (18 cm
+    # more raise) unless the foot may move 4.5 cm inwards, towards the stance leg
     box = ObstacleBox(np.array([1.0, 0.16, 0.0]), np.array([1.1, 0.6, 0.2]))
     assert Ssta(lanes=LANES).classify(box).feet == ("beside", "over")
-    decision = Ssta(SstaConfig(max_inward_shift=0.03), lanes=LANES).classify(box)
+    decision = Ssta(SstaConfig(max_inward_shift=0.05), lanes=LANES).classify(box)
     assert decision.feet == ("beside", "around")
-    assert decision.lateral[1] == pytest.approx(0.16 - (0.09 + 0.095))
+    half = SstaConfig().foot_half_width + SstaConfig().lateral_margin
+    assert decision.lateral[1] == pytest.approx(0.16 - (0.09 + half))
 
 
 def test_a_box_beside_the_path_changes_nothing():
@@ -107,15 +109,16 @@ def test_footholds_keep_the_margin_and_take_the_smaller_step_change():
     box = bounding_boxes(beam())[0]
     ssta = Ssta(lanes=LANES)
     low, high = ssta.foothold_band(box)
-    assert low == pytest.approx(1.24 - 0.04 - 0.165)
-    assert high == pytest.approx(1.32 + 0.04 + 0.095)
-    # a foothold at the beam's centre: 0.175 m forward beats 0.245 m back
+    margin = SstaConfig().foothold_margin
+    assert low == pytest.approx(1.24 - margin - 0.165)
+    assert high == pytest.approx(1.32 + margin + 0.095)
+    # a foothold at the beam's centre: 0.205 m forward beats 0.275 m back
     assert ssta.foothold_shift([1.28, 0.09, 0.0], [0.96, -0.09, 0.0], [box]) == pytest.approx(high - 1.28)
-    # forward would make a 0.675 m step (> 0.6): back it goes
+    # forward would make a 0.705 m step (> 0.6): back it goes
     assert ssta.foothold_shift([1.28, 0.09, 0.0], [0.78, -0.09, 0.0], [box]) == pytest.approx(low - 1.28)
     # clear of the band: no move
     assert ssta.foothold_shift([0.9, 0.09, 0.0], [0.6, -0.09, 0.0], [box]) == 0.0
-    # neither fits: behind the previous foothold (back) or a step longer than the limit (forward, 0.405 m)
+    # neither fits: behind the previous foothold (back) or a step longer than the limit (forward, 0.435 m)
     short = Ssta(SstaConfig(max_step_length=0.3), lanes=LANES)
     assert short.foothold_shift([1.28, 0.09, 0.0], [1.05, -0.09, 0.0], [box]) is None
 
