@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .evaluate import evaluate, format_report
+from .obstacle_plots import plot_footholds_top_view, plot_swing_trajectories, record_obstacle_walk
 from .plots import plot_clearance, plot_point_to_point, plot_traces
 from .point_to_point import FIG_5_10, rollout_point_to_point
 from .speed_error import plot_speed_error, speed_error_markdown
@@ -18,11 +19,20 @@ __all__ = ["run_demo"]
 _PLANAR = "redundancy_gym/PlanarReach-v0"
 _AGRI = "redundancy_gym/AgriReach-v0"
 _BIPED = "redundancy_gym/BipedWalk-v0"
+_OBSTACLES = "redundancy_gym/BipedObstacles-v0"
+# time limit of the demo's BipedObstacles episodes [control steps of 4 ms]: 10 s, where the beam and the triangle
+# course take 6.2 s (0.4 s start, course_end 2.32 m at 0.4 m/s); an episode with an obstacle contact does not end at
+# the course's end but at the time limit, which the registration sets for the longest random course (45 s)
+_OBSTACLE_DEMO_STEPS = 2500
+# frame rate of the BipedObstacles videos [1/s]: every 10th control step; software rendering (osmesa) takes about
+# 55 ms a frame here, so 50 fps would double the step's time
+_OBSTACLE_VIDEO_FPS = 25.0
 
 
 def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
-    crops); write JSON, PNG and MP4.
+    crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle); write JSON, PNG and
+    MP4.
 
     Returns the paths written.
     """
@@ -49,6 +59,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
+    written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_predictive(out, seed=seed))
     for path in written:
         print(f"wrote {path}")
@@ -97,6 +108,34 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]
     path, _ = record_episode(_BIPED, "walking", out / "biped_walk_walking.mp4", seed=seed,
                              env_kwargs={"target_speed": 0.7}, progress=progress)
     written.append(path)
+    return written
+
+
+def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+    """The walking reference (SSTA and RCA) on BipedObstacles, the monograph's beam and triangle courses: per course
+    an eval JSON, the swing-foot figure (figs. 5.16 / 5.19 analogue), the footholds' top view (fig. 5.17 analogue)
+    and one video at 25 fps; every episode is limited to 10 s (:data:`_OBSTACLE_DEMO_STEPS`). About 36 s on 2
+    cores (one busy), two thirds of it rendering."""
+    written = []
+    for course in ("beam", "triangle"):
+        env_kwargs = {"course": course, "max_episode_steps": _OBSTACLE_DEMO_STEPS}
+        report = evaluate(_OBSTACLES, "walking", episodes=episodes, seed=seed, env_kwargs=env_kwargs,
+                          progress=progress)
+        written.append(report.write_json(out / f"biped_obstacles_walking_{course}.json"))
+        print(f"\n== BipedObstacles-v0, walking, course={course}\n{format_report(report.to_json())}")
+        trace = record_obstacle_walk(course, seed)
+        what = "stepping over the 16.1 cm beam" if course == "beam" else "swinging around the 30 cm triangular prism"
+        written.append(plot_swing_trajectories(
+            trace, out / f"biped_obstacles_{course}_swing.png",
+            f"BipedObstacles-v0, {course} course (seed {seed}): swing feet {what}, nominal vs SSTA vs RCA "
+            "(figs. 5.16 / 5.19 analogue)"))
+        written.append(plot_footholds_top_view(
+            trace, out / f"biped_obstacles_{course}_top.png",
+            f"BipedObstacles-v0, {course} course (seed {seed}): footholds and swing paths from above "
+            "(fig. 5.17 analogue)"))
+        path, _ = record_episode(_OBSTACLES, "walking", out / f"biped_obstacles_{course}.mp4", seed=seed,
+                                 env_kwargs=env_kwargs, max_fps=_OBSTACLE_VIDEO_FPS, progress=progress)
+        written.append(path)
     return written
 
 
