@@ -4,7 +4,8 @@ Every env of ours and the peers (Gymnasium's ``Pusher-v5`` and ``Humanoid-v5``) 
 the same wrappers apply) and stepped with the zero action (for BipedWalk-v0: stand in the nominal posture) for a fixed wall time, resetting when an episode ends
 (resets count: they are part of what a training loop pays). Ratios ``<ours>_vs_<peer>`` compare rates measured
 in the same run; ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5, ``biped_vs_humanoid`` BipedWalk-v0 over
-Humanoid-v5 (per env step; ``sim_seconds_per_second`` also compares simulated time, since the two step
+Humanoid-v5 and ``biped_obstacles_vs_humanoid`` BipedObstacles-v0 (a random course per reset) over Humanoid-v5
+(per env step; ``sim_seconds_per_second`` also compares simulated time, since the two step
 different periods: 4 ms and 15 ms). Variants of our envs (by default
 AgriReach with ``prune=False``, the whole crop row in the scene and the collision model) are measured too, and
 ``agri_prune_speedup`` is the pruned rate over the unpruned one. Every wrapped id (``<Env>-<Wrapper>-v0``) is
@@ -34,7 +35,7 @@ VARIANTS = {"redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriRe
                                                            "agri_prune_speedup")}
 """label -> (env id, gym.make kwargs, name of the ratio base rate / variant rate)."""
 _SHORT = {"redundancy_gym/PlanarReach-v0": "planar", "redundancy_gym/AgriReach-v0": "agri",
-          "redundancy_gym/BipedWalk-v0": "biped",
+          "redundancy_gym/BipedWalk-v0": "biped", "redundancy_gym/BipedObstacles-v0": "biped_obstacles",
           "Pusher-v5": "pusher", "Humanoid-v5": "humanoid"}
 
 

@@ -13,6 +13,11 @@ are timed and compared: ``ik_compiled_vs_python`` is the ratio of the medians, `
 largest difference of their configurations [rad or m]. ``controller_vs_lola`` relates our controller step to
 the 548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not
 measured here).
+
+``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
+0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
+distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_cycle`` relates its median to the
+2 ms cycle in which Lola ran its whole controller with collision avoidance (a Xeon at 2.3 GHz; published).
 """
 
 from __future__ import annotations
@@ -31,11 +36,16 @@ from ..policies.walking_policy import WalkingPolicy
 from .evaluate import make_env
 from .exceptions import EvalError
 
-__all__ = ["LOLA_CYCLE_US", "format_walk_bench", "run_walk_bench"]
+__all__ = ["LOLA_CYCLE_US", "LOLA_OBSTACLE_CYCLE_US", "OBSTACLE_COURSES", "format_walk_bench", "run_walk_bench"]
 
 ENV_ID = "redundancy_gym/BipedWalk-v0"
 LOLA_CYCLE_US = 548.0
 """Lola's whole controller per cycle [us] on a 2.33 GHz Core2 Duo (the issue's reference figure)."""
+LOLA_OBSTACLE_CYCLE_US = 2000.0
+"""Lola's control cycle with obstacle avoidance [us] (monograph 5.4.2: all planning, collision avoidance,
+redundancy resolution, force and position control in one 2 ms cycle)."""
+OBSTACLE_ENV_ID = "redundancy_gym/BipedObstacles-v0"
+OBSTACLE_COURSES = ("beam", "triangle")
 
 _Call = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]
 
@@ -50,6 +60,32 @@ class _Recorder:
     def step(self, q: NDArray[np.float64], start: Any, end: Any, dt: float) -> WholeBodyIkResult:
         self.calls.append((np.array(q), np.array(start), np.array(end), float(dt)))
         return self.solver.step(q, start, end, dt)
+
+
+def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], bool, int]:
+    """One walk over an obstacle course to its end; returns the predict times [us], whether RCA evaluated
+    distances in each period, whether it succeeded, and its obstacle contacts."""
+    env = make_env(OBSTACLE_ENV_ID, {"course": course})
+    policy = WalkingPolicy(env)
+    times: list[float] = []
+    active: list[bool] = []
+    contacts, success = 0, False
+    try:
+        obs, _ = env.reset(seed=seed)
+        while True:
+            t0 = time.perf_counter()
+            action, _ = policy.predict(obs, episode_start=np.array([not times]))
+            times.append((time.perf_counter() - t0) * 1e6)
+            avoidance = policy.last_command.avoidance if policy.last_command is not None else None
+            active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
+            obs, _, terminated, truncated, info = env.step(action)
+            contacts += int(info["obstacle_contact"])
+            if terminated or truncated:
+                success = bool(info["is_success"])
+                break
+    finally:
+        env.close()
+    return times, active, success, contacts
 
 
 def _walk(speed: float, steps: int, seed: int, record: bool) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
@@ -119,6 +155,18 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
     compiled_times, compiled_q = _time_calls(compiled, calls, repeats, "compiled", progress)
     python_times, python_q = _time_calls(ik, calls, repeats, "python", progress)
     difference = max(float(np.max(np.abs(a - b))) for a, b in zip(compiled_q, python_q))
+    obstacles: dict[str, Any] = {}
+    all_times: list[float] = []
+    for course in tqdm(OBSTACLE_COURSES, desc="bench walk obstacles", disable=not progress):
+        times, active, success, contacts = _obstacle_walk(course, seed)
+        times, active = times[1:], active[1:]  # the first call plans the walk
+        near = [t for t, a in zip(times, active) if a]
+        obstacles[course] = {"step_us_median": float(np.median(times)), "step_us_p99": float(np.percentile(times, 99)),
+                             "rca_share": float(np.mean(active)),
+                             "step_us_median_rca": float(np.median(near)) if near else float("nan"),
+                             "steps": len(times), "success": success, "obstacle_contacts": contacts}
+        all_times += times
+    obstacle_median = float(np.median(all_times))
     controller = controller_times[1:]  # the first call plans the walk
     compiled_median, python_median = float(np.median(compiled_times)), float(np.median(python_times))
     controller_median = float(np.median(controller))
@@ -133,6 +181,9 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
         "ik_compiled_vs_python": compiled_median / python_median,
         "ik_max_difference": difference,
         "controller_vs_lola": controller_median / LOLA_CYCLE_US,
+        "obstacles": {"env": OBSTACLE_ENV_ID, "target_speed": 0.4, "courses": obstacles,
+                      "step_us_median": obstacle_median, "step_us_p99": float(np.percentile(all_times, 99))},
+        "obstacles_vs_lola_cycle": obstacle_median / LOLA_OBSTACLE_CYCLE_US,
         "self_collision_pairs": sum(len(o.collision_model.layout().segment_pairs) for o in ik.objectives
                                     if isinstance(o, CollisionObjective)),
     }
@@ -151,4 +202,11 @@ def format_walk_bench(report: dict[str, Any]) -> str:
         f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
         f"(largest difference {report['ik_max_difference']:.1e})",
         f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)",
+        *[f"with obstacles ({course}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us  "
+          f"RCA evaluating {100 * r['rca_share']:.0f} % of periods (median then {r['step_us_median_rca']:.1f} us)"
+          f"{'' if r['success'] else '  (course not passed)'}"
+          for course, r in report["obstacles"]["courses"].items()],
+        f"obstacles_vs_lola_cycle = {report['obstacles_vs_lola_cycle']:.3f}  (median "
+        f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
+        "collision avoidance)",
     ])

@@ -179,6 +179,8 @@ class Rca:
                     mask[nv + i] = True
             self._leg_columns.append(mask)
         self._models: tuple[CollisionObjective, CollisionObjective] | None = None
+        self._volumes: list[SSV] = []
+        self._frame: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
         self._lower = np.zeros((0, 3))
         self._upper = np.zeros((0, 3))
         self.reset()
@@ -192,8 +194,10 @@ class Rca:
         self._step: int | None = None
 
     def set_obstacles(self, volumes: Sequence[SSV]) -> None:
-        """The obstacle volumes (world frame) the swing legs keep off."""
+        """The obstacle volumes the swing legs keep off (in the frame of :meth:`set_frame`, identity at first)."""
         volumes = list(volumes)
+        self._volumes = volumes
+        self._frame = (np.eye(3), np.zeros(3))
         if not volumes:
             self._models = None
             self._lower = np.zeros((0, 3))
@@ -205,8 +209,26 @@ class Rca:
             CollisionObjective(CollisionModel(leg, environment, self_collision=False),
                                activation_distance=c.activation_distance, slope=c.slope, weight=c.weight)
             for leg in self._legs)
-        self._lower = np.array([v.points.min(axis=0) - v.radius for v in volumes])
-        self._upper = np.array([v.points.max(axis=0) + v.radius for v in volumes])
+        self._bounds()
+
+    def set_frame(self, rotation: ArrayLike, translation: ArrayLike) -> None:
+        """Place the obstacles by ``x -> R x + p`` from the coordinates they were given in (the controller's map
+        from the world into its plan's frame); the collision models move their volumes, nothing is rebuilt."""
+        rotation, translation = np.asarray(rotation, dtype=np.float64), np.asarray(translation, dtype=np.float64)
+        self._frame = (rotation, translation)
+        if self._models is None:
+            return
+        for objective in self._models:
+            for segment in objective.collision_model.environment:
+                objective.collision_model.set_environment_placement(segment.name, rotation, translation)
+        self._bounds()
+
+    def _bounds(self) -> None:
+        """The placed volumes' bounding boxes, for the gate."""
+        rotation, translation = self._frame
+        placed = [v.transformed(rotation, translation) for v in self._volumes]
+        self._lower = np.array([v.points.min(axis=0) - v.radius for v in placed])
+        self._upper = np.array([v.points.max(axis=0) + v.radius for v in placed])
 
     @property
     def state(self) -> RcaState:

@@ -278,13 +278,14 @@ class Ssta:
             classification = "beside"
         return ObstacleDecision(box, classification, (feet[0], feet[1]), (lateral[0], lateral[1]))
 
-    def line_shift(self, box: ObstacleBox) -> float | None:
+    def line_shift(self, box: ObstacleBox, side: float = 0.0) -> float | None:
         """The smallest sideways move [m] of both lanes that puts ``box`` beside them (None: beyond
-        ``max_line_shift``)."""
+        ``max_line_shift``); ``side`` > 0 asks for a move to +y, < 0 to -y (0: either)."""
         half = self.config.foot_half_width + self.config.lateral_margin
         right, left = float(self.lanes[0]), float(self.lanes[1])
         # the lanes pass on the box's -y side (the left lane's upper edge below it) or its +y side
-        candidates = [float(box.lower[1]) - (left + half), float(box.upper[1]) - (right - half)]
+        down, up = float(box.lower[1]) - (left + half), float(box.upper[1]) - (right - half)
+        candidates = [down] if side < 0.0 else [up] if side > 0.0 else [down, up]
         shift = min(candidates, key=abs)
         return shift if abs(shift) <= self.config.max_line_shift else None
 

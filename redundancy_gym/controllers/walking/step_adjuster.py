@@ -146,6 +146,10 @@ class StepAdjuster:
         k, s, remaining = pattern.swing_state(t)
         if k < 0 or remaining <= LAST_MOMENT:
             return None
+        if pattern.swing_modification(k) is not None:
+            # a swing over or around an obstacle (SSTA) keeps its path and its landing beside the obstacle: a
+            # re-timed swing would take the plain path through it
+            return None
         dcm = np.asarray(dcm, dtype=np.float64)[:2]
         if not np.all(np.isfinite(dcm)):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")

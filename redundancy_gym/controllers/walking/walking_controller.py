@@ -40,6 +40,10 @@ BACKENDS = ("compiled", "python")
 """Whole-body IK implementations of :class:`WalkingIkConfig`."""
 
 
+SSTA_REMAP = 0.01
+"""How far [m] the map from the world into the plan's frame must have moved the obstacles (at the sole's reach)
+since SSTA last planned for SSTA to plan again (at a step start)."""
+
 COMMAND_REPLAN_INTERVAL = 0.04
 """Shortest time [s] between two CoM replans for new walking commands (:meth:`WalkingController.set_command`)."""
 
@@ -183,6 +187,7 @@ class WalkingController:
         self.rca = Rca(model, self.soft_lower, self.soft_upper, rca, feet_frames=feet_frames) if self.use_rca else None
         self._obstacle_volumes: list[SSV] = []
         self._world_to_plan: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
+        self._ssta_map: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
         self._obstacle_step = -1
 
     # ------------------------------------------------------------------ start
@@ -232,6 +237,7 @@ class WalkingController:
         self.obstacle_boxes = ()
         self._obstacle_volumes = []
         self._world_to_plan = (np.eye(3), np.zeros(3))
+        self._ssta_map = (np.eye(3), np.zeros(3))
         self._obstacle_step = -1
         if self.rca is not None:
             self.rca.reset()
@@ -276,20 +282,28 @@ class WalkingController:
         if not new_volumes:
             return False
         self._obstacle_volumes += new_volumes
-        self._map_obstacles()
+        if self.rca is not None:
+            self.rca.set_obstacles(self._obstacle_volumes)
+        self._map_obstacles(force=True)
         return True
 
-    def _map_obstacles(self) -> None:
+    def _map_obstacles(self, force: bool = False) -> None:
         """Give SSTA and RCA the obstacles in the plan's frame: the world volumes moved by the rigid map that puts
         the measured stance sole on its planned pose (:meth:`_in_stance_frame`). The real robot drifts from the
         plan's world frame (its feet land relative to the real stance foot, which slips and turns a little); the
         obstacles are where they are relative to the real feet."""
         assert self.pattern is not None and self.ssta is not None
         rotation, translation = self._world_to_plan
-        mapped = [v.transformed(rotation, translation) for v in self._obstacle_volumes]
         if self.rca is not None:
-            self.rca.set_obstacles(mapped)
+            self.rca.set_frame(rotation, translation)
+        # SSTA plans again when the map moved the obstacles by more than a centimetre (or new ones came)
+        last_rotation, last_translation = self._ssta_map
+        moved = float(np.max(np.abs(translation - last_translation))) + 0.5 * float(np.max(np.abs(rotation - last_rotation)))
+        if not force and moved < SSTA_REMAP:
+            return
+        self._ssta_map = (rotation.copy(), translation.copy())
         if self.use_ssta and not self.pattern.turned:  # SSTA plans straight walks; RCA still acts on a turned one
+            mapped = [v.transformed(rotation, translation) for v in self._obstacle_volumes]
             self.obstacle_boxes = bounding_boxes(mapped)
             if self.pattern.set_obstacles(self.time, self.obstacle_boxes, self.ssta):
                 self._next = None

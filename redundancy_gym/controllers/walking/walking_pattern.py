@@ -38,6 +38,10 @@ ADJUSTED_OVER = 0.7
 """Share of the remaining single support after which an adjusted swing is above its landing (then only descends)."""
 TURN_WIDENING = 1.0
 """Outward shift of a turned foothold [m] per radian of heading change from the previous foothold, in toe lengths."""
+SIDESTEP_LEAD = 4.5
+"""A sidestep (:meth:`WalkingPattern.set_obstacles`) moves the walking line at the first foothold on its side that
+lies within this many step lengths of the box's band: two steps before the band, plus room for later footholds to
+move forward around other boxes."""
 MAX_STEP_TURN = 0.4
 """Largest heading change [rad] per step of a yaw-rate command (:meth:`WalkingPattern.set_velocity`): 0.5 rad/s at
 0.8 s steps."""
@@ -181,7 +185,8 @@ class WalkingPattern:
         self._boxes: tuple[ObstacleBox, ...] = ()
         self._modifications: dict[int, SwingModification] = {}
         self._stop: int | None = None
-        self._sidesteps: list[ObstacleBox] = []
+        # sidesteps: [box, line shift [m], foothold index moved beside it (None: not yet), index moved back]
+        self._sidesteps: list[list] = []
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -380,26 +385,52 @@ class WalkingPattern:
         decisions = [ssta.classify(b) for b in self._boxes]
         walls = [ssta.foothold_band(d.box)[0] for d in decisions if d.classification == "too_large"]
         wall = min(walls, default=np.inf)
-        # sidesteps: the walking line moves beside the box from about three steps before it to two after, the foot
-        # on the side it moves to first (the stance widens, then narrows back); planned once per box
+        # sidesteps (boxes neither foot can pass in its lane): the walking line moves beside the box, the foot on the
+        # side it moves to first (the stance widens, then narrows back); it has moved before a swing passes the box
+        # and moves back once both feet stand past it. Planned along with the footholds' moves, once per box (a box
+        # mapped again after the robot drifted a little is the same box).
         for d in decisions:
-            # a box mapped again (the robot drifted a little) is the same box: planned once
-            if d.classification != "sidestep" or any(np.max(np.abs(d.box.lower - b.lower)) < 0.2 for b in self._sidesteps):
+            if d.classification != "sidestep":
                 continue
-            shift = d.line_shift
-            lead = int(shift > 0.0)  # left footholds are odd
-            j1 = first + ((lead - first) % 2)
-            while self.foothold(j1)[0] < float(d.box.lower[0]) - 3.0 * self.step_length:
-                j1 += 2
-            j2 = j1 + 2 + ((1 - lead) - j1) % 2
-            while self.foothold(j2)[0] < float(d.box.upper[0]) + 2.0 * self.step_length:
-                j2 += 2
-            self._shifts += [(j1, np.array([0.0, shift])), (j2, np.array([0.0, -shift]))]
-            self._sidesteps.append(d.box)
+            known = next((e for e in self._sidesteps if np.max(np.abs(d.box.lower - e[0].lower)) < 0.2), None)
+            if known is None:
+                self._sidesteps.append([d.box, d.line_shift, None, None])  # box, shift, moved at, back at
+                continue
+            # the same box, mapped again after the robot drifted: the line moves by the change (to the same side
+            # of the box) from the next foothold not yet begun on the side it moves to, and back with the rest
+            shift = ssta.line_shift(d.box, side=known[1])
+            known[0] = d.box
+            if shift is None or abs(shift - known[1]) < 0.01 or (known[3] is not None and known[3] < first):
+                continue
+            correction = shift - known[1]
+            known[1] = shift
+            if known[2] is None:
+                continue
+            at = max(first, known[2])
+            at += (int(correction > 0.0) - at) % 2  # left footholds are odd: the foot on the move's side first
+            self._shifts.append((at, np.array([0.0, correction])))
+            if known[3] is not None:
+                self._shifts.append((max(known[3], at + 1), np.array([0.0, -correction])))
             changed = True
+        pending = [e for e in self._sidesteps if e[3] is None]
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
         j = first
         while self._stop is None and self.foothold(j)[0] <= reach:
+            for entry in pending:
+                box, shift, moved, back = entry
+                if back is not None:
+                    continue
+                low, high = ssta.foothold_band(box)
+                lead = int(shift > 0.0)  # left footholds are odd
+                if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low:
+                    self._shifts.append((j, np.array([0.0, shift])))
+                    entry[2] = j
+                    changed = True
+                elif moved is not None and j > moved + 1 and j % 2 != lead and \
+                        min(self.foothold(j - 1)[0], self.foothold(j - 2)[0]) >= high:
+                    self._shifts.append((j, np.array([0.0, -shift])))
+                    entry[3] = j
+                    changed = True
             h, previous = self.foothold(j), self.foothold(j - 1)
             move = ssta.foothold_shift(h, previous, self._boxes, behind=float(self.foothold(j - 2)[0]))
             if move is None or h[0] + (move or 0.0) > wall:
@@ -410,6 +441,11 @@ class WalkingPattern:
                 self._shifts.append((j, np.array([move, 0.0])))
                 changed = True
             j += 1
+        for entry in pending:
+            box, shift, moved, back = entry
+            if moved is not None and back is None and self._stop is None:  # back after the reach
+                entry[3] = j + ((1 - int(shift > 0.0)) - j) % 2
+                self._shifts.append((entry[3], np.array([0.0, -shift])))
         # the swings from the first step not yet begun: their modification and (stepping over) their timing
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}
         self._modifications = {i: v for i, v in self._modifications.items() if i <= k}

@@ -217,3 +217,26 @@ def test_bad_configs_and_boxes_raise_naming_the_value():
         ObstacleBox(np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 1.0]))
     with pytest.raises(ControllerError, match="lanes"):
         Ssta(lanes=(0.1, -0.1))
+
+
+def test_a_tall_post_overlapping_a_lane_from_outside_is_passed_by_moving_the_walking_line_beside_it():
+    # 4 cm into the left lane from outside, 35 cm tall: no step over, no inward swing: the line moves right
+    post = [LSS([2.0, 0.2, 0.0], [2.0, 0.2, 0.35], 0.04)]
+    box = bounding_boxes(post)[0]
+    pattern, ssta = pattern_with(post)
+    decision = ssta.classify(box)
+    assert decision.classification == "sidestep" and decision.line_shift < 0.0
+    low, high = ssta.foothold_band(box)
+    half = ssta.config.foot_half_width + ssta.config.lateral_margin
+    footholds = np.array([pattern.foothold(j) for j in range(0, 24)])
+    for j in range(2, 24):
+        start, end = footholds[j - 2], footholds[j]
+        if end[0] > low and start[0] < high:  # this swing passes the post: both of its footholds beside it
+            for h in (start, end):
+                assert h[1] + half <= box.lower[1] + 1e-9 or h[1] - half >= box.upper[1] - 1e-9, (j, h)
+        # the stance never narrows below the nominal width: the foot on the side of the move goes first
+        left, right = (footholds[j], footholds[j - 1]) if j % 2 else (footholds[j - 1], footholds[j])
+        assert left[1] - right[1] >= 0.18 - 1e-9, j
+    # and the line comes back after the post
+    np.testing.assert_allclose(footholds[-2:, 1], [-0.09, 0.09])
+    assert pattern.stop_index is None
