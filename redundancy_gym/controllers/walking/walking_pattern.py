@@ -389,21 +389,19 @@ class WalkingPattern:
         # side it moves to first (the stance widens, then narrows back); it has moved before a swing passes the box
         # and moves back once both feet stand past it. Planned along with the footholds' moves, once per box (a box
         # mapped again after the robot drifted a little is the same box).
-        for d in decisions:
-            if d.classification != "sidestep":
+        # boxes mapped again after the robot drifted are the same boxes (within 0.2 m): a sidestep planned for one
+        # keeps its side and moves by the change, from the next foothold not yet begun on the side it moves to,
+        # and back with the rest (whatever the box's class in the lanes' nominal place is now)
+        for known in self._sidesteps:
+            box = min(self._boxes, key=lambda b: float(np.max(np.abs(b.lower - known[0].lower))), default=None)
+            if box is None or np.max(np.abs(box.lower - known[0].lower)) >= 0.2:
                 continue
-            known = next((e for e in self._sidesteps if np.max(np.abs(d.box.lower - e[0].lower)) < 0.2), None)
-            if known is None:
-                self._sidesteps.append([d.box, d.line_shift, None, None])  # box, shift, moved at, back at
-                continue
-            # the same box, mapped again after the robot drifted: the line moves by the change (to the same side
-            # of the box) from the next foothold not yet begun on the side it moves to, and back with the rest
-            shift = ssta.line_shift(d.box, side=known[1])
-            known[0] = d.box
+            known[0] = box
+            shift = ssta.line_shift(box, side=known[1])
             if shift is None or abs(shift - known[1]) < 0.01 or (known[3] is not None and known[3] < first):
                 continue
             correction = shift - known[1]
-            known[1] = shift
+            known[1] = shift if shift != 0.0 else float(np.copysign(1e-9, known[1]))  # keeps its side
             if known[2] is None:
                 continue
             at = max(first, known[2])
@@ -412,6 +410,10 @@ class WalkingPattern:
             if known[3] is not None:
                 self._shifts.append((max(known[3], at + 1), np.array([0.0, -correction])))
             changed = True
+        for d in decisions:
+            if d.classification == "sidestep" and not any(np.max(np.abs(d.box.lower - e[0].lower)) < 0.2
+                                                           for e in self._sidesteps):
+                self._sidesteps.append([d.box, d.line_shift, None, None])  # box, shift, moved at, back at
         pending = [e for e in self._sidesteps if e[3] is None]
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
         j = first
@@ -422,7 +424,8 @@ class WalkingPattern:
                     continue
                 low, high = ssta.foothold_band(box)
                 lead = int(shift > 0.0)  # left footholds are odd
-                if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low:
+                if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low \
+                        and not self._passes_other_box(j, box, ssta):
                     self._shifts.append((j, np.array([0.0, shift])))
                     entry[2] = j
                     changed = True
@@ -466,6 +469,18 @@ class WalkingPattern:
             self._stale = True
             self._replan_from(t)
         return changed
+
+    def _passes_other_box(self, j: int, box: ObstacleBox, ssta: Ssta) -> bool:
+        """Whether the swings landing on ``h_j`` and on the other foot's next foothold (about a step later) pass a
+        box other than ``box`` along x: a sidestep moves those feet sideways, and must not move them into it."""
+        h, before, other = self.foothold(j)[0], self.foothold(j - 2)[0], self.foothold(j - 1)[0]
+        for b in self._boxes:
+            if b is box:
+                continue
+            low, high = ssta.foothold_band(b)
+            if (before < high and h > low) or (other < high and h + self.step_length > low):
+                return True
+        return False
 
     def _replan_from(self, t: float) -> None:
         """The CoM plan from ``t`` on, with the footholds as they are now."""
@@ -696,6 +711,8 @@ class WalkingPattern:
         land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)
         total = lift + cross + land
         weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
+        if modification.kind == "around":  # the sideways shift and back each take at least 30 % of the swing
+            weights[[0, 2]] = np.maximum(weights[[0, 2]], 0.3 / 0.4 * weights[1])
         t1, t2, t3 = single * weights / weights.sum()
         speed = (b1 - b0) / t2
         v1, v2 = min(speed, 2.0 * (b0 - a) / t1), min(speed, 2.0 * (e - b1) / t3)
