@@ -42,6 +42,9 @@ SIDESTEP_LEAD = 4.5
 """A sidestep (:meth:`WalkingPattern.set_obstacles`) moves the walking line at the first foothold on its side that
 lies within this many step lengths of the box's band: two steps before the band, plus room for later footholds to
 move forward around other boxes."""
+MAX_SIDESTEP_MOVE = 0.2
+"""Largest sideways move [m] of one foothold by sidesteps that start and end at the same step (a larger one ran
+the legs into each other)."""
 MAX_STEP_TURN = 0.4
 """Largest heading change [rad] per step of a yaw-rate command (:meth:`WalkingPattern.set_velocity`): 0.5 rad/s at
 0.8 s steps."""
@@ -425,7 +428,10 @@ class WalkingPattern:
                 low, high = ssta.foothold_band(box)
                 lead = int(shift > 0.0)  # left footholds are odd
                 if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low \
-                        and not self._passes_other_box(j, box, ssta):
+                        and not self._passes_other_box(j, box, shift, ssta) \
+                        and abs(shift - sum(e[1] for e in self._sidesteps if e is not entry and e[3] is not None
+                                            and j - 2 <= e[3] <= j)) <= MAX_SIDESTEP_MOVE:
+                    # (nor right after another sidestep's way back if one foot would move too far by both at once)
                     self._shifts.append((j, np.array([0.0, shift])))
                     entry[2] = j
                     changed = True
@@ -470,16 +476,21 @@ class WalkingPattern:
             self._replan_from(t)
         return changed
 
-    def _passes_other_box(self, j: int, box: ObstacleBox, ssta: Ssta) -> bool:
-        """Whether the swings landing on ``h_j`` and on the other foot's next foothold (about a step later) pass a
-        box other than ``box`` along x: a sidestep moves those feet sideways, and must not move them into it."""
-        h, before, other = self.foothold(j)[0], self.foothold(j - 2)[0], self.foothold(j - 1)[0]
+    def _passes_other_box(self, j: int, box: ObstacleBox, shift: float, ssta: Ssta) -> bool:
+        """Whether the swings landing on ``h_j`` and on the other foot's next foothold (about a step later), moved
+        sideways by ``shift`` [m], pass a box other than ``box`` that their sweep meets: a sidestep moves those
+        feet sideways, and must not move them into it."""
+        half = ssta.config.foot_half_width + ssta.config.lateral_margin
+        h, before, other = self.foothold(j), self.foothold(j - 2), self.foothold(j - 1)
+        sweeps = ((float(before[0]), float(h[0]), float(before[1]), float(h[1]) + shift),
+                  (float(other[0]), float(h[0]) + self.step_length, float(other[1]), float(other[1]) + shift))
         for b in self._boxes:
             if b is box:
                 continue
             low, high = ssta.foothold_band(b)
-            if (before < high and h > low) or (other < high and h + self.step_length > low):
-                return True
+            for x0, x1, y0, y1 in sweeps:
+                if x0 < high and x1 > low and min(y0, y1) - half < b.upper[1] and max(y0, y1) + half > b.lower[1]:
+                    return True
         return False
 
     def _replan_from(self, t: float) -> None:
