@@ -108,6 +108,8 @@ OPTION_RULES: dict[str, OptionRule] = {
     "correction_iterations": _at_least(0),
     "step_min_remaining": _above(0.0, "s"), "step_max_forward": _at_least(0.0, "m"),
     "step_max_backward": _at_least(0.0, "m"), "step_min_width": _at_least(0.0, "m"), "step_max_width": _above(0.0, "m"),
+    # obstacles (SSTA): a clearance above a box [m], a step-over single support (0: the nominal one) [s]
+    "obstacle_clearance": _at_least(0.0, "m"), "step_over_duration": _at_least(0.0, "s"),
     # choices
     "method": OptionRule(kind="str", choices=METHODS), "backend": OptionRule(kind="str", choices=BACKENDS),
     "descent": OptionRule(kind="str", choices=DESCENT_METHODS),
