@@ -101,7 +101,7 @@ class RcaConfig:
     max_offset: float = 0.15
     return_time: float = 0.15
     min_return_time: float = 0.06
-    gate: float = 0.6
+    gate: float = 0.45
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -136,6 +136,13 @@ class RcaState(NamedTuple):
     distance: float
     active: bool
     returning: bool
+
+
+_ZERO = np.zeros(3)
+_IDLE = RcaState(np.zeros(3), np.zeros(3), np.zeros(3), float("inf"), False, False)  # never written to
+_IDLE.offset.flags.writeable = False
+_IDLE.velocity.flags.writeable = False
+_IDLE.acceleration.flags.writeable = False
 
 
 class Rca:
@@ -281,6 +288,9 @@ class Rca:
             self._step = step
         if remaining <= c.return_time + 1e-12 or self._return is not None:
             return self._returning(remaining, dt)
+        if not self._w.any() and not self._v.any() and not self._near(foot):
+            self._a = _ZERO.copy()
+            return _IDLE  # nothing near and nothing to return from: the common case, without the arithmetic
         distance = float("inf")
         target = -c.attractor * self._w
         if self._near(foot):
