@@ -240,6 +240,8 @@ class Rca:
     @property
     def state(self) -> RcaState:
         """The current modification (without a distance)."""
+        if self._return is None and not self._w.any() and not self._v.any():
+            return _IDLE
         return RcaState(self._w.copy(), self._v.copy(), self._a.copy(), float("inf"), False, self._return is not None)
 
     def _near(self, foot: NDArray[np.float64]) -> bool:

@@ -472,8 +472,10 @@ class WalkingController:
         side = k % 2 if k >= 0 else 0
         position, velocity = slice(6 + 3 * side, 9 + 3 * side), slice(30 + 6 * side, 33 + 6 * side)
         after = self.rca.update(self.q_ref, side, k, remaining, self.dt, end_ref[position], self.pattern.ground)
-        start_ref[position] += before.offset
-        start_ref[velocity] += before.velocity
-        end_ref[position] += after.offset
-        end_ref[velocity] += after.velocity
+        if before.offset.any() or before.velocity.any():  # most periods: no modification to add
+            start_ref[position] += before.offset
+            start_ref[velocity] += before.velocity
+        if after.offset.any() or after.velocity.any():
+            end_ref[position] += after.offset
+            end_ref[velocity] += after.velocity
         return after
