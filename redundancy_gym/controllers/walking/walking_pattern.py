@@ -430,7 +430,7 @@ class WalkingPattern:
                 if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low \
                         and not self._passes_other_box(j, box, shift, ssta) \
                         and abs(shift - sum(e[1] for e in self._sidesteps if e is not entry and e[3] is not None
-                                            and j - 2 <= e[3] <= j)) <= MAX_SIDESTEP_MOVE:
+                                            and j - 1 <= e[3] <= j)) <= MAX_SIDESTEP_MOVE:
                     # (nor right after another sidestep's way back if one foot would move too far by both at once)
                     self._shifts.append((j, np.array([0.0, shift])))
                     entry[2] = j
