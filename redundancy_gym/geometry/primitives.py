@@ -48,6 +48,19 @@ class SSV:
     radius: float
     vertices: NDArray[np.float64]
 
+    @staticmethod
+    def from_kind(kind: int, vertices: ArrayLike, radius: float) -> SSV:
+        """The volume of kind ``kind`` (0 PSS, 1 LSS, 2 TSS) on the first 1, 2 or 3 rows of ``vertices`` [m] (the
+        packed form of observations and :class:`PackedVolumes`: unused rows are ignored)."""
+        v = np.asarray(vertices, dtype=np.float64)
+        if kind == 0:
+            return PSS(v[0], radius)
+        if kind == 1:
+            return LSS(v[0], v[1], radius)
+        if kind == 2:
+            return TSS(v[0], v[1], v[2], radius)
+        raise GeometryError(f"kind must be 0 (PSS), 1 (LSS) or 2 (TSS), got {kind!r}")
+
     @property
     def kind_name(self) -> str:
         """``"PSS"``, ``"LSS"`` or ``"TSS"``."""

@@ -20,7 +20,7 @@ from ..controllers.collision_objective import CollisionObjective
 from ..controllers.compiled_clik import CompiledClik
 from ..controllers.frame_axis_task import FrameAxisTask
 from ..controllers.joint_limit_objective import JointLimitObjective
-from ..geometry import LSS, PSS, SSV, TSS, Segment
+from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf
 from .exceptions import PolicyError
@@ -86,9 +86,7 @@ def obstacle_volumes(block: NDArray[np.float64]) -> list[tuple[SSV, bool]]:
             continue
         v = row[5:14].reshape(3, 3)
         r = float(row[14])
-        kind = int(np.argmax(row[1:4]))
-        volume: SSV = PSS(v[0], r) if kind == 0 else (LSS(v[0], v[1], r) if kind == 1 else TSS(v[0], v[1], v[2], r))
-        out.append((volume, bool(row[4] > 0.5)))
+        out.append((SSV.from_kind(int(np.argmax(row[1:4])), v, r), bool(row[4] > 0.5)))
     return out
 
 

@@ -18,7 +18,7 @@ from ..controllers.walking import (
     WalkingController,
     WalkingIkConfig,
 )
-from ..geometry import LSS, PSS, SSV, TSS
+from ..geometry import SSV
 from ..model import RobotModel
 from .exceptions import PolicyError
 from .options import config_from_options, env_with_attributes
@@ -37,14 +37,7 @@ def obstacle_volumes(rows: NDArray[np.float64]) -> list[SSV]:
     for row in rows:
         if row[0] < 0.5:
             continue
-        kind = int(np.argmax(row[1:4]))
-        v, radius = row[4:13].reshape(3, 3), float(row[13])
-        if kind == 0:
-            volumes.append(PSS(v[0], radius))
-        elif kind == 1:
-            volumes.append(LSS(v[0], v[1], radius))
-        else:
-            volumes.append(TSS(v[0], v[1], v[2], radius))
+        volumes.append(SSV.from_kind(int(np.argmax(row[1:4])), row[4:13].reshape(3, 3), float(row[13])))
     return volumes
 
 

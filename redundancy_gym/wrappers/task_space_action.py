@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..controllers import ClikResult
-from ..geometry import LSS, PSS, SSV, TSS, Segment
+from ..geometry import SSV, Segment
 from ..policies import PolicyError, make_policy
 from ..validation import check_real
 from .action_check import check_action, check_policy_kwargs, normalized_box
@@ -112,8 +112,7 @@ def _scene_obstacles(base: Any) -> list[Segment] | None:
     for k in np.flatnonzero(np.asarray(row.hard)):
         if k == target:
             continue
-        v, r, kind = row.vertices[k], float(row.radius[k]), int(row.kind[k])
-        volume: SSV = PSS(v[0], r) if kind == 0 else (LSS(v[0], v[1], r) if kind == 1 else TSS(v[0], v[1], v[2], r))
+        volume = SSV.from_kind(int(row.kind[k]), row.vertices[k], float(row.radius[k]))
         segments.append(Segment(f"part_{k}", (volume,)))
     return segments
 

@@ -29,6 +29,7 @@ from ...geometry import SSV, CollisionModel, Segment
 from ...model import RobotModel, collision_geometry_from_mjcf
 from ..actuated_objective import ActuatedObjective
 from ..collision_objective import CollisionObjective
+from ...validation import check_real
 from ..exceptions import ControllerError
 from ..joint_limit_objective import JointLimitObjective
 
@@ -104,15 +105,9 @@ class RcaConfig:
     gate: float = 0.45
 
     def __post_init__(self) -> None:
+        positive = ("activation_distance", "slope", "filter_time", "max_speed", "min_return_time")
         for f in fields(self):
-            value = getattr(self, f.name)
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-                raise ControllerError(f"{f.name} must be a real number, got {value!r}")
-            if not np.isfinite(value) or value < 0.0:
-                raise ControllerError(f"{f.name} must be finite and >= 0, got {value!r}")
-        for name in ("activation_distance", "slope", "filter_time", "max_speed", "min_return_time"):
-            if getattr(self, name) <= 0.0:
-                raise ControllerError(f"{name} must be > 0, got {getattr(self, name)!r}")
+            check_real(f.name, getattr(self, f.name), low=0.0, low_open=f.name in positive, error=ControllerError)
         if self.min_return_time > self.return_time:
             raise ControllerError("min_return_time must not exceed return_time")
 

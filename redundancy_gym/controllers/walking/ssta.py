@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV
+from ...validation import check_real
 from ..exceptions import ControllerError
 
 __all__ = ["OBSTACLE_CLASSES", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig", "SwingModification",
@@ -158,23 +159,17 @@ class SstaConfig:
     step_over_single: float | None = None
 
     def __post_init__(self) -> None:
+        positive = ("max_step_over_height", "max_step_length", "toe_length", "heel_length", "foot_half_width")
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name == "step_over_single" and value is None:
-                continue
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-                raise ControllerError(f"{f.name} must be a real number, got {value!r}")
-            if not np.isfinite(value):
-                raise ControllerError(f"{f.name} must be finite, got {value!r}")
-            if f.name != "min_step_length" and value < 0.0:
-                raise ControllerError(f"{f.name} must be >= 0, got {value!r}")
-        for name in ("max_step_over_height", "max_step_length", "toe_length", "heel_length", "foot_half_width"):
-            if getattr(self, name) <= 0.0:
-                raise ControllerError(f"{name} must be > 0, got {getattr(self, name)!r}")
+            if f.name == "step_over_single":
+                check_real(f.name, value, low=0.0, low_open=True, optional=True, unit="s", error=ControllerError)
+            elif f.name == "min_step_length":  # may be negative: a step back
+                check_real(f.name, value, unit="m", error=ControllerError)
+            else:
+                check_real(f.name, value, low=0.0, low_open=f.name in positive, error=ControllerError)
         if self.min_step_length >= self.max_step_length:
             raise ControllerError("min_step_length must be below max_step_length")
-        if self.step_over_single is not None and self.step_over_single <= 0.0:
-            raise ControllerError(f"step_over_single must be > 0 or None, got {self.step_over_single!r}")
 
 
 class SwingModification(NamedTuple):
@@ -275,20 +270,12 @@ class Ssta:
         """The class of ``box`` for feet walking in :attr:`lanes`."""
         # a short shift, a raise, or else the walking line moved beside the box; a long shift only where that is
         # not possible (the swing foot follows a quick sideways shift by about half: it is the last resort)
-        feet, lateral = [], []
-        for side in (0, 1):
-            decision, shift = self.foot_decision(box, float(self.lanes[side]), side, self.config.quick_shift)
-            feet.append(decision)
-            lateral.append(shift)
+        feet, lateral = self._feet(box, self.config.quick_shift)
         if "blocked" in feet:
             shift = self.line_shift(box)
             if shift is not None:
                 return ObstacleDecision(box, "sidestep", ("beside", "beside"), (0.0, 0.0), shift)
-            feet, lateral = [], []
-            for side in (0, 1):
-                decision, shift = self.foot_decision(box, float(self.lanes[side]), side)
-                feet.append(decision)
-                lateral.append(shift)
+            feet, lateral = self._feet(box, None)
         if "blocked" in feet:
             classification = "too_large"
         elif "over" in feet:
@@ -297,7 +284,13 @@ class Ssta:
             classification = "swing_around"
         else:
             classification = "beside"
-        return ObstacleDecision(box, classification, (feet[0], feet[1]), (lateral[0], lateral[1]))
+        return ObstacleDecision(box, classification, feet, lateral)
+
+    def _feet(self, box: ObstacleBox, outward: float | None) -> tuple[tuple[str, str], tuple[float, float]]:
+        """Both feet's :meth:`foot_decision` in their lanes: (decisions, shifts), right then left."""
+        right = self.foot_decision(box, float(self.lanes[0]), 0, outward)
+        left = self.foot_decision(box, float(self.lanes[1]), 1, outward)
+        return (right[0], left[0]), (right[1], left[1])
 
     def line_shift(self, box: ObstacleBox, side: float = 0.0) -> float | None:
         """The smallest sideways move [m] of both lanes that puts ``box`` beside them (None: beyond
@@ -336,11 +329,9 @@ class Ssta:
         h = np.asarray(foothold, dtype=np.float64)
         p = np.asarray(previous, dtype=np.float64)
         c = self.config
-        hits = [self.foothold_band(b) for b in boxes if self.in_lane(b, float(h[1]))
-                and self.foothold_band(b)[0] < h[0] < self.foothold_band(b)[1]]
-        if not hits:
-            return 0.0
         bands = [self.foothold_band(b) for b in boxes if self.in_lane(b, float(h[1]))]
+        if not any(low < h[0] < high for low, high in bands):
+            return 0.0
         candidates = sorted({band[0] - h[0] for band in bands} | {band[1] - h[0] for band in bands}, key=abs)
         for move in candidates:
             x = h[0] + move

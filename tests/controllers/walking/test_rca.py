@@ -48,6 +48,15 @@ def post_in_front_of_the_right_shin(model: RobotModel, q: np.ndarray, gap: float
     return LSS([x, mid[1] - 0.1, mid[2]], [x, mid[1] + 0.1, mid[2]], 0.02)
 
 
+def rca_at_the_bar(model: RobotModel, gap: float) -> tuple[np.ndarray, Rca, np.ndarray]:
+    """The lifted right leg, an RCA with the bar ``gap`` [m] in front of its shin, and its sole position [m]."""
+    q = lifted_right_leg(model)
+    rca = make_rca(model)
+    rca.set_obstacles([post_in_front_of_the_right_shin(model, q, gap=gap)])
+    model.update(q)
+    return q, rca, model.frame_position("r_sole")
+
+
 def test_the_modification_is_the_steepest_descent_of_the_potential_through_the_least_squares_map(model):
     """(5.80): ``wdot = -[(J_F)^#]^T dH/dq^T``; each component is minus the derivative of ``H`` along the joint
     motion ``J_F^# e_i`` that moves the swing foot along axis ``i`` (finite differences of the potential)."""
@@ -76,11 +85,7 @@ def test_the_modification_is_the_steepest_descent_of_the_potential_through_the_l
 
 
 def test_the_swing_leg_is_pushed_off_the_obstacle_and_the_attractor_pulls_back_to_the_nominal(model):
-    q = lifted_right_leg(model)
-    rca = make_rca(model)
-    rca.set_obstacles([post_in_front_of_the_right_shin(model, q, gap=0.01)])
-    model.update(q)
-    foot = model.frame_position("r_sole")
+    q, rca, foot = rca_at_the_bar(model, gap=0.01)
     offsets = [rca.update(q, 0, 3, 0.6 - i * DT, DT, foot, 0.0).offset for i in range(50)]
     assert offsets[-1][0] < -0.01  # pushed backwards while the obstacle is near
     # obstacles gone: the attractor (5.82) alone pulls the modification back, without overshoot
@@ -91,11 +96,7 @@ def test_the_swing_leg_is_pushed_off_the_obstacle_and_the_attractor_pulls_back_t
 
 
 def test_the_return_before_touchdown_is_c2_overshoot_free_and_ends_exactly_on_the_nominal(model):
-    q = lifted_right_leg(model)
-    rca = make_rca(model)
-    rca.set_obstacles([post_in_front_of_the_right_shin(model, q, gap=0.0)])
-    model.update(q)
-    foot = model.frame_position("r_sole")
+    q, rca, foot = rca_at_the_bar(model, gap=0.0)
     single = 0.64
     states = []
     for i in range(int(round(single / DT)) + 1):
