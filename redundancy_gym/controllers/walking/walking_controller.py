@@ -184,7 +184,8 @@ class WalkingController:
         self.ssta: Ssta | None = None
         self.obstacle_boxes: tuple[ObstacleBox, ...] = ()
         self.use_ssta, self.use_rca = bool(use_ssta), bool(use_rca)
-        self.rca = Rca(model, self.soft_lower, self.soft_upper, rca, feet_frames=feet_frames) if self.use_rca else None
+        self._rca_config = rca
+        self.rca: Rca | None = None  # built with the first obstacles: a walk on flat ground never needs its models
         self._obstacle_volumes: list[SSV] = []
         self._world_to_plan: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
         self._ssta_map: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
@@ -282,6 +283,8 @@ class WalkingController:
         if not new_volumes:
             return False
         self._obstacle_volumes += new_volumes
+        if self.use_rca and self.rca is None:
+            self.rca = Rca(self.model, self.soft_lower, self.soft_upper, self._rca_config, feet_frames=self.feet_frames)
         if self.rca is not None:
             self.rca.set_obstacles(self._obstacle_volumes)
         self._map_obstacles(force=True)
