@@ -6,7 +6,17 @@ from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
 from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
-from .ssta import OBSTACLE_CLASSES, ObstacleBox, ObstacleDecision, Ssta, SstaConfig, SwingModification, bounding_boxes
+from .ssta import (
+    BLOCKED_COST,
+    OBSTACLE_CLASSES,
+    LinePlan,
+    ObstacleBox,
+    ObstacleDecision,
+    Ssta,
+    SstaConfig,
+    SwingModification,
+    bounding_boxes,
+)
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
@@ -16,6 +26,7 @@ from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 __all__ = [
     "BACKENDS",
+    "BLOCKED_COST",
     "CompiledWholeBodyIk",
     "GRAVITY",
     "LEG_SEGMENTS",
@@ -27,6 +38,7 @@ __all__ = [
     "DcmPlan",
     "DcmPlanner",
     "GaitConfig",
+    "LinePlan",
     "ObstacleBox",
     "ObstacleDecision",
     "PatternSample",

@@ -11,6 +11,10 @@ volumes) is classified against the two feet's lanes (the strips the soles sweep 
    beside it (``"sidestep"``, within ``max_line_shift``) or, failing that, too large (``"too_large"``): the walk
    stops in front of it.
 
+The walking line's sideways offsets are planned for all boxes at once (:meth:`Ssta.plan_line`, dynamic
+programming over the footholds), so that neighbouring boxes that want the line on opposite sides, or a box
+beside the path, are passed together.
+
 Footholds keep a margin to every box their sole would overlap: a foothold that falls into a box's band moves
 to just in front of or just behind it, whichever changes the step length less and keeps it feasible; the later
 footholds move with it, so every other step keeps its length.
@@ -18,8 +22,9 @@ footholds move with it, so every other step keeps its length.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -29,8 +34,12 @@ from ...geometry import SSV
 from ...validation import check_real
 from ..exceptions import ControllerError
 
-__all__ = ["OBSTACLE_CLASSES", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig", "SwingModification",
-           "bounding_boxes"]
+__all__ = ["OBSTACLE_CLASSES", "LinePlan", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig",
+           "SwingModification", "bounding_boxes"]
+
+BLOCKED_COST = 1e6
+"""The cost of a swing through a box it can neither step over nor swing around (:meth:`Ssta.plan_line`): finite,
+so a plan always comes back and says where it is blocked."""
 
 OBSTACLE_CLASSES = ("beside", "sidestep", "step_over", "swing_around", "too_large")
 """The classes of :meth:`Ssta.classify`: the monograph's (a foot next to it: ``"beside"``, or ``"sidestep"`` where
@@ -138,6 +147,21 @@ class SstaConfig:
             more than this.
         step_over_single: single-support duration [s] of a step over a box (None: the nominal one); a slower swing
             lifts the foot to the box's height with smaller accelerations (Lola stepped over with 1 s steps).
+        max_line_move: largest sideways move [m] of one foot's foothold by the walking line's offset in one step
+            (:meth:`Ssta.plan_line`; a larger one ran the legs into each other).
+        max_widening: largest widening [m] of the stance by the line's offsets (the foot on the side of a move goes
+            first; the stance never narrows).
+        line_offset_cost: cost per metre of line offset per foothold (the line comes back when nothing holds it).
+        line_move_cost: cost per metre a foot moves sideways in a step (a few large moves rather than many).
+        long_shift_cost: cost added to a swing shifted sideways by more than ``quick_shift``.
+        move_clearance: distance [m] along x kept between the sole of a swing that moves sideways (along the
+            straight line between its footholds) and every box it does not pass beside.
+        straddle_height: the highest box [m] passed between the legs (a swing shifted outwards around it) at the
+            cost of the shift alone: the legs slant inwards from the feet to the hips, and above it the knee passes
+            over the box's top (the triangle, 0.3 m, is passed so; posts of 0.38 m touched a knee). Higher boxes
+            add ``long_shift_cost``.
+        line_tolerance: how much [m] less than ``lateral_margin`` a sideways-moving swing may keep to a box (the
+            boxes move by a few millimetres each time the robot's drift maps them again).
     """
 
     foothold_margin: float = 0.07
@@ -157,6 +181,14 @@ class SstaConfig:
     max_step_length: float = 0.6
     min_step_length: float = 0.0
     step_over_single: float | None = None
+    max_line_move: float = 0.3
+    max_widening: float = 0.3
+    line_offset_cost: float = 0.05
+    line_move_cost: float = 1.0
+    long_shift_cost: float = 3.0
+    move_clearance: float = 0.15
+    line_tolerance: float = 0.01
+    straddle_height: float = 0.3
 
     def __post_init__(self) -> None:
         positive = ("max_step_over_height", "max_step_length", "toe_length", "heel_length", "foot_half_width")
@@ -187,6 +219,21 @@ class SwingModification(NamedTuple):
     height: float
     lateral: float
     band: tuple[float, float]
+
+
+class LinePlan(NamedTuple):
+    """The walking line's sideways offsets of :meth:`Ssta.plan_line`.
+
+    Attributes:
+        offsets: per foothold from the first one planned, the offset [m] added to its y.
+        cost: the plan's cost (:class:`SstaConfig`'s line, shift and raise costs); at least
+            :data:`BLOCKED_COST` when some swing is blocked.
+        blocked: index (into ``offsets``) of the first foothold whose swing is blocked (None: none is).
+    """
+
+    offsets: NDArray[np.float64]
+    cost: float
+    blocked: int | None
 
 
 class ObstacleDecision(NamedTuple):
@@ -380,3 +427,137 @@ class Ssta:
         if kind == "over":
             lateral = 0.0
         return SwingModification(kind, float(height), float(lateral), (float(band[0]), float(band[1])))
+
+    # ------------------------------------------------------------------ the walking line
+    def swing_cost(self, box: ObstacleBox, y0: float, y1: float, side: int) -> float:
+        """The cost of a swing of foot ``side`` (0 right, 1 left) from sole y ``y0`` to ``y1`` [m] past ``box``
+        (whose band along x it crosses): 0 beside it; a raise above the step height [m] over it; ``lateral_cost``
+        times a sideways shift around it (plus ``long_shift_cost`` beyond ``quick_shift``);
+        :data:`BLOCKED_COST` when none of these passes, or when the swing moves sideways and its sweep meets the
+        box."""
+        c = self.config
+        if abs(y1 - y0) > 1e-3:
+            half = c.foot_half_width + c.lateral_margin
+            meets = min(y0, y1) - half < box.upper[1] and max(y0, y1) + half > box.lower[1]
+            return BLOCKED_COST if meets else 0.0
+        y = 0.5 * (y0 + y1)
+        decision, shift = self.foot_decision(box, y, side, c.quick_shift)
+        extra = 0.0
+        if decision == "blocked":
+            decision, shift = self.foot_decision(box, y, side)
+            extra = c.long_shift_cost
+        if decision == "blocked":
+            return BLOCKED_COST
+        if decision == "beside":
+            return 0.0
+        if decision == "over":
+            return max(box.height + c.clearance - c.step_height, 0.0)
+        if box.height > c.straddle_height and (shift > 0.0) == (side == 1):
+            extra += c.long_shift_cost  # shifted outwards, the box stays between the legs: the knee passes over it
+        return extra + c.lateral_cost * abs(shift)
+
+    def plan_line(self, footholds: ArrayLike, first_side: int, fixed: tuple[float, float],
+                  boxes: Sequence[ObstacleBox], free_end: bool = False) -> LinePlan:
+        """Sideways offsets of the walking line per foothold that pass ``boxes`` at least cost (dynamic
+        programming over the footholds, each offset from the box sides' :meth:`line_shift` and 0).
+
+        A foothold's offset moves it sideways; a swing from the same foot's previous foothold costs
+        :meth:`swing_cost` for every box its sole passes along x (a swing that moves sideways, for every box within
+        ``move_clearance`` of it). Constraints: a foot moves by at most ``max_line_move`` per step; the stance (the
+        left offset minus the right one of consecutive footholds) widens by 0 to ``max_widening``.
+
+        Args:
+            footholds: ``(n, 2)`` footholds [m] (x, y) before the offsets; the first two are fixed (their swings
+                began) and keep the offsets ``fixed``.
+            first_side: the side (0 right, 1 left) of ``footholds[0]``; they alternate.
+            fixed: the offsets [m] of the first two footholds.
+            boxes: the obstacle boxes.
+            free_end: whether the line may end offset (else the last two footholds come back to offset 0).
+
+        Returns:
+            the offsets of ``footholds[2:]``, the plan's cost and the first blocked foothold.
+        """
+        h = np.asarray(footholds, dtype=np.float64)
+        if h.ndim != 2 or h.shape[0] < 2 or h.shape[1] < 2:
+            raise ControllerError(f"footholds must be (n >= 2, 2), got shape {h.shape}")
+        # the footholds whose swings began were planned around the boxes where they were mapped then: when the
+        # robot's drift moved them by more than the tolerance, plan with less margin rather than stop
+        margin = self.config.lateral_margin
+        plan = LinePlan(np.zeros(0), 0.0, None)
+        for tolerance in (self.config.line_tolerance, 2.0 * self.config.line_tolerance, margin):
+            plan = self._plan_line(h, first_side, fixed, boxes, free_end, min(tolerance, margin))
+            if plan.blocked is None:
+                break
+        return plan
+
+    def _plan_line(self, h: NDArray[np.float64], first_side: int, fixed: tuple[float, float],
+                   boxes: Sequence[ObstacleBox], free_end: bool, tolerance: float) -> LinePlan:
+        """:meth:`plan_line` with the margin to the boxes less ``tolerance`` [m]."""
+        c = self.config
+        values = {0.0, round(float(fixed[0]), 6), round(float(fixed[1]), 6)}
+        for box in boxes:
+            for side in (-1.0, 1.0):
+                shift = self.line_shift(box, side)
+                if shift is not None:  # rounded away from the box to 5 mm: the same values when it is mapped again
+                    values.add(round(float(np.sign(shift)) * math.ceil(abs(shift) / 0.005 - 1e-6) * 0.005, 6))
+        offsets = np.array(sorted(values))
+        n = len(offsets)
+        a_index, b_index = int(np.argmin(np.abs(offsets - fixed[0]))), int(np.argmin(np.abs(offsets - fixed[1])))
+        value = np.full((n, n), np.inf)
+        value[a_index, b_index] = 0.0
+        move = np.abs(offsets[None, :] - offsets[:, None])  # [a, c]: the foot's move from o_a to o_c
+        step = c.line_move_cost * move + c.line_offset_cost * np.abs(offsets)[None, :]
+        step[move > c.max_line_move + 1e-9] = np.inf
+        # a moving swing's sweep is checked with the margin less the tolerance: the boxes move by a few millimetres
+        # each time the robot's drift maps them again, and the offsets planned before must stay feasible
+        half = c.foot_half_width + c.lateral_margin - tolerance
+        tolerant = Ssta(replace(c, lateral_margin=c.lateral_margin - tolerance), self.lanes)
+        reaches = [(float(b.lower[0]) - c.toe_length - c.clearance, float(b.upper[0]) + c.heel_length + c.clearance)
+                   for b in boxes]
+        if h.shape[0] == 2:
+            return LinePlan(np.zeros(0), 0.0, None)
+        parents: list[NDArray[np.intp]] = []
+        swings: list[NDArray[np.float64]] = []
+        for m in range(2, h.shape[0]):
+            side = (first_side + m) % 2
+            x0, x1 = float(h[m - 2, 0]), float(h[m, 0])
+            y0, y1 = float(h[m - 2, 1]), float(h[m, 1])
+            swing = np.zeros((n, n))
+            ya, yc = y0 + offsets[:, None], y1 + offsets[None, :]
+            moving = np.abs(yc - ya) > 1e-3
+            for box, (low, high) in zip(boxes, reaches, strict=True):
+                u0, u1 = max(min(x0, x1), low - c.move_clearance), min(max(x0, x1), high + c.move_clearance)
+                if u0 >= u1:
+                    continue
+                # the sole moves along the straight line between the footholds: its y where it is near the box
+                f0, f1 = ((u0 - x0) / (x1 - x0), (u1 - x0) / (x1 - x0)) if x1 != x0 else (0.0, 1.0)
+                y_u0, y_u1 = ya + (yc - ya) * f0, ya + (yc - ya) * f1
+                sweep = (np.minimum(y_u0, y_u1) - half < box.upper[1]) & (np.maximum(y_u0, y_u1) + half > box.lower[1])
+                passes = high > min(x0, x1) and low < max(x0, x1)
+                # a moving swing may step over a box low enough (its path is raised above it wherever it moves)
+                over = passes and self._can_step_over(box)
+                swing[moving & sweep] += max(box.height + c.clearance - c.step_height, 0.0) if over else BLOCKED_COST
+                if passes:  # its sole passes the box along x: over, around or beside
+                    for i, k in zip(*np.nonzero(~moving), strict=True):
+                        swing[i, k] += tolerant.swing_cost(box, float(ya[i, 0]), float(yc[0, k]), side)
+            # the stance from o_b (foothold m-1, the other foot) to o_c: never narrower, widened at most so much
+            widening = (offsets[:, None] - offsets[None, :]) if side == 0 else (offsets[None, :] - offsets[:, None])
+            width = np.where((widening >= -1e-9) & (widening <= c.max_widening + 1e-9), 0.0, np.inf)  # [b, c]
+            total = value[:, :, None] + (step + swing)[:, None, :] + width[None, :, :]  # [a, b, c]
+            parent = np.argmin(total, axis=0)
+            value = np.take_along_axis(total, parent[None], axis=0)[0]
+            parents.append(parent)
+            swings.append(swing)
+        zero = int(np.argmin(np.abs(offsets)))
+        if free_end or not np.isfinite(value[zero, zero]):
+            b, cc = np.unravel_index(int(np.argmin(value)), value.shape)
+        else:
+            b, cc = zero, zero
+        cost = float(value[b, cc])
+        chosen = [int(cc), int(b)]
+        for parent in reversed(parents[1:]):
+            chosen.append(int(parent[chosen[-1], chosen[-2]]))
+        chosen = chosen[::-1]  # offsets of footholds 1 .. n-1 (index into offsets)
+        path = [a_index, *chosen]
+        blocked = next((m for m in range(len(swings)) if swings[m][path[m], path[m + 2]] >= BLOCKED_COST), None)
+        return LinePlan(offsets[path[2:]], cost, blocked)

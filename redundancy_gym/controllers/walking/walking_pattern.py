@@ -38,13 +38,6 @@ ADJUSTED_OVER = 0.7
 """Share of the remaining single support after which an adjusted swing is above its landing (then only descends)."""
 TURN_WIDENING = 1.0
 """Outward shift of a turned foothold [m] per radian of heading change from the previous foothold, in toe lengths."""
-SIDESTEP_LEAD = 4.5
-"""A sidestep (:meth:`WalkingPattern.set_obstacles`) moves the walking line at the first foothold on its side that
-lies within this many step lengths of the box's band: two steps before the band, plus room for later footholds to
-move forward around other boxes."""
-MAX_SIDESTEP_MOVE = 0.2
-"""Largest sideways move [m] of one foothold by sidesteps that start and end at the same step (a larger one ran
-the legs into each other)."""
 MAX_STEP_TURN = 0.4
 """Largest heading change [rad] per step of a yaw-rate command (:meth:`WalkingPattern.set_velocity`): 0.5 rad/s at
 0.8 s steps."""
@@ -188,8 +181,8 @@ class WalkingPattern:
         self._boxes: tuple[ObstacleBox, ...] = ()
         self._modifications: dict[int, SwingModification] = {}
         self._stop: int | None = None
-        # sidesteps: [box, line shift [m], foothold index moved beside it (None: not yet), index moved back]
-        self._sidesteps: list[list] = []
+        # the walking line's sideways offsets [m] per foothold (sidesteps, :meth:`set_obstacles`)
+        self._line: dict[int, float] = {}
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -230,6 +223,7 @@ class WalkingPattern:
             for first, shift in self._shifts:
                 if j >= first:
                     h[:2] += shift
+            h[1] += self._line.get(j, 0.0)
             return h
         y = self._center[1] + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
         h = np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
@@ -239,6 +233,7 @@ class WalkingPattern:
         for first, delta in self._velocity_changes.items():
             if j >= first:
                 h[:2] += (j - first + 1) * delta
+        h[1] += self._line.get(j, 0.0)
         return h
 
     def heading(self, j: int) -> float:
@@ -361,9 +356,10 @@ class WalkingPattern:
 
     def set_obstacles(self, t: float, boxes: tuple[ObstacleBox, ...], ssta: Ssta) -> bool:
         """Plan the footholds and swings not yet begun at ``t`` [s] around obstacle ``boxes`` with ``ssta``
-        (monograph 5.4.2): a foothold whose sole would overlap a box moves along the walking direction to just
-        in front of or behind it (the later footholds with it); a swing that passes a box in its lane steps over
-        it or around it (:meth:`Ssta.swing`); a box too large to pass stops the walk in front of it. The CoM plan
+        (monograph 5.4.2): the walking line moves sideways where boxes are passed best beside the feet
+        (:meth:`Ssta.plan_line`); a foothold whose sole would overlap a box moves along the walking direction to
+        just in front of or behind it (the later footholds with it); a swing that passes a box in its lane steps
+        over it or around it (:meth:`Ssta.swing`); a box too large to pass stops the walk in front of it. The CoM plan
         is replanned from ``t`` when a foothold moved. Planning is for walking straight along +x.
 
         The landing of the swing under way at ``t`` (and during the standing start, the first landing) is kept:
@@ -388,73 +384,29 @@ class WalkingPattern:
         decisions = [ssta.classify(b) for b in self._boxes]
         walls = [ssta.foothold_band(d.box)[0] for d in decisions if d.classification == "too_large"]
         wall = min(walls, default=np.inf)
-        # sidesteps (boxes neither foot can pass in its lane): the walking line moves beside the box, the foot on the
-        # side it moves to first (the stance widens, then narrows back); it has moved before a swing passes the box
-        # and moves back once both feet stand past it. Planned along with the footholds' moves, once per box (a box
-        # mapped again after the robot drifted a little is the same box).
-        # boxes mapped again after the robot drifted are the same boxes (within 0.2 m): a sidestep planned for one
-        # keeps its side and moves by the change, from the next foothold not yet begun on the side it moves to,
-        # and back with the rest (whatever the box's class in the lanes' nominal place is now)
-        for known in self._sidesteps:
-            box = min(self._boxes, key=lambda b: float(np.max(np.abs(b.lower - known[0].lower))), default=None)
-            if box is None or np.max(np.abs(box.lower - known[0].lower)) >= 0.2:
-                continue
-            known[0] = box
-            shift = ssta.line_shift(box, side=known[1])
-            if shift is None or abs(shift - known[1]) < 0.01 or (known[3] is not None and known[3] < first):
-                continue
-            correction = shift - known[1]
-            known[1] = shift if shift != 0.0 else float(np.copysign(1e-9, known[1]))  # keeps its side
-            if known[2] is None:
-                continue
-            at = max(first, known[2])
-            at += (int(correction > 0.0) - at) % 2  # left footholds are odd: the foot on the move's side first
-            self._shifts.append((at, np.array([0.0, correction])))
-            if known[3] is not None:
-                self._shifts.append((max(known[3], at + 1), np.array([0.0, -correction])))
-            changed = True
-        for d in decisions:
-            if d.classification == "sidestep" and not any(np.max(np.abs(d.box.lower - e[0].lower)) < 0.2
-                                                           for e in self._sidesteps):
-                self._sidesteps.append([d.box, d.line_shift, None, None])  # box, shift, moved at, back at
-        pending = [e for e in self._sidesteps if e[3] is None]
+        passable = tuple(b for b in self._boxes if float(b.lower[0]) < wall)
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
-        j = first
-        while self._stop is None and self.foothold(j)[0] <= reach:
-            for entry in pending:
-                box, shift, moved, back = entry
-                if back is not None:
-                    continue
-                low, high = ssta.foothold_band(box)
-                lead = int(shift > 0.0)  # left footholds are odd
-                if moved is None and j % 2 == lead and self.foothold(j)[0] + SIDESTEP_LEAD * self.step_length >= low \
-                        and not self._passes_other_box(j, box, shift, ssta) \
-                        and abs(shift - sum(e[1] for e in self._sidesteps if e is not entry and e[3] is not None
-                                            and j - 1 <= e[3] <= j)) <= MAX_SIDESTEP_MOVE:
-                    # (nor right after another sidestep's way back if one foot would move too far by both at once)
-                    self._shifts.append((j, np.array([0.0, shift])))
-                    entry[2] = j
+        # the line's offsets decide which lanes meet a box, the footholds' moves where the swings pass it: the
+        # line is planned once more after footholds moved
+        for _ in range(2):
+            if self._stop is not None and self._stop >= first:
+                self._stop = None
+            changed |= self._plan_line(first, passable, ssta, min(reach, wall), free_end=bool(np.isfinite(wall)))
+            moved = False
+            j = first
+            while (self._stop is None or j < self._stop) and self.foothold(j)[0] <= reach:
+                h, previous = self.foothold(j), self.foothold(j - 1)
+                move = ssta.foothold_shift(h, previous, self._boxes, behind=float(self.foothold(j - 2)[0]))
+                if move is None or h[0] + (move or 0.0) > wall:
+                    self._stop = j
                     changed = True
-                elif moved is not None and j > moved + 1 and j % 2 != lead and \
-                        min(self.foothold(j - 1)[0], self.foothold(j - 2)[0]) >= high:
-                    self._shifts.append((j, np.array([0.0, -shift])))
-                    entry[3] = j
-                    changed = True
-            h, previous = self.foothold(j), self.foothold(j - 1)
-            move = ssta.foothold_shift(h, previous, self._boxes, behind=float(self.foothold(j - 2)[0]))
-            if move is None or h[0] + (move or 0.0) > wall:
-                self._stop = j
-                changed = True
+                    break
+                if move != 0.0:
+                    self._shifts.append((j, np.array([move, 0.0])))
+                    changed = moved = True
+                j += 1
+            if not moved:
                 break
-            if move != 0.0:
-                self._shifts.append((j, np.array([move, 0.0])))
-                changed = True
-            j += 1
-        for entry in pending:
-            box, shift, moved, back = entry
-            if moved is not None and back is None and self._stop is None:  # back after the reach
-                entry[3] = j + ((1 - int(shift > 0.0)) - j) % 2
-                self._shifts.append((entry[3], np.array([0.0, -shift])))
         # the swings from the first step not yet begun: their modification and (stepping over) their timing
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}
         self._modifications = {i: v for i, v in self._modifications.items() if i <= k}
@@ -476,22 +428,32 @@ class WalkingPattern:
             self._replan_from(t)
         return changed
 
-    def _passes_other_box(self, j: int, box: ObstacleBox, shift: float, ssta: Ssta) -> bool:
-        """Whether the swings landing on ``h_j`` and on the other foot's next foothold (about a step later), moved
-        sideways by ``shift`` [m], pass a box other than ``box`` that their sweep meets: a sidestep moves those
-        feet sideways, and must not move them into it."""
-        half = ssta.config.foot_half_width + ssta.config.lateral_margin
-        h, before, other = self.foothold(j), self.foothold(j - 2), self.foothold(j - 1)
-        sweeps = ((float(before[0]), float(h[0]), float(before[1]), float(h[1]) + shift),
-                  (float(other[0]), float(h[0]) + self.step_length, float(other[1]), float(other[1]) + shift))
-        for b in self._boxes:
-            if b is box:
-                continue
-            low, high = ssta.foothold_band(b)
-            for x0, x1, y0, y1 in sweeps:
-                if x0 < high and x1 > low and min(y0, y1) - half < b.upper[1] and max(y0, y1) + half > b.lower[1]:
-                    return True
-        return False
+    def _plan_line(self, first: int, boxes: tuple[ObstacleBox, ...], ssta: Ssta, reach: float,
+                   free_end: bool) -> bool:
+        """Offset the walking line sideways from foothold ``first`` on (:meth:`Ssta.plan_line`): the footholds up
+        to ``reach`` [m] along x and two more, which come back to the line unless ``free_end``. A blocked swing
+        stops the walk in front of it. Returns whether an offset changed."""
+        line = self._line
+        old = {j: line.pop(j) for j in [j for j in line if j >= first]}
+        fixed = (line.get(first - 2, 0.0), line.get(first - 1, 0.0))
+        bases = [self.foothold(first - 2)[:2] - (0.0, fixed[0]), self.foothold(first - 1)[:2] - (0.0, fixed[1])]
+        if boxes and (self._stop is None or self._stop > first):
+            # (a walk stopped in front of a box steps in place: its footholds never pass the reach)
+            j, past = first, 0
+            while past < 2 and (self._stop is None or j < self._stop):
+                bases.append(self.foothold(j)[:2])
+                past += int(bases[-1][0] > reach)
+                j += 1
+        plan = ssta.plan_line(np.array(bases), first % 2, fixed, boxes, free_end)
+        for j, offset in enumerate(plan.offsets, start=first):
+            if offset != 0.0:
+                line[j] = float(offset)
+        if plan.blocked is not None:
+            self._stop = first + plan.blocked
+            for j in [j for j in line if j >= self._stop]:
+                del line[j]
+        return any(abs(line.get(j, 0.0) - old.get(j, 0.0)) > 1e-6 for j in set(line) | set(old)) or \
+            plan.blocked is not None
 
     def _replan_from(self, t: float) -> None:
         """The CoM plan from ``t`` on, with the footholds as they are now."""
@@ -711,6 +673,8 @@ class WalkingPattern:
         outer pieces.
         """
         a, e = float(start[0]), float(end[0])
+        if e < a:  # a swing back (a foothold moved behind): the band is passed standing still along x
+            a = e = 0.5 * (a + e)
         b0 = min(max(modification.band[0], a), e)
         b1 = min(max(modification.band[1], b0), e)
         top = self.ground + modification.height

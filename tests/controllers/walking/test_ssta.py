@@ -6,11 +6,13 @@ import numpy as np
 import pytest
 
 from redundancy_gym.controllers import ControllerError
+from redundancy_gym.controllers.walking.ssta import BLOCKED_COST
 from redundancy_gym.controllers.walking import (
     GaitConfig,
     ObstacleBox,
     Ssta,
     SstaConfig,
+    SwingModification,
     WalkingPattern,
     bounding_boxes,
 )
@@ -240,3 +242,84 @@ def test_a_tall_post_overlapping_a_lane_from_outside_is_passed_by_moving_the_wal
     # and the line comes back after the post
     np.testing.assert_allclose(footholds[-2:, 1], [-0.09, 0.09])
     assert pattern.stop_index is None
+
+
+def _posts(*posts: tuple[float, float]) -> list[LSS]:
+    """Tall (0.35 m) posts of 4 cm radius at (x, y): too tall to step over."""
+    return [LSS([x, y, 0.0], [x, y, 0.35], 0.04) for x, y in posts]
+
+
+def _passes_beside(pattern: WalkingPattern, ssta: Ssta, n: int) -> None:
+    """Every swing whose sole passes a box's band passes it beside, both footholds clear of it sideways (by the
+    margin less the tolerance); the stance never narrows nor widens past ``max_widening``; the line comes back."""
+    c = ssta.config
+    half = c.foot_half_width + c.lateral_margin - c.line_tolerance
+    footholds = np.array([pattern.foothold(j) for j in range(n)])
+    for j in range(2, n):
+        start, end = footholds[j - 2], footholds[j]
+        for box in pattern.obstacle_boxes:
+            low, high = ssta.foothold_band(box)
+            if end[0] > low and start[0] < high:
+                for h in (start, end):
+                    assert h[1] + half <= box.lower[1] + 1e-9 or h[1] - half >= box.upper[1] - 1e-9, (j, h, box)
+        left, right = (footholds[j], footholds[j - 1]) if j % 2 else (footholds[j - 1], footholds[j])
+        assert 0.18 - 1e-9 <= left[1] - right[1] <= 0.18 + c.max_widening + 1e-9, j
+    np.testing.assert_allclose(footholds[-2:, 1], [-0.09, 0.09])
+    assert pattern.stop_index is None
+
+
+def test_the_walking_line_passes_two_posts_on_opposite_sides_one_after_the_other():
+    # a post in the right lane, then one in the left lane 2.2 m on: the line moves left, then right (the case that
+    # the earlier per-box sidesteps planned too late, through the second post)
+    pattern, ssta = pattern_with(_posts((3.0, -0.12), (5.2, 0.12)))
+    _passes_beside(pattern, ssta, 34)
+    offsets = [pattern.foothold(j)[1] - (-0.09 if j % 2 == 0 else 0.09) for j in range(34)]
+    assert max(offsets) > 0.05 and min(offsets) < -0.05  # left past one post, right past the other
+
+
+def test_a_sidestep_never_moves_a_foot_into_a_box_beside_the_path():
+    # a tall block beside the right lane just before a post in the left lane: the line moves right, but only after
+    # the right foot has passed the block
+    block = rectangle(1.5, 0.11, 0.33, 0.22, y=-0.355)
+    pattern, ssta = pattern_with([*block, *_posts((2.85, 0.15))])
+    _passes_beside(pattern, ssta, 30)
+
+
+def test_posts_across_the_path_block_the_line_and_say_where():
+    # no offset within max_line_shift passes a row of posts 12 cm apart: the plan says which swing is blocked
+    ssta = Ssta(SstaConfig(), LANES)
+    boxes = bounding_boxes(_posts(*[(2.0, y) for y in np.arange(-0.6, 0.61, 0.2)]))
+    h = np.array([[0.32 * max(j - 1, 0), -0.09 if j % 2 == 0 else 0.09] for j in range(24)])
+    plan = ssta.plan_line(h, 0, (0.0, 0.0), boxes)
+    assert plan.blocked is not None and plan.cost >= BLOCKED_COST
+    j = plan.blocked + 2  # the first swing that passes the posts
+    assert h[j - 2, 0] < 2.04 + 0.3 and h[j, 0] > 2.0 - 0.04 - 0.3
+
+
+def test_a_line_planned_before_the_robot_drifted_is_kept_with_less_margin_rather_than_blocked():
+    # the right foot stands 1.5 cm closer to a post ahead than the margin less the tolerance allows (the post was
+    # mapped further off when that foothold was planned): the plan relaxes the margin instead of stopping the walk
+    ssta = Ssta(SstaConfig(), LANES)
+    c = ssta.config
+    edge = -0.03 - (c.foot_half_width + c.lateral_margin - c.line_tolerance) + 0.015
+    post = ObstacleBox([1.5, -0.3, 0.0], [1.58, edge, 0.35])
+    h = np.array([[1.2 + 0.32 * (j - 1) if j else 1.2, -0.09 if j % 2 == 0 else 0.09] for j in range(20)])
+    fixed = (0.06, 0.06)  # the line moved left before: the right foot at -0.03, the left at 0.15
+    strict = ssta._plan_line(h, 0, fixed, [post], False, c.line_tolerance)
+    assert strict.blocked == 0  # with the first tolerance alone the next right swing could not pass
+    plan = ssta.plan_line(h, 0, fixed, [post])
+    assert plan.blocked is None
+
+
+def test_a_modified_swing_back_along_x_still_starts_and_ends_on_its_footholds():
+    # a foothold moved behind the same foot's previous one (rare: moves along x for two boxes): finite durations
+    pattern = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    start, end = np.array([1.0, -0.09, 0.0]), np.array([0.9, -0.09, 0.0])
+    vertical, horizontal = pattern._modified_swing(start, end, 0.48, SwingModification("around", 0.07, -0.05, (0.8, 1.1)))
+    xy0, v0, _ = horizontal.evaluate(0.0)
+    xy1, v1, _ = horizontal.evaluate(0.48)
+    np.testing.assert_allclose(xy0, start[:2], atol=1e-12)
+    np.testing.assert_allclose(xy1, end[:2], atol=1e-12)
+    np.testing.assert_allclose([v0, v1], 0.0, atol=1e-12)
+    path = np.array([horizontal.evaluate(t)[0] for t in np.linspace(0.0, 0.48, 49)])
+    assert np.all(np.isfinite(path)) and path[:, 1].min() == pytest.approx(-0.14, abs=0.01)
