@@ -165,6 +165,7 @@ class WalkingController:
         self.feet_frames, self.torso_frame = feet_frames, torso_frame
         self.correction_iterations = int(correction_iterations)
         self.correction_samples = int(correction_samples)
+        self._corrections: dict[tuple[float, bool, bytes], ZmpCorrection] = {}
         self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
         self.step_adjuster = StepAdjuster(stepping)
         self.stance_frame = stance_frame
@@ -213,7 +214,8 @@ class WalkingController:
         """Begin a walk from the standing configuration ``q`` (pinocchio convention) at ``speed`` [m/s].
 
         The kinematic model starts at ``q`` with the CoM lowered or raised to ``com_height`` above the soles;
-        the multi-body ZMP correction for ``speed`` is estimated by kinematic rollouts from it (about 25 ms).
+        the multi-body ZMP correction for ``speed`` is estimated by kinematic rollouts from it (about 0.26 s; kept for
+        a start from the same state).
         """
         q = self.model.check_configuration(q)
         self.ik = self._make_ik(q[self._nq:].copy())
@@ -229,9 +231,17 @@ class WalkingController:
             q_ref = self.solver.step(q_ref, stand, stand, self.dt).q
         self.q_ref = q_ref
         self._start = (feet, com[:2].copy())
-        # estimated at every start, from this start's state: a correction kept from an earlier walk's slightly
-        # different standing state made a walk's result depend on the walks before it
-        correction = self._estimate_correction(q_ref, speed) if self.correction_iterations else None
+        # estimated from this start's state (kept for the same state only): a correction kept from an earlier
+        # walk's slightly different standing state made a walk's result depend on the walks before it
+        correction = None
+        if self.correction_iterations:
+            key = (round(float(speed), 9), self.ik_config.momentum_minimization, q_ref.tobytes())
+            correction = self._corrections.get(key)
+            if correction is None:
+                correction = self._estimate_correction(q_ref, speed)
+                if len(self._corrections) >= 16:
+                    self._corrections.pop(next(iter(self._corrections)))
+                self._corrections[key] = correction
         self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, correction)
         self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
         self.obstacle_boxes = ()
