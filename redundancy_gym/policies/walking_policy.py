@@ -155,7 +155,7 @@ class WalkingPolicy(PerEnvPolicy):
                 self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
                 np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik, stepping=stepping,
                 correction_iterations=c.correction_iterations, ssta=ssta, rca=RcaConfig(), use_ssta=c.ssta,
-                use_rca=c.rca)
+                use_rca=c.rca, correction_configuration=self._nominal)
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc
         self.last_command: WalkingCommand | None = None

@@ -131,6 +131,8 @@ class WalkingController:
             height, longest step and foot lanes).
         rca: reactive swing-leg collision avoidance (:class:`Rca`) for :meth:`set_obstacles` (None: the defaults).
         use_ssta, use_rca: switch either obstacle layer off (ablations); without both, obstacles are ignored.
+        correction_configuration: the standing joint positions [rad] the ZMP correction is estimated from, once
+            per speed (None: from each start's own standing state, about 0.26 s per start).
     """
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
@@ -139,7 +141,7 @@ class WalkingController:
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
                  correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True,
                  ssta: SstaConfig | None = None, rca: RcaConfig | None = None, use_ssta: bool = True,
-                 use_rca: bool = True) -> None:
+                 use_rca: bool = True, correction_configuration: ArrayLike | None = None) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -166,6 +168,13 @@ class WalkingController:
         self.correction_iterations = int(correction_iterations)
         self.correction_samples = int(correction_samples)
         self._corrections: dict[tuple[float, bool, bytes], ZmpCorrection] = {}
+        self.correction_configuration: NDArray[np.float64] | None = None
+        if correction_configuration is not None:
+            joints = np.asarray(correction_configuration, dtype=np.float64)
+            if joints.shape != (model.nq - self._nq,) or not np.all(np.isfinite(joints)):
+                raise ControllerError(f"correction_configuration must be {model.nq - self._nq} finite joint positions "
+                                      f"[rad], got shape {joints.shape}")
+            self.correction_configuration = joints
         self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
         self.step_adjuster = StepAdjuster(stepping)
         self.stance_frame = stance_frame
@@ -235,10 +244,12 @@ class WalkingController:
         # walk's slightly different standing state made a walk's result depend on the walks before it
         correction = None
         if self.correction_iterations:
-            key = (round(float(speed), 9), self.ik_config.momentum_minimization, q_ref.tobytes())
+            canonical = self.correction_configuration is not None
+            key = (round(float(speed), 9), self.ik_config.momentum_minimization, b"" if canonical else q_ref.tobytes())
             correction = self._corrections.get(key)
             if correction is None:
-                correction = self._estimate_correction(q_ref, speed)
+                correction = self._canonical_correction(speed) if canonical else \
+                    self._estimate_correction(q_ref, speed, self.solver, self._start)
                 if len(self._corrections) >= 16:
                     self._corrections.pop(next(iter(self._corrections)))
                 self._corrections[key] = correction
@@ -326,14 +337,35 @@ class WalkingController:
         yaw = np.eye(3)
         return WholeBodyReference(com, np.zeros(3), feet, rotations, np.zeros((2, 6)), yaw, np.zeros(3))
 
-    def _estimate_correction(self, q_start: NDArray[np.float64], speed: float) -> ZmpCorrection:
-        """Kinematic rollouts: the ZMP shift ``(-Ldot_y, Ldot_x) / (m g)`` of the reference motion, per phase.
+    def _canonical_correction(self, speed: float) -> ZmpCorrection:
+        """The ZMP correction for ``speed`` from :attr:`correction_configuration`: standing with the base level at the
+        origin, its own IK (the same for every start, so no walk depends on the walks before it)."""
+        assert self.correction_configuration is not None
+        q = np.zeros(self.model.nq)
+        q[self._nq - 1] = 1.0  # the identity quaternion (x, y, z, w)
+        q[self._nq:] = self.correction_configuration
+        self.model.update(q)
+        feet = np.array([self.model.frame_position(f) for f in self._feet])
+        rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
+        com, _ = self.model.com_and_centroidal_matrix()
+        stand = self._standing_reference(np.array([com[0], com[1], float(feet[:, 2].mean()) + self.gait.com_height]),
+                                         feet, rotations)
+        ik = self._make_ik(q[self._nq:].copy())
+        solver: WholeBodyIk | CompiledWholeBodyIk = CompiledWholeBodyIk(ik) if self.ik_config.backend == "compiled" else ik
+        for _ in range(20):
+            q = solver.step(q, stand, stand, self.dt).q
+        return self._estimate_correction(q, speed, solver, (feet, com[:2].copy()))
+
+    def _estimate_correction(self, q_start: NDArray[np.float64], speed: float,
+                             solver: WholeBodyIk | CompiledWholeBodyIk,
+                             start: tuple[NDArray[np.float64], NDArray[np.float64]]) -> ZmpCorrection:
+        """Kinematic rollouts with ``solver`` from ``q_start`` (feet and CoM ``start``): the ZMP shift
+        ``(-Ldot_y, Ldot_x) / (m g)`` of the reference motion, per phase.
 
         Iterates ``correction_iterations`` times (each plans with the previous estimate); steps 2 and 3 (the
         first full steps of each foot) give the right- and left-swing tables.
         """
-        assert self.solver is not None
-        feet, com = self._start
+        feet, com = start
         n = self.correction_samples
         phases = np.arange(n) / n
         correction: ZmpCorrection | None = None
@@ -345,7 +377,7 @@ class WalkingController:
             times, momentum = [], []
             while t < end:
                 end_ref = self._reference_array(pattern.sample(t + self.dt), np.zeros(2), np.zeros(2))
-                result = self.solver.step(q, start_ref, end_ref, self.dt)
+                result = solver.step(q, start_ref, end_ref, self.dt)
                 q, start_ref, t = result.q, end_ref, t + self.dt
                 self.model.update(q)
                 _, centroidal = self.model.com_and_centroidal_matrix()
