@@ -494,6 +494,8 @@ class Ssta:
                    boxes: Sequence[ObstacleBox], free_end: bool, tolerance: float) -> LinePlan:
         """:meth:`plan_line` with the margin to the boxes less ``tolerance`` [m]."""
         c = self.config
+        if h.shape[0] == 2:
+            return LinePlan(np.zeros(0), 0.0, None)
         values = {0.0, round(float(fixed[0]), 6), round(float(fixed[1]), 6)}
         for box in boxes:
             for side in (-1.0, 1.0):
@@ -514,8 +516,6 @@ class Ssta:
         tolerant = Ssta(replace(c, lateral_margin=c.lateral_margin - tolerance), self.lanes)
         reaches = [(float(b.lower[0]) - c.toe_length - c.clearance, float(b.upper[0]) + c.heel_length + c.clearance)
                    for b in boxes]
-        if h.shape[0] == 2:
-            return LinePlan(np.zeros(0), 0.0, None)
         parents: list[NDArray[np.intp]] = []
         swings: list[NDArray[np.float64]] = []
         for m in range(2, h.shape[0]):
@@ -560,4 +560,6 @@ class Ssta:
         chosen = chosen[::-1]  # offsets of footholds 1 .. n-1 (index into offsets)
         path = [a_index, *chosen]
         blocked = next((m for m in range(len(swings)) if swings[m][path[m], path[m + 2]] >= BLOCKED_COST), None)
+        if not np.isfinite(cost) and blocked is None:  # no stance from the fixed footholds keeps the limits
+            blocked = 0
         return LinePlan(offsets[path[2:]], cost, blocked)

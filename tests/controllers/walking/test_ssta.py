@@ -323,3 +323,16 @@ def test_a_modified_swing_back_along_x_still_starts_and_ends_on_its_footholds():
     np.testing.assert_allclose([v0, v1], 0.0, atol=1e-12)
     path = np.array([horizontal.evaluate(t)[0] for t in np.linspace(0.0, 0.48, 49)])
     assert np.all(np.isfinite(path)) and path[:, 1].min() == pytest.approx(-0.14, abs=0.01)
+
+
+def test_a_line_that_cannot_keep_the_stance_limits_from_its_fixed_footholds_says_it_is_blocked():
+    # the fixed right foot 0.3 m left of its lane and the left foot 0.3 m right of its own (crossed): every next
+    # foothold narrows or over-widens the stance, so no plan keeps the limits
+    ssta = Ssta(SstaConfig(), LANES)
+    h = np.array([[0.32 * j, -0.09 if j % 2 == 0 else 0.09] for j in range(10)])
+    plan = ssta.plan_line(h, 0, (0.3, -0.3), _posts_boxes())
+    assert plan.blocked == 0 and not np.isfinite(plan.cost)
+
+
+def _posts_boxes() -> list[ObstacleBox]:
+    return list(bounding_boxes(_posts((2.0, 0.3))))
