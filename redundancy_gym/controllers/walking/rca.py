@@ -285,12 +285,13 @@ class Rca:
             self._step = step
         if remaining <= c.return_time + 1e-12 or self._return is not None:
             return self._returning(remaining, dt)
-        if not self._w.any() and not self._v.any() and not self._near(foot):
+        near = self._near(foot)
+        if not near and not self._w.any() and not self._v.any():
             self._a = _ZERO.copy()
             return _IDLE  # nothing near and nothing to return from: the common case, without the arithmetic
         distance = float("inf")
         target = -c.attractor * self._w
-        if self._near(foot):
+        if near:
             self.model.update(q)
             rate, distance = self.modification_rate(q, side)
             target = target + rate

@@ -391,6 +391,16 @@ class Ssta:
         return None
 
     # ------------------------------------------------------------------ swing
+    def _swing_decision(self, box: ObstacleBox, y: float, side: int) -> tuple[str, float, bool]:
+        """:meth:`foot_decision` of a swing: a shift of at most ``quick_shift`` or a raise, else a longer shift
+        (the swing foot follows a quick sideways shift by about half: a long one is the last resort); and whether
+        the shift is a long one."""
+        decision, shift = self.foot_decision(box, y, side, self.config.quick_shift)
+        if decision != "blocked":
+            return decision, shift, False
+        decision, shift = self.foot_decision(box, y, side)
+        return decision, shift, True
+
     def swing(self, start: ArrayLike, end: ArrayLike, side: int, boxes: Sequence[ObstacleBox]
               ) -> SwingModification | None:
         """The modification of a swing of foot ``side`` (0 right, 1 left) from foothold ``start`` to ``end``
@@ -409,9 +419,7 @@ class Ssta:
             reach = (float(box.lower[0]) - c.toe_length - c.clearance, float(box.upper[0]) + c.heel_length + c.clearance)
             if reach[1] <= low or reach[0] >= high:
                 continue  # the swing's sole does not pass over the box along x
-            decision, shift = self.foot_decision(box, y, side, self.config.quick_shift)
-            if decision == "blocked":
-                decision, shift = self.foot_decision(box, y, side)
+            decision, shift, _ = self._swing_decision(box, y, side)
             if decision in ("beside", "blocked"):
                 continue
             band = (min(band[0], reach[0]), max(band[1], reach[1]))
@@ -429,23 +437,14 @@ class Ssta:
         return SwingModification(kind, float(height), float(lateral), (float(band[0]), float(band[1])))
 
     # ------------------------------------------------------------------ the walking line
-    def swing_cost(self, box: ObstacleBox, y0: float, y1: float, side: int) -> float:
-        """The cost of a swing of foot ``side`` (0 right, 1 left) from sole y ``y0`` to ``y1`` [m] past ``box``
-        (whose band along x it crosses): 0 beside it; a raise above the step height [m] over it; ``lateral_cost``
-        times a sideways shift around it (plus ``long_shift_cost`` beyond ``quick_shift``);
-        :data:`BLOCKED_COST` when none of these passes, or when the swing moves sideways and its sweep meets the
-        box."""
+    def swing_cost(self, box: ObstacleBox, y: float, side: int) -> float:
+        """The cost of a swing of foot ``side`` (0 right, 1 left) with its sole at ``y`` [m] past ``box`` (whose band
+        along x it crosses): 0 beside it; a raise above the step height [m] over it; ``lateral_cost`` times a
+        sideways shift around it (plus ``long_shift_cost`` beyond ``quick_shift``, and for a box higher than
+        ``straddle_height`` kept between the legs); :data:`BLOCKED_COST` when none of these passes."""
         c = self.config
-        if abs(y1 - y0) > 1e-3:
-            half = c.foot_half_width + c.lateral_margin
-            meets = min(y0, y1) - half < box.upper[1] and max(y0, y1) + half > box.lower[1]
-            return BLOCKED_COST if meets else 0.0
-        y = 0.5 * (y0 + y1)
-        decision, shift = self.foot_decision(box, y, side, c.quick_shift)
-        extra = 0.0
-        if decision == "blocked":
-            decision, shift = self.foot_decision(box, y, side)
-            extra = c.long_shift_cost
+        decision, shift, long = self._swing_decision(box, y, side)
+        extra = c.long_shift_cost if long else 0.0
         if decision == "blocked":
             return BLOCKED_COST
         if decision == "beside":
@@ -539,7 +538,7 @@ class Ssta:
                 swing[moving & sweep] += max(box.height + c.clearance - c.step_height, 0.0) if over else BLOCKED_COST
                 if passes:  # its sole passes the box along x: over, around or beside
                     for i, k in zip(*np.nonzero(~moving), strict=True):
-                        swing[i, k] += tolerant.swing_cost(box, float(ya[i, 0]), float(yc[0, k]), side)
+                        swing[i, k] += tolerant.swing_cost(box, 0.5 * float(ya[i, 0] + yc[0, k]), side)
             # the stance from o_b (foothold m-1, the other foot) to o_c: never narrower, widened at most so much
             widening = (offsets[:, None] - offsets[None, :]) if side == 0 else (offsets[None, :] - offsets[:, None])
             width = np.where((widening >= -1e-9) & (widening <= c.max_widening + 1e-9), 0.0, np.inf)  # [b, c]

@@ -223,25 +223,16 @@ class WalkingController:
         """Begin a walk from the standing configuration ``q`` (pinocchio convention) at ``speed`` [m/s].
 
         The kinematic model starts at ``q`` with the CoM lowered or raised to ``com_height`` above the soles;
-        the multi-body ZMP correction for ``speed`` is estimated by kinematic rollouts from it (about 0.26 s; kept for
-        a start from the same state).
+        the multi-body ZMP correction for ``speed`` is estimated by kinematic rollouts (about 0.3 s) from
+        ``correction_configuration`` once per speed, or without it from ``q`` (kept for a start from the same state).
         """
         q = self.model.check_configuration(q)
-        self.ik = self._make_ik(q[self._nq:].copy())
-        self.solver = CompiledWholeBodyIk(self.ik) if self.ik_config.backend == "compiled" else self.ik
-        self.model.update(q)
-        feet = np.array([self.model.frame_position(f) for f in self._feet])
-        rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
-        ground = float(feet[:, 2].mean())
-        com, _ = self.model.com_and_centroidal_matrix()
-        stand = self._standing_reference(np.array([com[0], com[1], ground + self.gait.com_height]), feet, rotations)
-        q_ref = q.copy()
-        for _ in range(20):
-            q_ref = self.solver.step(q_ref, stand, stand, self.dt).q
+        self.ik, self.solver, q_ref, start = self._stand(q)
         self.q_ref = q_ref
-        self._start = (feet, com[:2].copy())
-        # estimated from this start's state (kept for the same state only): a correction kept from an earlier
-        # walk's slightly different standing state made a walk's result depend on the walks before it
+        feet, com = start
+        # from correction_configuration once per speed, else from this start's state (kept for the same state only):
+        # a correction kept from an earlier walk's slightly different standing state made a walk's result depend on
+        # the walks before it
         correction = None
         if self.correction_iterations:
             canonical = self.correction_configuration is not None
@@ -249,11 +240,11 @@ class WalkingController:
             correction = self._corrections.get(key)
             if correction is None:
                 correction = self._canonical_correction(speed) if canonical else \
-                    self._estimate_correction(q_ref, speed, self.solver, self._start)
+                    self._estimate_correction(q_ref, speed, self.solver, start)
                 if len(self._corrections) >= 16:
                     self._corrections.pop(next(iter(self._corrections)))
                 self._corrections[key] = correction
-        self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com[:2], speed, correction)
+        self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
         self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
         self.obstacle_boxes = ()
         self._obstacle_volumes = []
@@ -344,17 +335,25 @@ class WalkingController:
         q = np.zeros(self.model.nq)
         q[self._nq - 1] = 1.0  # the identity quaternion (x, y, z, w)
         q[self._nq:] = self.correction_configuration
+        _, solver, q_ref, start = self._stand(q)
+        return self._estimate_correction(q_ref, speed, solver, start)
+
+    def _stand(self, q: NDArray[np.float64]) -> tuple[WholeBodyIk, WholeBodyIk | CompiledWholeBodyIk,
+                                                    NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+        """An IK with ``q``'s joints as its posture, and ``q`` moved by it onto the standing reference (the CoM
+        ``com_height`` above the soles): ``(ik, solver, q_ref, (feet [m], CoM (x, y) [m]))``."""
+        ik = self._make_ik(q[self._nq:].copy())
+        solver: WholeBodyIk | CompiledWholeBodyIk = CompiledWholeBodyIk(ik) if self.ik_config.backend == "compiled" else ik
         self.model.update(q)
         feet = np.array([self.model.frame_position(f) for f in self._feet])
         rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
         com, _ = self.model.com_and_centroidal_matrix()
         stand = self._standing_reference(np.array([com[0], com[1], float(feet[:, 2].mean()) + self.gait.com_height]),
                                          feet, rotations)
-        ik = self._make_ik(q[self._nq:].copy())
-        solver: WholeBodyIk | CompiledWholeBodyIk = CompiledWholeBodyIk(ik) if self.ik_config.backend == "compiled" else ik
+        q_ref = q.copy()
         for _ in range(20):
-            q = solver.step(q, stand, stand, self.dt).q
-        return self._estimate_correction(q, speed, solver, (feet, com[:2].copy()))
+            q_ref = solver.step(q_ref, stand, stand, self.dt).q
+        return ik, solver, q_ref, (feet, com[:2].copy())
 
     def _estimate_correction(self, q_start: NDArray[np.float64], speed: float,
                              solver: WholeBodyIk | CompiledWholeBodyIk,

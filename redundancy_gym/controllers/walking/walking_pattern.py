@@ -381,8 +381,7 @@ class WalkingPattern:
         if self._stop is not None and self._stop >= first:
             self._stop = None
             changed = True
-        decisions = [ssta.classify(b) for b in self._boxes]
-        walls = [ssta.foothold_band(d.box)[0] for d in decisions if d.classification == "too_large"]
+        walls = [ssta.foothold_band(b)[0] for b in self._boxes if ssta.classify(b).classification == "too_large"]
         wall = min(walls, default=np.inf)
         passable = tuple(b for b in self._boxes if float(b.lower[0]) < wall)
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
