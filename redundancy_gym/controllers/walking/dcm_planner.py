@@ -19,6 +19,8 @@ so the ZMP stays exactly on the planned reference, which is inside the support p
 
 from __future__ import annotations
 
+import bisect
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -90,34 +92,68 @@ class DcmPlan:
     dcm: NDArray[np.float64]
     com: NDArray[np.float64]
 
+    def __post_init__(self) -> None:
+        # sample() runs several times per control period of the walking controller; it evaluates each segment from
+        # Python floats computed once on the segment's first use (:meth:`_segment`). The cache relies on the plan's
+        # arrays not being written after construction (the plan is frozen; nothing in the package writes them).
+        object.__setattr__(self, "_knots", None)
+        object.__setattr__(self, "_segments", {})
+
     def sample(self, t: float) -> ComState:
         """The LIPM state at time ``t`` [s]; before the first knot the first, after the last the resting state."""
-        times = self.times
-        if t >= times[-1]:
-            r = self.zmp[-1]
-            x, xi = self.com[-1], self.dcm[-1]
-            s = t - times[-1]
-            c = xi - r
-            d = x - r - 0.5 * c
-            # at rest (xi = r) the divergent term is exactly zero, however long the pause (no 0 * inf)
-            grow = _divergent(0.5 * c, self.omega * s)
-            decay = d * np.exp(-self.omega * s)
-            position = r + grow + decay
-            velocity = self.omega * (grow - decay)
-            return self._state(position, velocity, r)
-        k = int(np.clip(np.searchsorted(times, t, side="right") - 1, 0, times.size - 2))
-        s = max(t - times[k], 0.0)
-        slope = (self.zmp[k + 1] - self.zmp[k]) / (times[k + 1] - times[k])
-        r = self.zmp[k] + slope * s
-        c = self.dcm[k] - self.zmp[k] - slope / self.omega
-        d = self.com[k] - self.zmp[k] - 0.5 * c
-        grow, decay = _divergent(0.5 * c, self.omega * s), d * np.exp(-self.omega * s)
-        position = r + grow + decay
-        velocity = slope + self.omega * (grow - decay)
-        return self._state(position, velocity, r)
+        # Scalar math on x and y, with bisect on a list of knot times: on 2-vectors numpy's per-call overhead cost
+        # several times the arithmetic, in the walking controller's per-period budget. The operations are those of
+        # the vector form in the same order (the results agree to round-off; only exp may differ in the last bit).
+        knots: list[float] | None = self._knots  # type: ignore[attr-defined]
+        if knots is None:
+            knots = self.times.tolist()
+            object.__setattr__(self, "_knots", knots)
+        if t >= knots[-1]:  # after the last knot: the rest (-1) with the ZMP at the last knot
+            k, s = -1, t - knots[-1]
+        else:
+            k = min(max(bisect.bisect_right(knots, t) - 1, 0), len(knots) - 2)
+            s = max(t - knots[k], 0.0)
+        zx, zy, mx, my, hcx, hcy, dx, dy = self._segment(k)
+        # r = r_k + m s; at rest r = r_k as it is (0 * s would be NaN for an infinite pause)
+        rx, ry = (zx + mx * s, zy + my * s) if k >= 0 else (zx, zy)
+        w = self.omega
+        e_grow, e_decay = math.exp(min(w * s, MAX_EXPONENT)), math.exp(-w * s)
+        # the divergent term is exactly zero where c is (at rest xi = r, however long the pause: no 0 * inf)
+        gx = hcx * e_grow if hcx != 0.0 else 0.0
+        gy = hcy * e_grow if hcy != 0.0 else 0.0
+        ex, ey = dx * e_decay, dy * e_decay
+        px, py = rx + gx + ex, ry + gy + ey
+        vx, vy = mx + w * (gx - ex), my + w * (gy - ey)
+        w2 = w**2
+        return ComState(np.array((px, py)), np.array((vx, vy)), np.array((w2 * (px - rx), w2 * (py - ry))),
+                        np.array((px + vx / w, py + vy / w)), np.array((rx, ry)))
 
-    def _state(self, position: NDArray[np.float64], velocity: NDArray[np.float64], r: NDArray[np.float64]) -> ComState:
-        return ComState(position, velocity, self.omega**2 * (position - r), position + velocity / self.omega, r.copy())
+    def _segment(self, k: int) -> tuple[float, float, float, float, float, float, float, float]:
+        """Coefficients of segment ``k`` (-1: the rest after the last knot) as Python floats, cached:
+        ``(r_k x, r_k y, m x, m y, c x / 2, c y / 2, d x, d y)`` of the module docstring's closed form, the ZMP
+        ``r_k`` [m] at its start, its slope ``m`` [m/s] (zero at rest) and the terms ``c / 2``, ``d`` [m]."""
+        segments: dict[int, tuple[float, float, float, float, float, float, float, float]]
+        segments = self._segments  # type: ignore[attr-defined]
+        cached = segments.get(k)
+        if cached is not None:
+            return cached
+        zx, zy = self.zmp[k].tolist()
+        if k == -1:
+            mx = my = 0.0
+            # c = xi - r at rest
+            cx, cy = self.dcm[-1, 0] - zx, self.dcm[-1, 1] - zy
+        else:
+            dt = float(self.times[k + 1] - self.times[k])
+            mx, my = (self.zmp[k + 1] - self.zmp[k]).tolist()
+            mx, my = mx / dt, my / dt
+            # c = xi_k - r_k - m / omega
+            cx, cy = self.dcm[k, 0] - zx - mx / self.omega, self.dcm[k, 1] - zy - my / self.omega
+        hcx, hcy = float(0.5 * cx), float(0.5 * cy)
+        # d = x_k - r_k - c / 2
+        dx, dy = float(self.com[k, 0] - zx - hcx), float(self.com[k, 1] - zy - hcy)
+        cached = (zx, zy, mx, my, hcx, hcy, dx, dy)
+        segments[k] = cached
+        return cached
 
 
 class DcmPlanner:
