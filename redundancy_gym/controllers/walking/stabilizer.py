@@ -14,6 +14,7 @@ The measured ZMP passes a first-order low-pass filter (``zmp_filter``): it jumps
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -90,40 +91,87 @@ class Stabilizer:
 
     def reset(self) -> None:
         """Zero offset and forget the filtered ZMP."""
-        self._offset = np.zeros(2)
-        self._zmp: NDArray[np.float64] | None = None
+        # the state as Python floats (x, y) [m]: the update runs once per control period in scalar math
+        self._offset: tuple[float, float] = (0.0, 0.0)
+        self._zmp: tuple[float, float] | None = None
 
     def update(self, dt: float, com_ref: ArrayLike, dcm_ref: ArrayLike, zmp_ref: ArrayLike, com: ArrayLike,
                com_velocity: ArrayLike, zmp: ArrayLike | None) -> StabilizerOutput:
         """Advance one control period ``dt`` [s] from the plan (``*_ref``) and the measurement (x, y) [m, m/s].
 
-        ``zmp`` None (no loaded foot) keeps the last filtered value.
+        Each point may have more entries (a 3-D CoM): its first two are used. ``zmp`` None (no loaded foot) keeps
+        the last filtered value.
         """
+        # Scalar math on x and y: on 2-vectors numpy's per-call overhead cost several times the arithmetic, in the
+        # walking controller's per-period budget. The operations are those of the vector form in the same order.
+        if not (isinstance(dt, float) and 0.0 < dt < math.inf):  # the usual float dt passes without numpy
+            if not np.isfinite(dt) or dt <= 0.0:
+                raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        # Python floats throughout: a NumPy scalar (float32 dt or gain) would otherwise set the precision
+        dt = float(dt)
         g = self.gains
-        if not np.isfinite(dt) or dt <= 0.0:
-            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
-        com_ref, dcm_ref, zmp_ref = (np.asarray(v, dtype=np.float64)[:2] for v in (com_ref, dcm_ref, zmp_ref))
-        com, com_velocity = np.asarray(com, dtype=np.float64)[:2], np.asarray(com_velocity, dtype=np.float64)[:2]
-        for name, value in (("com_ref", com_ref), ("dcm_ref", dcm_ref), ("zmp_ref", zmp_ref), ("com", com),
-                            ("com_velocity", com_velocity)):
-            if value.shape != (2,) or not np.all(np.isfinite(value)):
-                raise ControllerError(f"{name} must be a finite (x, y), got {value!r}")
-        dcm_error = com + com_velocity / self.omega - dcm_ref
-        desired = zmp_ref + g.dcm * dcm_error
+        k_dcm, k_zmp, k_com, max_offset = float(g.dcm), float(g.zmp), float(g.com), float(g.max_offset)
+        points = (com_ref, dcm_ref, zmp_ref, com, com_velocity)
+        if all(map(_is_float_vector, points)):  # the arrays of the controller: read without a conversion
+            xy = [(p.item(0), p.item(1)) for p in points]  # type: ignore[union-attr]
+        else:
+            xy = _checked_points(points)
+        (crx, cry), (xrx, xry), (zrx, zry), (cx, cy), (vx, vy) = xy
+        # one finite check for all ten numbers (NaN and inf survive a sum); the message names the bad point
+        if not math.isfinite(crx + cry + xrx + xry + zrx + zry + cx + cy + vx + vy):
+            _checked_points(points)  # raises, unless the sum only overflowed
+        w = self.omega
+        ex, ey = cx + vx / w - xrx, cy + vy / w - xry  # dcm_error
+        dx, dy = zrx + k_dcm * ex, zry + k_dcm * ey  # desired ZMP
         if zmp is not None:
-            zmp = np.asarray(zmp, dtype=np.float64)[:2]
-            if zmp.shape != (2,) or not np.all(np.isfinite(zmp)):
-                raise ControllerError(f"zmp must be None or a finite (x, y), got {zmp!r}")
+            zx, zy = _zmp_point(zmp)
             if self._zmp is None:
-                self._zmp = zmp.copy()
+                self._zmp = (zx, zy)
             else:
-                self._zmp += (dt / (g.zmp_filter + dt)) * (zmp - self._zmp)
-        measured = desired if self._zmp is None else self._zmp
-        rate = -g.zmp * (desired - measured) + g.com * (com_ref - com)
-        offset = self._offset + rate * dt
-        norm = float(np.linalg.norm(offset))
-        if norm > g.max_offset:
-            offset *= g.max_offset / norm
-            rate = (offset - self._offset) / dt
-        self._offset = offset
-        return StabilizerOutput(offset.copy(), rate, desired, measured.copy(), dcm_error)
+                fx, fy = self._zmp
+                gain = dt / (float(g.zmp_filter) + dt)
+                self._zmp = (fx + gain * (zx - fx), fy + gain * (zy - fy))
+        mx, my = (dx, dy) if self._zmp is None else self._zmp  # measured ZMP
+        rx, ry = -k_zmp * (dx - mx) + k_com * (crx - cx), -k_zmp * (dy - my) + k_com * (cry - cy)  # rate
+        px, py = self._offset
+        ox, oy = px + rx * dt, py + ry * dt
+        norm = math.sqrt(ox * ox + oy * oy)  # as np.linalg.norm computes it (hypot rounds differently)
+        if norm > max_offset:
+            scale = max_offset / norm
+            ox, oy = ox * scale, oy * scale
+            rx, ry = (ox - px) / dt, (oy - py) / dt
+        self._offset = (ox, oy)
+        return StabilizerOutput(np.array((ox, oy)), np.array((rx, ry)), np.array((dx, dy)), np.array((mx, my)),
+                                np.array((ex, ey)))
+
+
+_FLOAT64 = np.dtype(np.float64)
+_POINT_NAMES = ("com_ref", "dcm_ref", "zmp_ref", "com", "com_velocity")
+
+
+def _is_float_vector(value: object) -> bool:
+    """Whether ``value`` is a 1-D float64 array of at least 2 entries: then ``np.asarray(value, np.float64)[:2]``
+    are its first two entries, which :meth:`Stabilizer.update` reads without that conversion."""
+    return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.ndim == 1 and value.shape[0] >= 2
+
+
+def _checked_points(values: tuple[ArrayLike, ...]) -> list[tuple[float, float]]:
+    """The first two entries of each of :meth:`Stabilizer.update`'s points (``_POINT_NAMES``) as floats;
+    ControllerError naming the first one that is not a finite (x, y)."""
+    arrays = [np.asarray(v, dtype=np.float64)[:2] for v in values]
+    for name, value in zip(_POINT_NAMES, arrays):
+        if value.shape != (2,) or not np.all(np.isfinite(value)):
+            raise ControllerError(f"{name} must be a finite (x, y), got {value!r}")
+    return [(a.item(0), a.item(1)) for a in arrays]
+
+
+def _zmp_point(zmp: ArrayLike) -> tuple[float, float]:
+    """The measured ZMP's first two entries as floats; ControllerError unless they are a finite (x, y)."""
+    if _is_float_vector(zmp):
+        x, y = zmp.item(0), zmp.item(1)  # type: ignore[union-attr]
+        if math.isfinite(x + y):
+            return x, y
+    point = np.asarray(zmp, dtype=np.float64)[:2]
+    if point.shape != (2,) or not np.all(np.isfinite(point)):
+        raise ControllerError(f"zmp must be None or a finite (x, y), got {point!r}")
+    return point.item(0), point.item(1)
