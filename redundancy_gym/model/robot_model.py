@@ -27,6 +27,9 @@ __all__ = ["JacobianKind", "RobotModel"]
 JacobianKind = Literal["translational", "rotational", "full"]
 _JACOBIAN_ROWS: dict[str, slice] = {"translational": slice(0, 3), "rotational": slice(3, 6), "full": slice(0, 6)}
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_FLOAT64 = np.dtype(np.float64)
+_FRAME_TUPLES_CACHED = 64
+"""Frame tuples whose indices a model keeps (:meth:`RobotModel.measure`); later ones are resolved on each call."""
 # 1-DoF joints the compiled kinematics handle: short name -> (joint type, axis or None for "read it")
 _CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
     "JointModelRX": (REVOLUTE, (1.0, 0.0, 0.0)), "JointModelRY": (REVOLUTE, (0.0, 1.0, 0.0)),
@@ -61,6 +64,11 @@ class RobotModel:
         for index, frame in enumerate(model.frames):
             self._frame_ids.setdefault(frame.name, index)
         self._q: NDArray[np.float64] | None = None
+        # read on every control period (checks, conversions): fixed with the model, so kept as Python values
+        self._nq, self._nv = int(model.nq), int(model.nv)
+        self._floating_base = model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer"
+        # the frame indices of frame tuples :meth:`measure` was given (the controller gives the same tuple each period)
+        self._frame_tuples: dict[tuple[str | int, ...], tuple[int, ...]] = {}
 
     @classmethod
     def from_mjcf(cls, path: str | Path) -> RobotModel:
@@ -84,17 +92,17 @@ class RobotModel:
     @property
     def nq(self) -> int:
         """Number of generalized coordinates."""
-        return int(self._model.nq)
+        return self._nq
 
     @property
     def nv(self) -> int:
         """Number of generalized velocities."""
-        return int(self._model.nv)
+        return self._nv
 
     @property
     def floating_base(self) -> bool:
         """Whether the first joint is a free flyer (a free-floating base)."""
-        return self._model.njoints > 1 and self._model.joints[1].shortname() == "JointModelFreeFlyer"
+        return self._floating_base
 
     @property
     def base_dofs(self) -> tuple[int, int]:
@@ -195,8 +203,9 @@ class RobotModel:
     # ------------------------------------------------------------------ state
     def check_configuration(self, q: ArrayLike) -> NDArray[np.float64]:
         """Return ``q`` as a float array after checking its size and finiteness."""
-        q = _as_float_array(q, "configuration")
-        if q.shape != (self.nq,):
+        if not _is_float_vector(q, self._nq):  # a float64 array of the right size needs no conversion
+            q = _as_float_array(q, "configuration")
+        if q.shape != (self._nq,):
             raise ModelError(f"configuration must have shape ({self.nq},), got {q.shape}")
         if not math.isfinite(float(q.sum())):  # one reduction: NaN and inf survive a sum
             raise ModelError("configuration contains non-finite values")
@@ -308,16 +317,30 @@ class RobotModel:
         Cheaper than :meth:`update` (no Jacobians); it leaves the cache empty, so call :meth:`update` before
         the next Jacobian query.
         """
+        # The per-period measurement of the walking controller: its cost is mostly Python and conversions, so it
+        # updates only the placements of ``frames`` (the cache is left empty anyway) and resolves a frame tuple once.
         q = self.check_configuration(q)
         v = self._check_velocity(v)
         self._q = None
-        com = np.array(pin.centerOfMass(self._model, self._data, q, v, False), dtype=np.float64)
-        com_velocity = np.array(self._data.vcom[0], dtype=np.float64)
-        pin.updateFramePlacements(self._model, self._data)
-        placements = [self._data.oMf[self._resolve(f)] for f in frames]
-        rotations = np.array([m.rotation for m in placements], dtype=np.float64).reshape(len(frames), 3, 3)
-        positions = np.array([m.translation for m in placements], dtype=np.float64).reshape(len(frames), 3)
-        return com, com_velocity, rotations, positions
+        model, data = self._model, self._data
+        com = np.array(pin.centerOfMass(model, data, q, v, False), dtype=np.float64)
+        com_velocity = np.array(data.vcom[0], dtype=np.float64)
+        if len(frames) == 0:
+            return com, com_velocity, np.empty((0, 3, 3)), np.empty((0, 3))
+        indices = self._frame_indices(frames)
+        placements = np.array([pin.updateFramePlacement(model, data, f).homogeneous for f in indices], dtype=np.float64)
+        # copies: C-contiguous, and not views of one another's array
+        return com, com_velocity, placements[:, :3, :3].copy(), placements[:, :3, 3].copy()
+
+    def _frame_indices(self, frames: tuple[str | int, ...]) -> tuple[int, ...]:
+        """The indices of ``frames`` (:meth:`_resolve` each), cached per hashable tuple of frames."""
+        try:
+            return self._frame_tuples[frames]
+        except (KeyError, TypeError):  # TypeError: an unhashable sequence, resolved each time
+            indices = tuple(self._resolve(f) for f in frames)
+        if isinstance(frames, tuple) and len(self._frame_tuples) < _FRAME_TUPLES_CACHED:
+            self._frame_tuples[frames] = indices
+        return indices
 
     def mass_matrix(self) -> NDArray[np.float64]:
         """Joint-space inertia matrix (nv x nv)."""
@@ -351,15 +374,17 @@ class RobotModel:
         """
         q = np.array(qpos, dtype=np.float64)
         v = np.array(qvel, dtype=np.float64)
-        if q.shape != (self.nq,) or v.shape != (self.nv,):
-            raise ModelError(f"qpos and qvel must have shapes ({self.nq},), ({self.nv},); got {q.shape}, {v.shape}")
-        if self.floating_base:
-            w, x, y, z = q[3:7]
-            norm = float(np.sqrt(w * w + x * x + y * y + z * z))
+        if q.shape != (self._nq,) or v.shape != (self._nv,):
+            raise ModelError(f"qpos and qvel must have shapes ({self._nq},), ({self._nv},); got {q.shape}, {v.shape}")
+        if self._floating_base:
+            # the quaternion in Python floats (called once per control period; the same operations as on arrays)
+            w, x, y, z = q[3:7].tolist()
+            norm = math.sqrt(w * w + x * x + y * y + z * z)
             if not norm > 0.0:
                 raise ModelError("the base quaternion of qpos is zero")
-            q[3:7] = np.array([x, y, z, w]) / norm
-            rotation = pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()
+            x, y, z, w = x / norm, y / norm, z / norm, w / norm
+            q[3:7] = (x, y, z, w)
+            rotation = pin.Quaternion(w, x, y, z).toRotationMatrix()
             v[:3] = rotation.T @ v[:3]
         return q, v
 
@@ -379,8 +404,9 @@ class RobotModel:
 
     # ------------------------------------------------------------------ helpers
     def _check_velocity(self, qdot: ArrayLike) -> NDArray[np.float64]:
-        qdot = _as_float_array(qdot, "velocity")
-        if qdot.shape != (self.nv,):
+        if not _is_float_vector(qdot, self._nv):  # a float64 array of the right size needs no conversion
+            qdot = _as_float_array(qdot, "velocity")
+        if qdot.shape != (self._nv,):
             raise ModelError(f"velocity must have shape ({self.nv},), got {qdot.shape}")
         if not math.isfinite(float(qdot.sum())):
             raise ModelError("velocity contains non-finite values")
@@ -433,6 +459,11 @@ def _velocity_limits_from_actuators(model: pin.Model, path: Path) -> None:
 
 def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _is_float_vector(value: object, size: int) -> bool:
+    """Whether ``value`` is a float64 array of shape ``(size,)`` (what :func:`_as_float_array` would return as is)."""
+    return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == (size,)
 
 
 def _as_float_array(value: ArrayLike, name: str) -> NDArray[np.float64]:

@@ -193,3 +193,77 @@ def test_clamp_limits_the_joints_and_leaves_a_floating_base_alone(planar_model: 
     clamped = biped.clamp(q)
     np.testing.assert_array_equal(clamped[:7], q[:7])  # 3 m away and turned: still the same base pose
     np.testing.assert_array_equal(clamped[7:], biped.upper_limits[7:])
+
+
+def _random_biped_state(model: RobotModel, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    quaternion = rng.normal(size=4)
+    q = np.concatenate([rng.normal(size=3), quaternion / np.linalg.norm(quaternion),
+                        rng.uniform(model.lower_limits[7:], model.upper_limits[7:])])
+    return q, rng.normal(size=model.nv)
+
+
+def test_measure_is_the_com_its_velocity_and_the_frame_placements_of_a_full_update(rng) -> None:
+    """measure() updates only the frames it is asked for: each agrees with update() and the frame queries, the
+    CoM velocity with the CoM Jacobian, and afterwards the kinematic cache is empty."""
+    biped = RobotModel.from_mjcf(BIPED_XML)
+    frames = ("r_sole", "l_sole", biped.frame_id("imu"), "r_sole")
+    for _ in range(5):
+        q, v = _random_biped_state(biped, rng)
+        com, com_velocity, rotations, positions = biped.measure(q, v, frames)
+        assert rotations.shape == (4, 3, 3) and positions.shape == (4, 3)
+        assert rotations.flags.c_contiguous and positions.flags.c_contiguous
+        with pytest.raises(ModelError, match="update"):
+            biped.frame_position("r_sole")
+        biped.update(q)
+        np.testing.assert_allclose(com, biped.com(), atol=1e-14)
+        np.testing.assert_allclose(com_velocity, biped.com_jacobian() @ v, atol=1e-12)
+        for k, frame in enumerate(frames):
+            rotation, position = biped.frame_placement(frame)
+            np.testing.assert_array_equal(rotations[k], rotation)
+            np.testing.assert_array_equal(positions[k], position)
+        # the results are the caller's: another measurement leaves them as they are
+        kept = [com.copy(), com_velocity.copy(), rotations.copy(), positions.copy()]
+        biped.measure(*_random_biped_state(biped, rng), frames)
+        for a, b in zip(kept, (com, com_velocity, rotations, positions)):
+            np.testing.assert_array_equal(a, b)
+    # frames as a list, no frames, and an unknown frame
+    q, v = _random_biped_state(biped, rng)
+    np.testing.assert_array_equal(biped.measure(q, v, list(frames))[3], biped.measure(q, v, frames)[3])
+    # each tuple of frames gets its own frames (the model keeps their indices per tuple)
+    for subset in (("r_sole",), ("l_sole", "r_sole"), frames[:2]):
+        _, _, rotations, positions = biped.measure(q, v, subset)
+        biped.update(q)
+        np.testing.assert_array_equal(positions, [biped.frame_position(f) for f in subset])
+    empty = biped.measure(q, v)
+    assert empty[2].shape == (0, 3, 3) and empty[3].shape == (0, 3)
+    with pytest.raises(UnknownFrameError, match="nope"):
+        biped.measure(q, v, ("r_sole", "nope"))
+    with pytest.raises(ModelError, match="velocity must have shape"):
+        biped.measure(q, v[:-1], frames)
+    with pytest.raises(ModelError, match="non-finite"):
+        biped.measure(np.where(np.arange(biped.nq) == 9, np.nan, q), v, frames)
+
+
+def test_from_mujoco_state_normalizes_reorders_and_turns_the_base_velocity_into_the_base_frame(rng) -> None:
+    biped = RobotModel.from_mjcf(BIPED_XML)
+    qpos = np.concatenate([[0.1, 0.2, 0.9], [2.0, 0.4, -0.6, 1.0], rng.normal(size=biped.nq - 7)])  # not unit
+    qvel = rng.normal(size=biped.nv)
+    given = qpos.copy(), qvel.copy()
+    q, v = biped.from_mujoco_state(qpos, qvel)
+    w, x, y, z = qpos[3:7] / np.linalg.norm(qpos[3:7])
+    np.testing.assert_allclose(q[3:7], [x, y, z, w], rtol=1e-15)
+    np.testing.assert_array_equal(q[[0, 1, 2]], qpos[:3])
+    np.testing.assert_array_equal(q[7:], qpos[7:])
+    # the rotation of a unit quaternion (w, x, y, z), written out
+    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    np.testing.assert_allclose(v[:3], rotation.T @ qvel[:3], atol=1e-14)
+    np.testing.assert_array_equal(v[3:], qvel[3:])
+    np.testing.assert_array_equal(qpos, given[0])  # the inputs are left alone
+    np.testing.assert_array_equal(qvel, given[1])
+    qpos[3:7] = 0.0
+    with pytest.raises(ModelError, match="quaternion of qpos is zero"):
+        biped.from_mujoco_state(qpos, qvel)
+    with pytest.raises(ModelError, match="shapes"):
+        biped.from_mujoco_state(qpos[:-1], qvel)
