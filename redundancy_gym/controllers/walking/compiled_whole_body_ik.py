@@ -3,6 +3,8 @@ the time)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -125,6 +127,13 @@ class CompiledWholeBodyIk:
         self._inputs = self._field("inputs")
         self._outputs = self._field("outputs")
         self._scalars = self._field("scalars")
+        # views of the kernel's inputs and outputs, sliced once: step() runs once per control period, where
+        # numpy's per-call overhead is a noticeable part of the wrapper's cost
+        self._q_input = self._inputs[:nq]
+        self._reference_inputs = (self._inputs[nq:nq + REFERENCE_SIZE],
+                                  self._inputs[nq + REFERENCE_SIZE:nq + 2 * REFERENCE_SIZE])
+        self._q_output, self._qdot_output = self._outputs[:nq], self._outputs[nq:nq + nv]
+        self._extra_output = self._outputs[nq + nv:]
         self._scalars[:] = [ik.gain, ik.gamma, ik.beta, ik.nullspace_gain, ik.damping, ik.singular_threshold,
                             ik.max_velocity, 0.0]
         self._kernel = compiled_entry_point(whole_body_step, "int64(float64[::1], int64[::1])")
@@ -136,27 +145,27 @@ class CompiledWholeBodyIk:
     def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
         """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call; the references
         may be given packed (:meth:`WholeBodyReference.to_array`), which saves their conversion."""
-        if not np.isfinite(dt) or dt <= 0.0:
-            raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
-        nq, nv = self._nq, self._nv
+        if not (isinstance(dt, float) and 0.0 < dt < math.inf):  # the usual float dt passes without numpy
+            if not np.isfinite(dt) or dt <= 0.0:
+                raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
+        nq = self._nq
         q = np.asarray(q, dtype=np.float64)
         if q.shape != (nq,):
             raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
-        inputs = self._inputs
-        inputs[:nq] = q
-        for k, reference in enumerate((start, end)):
+        self._q_input[...] = q
+        for reference, view in zip((start, end), self._reference_inputs):
             packed = reference.to_array() if isinstance(reference, WholeBodyReference) else reference
-            if np.shape(packed) != (REFERENCE_SIZE,):
-                raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {np.shape(packed)}")
-            inputs[nq + k * REFERENCE_SIZE:nq + (k + 1) * REFERENCE_SIZE] = packed
+            shape = packed.shape if type(packed) is np.ndarray else np.shape(packed)
+            if shape != (REFERENCE_SIZE,):
+                raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {shape}")
+            view[...] = packed
         self._scalars[-1] = dt
         if self._kernel(self._f, self._i) == BAD_INPUT:
             if not np.all(np.isfinite(q)):
                 raise ModelError("configuration contains non-finite values")
             raise ControllerError("the references must be finite")
-        out = self._outputs
-        error, lz, sigma, success, _, _, limited = out[nq + nv:].tolist()
-        return WholeBodyIkResult(out[:nq].copy(), out[nq:nq + nv].copy(), error, lz, sigma, bool(success),
+        error, lz, sigma, success, _, _, limited = self._extra_output.tolist()
+        return WholeBodyIkResult(self._q_output.copy(), self._qdot_output.copy(), error, lz, sigma, bool(success),
                                  bool(limited))
 
     @property

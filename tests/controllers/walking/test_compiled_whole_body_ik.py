@@ -175,3 +175,26 @@ def test_packed_reference_round_trip_and_controller_packing(model: RobotModel) -
     assert np.any(sample.feet_pitch != 0.0)
     with pytest.raises(ControllerError, match="shape"):
         WholeBodyReference.from_array(np.zeros(5))
+
+
+def test_packed_references_give_the_same_step_and_results_are_the_callers(model: RobotModel) -> None:
+    """References packed by :meth:`WholeBodyReference.to_array` go to the same kernel inputs (start, then end);
+    the next step does not write into a result already returned."""
+    compiled = CompiledWholeBodyIk(WholeBodyIk(model))
+    q = standing(model)
+    start, end = _hold(model, q), _hold(model, q, com_lift=-0.01)
+    first = compiled.step(q, start, end, 0.004)
+    packed = compiled.step(q, start.to_array(), end.to_array(), 0.004)
+    np.testing.assert_array_equal(packed.q, first.q)
+    np.testing.assert_array_equal(packed.qdot, first.qdot)
+    assert packed[2:] == first[2:]
+    swapped = compiled.step(q, end.to_array(), start.to_array(), 0.004)
+    assert not np.array_equal(swapped.q, first.q)  # start and end are not interchangeable inputs
+    kept = first.q.copy(), first.qdot.copy()
+    compiled.step(first.q, end, _hold(model, q, com_lift=-0.02), 0.004)
+    np.testing.assert_array_equal(first.q, kept[0])
+    np.testing.assert_array_equal(first.qdot, kept[1])
+    with pytest.raises(ControllerError, match=r"packed reference has shape \(54,\), got \(53,\)"):
+        compiled.step(q, start, end.to_array()[:-1], 0.004)
+    with pytest.raises(ControllerError, match="dt must be finite and > 0, got nan"):
+        compiled.step(q, start, end, float("nan"))
