@@ -191,7 +191,9 @@ class WalkingPolicy(PerEnvPolicy):
         wrench = obs[self._wrench].reshape(2, 6)
         command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])
         self.last_command = command
-        return np.clip((command.joint_targets - self._nominal) / self._scale, -1.0, 1.0).astype(np.float32)
+        # np.minimum(np.maximum(...)) is np.clip (NaN included) without its Python-side dispatch, once per period
+        action = (command.joint_targets - self._nominal) / self._scale
+        return np.minimum(np.maximum(action, -1.0, out=action), 1.0, out=action).astype(np.float32)
 
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint position targets for one observation."""

@@ -83,3 +83,23 @@ def test_sb3_model_of_another_env_is_refused_at_load(tmp_path) -> None:
     assert redundancy_gym.make_policy(str(path), agri).predict(agri.reset(seed=0)[0])[0].shape == (9,)
     with pytest.raises(PolicyError, match=r"observation shape \(515,\).*PlanarReach-v0 has \(18,\)"):
         redundancy_gym.make_policy(str(path), gym.make("redundancy_gym/PlanarReach-v0"))
+
+
+def test_walking_action_is_the_clipped_normalized_joint_targets() -> None:
+    """The action is ``clip((targets - nominal) / scale, -1, 1)`` in float32 (NaN passes through, as in np.clip)."""
+    env = gym.make("redundancy_gym/BipedWalk-v0")
+    policy = redundancy_gym.make_policy("walking", env)
+    obs, _ = env.reset(seed=0)
+    action, _ = policy.predict(obs, episode_start=np.array([True]))
+    command = policy.last_command
+    nominal, scale = policy._nominal, policy._scale
+    np.testing.assert_array_equal(action, np.clip((command.joint_targets - nominal) / scale, -1, 1).astype(np.float32))
+    targets = nominal + scale * np.linspace(-3.0, 3.0, nominal.size)
+    targets[0] = np.nan
+    policy.controller.step = lambda *args: command._replace(joint_targets=targets.copy())
+    action = policy.command(obs)
+    expected = np.clip((targets - nominal) / scale, -1.0, 1.0).astype(np.float32)
+    assert action.dtype == np.float32 and np.isnan(action[0])
+    np.testing.assert_array_equal(action, expected)
+    assert np.nanmin(action) == -1.0 and np.nanmax(action) == 1.0
+    env.close()
