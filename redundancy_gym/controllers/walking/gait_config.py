@@ -27,6 +27,9 @@ class GaitConfig:
         swing_pitch_peak: share of the single support at which the swing pitch peaks, in (0, swing_pitch_flat).
         toe_length: distance from the sole point to the tip of the toe [m]; the pitched swing foot turns about it.
         swing_pitch_flat: share of the single support from which the swing foot is flat again, in (0, 1).
+        swing_settle: share of the single support at its end in which the swing foot only comes down, in [0, 0.5):
+            its horizontal motion ends before, so a foot that touches down early (it tracks its height a centimetre
+            or two low) lands on its foothold rather than short of it while still moving forward.
         com_height: ``z_c`` of the LIPM, height of the CoM above the ground [m].
         start_duration: double support at the start, while the weight moves onto the first stance foot [s].
         heel_toe_shift: the ZMP rolls from ``-shift`` to ``+shift`` along the stance foot in single support [m].
@@ -44,6 +47,7 @@ class GaitConfig:
     swing_pitch_peak: float = 0.3
     swing_pitch_flat: float = 0.75
     toe_length: float = 0.165
+    swing_settle: float = 0.1
     com_height: float = 0.91
     start_duration: float = 0.4
     heel_toe_shift: float = 0.02
@@ -74,6 +78,8 @@ class GaitConfig:
         if not 0.0 < self.swing_pitch_peak < self.swing_pitch_flat < 1.0:
             raise ControllerError("need 0 < swing_pitch_peak < swing_pitch_flat < 1, got "
                                   f"{self.swing_pitch_peak!r}, {self.swing_pitch_flat!r}")
+        if not 0.0 <= self.swing_settle < 0.5:
+            raise ControllerError(f"swing_settle must lie in [0, 0.5), got {self.swing_settle!r}")
         if not 0.0 <= self.swing_pitch <= 0.6:  # toes up would turn the heel below the ground about the toe tip
             raise ControllerError(f"swing_pitch must lie in [0, 0.6] rad (toes down), got {self.swing_pitch!r}")
         if not isinstance(self.preview_steps, (int, np.integer)) or self.preview_steps < 2:

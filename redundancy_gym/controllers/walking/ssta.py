@@ -147,6 +147,14 @@ class SstaConfig:
             more than this.
         step_over_single: single-support duration [s] of a step over a box (None: the nominal one); a slower swing
             lifts the foot to the box's height with smaller accelerations (Lola stepped over with 1 s steps).
+        long_swing: the longest swing [m] of a foot (between its footholds) at the nominal single-support duration;
+            a longer one is slowed to the same mean speed (None: never).
+        raise_pitch: toe-down pitch [rad/m] added to a swing over a box per metre of its toe tip's height: with the
+            knee bent that far the ankle meets its dorsiflexion limit (a swing 0.26 m high, planned at 0.25 rad,
+            pitched 0.57 rad and its toe caught the box's edge); planned, the foot turns about its toe tip, which
+            keeps to the path.
+        stuck_cost: cost of a walking-line offset that leaves a foothold in a box's band (its lane meeting the box
+            with the full margin) where no move along x fits (:meth:`foothold_shift`): the walk would stop there.
         max_line_move: largest sideways move [m] of one foot's foothold by the walking line's offset in one step
             (:meth:`Ssta.plan_line`; a larger one ran the legs into each other).
         max_widening: largest widening [m] of the stance by the line's offsets (the foot on the side of a move goes
@@ -156,10 +164,11 @@ class SstaConfig:
         long_shift_cost: cost added to a swing shifted sideways by more than ``quick_shift``.
         move_clearance: distance [m] along x kept between the sole of a swing that moves sideways (along the
             straight line between its footholds) and every box it does not pass beside.
-        straddle_height: the highest box [m] passed between the legs (a swing shifted outwards around it) at the
-            cost of the shift alone: the legs slant inwards from the feet to the hips, and above it the knee passes
-            over the box's top (the triangle, 0.3 m, is passed so; posts of 0.38 m touched a knee). Higher boxes
-            add ``long_shift_cost``.
+        straddle_height: the highest box [m] (its swept-sphere bounding box) that a swing shifted outwards around
+            it keeps between the legs: the legs slant inwards from the feet to the hips, and above it the shank or
+            knee passes over the box's top (the triangle, 0.345 m with its radius, is passed so; posts of 0.39 to
+            0.45 m touched a shank or knee on the random courses). A higher box blocks such a swing: the walking line
+            moves, or the walk stops in front of it.
         line_tolerance: how much [m] less than ``lateral_margin`` a sideways-moving swing may keep to a box (the
             boxes move by a few millimetres each time the robot's drift maps them again).
     """
@@ -181,6 +190,9 @@ class SstaConfig:
     max_step_length: float = 0.6
     min_step_length: float = 0.0
     step_over_single: float | None = None
+    long_swing: float | None = 0.7
+    raise_pitch: float = 1.5
+    stuck_cost: float = 1.0
     max_line_move: float = 0.3
     max_widening: float = 0.3
     line_offset_cost: float = 0.05
@@ -188,14 +200,15 @@ class SstaConfig:
     long_shift_cost: float = 3.0
     move_clearance: float = 0.15
     line_tolerance: float = 0.01
-    straddle_height: float = 0.3
+    straddle_height: float = 0.35
 
     def __post_init__(self) -> None:
         positive = ("max_step_over_height", "max_step_length", "toe_length", "heel_length", "foot_half_width")
         for f in fields(self):
             value = getattr(self, f.name)
-            if f.name == "step_over_single":
-                check_real(f.name, value, low=0.0, low_open=True, optional=True, unit="s", error=ControllerError)
+            if f.name in ("step_over_single", "long_swing"):
+                unit = "s" if f.name == "step_over_single" else "m"
+                check_real(f.name, value, low=0.0, low_open=True, optional=True, unit=unit, error=ControllerError)
             elif f.name == "min_step_length":  # may be negative: a step back
                 check_real(f.name, value, unit="m", error=ControllerError)
             else:
@@ -269,6 +282,13 @@ class Ssta:
         if lanes_a.shape != (2,) or not np.all(np.isfinite(lanes_a)) or not lanes_a[0] < lanes_a[1]:
             raise ControllerError(f"lanes must be finite (right, left) with right < left, got {lanes!r}")
         self.lanes = lanes_a
+        self._without_margin: Ssta | None = None
+
+    def _marginless(self) -> Ssta:
+        """This SSTA without the lateral margin (built once)."""
+        if self._without_margin is None:
+            self._without_margin = Ssta(replace(self.config, lateral_margin=0.0), self.lanes)
+        return self._without_margin
 
     # ------------------------------------------------------------------ classification
     def _lateral_options(self, box: ObstacleBox, y: float, side: int, outward: float | None = None
@@ -420,6 +440,10 @@ class Ssta:
             if reach[1] <= low or reach[0] >= high:
                 continue  # the swing's sole does not pass over the box along x
             decision, shift, _ = self._swing_decision(box, y, side)
+            if decision == "blocked" and c.lateral_margin > 0.0:
+                # the walking line was planned with less margin (the drift relaxation of plan_line): pass the box
+                # by the smallest shift that clears it rather than through it
+                decision, shift, _ = self._marginless()._swing_decision(box, y, side)
             if decision in ("beside", "blocked"):
                 continue
             band = (min(band[0], reach[0]), max(band[1], reach[1]))
@@ -440,8 +464,9 @@ class Ssta:
     def swing_cost(self, box: ObstacleBox, y: float, side: int) -> float:
         """The cost of a swing of foot ``side`` (0 right, 1 left) with its sole at ``y`` [m] past ``box`` (whose band
         along x it crosses): 0 beside it; a raise above the step height [m] over it; ``lateral_cost`` times a
-        sideways shift around it (plus ``long_shift_cost`` beyond ``quick_shift``, and for a box higher than
-        ``straddle_height`` kept between the legs); :data:`BLOCKED_COST` when none of these passes."""
+        sideways shift around it (plus ``long_shift_cost`` beyond ``quick_shift``); :data:`BLOCKED_COST` when none of
+        these passes, or when the shift is outwards around a box higher than ``straddle_height`` (kept between the
+        legs)."""
         c = self.config
         decision, shift, long = self._swing_decision(box, y, side)
         extra = c.long_shift_cost if long else 0.0
@@ -452,8 +477,32 @@ class Ssta:
         if decision == "over":
             return max(box.height + c.clearance - c.step_height, 0.0)
         if box.height > c.straddle_height and (shift > 0.0) == (side == 1):
-            extra += c.long_shift_cost  # shifted outwards, the box stays between the legs: the knee passes over it
+            return BLOCKED_COST  # shifted outwards, the box stays between the legs: the knee passes over its top
         return extra + c.lateral_cost * abs(shift)
+
+    def _passing_cost(self, start: tuple[float, float], end: tuple[float, float], side: int,
+                      boxes: Sequence[ObstacleBox]) -> float:
+        """The cost of a swing from ``start`` to ``end`` (x, y) [m] past ``boxes`` (all of which its sole passes along
+        x) as :meth:`swing` plans it, the boxes taken together: :data:`BLOCKED_COST` where a box blocks it, where
+        the shift it takes around one box leaves its sole in another's lane (without margin), or where it steps
+        over one box but not over another in its lane."""
+        if not boxes:
+            return 0.0
+        y = 0.5 * (start[1] + end[1])
+        costs = [self.swing_cost(box, y, side) for box in boxes]
+        if max(costs) >= BLOCKED_COST:
+            return BLOCKED_COST
+        modification = self.swing((start[0], start[1]), (end[0], end[1]), side, boxes)
+        if modification is None:
+            return 0.0
+        free = self._marginless()
+        for box in boxes:
+            if modification.kind == "over":
+                if free.in_lane(box, y) and box.height + self.config.clearance > modification.height + 1e-9:
+                    return BLOCKED_COST
+            elif free.in_lane(box, y + modification.lateral):
+                return BLOCKED_COST
+        return float(sum(costs))
 
     def plan_line(self, footholds: ArrayLike, first_side: int, fixed: tuple[float, float],
                   boxes: Sequence[ObstacleBox], free_end: bool = False) -> LinePlan:
@@ -480,21 +529,33 @@ class Ssta:
         if h.ndim != 2 or h.shape[0] < 2 or h.shape[1] < 2:
             raise ControllerError(f"footholds must be (n >= 2, 2), got shape {h.shape}")
         # the footholds whose swings began were planned around the boxes where they were mapped then: when the
-        # robot's drift moved them by more than the tolerance, plan with less margin rather than stop
-        margin = self.config.lateral_margin
+        # robot's drift moved them by more than the tolerance, plan with less margin rather than stop. The last
+        # rungs shorten the distance along x kept by sideways-moving swings, then let such a swing pass a box
+        # around it (its sideways shift made before the box, as Ssta.swing plans it): a stop in front of the box
+        # never passes it, these swings usually do
+        c = self.config
+        margin, clearance = c.lateral_margin, c.move_clearance
+        ladder = ((c.line_tolerance, clearance, False), (2.0 * c.line_tolerance, clearance, False),
+                  (margin, clearance, False), (margin, 0.5 * clearance, False), (margin, 0.0, False),
+                  (margin, 0.0, True))
         plan = LinePlan(np.zeros(0), 0.0, None)
-        for tolerance in (self.config.line_tolerance, 2.0 * self.config.line_tolerance, margin):
-            plan = self._plan_line(h, first_side, fixed, boxes, free_end, min(tolerance, margin))
+        for tolerance, move_clearance, moving_around in ladder:
+            plan = self._plan_line(h, first_side, fixed, boxes, free_end, min(tolerance, margin), move_clearance,
+                                   moving_around)
             if plan.blocked is None:
                 break
         return plan
 
     def _plan_line(self, h: NDArray[np.float64], first_side: int, fixed: tuple[float, float],
-                   boxes: Sequence[ObstacleBox], free_end: bool, tolerance: float) -> LinePlan:
-        """:meth:`plan_line` with the margin to the boxes less ``tolerance`` [m]."""
+                   boxes: Sequence[ObstacleBox], free_end: bool, tolerance: float,
+                   move_clearance: float | None = None, moving_around: bool = False) -> LinePlan:
+        """:meth:`plan_line` with the margin to the boxes less ``tolerance`` [m] and sideways-moving swings kept
+        ``move_clearance`` [m] along x from the boxes (None: the configured one), or (``moving_around``) costed
+        like the other swings where they pass a box."""
         c = self.config
         if h.shape[0] == 2:
             return LinePlan(np.zeros(0), 0.0, None)
+        clearance = c.move_clearance if move_clearance is None else move_clearance
         values = {0.0, round(float(fixed[0]), 6), round(float(fixed[1]), 6)}
         for box in boxes:
             for side in (-1.0, 1.0):
@@ -525,7 +586,7 @@ class Ssta:
             ya, yc = y0 + offsets[:, None], y1 + offsets[None, :]
             moving = np.abs(yc - ya) > 1e-3
             for box, (low, high) in zip(boxes, reaches, strict=True):
-                u0, u1 = max(min(x0, x1), low - c.move_clearance), min(max(x0, x1), high + c.move_clearance)
+                u0, u1 = max(min(x0, x1), low - clearance), min(max(x0, x1), high + clearance)
                 if u0 >= u1:
                     continue
                 # the sole moves along the straight line between the footholds: its y where it is near the box
@@ -535,14 +596,29 @@ class Ssta:
                 passes = high > min(x0, x1) and low < max(x0, x1)
                 # a moving swing may step over a box low enough (its path is raised above it wherever it moves)
                 over = passes and self._can_step_over(box)
-                swing[moving & sweep] += max(box.height + c.clearance - c.step_height, 0.0) if over else BLOCKED_COST
+                if not moving_around:
+                    swing[moving & sweep] += max(box.height + c.clearance - c.step_height, 0.0) if over \
+                        else BLOCKED_COST
                 if passes:  # its sole passes the box along x: over, around or beside
                     for i, k in zip(*np.nonzero(~moving), strict=True):
                         swing[i, k] += tolerant.swing_cost(box, 0.5 * float(ya[i, 0] + yc[0, k]), side)
+            if moving_around:
+                passed = [b for b, (low, high) in zip(boxes, reaches, strict=True) if high > min(x0, x1) and
+                          low < max(x0, x1)]
+                for i, k in zip(*np.nonzero(moving), strict=True):
+                    swing[i, k] += tolerant._passing_cost((x0, float(ya[i, 0])), (x1, float(yc[0, k])), side, passed)
+            # a foothold left in a box's band in its lane (full margin) moves along x; where no move fits, the walk
+            # stops in front of the box (a line barely 1 cm off the box would have passed it)
+            stand = np.zeros(n)
+            if any(self.foothold_band(b)[0] < x1 < self.foothold_band(b)[1] for b in boxes):
+                previous, behind = h[m - 1], float(h[m - 2, 0])
+                for i, o in enumerate(offsets):
+                    if self.foothold_shift((x1, y1 + o), previous, boxes, behind=behind) is None:
+                        stand[i] = c.stuck_cost
             # the stance from o_b (foothold m-1, the other foot) to o_c: never narrower, widened at most so much
             widening = (offsets[:, None] - offsets[None, :]) if side == 0 else (offsets[None, :] - offsets[:, None])
             width = np.where((widening >= -1e-9) & (widening <= c.max_widening + 1e-9), 0.0, np.inf)  # [b, c]
-            total = value[:, :, None] + (step + swing)[:, None, :] + width[None, :, :]  # [a, b, c]
+            total = value[:, :, None] + (step + swing + stand[None, :])[:, None, :] + width[None, :, :]  # [a, b, c]
             parent = np.argmin(total, axis=0)
             value = np.take_along_axis(total, parent[None], axis=0)[0]
             parents.append(parent)

@@ -207,7 +207,13 @@ class WalkingPattern:
             # stopped in front of a box too large to pass: the feet step in place beside the last foothold
             last = self.foothold(self._stop - 1)
             own = self.foothold(self._stop - 1 if (self._stop - 1) % 2 == j % 2 else self._stop - 2)
-            h = np.array([last[0], own[1], own[2]])
+            # beside the other foot, unless a box stands there in this foot's lane (a post the other foot passed)
+            x = last[0]
+            if self._ssta is not None and any(self._ssta.in_lane(b, float(own[1])) and
+                                              self._ssta.foothold_band(b)[0] < x < self._ssta.foothold_band(b)[1]
+                                              for b in self._boxes):
+                x = own[0]
+            h = np.array([x, own[1], own[2]])
             for first, shift in self._shifts:  # push recovery still moves the steps in place
                 if self._stop <= first <= j:
                     h[:2] += shift
@@ -406,19 +412,21 @@ class WalkingPattern:
                 j += 1
             if not moved:
                 break
-        # the swings from the first step not yet begun: their modification and (stepping over) their timing
-        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= k}
-        self._modifications = {i: v for i, v in self._modifications.items() if i <= k}
-        single = ssta.config.step_over_single
-        if single is not None:
+        # the swings from the first step not yet begun: their modification and (stepping over) their timing; a swing
+        # only just begun (the controller samples the new step before it maps the obstacles again) is replanned too:
+        # in its first 1 % it has not moved (a quintic covers 1e-5 of its path), and its old path passed boxes
+        # where they were mapped a step ago
+        kept = k if k >= 0 and t - self.step_start(k) > 0.01 * self.step_single(k) else k - 1
+        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= kept}
+        self._modifications = {i: v for i, v in self._modifications.items() if i <= kept}
+        over_single, long_swing = ssta.config.step_over_single, ssta.config.long_swing
+        if over_single is not None or long_swing is not None:
             for i in range(max(k + 1, 0), j):
-                side = RIGHT if i % 2 == 0 else LEFT
-                modification = ssta.swing(self.foothold(i), self.foothold(i + 2), side, self._boxes)
-                over = modification is not None and modification.kind == "over"
-                if over and self._singles.get(i) != single:
-                    self._singles[i] = float(single)
+                single = self._ssta_single(i, ssta)
+                if single is not None and self._singles.get(i) != single:
+                    self._singles[i] = single
                     changed = True
-                elif not over and i in self._singles:
+                elif single is None and i in self._singles:
                     del self._singles[i]
                     changed = True
         if changed:
@@ -426,6 +434,22 @@ class WalkingPattern:
             self._stale = True
             self._replan_from(t)
         return changed
+
+    def _ssta_single(self, i: int, ssta: Ssta) -> float | None:
+        """The single support [s] SSTA gives step ``i``'s swing (None: the nominal one): ``step_over_single`` over a
+        box, and a swing longer than ``long_swing`` (a foothold moved back before a box makes the next swing of
+        that foot long) slowed to the nominal swing's speed over ``long_swing``: the swing foot lags a fast swing
+        and lands short of its foothold, hard enough to kick the stance foot back onto the box."""
+        c = ssta.config
+        start, end = self.foothold(i), self.foothold(i + 2)
+        modification = ssta.swing(start, end, RIGHT if i % 2 == 0 else LEFT, self._boxes)
+        if modification is not None and modification.kind == "over":
+            # (slowed, a swing over a box pitched its toe into the box's edge on the random courses)
+            return None if c.step_over_single is None else float(c.step_over_single)
+        travel = float(np.hypot(end[0] - start[0], end[1] - start[1]))
+        if c.long_swing is not None and travel > c.long_swing:
+            return self._single * travel / c.long_swing
+        return None
 
     def _plan_line(self, first: int, boxes: tuple[ObstacleBox, ...], ssta: Ssta, reach: float,
                    free_end: bool) -> bool:
@@ -569,6 +593,13 @@ class WalkingPattern:
                 nominal, scale = self._nominal_swing_time(k, s)
                 angle, rate, _ = self._swing_pitch.evaluate(nominal)
                 angle, rate = float(angle), float(rate) * scale
+                modification = self._modifications.get(k)
+                if modification is not None and modification.kind == "over" and self._ssta is not None:
+                    # high over a box the knee bends so far that the ankle meets its dorsiflexion limit and the
+                    # real foot pitches toes-down anyway; planned, its toe tip still follows the path
+                    gain = self._ssta.config.raise_pitch
+                    angle += gain * (float(position[2]) - self.ground)
+                    rate += gain * float(velocity[2])
                 # the pitched foot turns about its toe tip, which follows the swing path: no toe scuffing
                 toe = self.config.toe_length
                 if self._turned:  # the toe tip ahead along the foot's heading, which turns over the single support
@@ -651,14 +682,10 @@ class WalkingPattern:
                     self._swing_cache[k] = self._modified_swing(start, end, self.step_single(k), modification)
                     return self._swing_cache[k]
                 self._modifications.pop(k, None)
-            half = 0.5 * self._single
-            height = self.config.step_height
-            # apex acceleration of the parabola through the same apex: the two pieces join C2
-            apex_acceleration = -8.0 * height / self._single**2
-            lift = Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration)
-            land = Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)
-            self._swing_cache[k] = (PiecewiseQuintic([lift, land]),
-                                    Quintic.from_boundary(self._single, start[:2], end[:2]))
+            single = self.step_single(k)
+            self._swing_cache[k] = (self._nominal_vertical(start, end, single),
+                                    Quintic.from_boundary(single * (1.0 - self.config.swing_settle), start[:2],
+                                                          end[:2]))
         return self._swing_cache[k]
 
     def _modified_swing(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float,
@@ -666,10 +693,10 @@ class WalkingPattern:
         """An SSTA swing (monograph 5.4.2): its control points at the ends of the band where it passes the box,
         raised to the box's height (``"over"``) or shifted sideways by the overlap (``"around"``); C2 throughout.
 
-        Three pieces: lift-off to the band's start, across the band, down to the landing; their durations share
-        ``single`` in proportion to the distance each covers (at least a fifth each). Along x the sole moves
-        forward only: at the band's ends its speed is the crossing speed, at most twice the mean speed of the
-        outer pieces.
+        Over a box, three pieces: lift-off to the band's start, across the band, down to the landing; their
+        durations share ``single`` in proportion to the distance each covers (at least a fifth each). Along x the
+        sole moves forward only: at the band's ends its speed is the crossing speed, at most twice the mean speed of
+        the outer pieces. Around a box: :meth:`_around`, at the nominal height.
         """
         a, e = float(start[0]), float(end[0])
         if e < a:  # a swing back (a foothold moved behind): the band is passed standing still along x
@@ -677,40 +704,100 @@ class WalkingPattern:
         b0 = min(max(modification.band[0], a), e)
         b1 = min(max(modification.band[1], b0), e)
         top = self.ground + modification.height
-        # each piece's share of the time follows the distance it covers: the rise (or the sideways shift) happens
-        # before the band, the descent (or the shift back) after it
+        if modification.kind == "around":
+            return self._nominal_vertical(start, end, single), self._around(start, end, single, modification, b0, b1)
+        # each piece's share of the time follows the distance it covers: the rise happens before the band, the
+        # descent after it
         shift = abs(modification.lateral)
         lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else shift)
         cross = b1 - b0
         land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)
         total = lift + cross + land
         weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
-        if modification.kind == "around":  # the sideways shift and back each take at least 30 % of the swing
-            weights[[0, 2]] = np.maximum(weights[[0, 2]], 0.3 / 0.4 * weights[1])
         t1, t2, t3 = single * weights / weights.sum()
+        # the horizontal motion ends before the landing (GaitConfig.swing_settle), by at most half the last piece
+        t3_horizontal = max(t3 - self.config.swing_settle * single, 0.5 * t3)
         speed = (b1 - b0) / t2
-        v1, v2 = min(speed, 2.0 * (b0 - a) / t1), min(speed, 2.0 * (e - b1) / t3)
+        v1, v2 = min(speed, 2.0 * (b0 - a) / t1), min(speed, 2.0 * (e - b1) / t3_horizontal)
         # the nominal lateral path (start to end) plus the shift, which holds across the band
-        lateral = Quintic.from_boundary(single, start[1], end[1])
+        lateral = Quintic.from_boundary(single * (1.0 - self.config.swing_settle), start[1], end[1])
         y1, vy1, ay1 = (float(x) for x in lateral.evaluate(t1))
         y2, vy2, ay2 = (float(x) for x in lateral.evaluate(t1 + t2))
         d = modification.lateral
         horizontal = PiecewiseQuintic([
             Quintic.from_boundary(t1, start[:2], [b0, y1 + d], 0.0, [v1, vy1], 0.0, [0.0, ay1]),
             Quintic.from_boundary(t2, [b0, y1 + d], [b1, y2 + d], [v1, vy1], [v2, vy2], [0.0, ay1], [0.0, ay2]),
-            Quintic.from_boundary(t3, [b1, y2 + d], end[:2], [v2, vy2], 0.0, [0.0, ay2], 0.0)])
-        if modification.kind == "over":
-            vertical = PiecewiseQuintic([Quintic.from_boundary(t1, start[2], top),
-                                         Quintic.from_boundary(t2, top, top),
-                                         Quintic.from_boundary(t3, top, end[2])])
-        else:
-            half = 0.5 * single
-            height = self.config.step_height
-            apex_acceleration = -8.0 * height / single**2
-            vertical = PiecewiseQuintic([
-                Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration),
-                Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)])
+            Quintic.from_boundary(t3_horizontal, [b1, y2 + d], end[:2], [v2, vy2], 0.0, [0.0, ay2], 0.0)])
+        vertical = PiecewiseQuintic([Quintic.from_boundary(t1, start[2], top),
+                                     Quintic.from_boundary(t2, top, top),
+                                     Quintic.from_boundary(t3, top, end[2])])
         return vertical, horizontal
+
+    def _nominal_vertical(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float) -> PiecewiseQuintic:
+        """The nominal swing height over ``single`` [s]: up to ``step_height`` above the landing and down, C2 at the
+        apex (both pieces share the parabola's apex acceleration)."""
+        half = 0.5 * single
+        height = self.config.step_height
+        apex_acceleration = -8.0 * height / single**2
+        return PiecewiseQuintic([
+            Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration),
+            Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)])
+
+    def _around(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float,
+                modification: SwingModification, b0: float, b1: float) -> PiecewiseQuintic:
+        """The horizontal path of a swing around a box: the nominal one (settled before the landing) plus a sideways
+        shift by ``modification.lateral``, made before the sole reaches the band ``[b0, b1]`` along x and taken back
+        after it, each in at least ``0.3 * single`` [s] times the shift over ``quick_shift`` (at most 1).
+
+        Along x the sole keeps the nominal quintic: the three pieces of a swing over a box, stalled along x while the
+        shift was made, left a landing piece 0.36 m in 0.18 s, and the foot, 18 cm behind, touched down short and
+        hard. A short shift needs little time; where the band begins at the lift-off the shift is under way while
+        the sole starts forward (slowly: a quintic covers 3 % of its path in the first 15 % of its time)."""
+        settled = single * (1.0 - self.config.swing_settle)
+        base = Quintic.from_boundary(settled, start[:2], end[:2])
+        a, e = float(start[0]), float(end[0])
+
+        def reaches(x: float) -> float:
+            """When the nominal sole reaches ``x`` along x [s] (bisection: the quintic is monotonic)."""
+            if e <= a or x <= a:
+                return 0.0
+            if x >= e:
+                return settled
+            low, high = 0.0, settled
+            for _ in range(40):
+                mid = 0.5 * (low + high)
+                low, high = (mid, high) if float(base.evaluate(mid)[0][0]) < x else (low, mid)
+            return 0.5 * (low + high)
+
+        d = float(modification.lateral)
+        quick = self._ssta.config.quick_shift if self._ssta is not None else 0.05
+        shortest = 0.3 * single * (min(abs(d) / quick, 1.0) if quick > 0.0 else 1.0)
+        t_in, t_out = max(reaches(b0), shortest), min(reaches(b1), settled - shortest)
+        if t_out < t_in:  # a short band: the shift is held for an instant between going out and back
+            t_in = t_out = min(max(0.5 * (t_in + t_out), shortest), settled - shortest)
+        shift_in, shift_out = Quintic.from_boundary(t_in, 0.0, d), Quintic.from_boundary(settled - t_out, d, 0.0)
+
+        def state(t: float) -> tuple[NDArray[np.float64], ...]:
+            """The path's position, velocity and acceleration at ``t`` [s]: the nominal plus the shift."""
+            p, v, acc = (np.array(x, dtype=np.float64) for x in base.evaluate(t))
+            if t <= t_in:
+                w = shift_in.evaluate(t)
+            elif t >= t_out:
+                w = shift_out.evaluate(t - t_out)
+            else:
+                w = (d, 0.0, 0.0)
+            for target, value in zip((p, v, acc), w, strict=True):
+                target[1] += float(value)
+            return p, v, acc
+
+        knots = [t for t in dict.fromkeys([0.0, t_in, t_out, settled])]
+        pieces = []
+        for t0, t1 in zip(knots[:-1], knots[1:], strict=True):
+            if t1 - t0 <= 1e-12:
+                continue
+            (p0, v0, a0), (p1, v1, a1) = state(t0), state(t1)
+            pieces.append(Quintic.from_boundary(t1 - t0, p0, p1, v0, v1, a0, a1))
+        return PiecewiseQuintic(pieces)
 
     def _nominal_swing_time(self, k: int, s: float) -> tuple[float, float]:
         """The nominal swing time [s] at swing time ``s`` of step ``k``, and its rate (1 unless re-timed)."""

@@ -9,6 +9,7 @@ from redundancy_gym.controllers import ControllerError
 from redundancy_gym.controllers.walking.ssta import BLOCKED_COST
 from redundancy_gym.controllers.walking import (
     GaitConfig,
+    Quintic,
     ObstacleBox,
     Ssta,
     SstaConfig,
@@ -336,3 +337,198 @@ def test_a_line_that_cannot_keep_the_stance_limits_from_its_fixed_footholds_says
 
 def _posts_boxes() -> list[ObstacleBox]:
     return list(bounding_boxes(_posts((2.0, 0.3))))
+
+
+@pytest.mark.parametrize("course", [lambda: [], beam, triangle])
+def test_every_swing_comes_straight_down_onto_its_foothold(course):
+    # the horizontal motion ends before the landing (GaitConfig.swing_settle): a foot that touches down a little
+    # early lands on its foothold instead of short of it while still moving forward (it kicked the stance foot
+    # back onto a box); a modified swing keeps at least half its last piece for that
+    pattern, _ = pattern_with(course())
+    settle = pattern.config.swing_settle
+    assert settle > 0.0
+    for k in range(8):
+        single = pattern.step_single(k)
+        nominal = pattern.swing_modification(k) is None
+        still = (1.0 if nominal else 0.5) * settle * single
+        for s in np.linspace(single - still, single, 25):
+            (xy, vxy, _), (z, _, _) = pattern._swing_kinematics(k, s)  # noqa: SLF001
+            np.testing.assert_allclose(xy, pattern.foothold(k + 2)[:2], atol=1e-12)
+            np.testing.assert_allclose(vxy, 0.0, atol=1e-12)
+            assert s == single or z > pattern.ground
+        # before it the sole still moves along x
+        (xy, _, _), _ = pattern._swing_kinematics(k, 0.5 * single)  # noqa: SLF001
+        assert xy[0] < pattern.foothold(k + 2)[0] - 1e-3
+
+
+def test_a_long_swing_is_slowed_to_the_mean_speed_of_the_longest_nominal_one():
+    # around the triangle a foothold moves back in front of it: the next swing of that foot covers 0.85 m
+    pattern, ssta = pattern_with(triangle())
+    plain = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    longest, single = ssta.config.long_swing, plain.single_support
+    slowed = 0
+    for k in range(12):
+        travel = float(np.hypot(*(pattern.foothold(k + 2) - pattern.foothold(k))[:2]))
+        if travel > longest:
+            assert pattern.step_single(k) == pytest.approx(single * travel / longest)
+            slowed += 1
+        else:
+            assert pattern.step_single(k) == single
+        # the later steps start later by the longer single supports before them
+        assert pattern.step_start(k + 1) - pattern.step_start(k) == pytest.approx(
+            plain.step_duration - single + pattern.step_single(k))
+    assert slowed == 2
+    never = pattern_with(triangle(), SstaConfig(long_swing=None))[0]
+    assert all(never.step_single(k) == single for k in range(12))
+
+
+def test_a_swing_over_a_box_pitches_its_toes_down_with_its_height_and_its_toe_tip_keeps_to_the_path():
+    pattern, ssta = pattern_with(beam())
+    gain = ssta.config.raise_pitch
+    k = next(k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "over")
+    side = k % 2
+    plain = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    toe = pattern.config.toe_length
+    start, single = pattern.step_start(k), pattern.step_single(k)
+    times = start + np.linspace(0.01, 0.99, 99) * single
+    angles, rates = [], []
+    for t in times:
+        sample = pattern.sample(float(t))
+        (_, _, _), (z, _, _) = pattern._swing_kinematics(k, t - start)  # noqa: SLF001
+        angle = float(sample.feet_pitch[side])
+        nominal = float(plain._swing_pitch.evaluate((t - start) * plain.single_support / single)[0])  # noqa: SLF001
+        assert angle == pytest.approx(nominal + gain * (float(z) - pattern.ground), abs=1e-9)
+        # the toe tip (the sole point turned back about it) is on the swing path
+        assert float(sample.feet[side][2]) - toe * np.sin(angle) == pytest.approx(float(z), abs=1e-9)
+        angles.append(angle)
+        rates.append(float(sample.feet_pitch_rate[side]))
+    top = pattern.swing_modification(k).height
+    assert max(angles) >= gain * top
+    # the rate is the angle's derivative (the height term included)
+    np.testing.assert_allclose(np.gradient(angles, times)[1:-1], np.array(rates)[1:-1], atol=0.02 * max(np.abs(rates)))
+
+
+def _staggered_posts() -> tuple[np.ndarray, list[ObstacleBox]]:
+    """The footholds and boxes (plan frame) of a random course where the line, moved right past a post on the
+    left, must move left before a post on the right 1.4 m on: the right foot's last chance to move lands 0.25 m
+    in front of the second post."""
+    h = np.array([[8.645, 0.09], [8.965, -0.09], [9.285, 0.09], [9.437, -0.09], [9.757, 0.09], [10.077, -0.09],
+                  [10.397, 0.09], [10.717, -0.09], [11.037, 0.09], [11.357, -0.09]])
+    boxes = [ObstacleBox(np.array([8.268, 0.107, -0.044]), np.array([8.356, 0.196, 0.354])),
+             ObstacleBox(np.array([9.687, -0.296, -0.043]), np.array([9.774, -0.136, 0.42]))]
+    return h, boxes
+
+
+def test_a_line_move_close_in_front_of_a_post_is_taken_rather_than_stopping_the_walk():
+    ssta = Ssta(SstaConfig(), LANES)
+    c = ssta.config
+    h, boxes = _staggered_posts()
+    fixed = (-0.09, -0.09)
+    # with the full distance along x kept by moving swings, even the whole margin relaxed blocks it
+    assert ssta._plan_line(h, 1, fixed, boxes, False, c.lateral_margin).blocked is not None  # noqa: SLF001
+    plan = ssta.plan_line(h, 1, fixed, boxes)
+    assert plan.blocked is None
+    offsets = np.concatenate([fixed, plan.offsets])
+    y = h[:, 1] + offsets
+    half = c.foot_half_width
+    for j in range(2, len(h)):
+        for box in boxes:
+            low = float(box.lower[0]) - c.toe_length
+            high = float(box.upper[0]) + c.heel_length
+            if h[j, 0] > low and h[j - 2, 0] < high:  # this swing passes the box: beside it, not moving
+                assert y[j] == y[j - 2]
+                assert y[j] + half <= box.lower[1] or y[j] - half >= box.upper[1], (j, y[j], box)
+
+
+def test_the_line_moves_a_centimetre_rather_than_leave_a_foothold_where_no_move_along_x_fits():
+    # a tall block beside the right lane, 9 mm into its margin; the right foothold in front of it can move
+    # neither back (behind the left foot) nor forward (a 0.62 m step)
+    block = ObstacleBox(np.array([2.716, -0.453, 0.0]), np.array([3.114, -0.191, 0.363]))
+    h = np.array([[2.022, 0.09], [2.342, -0.09], [2.662, 0.09], [2.982, -0.09], [3.302, 0.09], [3.622, -0.09],
+                  [3.942, 0.09], [4.262, -0.09], [4.582, 0.09], [4.902, -0.09]])
+    ssta = Ssta(SstaConfig(), LANES)
+    assert ssta.foothold_shift(h[3], h[2], [block], behind=float(h[1, 0])) is None
+    plan = ssta.plan_line(h, 1, (0.0, 0.0), [block])
+    assert plan.blocked is None
+    y = h[3, 1] + plan.offsets[1]
+    assert not ssta.in_lane(block, float(y)) and 0.0 < y - h[3, 1] <= 0.015
+    stuck = ssta._plan_line(h, 1, (0.0, 0.0), [block], False, ssta.config.line_tolerance)  # noqa: SLF001
+    assert stuck.offsets[1] == plan.offsets[1]
+    free = Ssta(SstaConfig(stuck_cost=0.0), LANES).plan_line(h, 1, (0.0, 0.0), [block])
+    assert free.offsets[1] == 0.0  # without the cost the line stays and the walk would stop
+
+
+def test_a_swing_the_line_passes_with_less_margin_still_goes_around_its_box():
+    # the line was planned with the margin relaxed (the robot's drift): with the full margin no shift clears the
+    # post, so the swing takes the smallest one that does instead of going straight through it
+    ssta = Ssta(SstaConfig(), LANES)
+    post = ObstacleBox(np.array([6.52, -0.23, -0.04]), np.array([6.60, -0.07, 0.3]))
+    modification = ssta.swing([6.3, -0.185, 0.0], [7.1, -0.185, 0.0], 0, [post])
+    assert modification is not None and modification.kind == "around"
+    c = ssta.config
+    assert -0.185 + modification.lateral + c.foot_half_width <= float(post.lower[1]) + 1e-9
+    assert abs(modification.lateral) <= c.max_outward_shift
+
+
+def test_a_swing_just_begun_is_replanned_around_boxes_mapped_again():
+    # the controller samples a new step before it maps the obstacles again: that swing's path must follow
+    pattern = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
+    ssta = Ssta(SstaConfig(), LANES)
+    pattern.set_obstacles(0.0, (), ssta)
+    k = 4
+    t = pattern.step_start(k)
+    pattern.sample(t)  # the swing's path is planned (and cached) without obstacles
+    assert pattern.swing_modification(k) is None
+    x = 0.5 * float(pattern.foothold(k)[0] + pattern.foothold(k + 2)[0])
+    beam_here = bounding_boxes(rectangle(x, 0.35, 0.05, 0.04))
+    pattern.set_obstacles(t, beam_here, ssta)
+    pattern.sample(t)
+    assert pattern.swing_modification(k) is not None and pattern.swing_modification(k).kind == "over"
+    # a swing well under way keeps its path
+    later = pattern.step_start(k + 1) + 0.2
+    pattern.sample(later)
+    before = pattern.swing_modification(k + 1)
+    pattern.set_obstacles(later, beam_here + bounding_boxes(rectangle(x + 0.32, 0.35, 0.05, 0.04)), ssta)
+    assert pattern.swing_modification(k + 1) == before
+
+
+def test_a_swing_around_a_box_keeps_the_nominal_progress_along_x():
+    # the shift is added to the nominal path: the sole never stalls along x and then rushes to its landing
+    pattern, _ = pattern_with(triangle())
+    arounds = [k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "around"]
+    assert arounds
+    settle = pattern.config.swing_settle
+    for k in arounds:
+        single = pattern.step_single(k)
+        nominal = Quintic.from_boundary(single * (1.0 - settle), pattern.foothold(k)[:2], pattern.foothold(k + 2)[:2])
+        for s in np.linspace(0.0, single, 60):
+            (xy, vxy, _), _ = pattern._swing_kinematics(k, s)  # noqa: SLF001
+            x, vx, _ = nominal.evaluate(s)
+            assert xy[0] == pytest.approx(float(x[0]), abs=1e-9) and vxy[0] == pytest.approx(float(vx[0]), abs=1e-9)
+
+
+def test_a_swing_never_keeps_a_post_higher_than_the_straddle_height_between_the_legs():
+    # a post overlapping the right lane from the inside: the right foot could only pass it shifted outwards, the
+    # post between the legs, where the shank or knee passes over its top
+    ssta = Ssta(SstaConfig(), LANES)
+    c = ssta.config
+    tall = bounding_boxes([LSS([2.0, -0.02, 0.0], [2.0, -0.02, 0.36], 0.03)])[0]
+    low = bounding_boxes([LSS([2.0, -0.02, 0.0], [2.0, -0.02, 0.28], 0.03)])[0]
+    assert tall.height > c.straddle_height >= low.height
+    decision, shift, _ = ssta._swing_decision(tall, -0.09, 0)  # noqa: SLF001
+    assert decision == "around" and shift < 0.0  # outwards
+    assert ssta.swing_cost(tall, -0.09, 0) >= BLOCKED_COST
+    assert ssta.swing_cost(low, -0.09, 0) < BLOCKED_COST
+    # the monograph's triangle (0.345 m with its radius) is still passed with both feet around it
+    pattern, _ = pattern_with(triangle())
+    assert [m.kind for k in range(8) if (m := pattern.swing_modification(k)) is not None] == ["around", "around"]
+    # the walking line moves so that neither foot keeps the tall post between the legs
+    pattern, ssta = pattern_with([LSS([2.0, -0.02, 0.0], [2.0, -0.02, 0.36], 0.03)])
+    assert pattern.stop_index is None
+    footholds = [pattern.foothold(j) for j in range(24)]
+    for j in range(2, 24):
+        start, end = footholds[j - 2], footholds[j]
+        low_x, high_x = ssta.foothold_band(tall)
+        if end[0] > low_x and start[0] < high_x:
+            m = ssta.swing(start, end, j % 2, [tall])
+            assert m is None or m.kind != "around" or (m.lateral > 0.0) != (j % 2 == 1)
