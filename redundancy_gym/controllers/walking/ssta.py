@@ -578,6 +578,7 @@ class Ssta:
                    for b in boxes]
         parents: list[NDArray[np.intp]] = []
         swings: list[NDArray[np.float64]] = []
+        straddles: list[NDArray[np.float64]] = []
         for m in range(2, h.shape[0]):
             side = (first_side + m) % 2
             x0, x1 = float(h[m - 2, 0]), float(h[m, 0])
@@ -618,11 +619,22 @@ class Ssta:
             # the stance from o_b (foothold m-1, the other foot) to o_c: never narrower, widened at most so much
             widening = (offsets[:, None] - offsets[None, :]) if side == 0 else (offsets[None, :] - offsets[:, None])
             width = np.where((widening >= -1e-9) & (widening <= c.max_widening + 1e-9), 0.0, np.inf)  # [b, c]
-            total = value[:, :, None] + (step + swing + stand[None, :])[:, None, :] + width[None, :, :]  # [a, b, c]
-            parent = np.argmin(total, axis=0)
+            # a swing past a box higher than straddle_height with the box between the soles (the stance foot on its
+            # other side): the legs slant inwards, and the shank or knee passes over its top
+            straddle = np.zeros((n, n))  # [b, c]
+            stance_y = float(h[m - 1, 1]) + offsets[:, None]
+            swing_y = y1 + offsets[None, :]
+            right_y, left_y = (swing_y, stance_y) if side == 0 else (stance_y, swing_y)
+            for box, (low, high) in zip(boxes, reaches, strict=True):
+                if box.height > c.straddle_height and high > min(x0, x1) and low < max(x0, x1):
+                    between = (right_y + c.foot_half_width <= box.lower[1]) & (left_y - c.foot_half_width >= box.upper[1])
+                    straddle[between] = BLOCKED_COST
+            total = value[:, :, None] + (step + swing + stand[None, :])[:, None, :] + (width + straddle)[None, :, :]
+            parent = np.argmin(total, axis=0)  # over a, for each (b, c)
             value = np.take_along_axis(total, parent[None], axis=0)[0]
             parents.append(parent)
             swings.append(swing)
+            straddles.append(straddle)
         zero = int(np.argmin(np.abs(offsets)))
         if free_end or not np.isfinite(value[zero, zero]):
             b, cc = np.unravel_index(int(np.argmin(value)), value.shape)
@@ -634,7 +646,8 @@ class Ssta:
             chosen.append(int(parent[chosen[-1], chosen[-2]]))
         chosen = chosen[::-1]  # offsets of footholds 1 .. n-1 (index into offsets)
         path = [a_index, *chosen]
-        blocked = next((m for m in range(len(swings)) if swings[m][path[m], path[m + 2]] >= BLOCKED_COST), None)
+        blocked = next((m for m in range(len(swings)) if swings[m][path[m], path[m + 2]] +
+                        straddles[m][path[m + 1], path[m + 2]] >= BLOCKED_COST), None)
         if not np.isfinite(cost) and blocked is None:  # no stance from the fixed footholds keeps the limits
             blocked = 0
         return LinePlan(offsets[path[2:]], cost, blocked)

@@ -532,3 +532,27 @@ def test_a_swing_never_keeps_a_post_higher_than_the_straddle_height_between_the_
         if end[0] > low_x and start[0] < high_x:
             m = ssta.swing(start, end, j % 2, [tall])
             assert m is None or m.kind != "around" or (m.lateral > 0.0) != (j % 2 == 1)
+
+
+def test_the_line_never_keeps_a_tall_post_between_the_feet_either():
+    # a 0.4 m post between the lanes: passing with one foot on each side (the stance widened around it) is as
+    # blocked as a swing shifted outwards around it; both feet pass on one side
+    # (the stance starts widened by 0.16 m: without the rule both feet would walk on past it, one on each side)
+    ssta = Ssta(SstaConfig(), LANES)
+    post = bounding_boxes([LSS([3.0, 0.0, 0.0], [3.0, 0.0, 0.36], 0.04)])[0]
+    h = np.array([[0.32 * max(j - 1, 0), -0.09 if j % 2 == 0 else 0.09] for j in range(20)])
+    fixed = (-0.08, 0.08)
+    plan = ssta.plan_line(h, 0, fixed, [post])
+    assert plan.blocked is None
+    y = h[:, 1] + np.concatenate([fixed, plan.offsets])
+    low, high = ssta.foothold_band(post)
+    passing = [j for j in range(2, 20) if h[j, 0] > low and h[j - 2, 0] < high]
+    assert passing
+    half = ssta.config.foot_half_width
+    for j in passing:
+        right, left = (y[j], y[j - 1]) if j % 2 == 0 else (y[j - 1], y[j])
+        assert not (right + half <= post.lower[1] and left - half >= post.upper[1]), (j, right, left)
+    # a lower post may stay between the feet (the monograph's triangle is passed so)
+    short = bounding_boxes([LSS([2.0, 0.0, 0.0], [2.0, 0.0, 0.25], 0.04)])[0]
+    kept = ssta.plan_line(h, 0, fixed, [short])
+    assert kept.blocked is None and np.allclose(kept.offsets[:8], np.tile(fixed, 4))
