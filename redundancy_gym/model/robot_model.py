@@ -348,6 +348,15 @@ class RobotModel:
         mass = pin.crba(self._model, self._data, q)
         return np.triu(mass) + np.triu(mass, 1).T
 
+    def nonlinear_effects(self, q: ArrayLike, qdot: ArrayLike) -> NDArray[np.float64]:
+        """``h(q, qdot)`` of ``M qddot + h = tau`` (5.92): Coriolis, centrifugal and gravity terms [N m or N] (nv).
+
+        Updates the model at ``q`` (as :meth:`update`); the kinematic cache stays valid there.
+        """
+        q = self.update(q)
+        qdot = self._check_velocity(qdot)
+        return np.array(pin.nonLinearEffects(self._model, self._data, q, qdot), dtype=np.float64)
+
     # ------------------------------------------------------------------ integration
     def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration manifold)."""

@@ -267,3 +267,22 @@ def test_from_mujoco_state_normalizes_reorders_and_turns_the_base_velocity_into_
         biped.from_mujoco_state(qpos, qvel)
     with pytest.raises(ModelError, match="shapes"):
         biped.from_mujoco_state(qpos[:-1], qvel)
+
+
+def test_nonlinear_effects_close_the_equations_of_motion_with_the_mass_matrix():
+    # M qddot + h(q, qdot) = tau of pinocchio's recursive Newton-Euler, for any qddot
+    import pinocchio as pin
+
+    from redundancy_gym.assets import AGRI_ARM_XML
+
+    model = RobotModel.from_mjcf(AGRI_ARM_XML)
+    data = model.pinocchio_model.createData()
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q = 0.5 * (model.lower_limits + model.upper_limits) + rng.uniform(-0.3, 0.3, model.nq)
+        qdot, qddot = rng.normal(size=model.nv), rng.normal(size=model.nv)
+        h = model.nonlinear_effects(q, qdot)
+        tau = pin.rnea(model.pinocchio_model, data, q, qdot, qddot)
+        np.testing.assert_allclose(model.mass_matrix() @ qddot + h, tau, rtol=1e-10, atol=1e-9)
+    # the kinematic cache stays at q
+    np.testing.assert_allclose(model.q, q)
