@@ -354,9 +354,13 @@ class WalkingPattern:
         return self._stop
 
     def swing_modification(self, k: int) -> SwingModification | None:
-        """How SSTA changed step ``k``'s swing (None: the nominal swing)."""
+        """How SSTA changed step ``k``'s swing (None: the nominal swing); for a step already over, the
+        modification it was walked with (planning it again would use the boxes where the drift has mapped them
+        since)."""
         if self._ssta is None or k < 0:
             return None
+        if k < self._plan_step:
+            return self._modifications.get(k)
         self._nominal_swing(k)
         return self._modifications.get(k)
 

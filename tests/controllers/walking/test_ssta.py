@@ -556,3 +556,17 @@ def test_the_line_never_keeps_a_tall_post_between_the_feet_either():
     short = bounding_boxes([LSS([2.0, 0.0, 0.0], [2.0, 0.0, 0.25], 0.04)])[0]
     kept = ssta.plan_line(h, 0, fixed, [short])
     assert kept.blocked is None and np.allclose(kept.offsets[:8], np.tile(fixed, 4))
+
+
+def test_a_past_swing_reports_the_modification_it_was_walked_with():
+    # after the steps past the triangle, the boxes are mapped again 0.3 m further on (the robot's drift): the
+    # swings already walked keep their record instead of being planned again around the moved box
+    pattern, ssta = pattern_with(triangle())
+    walked = {k: pattern.swing_modification(k) for k in range(6)}
+    assert walked[2] is None and walked[3] is not None
+    t = pattern.step_start(6) + 0.1
+    pattern.sample(t)
+    moved = bounding_boxes([TSS([0.98, -0.065, 0.0], [0.98, 0.065, 0.0], [0.98, 0.0, 0.3], 0.045)])
+    pattern.set_obstacles(t, moved, ssta)
+    pattern.sample(t)
+    assert {k: pattern.swing_modification(k) for k in range(6)} == walked
