@@ -348,6 +348,14 @@ class RobotModel:
         mass = pin.crba(self._model, self._data, q)
         return np.triu(mass) + np.triu(mass, 1).T
 
+    def centroidal_momentum_drift(self, q: ArrayLike, qdot: ArrayLike) -> NDArray[np.float64]:
+        """``Adot_G qdot`` (6: linear, then angular about the CoM), the drift of the centroidal momentum's rate
+        ``hdot_G = A_G qddot + Adot_G qdot``. Updates the model at ``q``; the kinematic cache stays valid there."""
+        q = self.update(q)
+        qdot = self._check_velocity(qdot)
+        rate = pin.computeCentroidalMapTimeVariation(self._model, self._data, q, qdot)
+        return np.array(rate, dtype=np.float64) @ qdot
+
     def nonlinear_effects(self, q: ArrayLike, qdot: ArrayLike) -> NDArray[np.float64]:
         """``h(q, qdot)`` of ``M qddot + h = tau`` (5.92): Coriolis, centrifugal and gravity terms [N m or N] (nv).
 

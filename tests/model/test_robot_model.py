@@ -286,3 +286,21 @@ def test_nonlinear_effects_close_the_equations_of_motion_with_the_mass_matrix():
         np.testing.assert_allclose(model.mass_matrix() @ qddot + h, tau, rtol=1e-10, atol=1e-9)
     # the kinematic cache stays at q
     np.testing.assert_allclose(model.q, q)
+
+
+def test_centroidal_momentum_drift_is_the_rate_of_the_momentum_at_zero_acceleration():
+    # d/dt (A_G(q) v) along q(t) = q + v t with constant v, by central differences
+    model = RobotModel.from_mjcf(BIPED_XML)
+    rng = np.random.default_rng(4)
+    q = np.zeros(model.nq)
+    q[6] = 1.0
+    q[2] = 0.9
+    v = rng.normal(0.0, 0.3, model.nv)
+    drift = model.centroidal_momentum_drift(q, v)
+    h = 1e-6
+
+    def momentum(t: float) -> np.ndarray:
+        model.update(model.integrate(q, v, t))
+        return model.com_and_centroidal_matrix()[1] @ v
+
+    np.testing.assert_allclose(drift, (momentum(h) - momentum(-h)) / (2 * h), atol=1e-6)

@@ -1,0 +1,191 @@
+"""Inverse Kineto-Dynamics for biped walking (monograph 5.5.2, (5.84)-(5.91)): joint accelerations that realize a
+prescribed contact moment exactly, with the horizontal CoM as the unknown task coordinates."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ...model import RobotModel
+from ..exceptions import ControllerError
+from ..redundancy_resolution import WeightMatrix, check_configuration, check_finite, resolve
+
+__all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
+
+GRAVITY = 9.81
+"""Gravitational acceleration [m/s^2], acting along -z."""
+
+
+def _log3(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rotation vector of ``rotation`` [rad] (angle-axis; 0 for the identity)."""
+    cos = float(np.clip(0.5 * (np.trace(rotation) - 1.0), -1.0, 1.0))
+    angle = float(np.arccos(cos))
+    axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
+    if angle < 1e-9:
+        return 0.5 * axis
+    return angle / (2.0 * np.sin(angle)) * axis
+
+
+class BipedIkdReference(NamedTuple):
+    """The known part of the hybrid task at one instant (world frame), and the prescribed contact moment.
+
+    Attributes:
+        feet_position: sole positions [m] (2, 3), rows right, left.
+        feet_rotation: sole orientations (2, 3, 3).
+        feet_velocity: sole twists [m/s, rad/s] (2, 6): linear, then angular.
+        feet_acceleration: their rates [m/s^2, rad/s^2] (2, 6).
+        torso_rotation: torso orientation (3, 3).
+        torso_angular_velocity: [rad/s] (3).
+        torso_angular_acceleration: [rad/s^2] (3).
+        com_height: the CoM's z [m], its rate [m/s] and acceleration [m/s^2] (3).
+        moment: the contact moment ``(T_x, T_y)`` [N m] about the world origin (5.85) with the contact force
+            taken to act there (the monograph's choice ``r_F = 0``); for a ZMP ``p`` on flat ground and a
+            vertical force ``F_z``, ``T = F_z (p_y, -p_x)``.
+    """
+
+    feet_position: NDArray[np.float64]
+    feet_rotation: NDArray[np.float64]
+    feet_velocity: NDArray[np.float64]
+    feet_acceleration: NDArray[np.float64]
+    torso_rotation: NDArray[np.float64]
+    torso_angular_velocity: NDArray[np.float64]
+    torso_angular_acceleration: NDArray[np.float64]
+    com_height: NDArray[np.float64]
+    moment: NDArray[np.float64]
+
+
+class BipedIkdResult(NamedTuple):
+    """One step of :class:`BipedIkd`.
+
+    Attributes:
+        qddot: generalized accelerations (nv); zeros when ``success`` is False.
+        com_acceleration: the CoM's acceleration [m/s^2] (3): x and y solved for, z the prescribed one.
+        residual: ``|R qddot + r|`` of (5.91) (0 up to round-off unless damped).
+        sigma_min: smallest singular value of ``R W^-1/2``.
+        success: False at a singular task.
+        status: ``"ok"``, ``"damped"`` or ``"singular"``.
+    """
+
+    qddot: NDArray[np.float64]
+    com_acceleration: NDArray[np.float64]
+    residual: float
+    sigma_min: float
+    success: bool
+    status: str
+
+
+class BipedIkd:
+    """``R qddot + r = 0`` (5.91) from the x/y angular momentum theorem about the CoM with the contact moment
+    prescribed (5.87)-(5.89) and the task split into known rows (the CoM's height, both soles' poses, the torso's
+    orientation) and unknown ones (the CoM's x and y) (5.90)::
+
+        A qddot + B wddot_u + c = 0,   A = J_L,xy,  B = [[0, -m z_c], [m z_c, 0]],
+        c = Jdot_L,xy qdot + (m y_c (g + zddot_c) - T_x, -m x_c (g + zddot_c) - T_y),
+        R = J_w + T_wu B^-1 A,   r = Jdot_w qdot - T_wk wddot_k + T_wu B^-1 c.
+
+    ``J_L`` and ``Jdot_L qdot`` are the angular rows of the centroidal momentum matrix and its drift (pinocchio,
+    through :class:`~redundancy_gym.model.RobotModel`). The known rows are stabilized as in (5.19) (the
+    drift compensation acts on them only: ``stiffness`` ``K_P``, ``damping`` ``K_D``; the monograph's
+    ``K_P = 40 / dt``, ``K_D = 2 sqrt(K_P) 0.85`` suit a 1 ms period). The redundancy (the arms, the waist) is
+    resolved by the weighted minimum of ``|qddot - qddot_pref|``, ``qddot_pref = -D qdot - K (q - posture)``
+    (``self_motion_damping`` ``D``, ``posture_stiffness`` ``K``).
+
+    This is the kinematic IKD: the contact moment that the generated motion needs is the prescribed one exactly
+    (pinocchio's inverse dynamics of the motion give it back); nothing here keeps the CoM near a plan, and without
+    stabilization it drifts away (monograph fig. 5.21).
+
+    Args:
+        model: a floating-base model of the biped.
+        feet_frames: the sole frames (right, left).
+        torso_frame: the torso's frame.
+        posture: the posture (nq) of the nullspace term (None: no posture term).
+    """
+
+    def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+                 torso_frame: str = "imu", stiffness: float = 400.0, damping: float = 34.0,
+                 self_motion_damping: float = 10.0, posture_stiffness: float = 25.0, posture: ArrayLike | None = None,
+                 weights: ArrayLike | float = 1.0, singular_threshold: float = 1e-6) -> None:
+        if not model.floating_base:
+            raise ControllerError(f"biped IKD needs a floating-base model, {model.source} has a fixed base")
+        for name, value in (("stiffness", stiffness), ("damping", damping),
+                            ("self_motion_damping", self_motion_damping), ("posture_stiffness", posture_stiffness)):
+            if not np.isfinite(value) or value < 0.0:
+                raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
+        self.model = model
+        self.feet_frames = tuple(feet_frames)
+        self.torso_frame = torso_frame
+        for frame in (*self.feet_frames, torso_frame):
+            model.frame_id(frame)  # raises naming an unknown frame
+        self.kp, self.kd = float(stiffness), float(damping)
+        self.self_motion_damping, self.posture_stiffness = float(self_motion_damping), float(posture_stiffness)
+        self.posture = None if posture is None else model.check_configuration(posture)
+        self.weights = WeightMatrix(weights, model.nv)
+        self.singular_threshold = float(singular_threshold)
+        self.mass = model.total_mass
+
+    def _known(self, q: NDArray[np.float64], qdot: NDArray[np.float64], ref: BipedIkdReference
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The known rows' Jacobian (16 x nv), drift ``Jdot qdot`` and stabilized acceleration: both soles (6 each),
+        the torso's orientation (3), the CoM's height (1)."""
+        model = self.model
+        jacobians, drifts, accelerations = [], [], []
+        for i, frame in enumerate(self.feet_frames):
+            drift = model.frame_jacobian_derivative_times_velocity(q, qdot, frame, "full")
+            jac = model.frame_jacobian(frame, "full")
+            rotation, position = model.frame_placement(frame)
+            error = np.concatenate([ref.feet_position[i] - position, _log3(ref.feet_rotation[i] @ rotation.T)])
+            accelerations.append(ref.feet_acceleration[i] + self.kd * (ref.feet_velocity[i] - jac @ qdot)
+                                 + self.kp * error)
+            jacobians.append(jac)
+            drifts.append(drift)
+        drift = model.frame_jacobian_derivative_times_velocity(q, qdot, self.torso_frame, "rotational")
+        jac = model.frame_jacobian(self.torso_frame, "rotational")
+        error = _log3(ref.torso_rotation @ model.frame_rotation(self.torso_frame).T)
+        accelerations.append(ref.torso_angular_acceleration + self.kd * (ref.torso_angular_velocity - jac @ qdot)
+                             + self.kp * error)
+        jacobians.append(jac)
+        drifts.append(drift)
+        return np.vstack(jacobians), np.concatenate(drifts), np.concatenate(accelerations)
+
+    def step(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference) -> BipedIkdResult:
+        """Generalized accelerations at ``(q, qdot)`` for ``reference`` (the contact moment among it)."""
+        model = self.model
+        q = check_configuration(q, "q")
+        qdot = check_finite(qdot, "qdot")
+        if qdot.shape != (model.nv,):
+            raise ControllerError(f"qdot must be finite with shape ({model.nv},), got {qdot.shape}")
+        for name in reference._fields:
+            check_finite(getattr(reference, name), f"reference.{name}")
+        moment = np.asarray(reference.moment, dtype=np.float64)
+        height = np.asarray(reference.com_height, dtype=np.float64)
+        if moment.shape != (2,) or height.shape != (3,):
+            raise ControllerError("reference.moment must be (T_x, T_y) and reference.com_height (z, zdot, zddot)")
+        j_known, drift_known, wddot_known = self._known(q, qdot, reference)
+        momentum_drift = model.centroidal_momentum_drift(q, qdot)  # updates at q
+        com, centroidal = model.com_and_centroidal_matrix()
+        m = self.mass
+        j_com, drift_com = centroidal[:3] / m, momentum_drift[:3] / m
+        z_acceleration = height[2] + self.kd * (height[1] - j_com[2] @ qdot) + self.kp * (height[0] - com[2])
+        # (5.88): A qddot + B (xddot_c, yddot_c) + c = 0
+        a = centroidal[3:5]
+        g = GRAVITY + z_acceleration
+        c = momentum_drift[3:5] + np.array([m * com[1] * g - moment[0], -m * com[0] * g - moment[1]])
+        b_inverse = np.array([[0.0, 1.0], [-1.0, 0.0]]) / (m * com[2])  # B^-1 of [[0, -m z], [m z, 0]]
+        # (5.91): the known rows and the CoM's x, y replaced by what the angular momentum theorem gives them
+        r_mat = np.vstack([j_known, j_com[2], j_com[:2] + b_inverse @ a])
+        r_vec = np.concatenate([drift_known - wddot_known, [drift_com[2] - z_acceleration],
+                                drift_com[:2] + b_inverse @ c])
+        preferred = -self.self_motion_damping * qdot
+        if self.posture is not None:
+            preferred = preferred - self.posture_stiffness * model.difference(self.posture, q)
+        res = resolve(r_mat, -r_vec, -self.weights.apply(preferred), self.weights,
+                      singular_threshold=self.singular_threshold)
+        if not res.success:
+            return BipedIkdResult(np.zeros(model.nv), np.zeros(3), float(np.linalg.norm(r_vec)), res.sigma_min, False,
+                                  res.status)
+        qddot = res.x
+        com_acceleration = j_com @ qddot + drift_com
+        residual = float(np.linalg.norm(r_mat @ qddot + r_vec))
+        return BipedIkdResult(qddot, com_acceleration, residual, res.sigma_min, True, res.status)
