@@ -43,6 +43,10 @@ class BipedIkdReference(NamedTuple):
         moment: the contact moment ``(T_x, T_y)`` [N m] about the world origin (5.85) with the contact force
             taken to act there (the monograph's choice ``r_F = 0``); for a ZMP ``p`` on flat ground and a
             vertical force ``F_z``, ``T = F_z (p_y, -p_x)``.
+        com_plan: the planned horizontal CoM ``(x, y, xdot, ydot)`` [m, m/s] that the contact-moment stabilization
+            (5.97) pulls to (None: no stabilization).
+        support: the support polygon's bounding box ``((x_min, y_min), (x_max, y_max))`` [m] that the stabilized
+            moment's ZMP is saturated to (None: no saturation).
     """
 
     feet_position: NDArray[np.float64]
@@ -54,6 +58,8 @@ class BipedIkdReference(NamedTuple):
     torso_angular_acceleration: NDArray[np.float64]
     com_height: NDArray[np.float64]
     moment: NDArray[np.float64]
+    com_plan: NDArray[np.float64] | None = None
+    support: NDArray[np.float64] | None = None
 
 
 class BipedIkdResult(NamedTuple):
@@ -66,6 +72,8 @@ class BipedIkdResult(NamedTuple):
         sigma_min: smallest singular value of ``R W^-1/2``.
         success: False at a singular task.
         status: ``"ok"``, ``"damped"`` or ``"singular"``.
+        moment: the contact moment ``(T_x, T_y)`` [N m] the motion realizes: the reference's, plus the
+            stabilization's modification (5.97) where it acts.
     """
 
     qddot: NDArray[np.float64]
@@ -74,6 +82,7 @@ class BipedIkdResult(NamedTuple):
     sigma_min: float
     success: bool
     status: str
+    moment: NDArray[np.float64]
 
 
 class BipedIkd:
@@ -93,24 +102,32 @@ class BipedIkd:
     (``self_motion_damping`` ``D``, ``posture_stiffness`` ``K``).
 
     This is the kinematic IKD: the contact moment that the generated motion needs is the prescribed one exactly
-    (pinocchio's inverse dynamics of the motion give it back); nothing here keeps the CoM near a plan, and without
-    stabilization it drifts away (monograph fig. 5.21).
+    (pinocchio's inverse dynamics of the motion give it back); without stabilization the CoM drifts away from
+    the plan the moment came from (monograph fig. 5.21). Stabilization via the contact moment (5.97): with a
+    ``com_plan`` in the reference and ``moment_gain`` ``k`` > 0, ``T += sat(B [K_p (w_plan - w) + K_d (wdot_plan -
+    wdot)])`` with the monograph's ``K_p = k 40 / period`` and ``K_d = 2 * 0.85 sqrt(K_p)``, its ZMP saturated to
+    the reference's ``support`` box. In the pendulum limit the error dynamics are stable for ``K_p > (g +
+    zddot) / z`` (monograph footnote 19: ``k`` above about 2.7e-4 at a 1 ms period).
 
     Args:
         model: a floating-base model of the biped.
         feet_frames: the sole frames (right, left).
         torso_frame: the torso's frame.
         posture: the posture (nq) of the nullspace term (None: no posture term).
+        moment_gain: ``k`` of (5.97) (0: the prescribed moment unmodified).
+        period: the control period [s] of the gains ``K_p = k 40 / period``.
     """
 
     def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  torso_frame: str = "imu", stiffness: float = 400.0, damping: float = 34.0,
                  self_motion_damping: float = 10.0, posture_stiffness: float = 25.0, posture: ArrayLike | None = None,
-                 weights: ArrayLike | float = 1.0, singular_threshold: float = 1e-6) -> None:
+                 weights: ArrayLike | float = 1.0, singular_threshold: float = 1e-6, moment_gain: float = 0.0,
+                 period: float = 0.001) -> None:
         if not model.floating_base:
             raise ControllerError(f"biped IKD needs a floating-base model, {model.source} has a fixed base")
         for name, value in (("stiffness", stiffness), ("damping", damping),
-                            ("self_motion_damping", self_motion_damping), ("posture_stiffness", posture_stiffness)):
+                            ("self_motion_damping", self_motion_damping), ("posture_stiffness", posture_stiffness),
+                            ("moment_gain", moment_gain)):
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         self.model = model
@@ -124,6 +141,11 @@ class BipedIkd:
         self.weights = WeightMatrix(weights, model.nv)
         self.singular_threshold = float(singular_threshold)
         self.mass = model.total_mass
+        if not np.isfinite(period) or period <= 0.0:
+            raise ControllerError(f"period must be finite and > 0 [s], got {period!r}")
+        self.moment_gain = float(moment_gain)
+        self.com_stiffness = self.moment_gain * 40.0 / float(period)
+        self.com_damping = 2.0 * 0.85 * float(np.sqrt(self.com_stiffness))
 
     def _known(self, q: NDArray[np.float64], qdot: NDArray[np.float64], ref: BipedIkdReference
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -157,7 +179,8 @@ class BipedIkd:
         if qdot.shape != (model.nv,):
             raise ControllerError(f"qdot must be finite with shape ({model.nv},), got {qdot.shape}")
         for name in reference._fields:
-            check_finite(getattr(reference, name), f"reference.{name}")
+            if getattr(reference, name) is not None:
+                check_finite(getattr(reference, name), f"reference.{name}")
         moment = np.asarray(reference.moment, dtype=np.float64)
         height = np.asarray(reference.com_height, dtype=np.float64)
         if moment.shape != (2,) or height.shape != (3,):
@@ -171,8 +194,11 @@ class BipedIkd:
         # (5.88): A qddot + B (xddot_c, yddot_c) + c = 0
         a = centroidal[3:5]
         g = GRAVITY + z_acceleration
+        b_mat = np.array([[0.0, -m * com[2]], [m * com[2], 0.0]])
+        if reference.com_plan is not None and self.moment_gain > 0.0:
+            moment = self._stabilized(moment, reference, com[:2], j_com[:2] @ qdot, b_mat, m * g)
         c = momentum_drift[3:5] + np.array([m * com[1] * g - moment[0], -m * com[0] * g - moment[1]])
-        b_inverse = np.array([[0.0, 1.0], [-1.0, 0.0]]) / (m * com[2])  # B^-1 of [[0, -m z], [m z, 0]]
+        b_inverse = np.array([[0.0, 1.0], [-1.0, 0.0]]) / (m * com[2])  # B^-1
         # (5.91): the known rows and the CoM's x, y replaced by what the angular momentum theorem gives them
         r_mat = np.vstack([j_known, j_com[2], j_com[:2] + b_inverse @ a])
         r_vec = np.concatenate([drift_known - wddot_known, [drift_com[2] - z_acceleration],
@@ -184,8 +210,23 @@ class BipedIkd:
                       singular_threshold=self.singular_threshold)
         if not res.success:
             return BipedIkdResult(np.zeros(model.nv), np.zeros(3), float(np.linalg.norm(r_vec)), res.sigma_min, False,
-                                  res.status)
+                                  res.status, moment)
         qddot = res.x
         com_acceleration = j_com @ qddot + drift_com
         residual = float(np.linalg.norm(r_mat @ qddot + r_vec))
-        return BipedIkdResult(qddot, com_acceleration, residual, res.sigma_min, True, res.status)
+        return BipedIkdResult(qddot, com_acceleration, residual, res.sigma_min, True, res.status, moment)
+
+    def _stabilized(self, moment: NDArray[np.float64], reference: BipedIkdReference, com: NDArray[np.float64],
+                    com_velocity: NDArray[np.float64], b_mat: NDArray[np.float64], force: float
+                    ) -> NDArray[np.float64]:
+        """(5.97): the moment plus ``B [K_p (w_plan - w) + K_d (wdot_plan - wdot)]``, its ZMP (for the vertical
+        force ``force`` [N]) kept in the support box."""
+        plan = np.asarray(reference.com_plan, dtype=np.float64)
+        if plan.shape != (4,):
+            raise ControllerError(f"reference.com_plan must be (x, y, xdot, ydot), got shape {plan.shape}")
+        modified = moment + b_mat @ (self.com_stiffness * (plan[:2] - com) + self.com_damping * (plan[2:] - com_velocity))
+        if reference.support is None or force <= 0.0:
+            return modified
+        box = np.asarray(reference.support, dtype=np.float64)
+        zmp = np.clip(np.array([-modified[1], modified[0]]) / force, box[0], box[1])
+        return force * np.array([zmp[1], -zmp[0]])

@@ -130,3 +130,66 @@ def test_a_fixed_base_model_and_bad_references_are_refused(biped):
     reference = _reference(biped, q, np.zeros(2))
     with pytest.raises(ControllerError, match="reference.moment"):
         BipedIkd(biped).step(q, np.zeros(biped.nv), reference._replace(moment=np.array([np.nan, 0.0])))
+
+
+def _walk(biped: RobotModel, gain: float, duration: float) -> tuple[list[float], list[float], list[bool]]:
+    """A kinematic IKD walk at 0.4 m/s along the DCM walking pattern (its soles, its LIPM ZMP as the contact moment,
+    its CoM as the plan of (5.97)) with ``moment_gain`` ``gain``; per period: the largest relative difference of
+    RNEA's contact moment from the one the IKD realized, the CoM's distance from the plan [m], and whether the
+    realized moment's ZMP lies in the support box. Stops early when the IKD fails."""
+    from redundancy_gym.controllers.walking import GaitConfig, WalkingPattern
+
+    q = standing(biped)
+    qdot = np.zeros(biped.nv)
+    biped.update(q)
+    feet = [biped.frame_position(f).copy() for f in FEET]
+    start = biped.com().copy()
+    pattern = WalkingPattern(GaitConfig(), feet[0], feet[1], start[:2], 0.4)
+    ikd = BipedIkd(biped, posture=q, moment_gain=gain, period=0.001)
+    force = biped.total_mass * GRAVITY
+    errors, distances, inside = [], [], []
+    dt = 0.001
+    for n in range(int(round(duration / dt))):
+        sample, ahead = pattern.sample(n * dt), pattern.sample((n + 1) * dt)
+        velocity, acceleration = np.zeros((2, 6)), np.zeros((2, 6))
+        velocity[:, :3], velocity[:, 4] = sample.feet_velocity, sample.feet_pitch_rate
+        acceleration[:, :3] = (ahead.feet_velocity - sample.feet_velocity) / dt
+        acceleration[:, 4] = (ahead.feet_pitch_rate - sample.feet_pitch_rate) / dt
+        rotation = np.array([[[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]]
+                             for a in sample.feet_pitch])
+        standing_feet = [f for f, c in zip(sample.feet, sample.contact, strict=True) if c]
+        box = np.array([np.min([[f[0] - 0.095, f[1] - 0.075] for f in standing_feet], axis=0),
+                        np.max([[f[0] + 0.165, f[1] + 0.075] for f in standing_feet], axis=0)])
+        zmp = sample.zmp
+        reference = BipedIkdReference(sample.feet.copy(), rotation, velocity, acceleration, np.eye(3), np.zeros(3),
+                                      np.zeros(3), np.array([start[2], 0.0, 0.0]),
+                                      np.array([force * zmp[1], -force * zmp[0]]),
+                                      np.array([*sample.com[:2], *sample.com_velocity[:2]]), box)
+        result = ikd.step(q, qdot, reference)
+        if not result.success:
+            break
+        moment = _contact_moment(biped, q, qdot, result.qddot)
+        errors.append(float(np.abs(moment[:2] - result.moment).max() / np.abs(result.moment).max()))
+        realized = np.array([-result.moment[1], result.moment[0]]) / force
+        inside.append(bool(np.all(realized >= box[0] - 1e-9) and np.all(realized <= box[1] + 1e-9)))
+        biped.update(q)
+        distances.append(float(np.linalg.norm(biped.com()[:2] - sample.com[:2])))
+        qdot = qdot + dt * result.qddot
+        q = biped.integrate(q, qdot, dt)
+        if distances[-1] > 0.2:
+            break
+    return errors, distances, inside
+
+
+def test_a_stabilized_ikd_walk_of_several_steps_realizes_its_moment_exactly_and_keeps_to_the_plan(biped):
+    # three steps (2.5 s) with k = 1e-3 (K_p = 40, K_d = 10.8 at 1 ms; the pendulum needs K_p > g / z = 10.8):
+    # the moment that inverse dynamics give for the motion is the realized one at every period, its ZMP never
+    # leaves the support box, and the CoM stays within a centimetre of the plan
+    errors, distances, inside = _walk(biped, 1e-3, 2.5)
+    assert len(errors) == 2500
+    assert max(errors) < 1e-6
+    assert all(inside)
+    assert max(distances) < 0.01
+    # unstabilized (k = 0) the same walk runs off the plan (fig. 5.21): 5 cm within two steps
+    _, distances, _ = _walk(biped, 0.0, 2.0)
+    assert max(distances) > 0.05
