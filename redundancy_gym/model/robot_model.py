@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Literal
 
@@ -275,13 +276,20 @@ class RobotModel:
         ``d/dt (J qdot)`` for the linear part (classical, not spatial, acceleration). Leaves the
         kinematic cache (placements and Jacobians) at ``q``.
         """
+        return self.frames_jacobian_derivative_times_velocity(q, qdot, (frame,), kind)[0]
+
+    def frames_jacobian_derivative_times_velocity(self, q: ArrayLike, qdot: ArrayLike, frames: Sequence[str | int],
+                                                  kind: JacobianKind = "full") -> NDArray[np.float64]:
+        """:meth:`frame_jacobian_derivative_times_velocity` of several ``frames`` (rows in their order) from one
+        kinematic pass."""
         rows = self._rows(kind)
         q = self.update(q)
         qdot = self._check_velocity(qdot)
         # same q: placements and the joint Jacobians of update() stay valid
         pin.forwardKinematics(self._model, self._data, q, qdot, np.zeros(self.nv))
-        acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(frame), _WORLD_ALIGNED)
-        return np.asarray(acc.vector, dtype=np.float64)[rows].copy()
+        return np.array([np.asarray(pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(f),
+                                                                      _WORLD_ALIGNED).vector)[rows] for f in frames],
+                        dtype=np.float64)
 
     # ------------------------------------------------------------------ mass properties and momentum
     def com(self) -> NDArray[np.float64]:

@@ -11,21 +11,12 @@ from numpy.typing import ArrayLike, NDArray
 from ...model import RobotModel
 from ..exceptions import ControllerError
 from ..redundancy_resolution import WeightMatrix, check_configuration, check_finite, resolve
+from ..walking.ik_kernels import rotation_error
 
 __all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
 
 GRAVITY = 9.81
 """Gravitational acceleration [m/s^2], acting along -z."""
-
-
-def _log3(rotation: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The rotation vector of ``rotation`` [rad] (angle-axis; 0 for the identity)."""
-    cos = float(np.clip(0.5 * (np.trace(rotation) - 1.0), -1.0, 1.0))
-    angle = float(np.arccos(cos))
-    axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
-    if angle < 1e-9:
-        return 0.5 * axis
-    return angle / (2.0 * np.sin(angle)) * axis
 
 
 class BipedIkdReference(NamedTuple):
@@ -149,26 +140,24 @@ class BipedIkd:
 
     def _known(self, q: NDArray[np.float64], qdot: NDArray[np.float64], ref: BipedIkdReference
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The known rows' Jacobian (16 x nv), drift ``Jdot qdot`` and stabilized acceleration: both soles (6 each),
-        the torso's orientation (3), the CoM's height (1)."""
+        """The known rows' Jacobian (15 x nv), drift ``Jdot qdot`` and stabilized acceleration: both soles (6 each)
+        and the torso's orientation (3); :meth:`step` adds the CoM's height."""
         model = self.model
-        jacobians, drifts, accelerations = [], [], []
+        drift = model.frames_jacobian_derivative_times_velocity(q, qdot, (*self.feet_frames, self.torso_frame), "full")
+        jacobians, accelerations = [], []
         for i, frame in enumerate(self.feet_frames):
-            drift = model.frame_jacobian_derivative_times_velocity(q, qdot, frame, "full")
             jac = model.frame_jacobian(frame, "full")
             rotation, position = model.frame_placement(frame)
-            error = np.concatenate([ref.feet_position[i] - position, _log3(ref.feet_rotation[i] @ rotation.T)])
+            error = np.concatenate([ref.feet_position[i] - position, rotation_error(ref.feet_rotation[i], rotation)])
             accelerations.append(ref.feet_acceleration[i] + self.kd * (ref.feet_velocity[i] - jac @ qdot)
                                  + self.kp * error)
             jacobians.append(jac)
-            drifts.append(drift)
-        drift = model.frame_jacobian_derivative_times_velocity(q, qdot, self.torso_frame, "rotational")
         jac = model.frame_jacobian(self.torso_frame, "rotational")
-        error = _log3(ref.torso_rotation @ model.frame_rotation(self.torso_frame).T)
+        error = rotation_error(ref.torso_rotation, model.frame_rotation(self.torso_frame))
         accelerations.append(ref.torso_angular_acceleration + self.kd * (ref.torso_angular_velocity - jac @ qdot)
                              + self.kp * error)
         jacobians.append(jac)
-        drifts.append(drift)
+        drifts = [drift[0], drift[1], drift[2, 3:]]
         return np.vstack(jacobians), np.concatenate(drifts), np.concatenate(accelerations)
 
     def step(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference) -> BipedIkdResult:

@@ -144,6 +144,8 @@ class GeneralIkd:
         self.known_task = _indices("known_task", rows, task.dim)
         self.free_task = np.setdiff1d(np.arange(task.dim), self.known_task)
         n_known = self.known_task.size
+        self._t_wu = np.zeros((task.dim, self.free_task.size))  # T_wu of (5.90), a selection of the free rows
+        self._t_wu[self.free_task, np.arange(self.free_task.size)] = 1.0
         self.kp = np.broadcast_to(np.asarray(stiffness, dtype=np.float64), (n_known,)).copy()
         self.kd = np.broadcast_to(np.asarray(damping, dtype=np.float64), (n_known,)).copy()
         for name, value in (("stiffness", self.kp), ("damping", self.kd)):
@@ -213,12 +215,9 @@ class GeneralIkd:
         minv = np.linalg.solve(factor.T, np.linalg.solve(factor, rhs))
         minv_w, minv_h = minv[:, :-1], minv[:, -1]
         j_minv_w = jacobian @ minv_w
-        t_wk = np.zeros((self.task.dim, n_known))
-        t_wk[known, np.arange(n_known)] = 1.0
-        t_wu = np.zeros((self.task.dim, self.free_task.size))
-        t_wu[self.free_task, np.arange(self.free_task.size)] = 1.0
-        g = np.hstack([j_minv_w[:, self.unknown_forces], -t_wu])  # (5.96)
-        f = j_minv_w[:, self.known_forces] @ lam_k - jacobian @ minv_h + drift - t_wk @ wddot_k
+        g = np.hstack([j_minv_w[:, self.unknown_forces], -self._t_wu])  # (5.96)
+        f = j_minv_w[:, self.known_forces] @ lam_k - jacobian @ minv_h + drift
+        f[known] -= wddot_k  # - T_wk wddot_k: T_wk selects the known rows
         n_u = self.unknown_forces.size
         weights = self.weights
         if self.weighting == "acceleration":

@@ -383,6 +383,10 @@ class Ssta:
         half = self.config.foot_half_width + self.config.lateral_margin
         return bool(y + half > box.lower[1] and y - half < box.upper[1])
 
+    def in_band(self, x: float, y: float, boxes: Sequence[ObstacleBox]) -> bool:
+        """Whether a sole point at ``(x, y)`` [m] stands in the band (:meth:`foothold_band`) of a box in its lane."""
+        return any(self.in_lane(b, y) and self.foothold_band(b)[0] < x < self.foothold_band(b)[1] for b in boxes)
+
     def foothold_shift(self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox],
                        behind: float = -np.inf) -> float | None:
         """The move along x [m] that takes a foothold out of every box's band, changing the step from
@@ -576,6 +580,7 @@ class Ssta:
         tolerant = Ssta(replace(c, lateral_margin=c.lateral_margin - tolerance), self.lanes)
         reaches = [(float(b.lower[0]) - c.toe_length - c.clearance, float(b.upper[0]) + c.heel_length + c.clearance)
                    for b in boxes]
+        bands = [self.foothold_band(b) for b in boxes]
         parents: list[NDArray[np.intp]] = []
         swings: list[NDArray[np.float64]] = []
         straddles: list[NDArray[np.float64]] = []
@@ -611,7 +616,7 @@ class Ssta:
             # a foothold left in a box's band in its lane (full margin) moves along x; where no move fits, the walk
             # stops in front of the box (a line barely 1 cm off the box would have passed it)
             stand = np.zeros(n)
-            if any(self.foothold_band(b)[0] < x1 < self.foothold_band(b)[1] for b in boxes):
+            if any(low < x1 < high for low, high in bands):  # in some box's band along x (whatever the lane)
                 previous, behind = h[m - 1], float(h[m - 2, 0])
                 for i, o in enumerate(offsets):
                     if self.foothold_shift((x1, y1 + o), previous, boxes, behind=behind) is None:

@@ -209,9 +209,7 @@ class WalkingPattern:
             own = self.foothold(self._stop - 1 if (self._stop - 1) % 2 == j % 2 else self._stop - 2)
             # beside the other foot, unless a box stands there in this foot's lane (a post the other foot passed)
             x = last[0]
-            if self._ssta is not None and any(self._ssta.in_lane(b, float(own[1])) and
-                                              self._ssta.foothold_band(b)[0] < x < self._ssta.foothold_band(b)[1]
-                                              for b in self._boxes):
+            if self._ssta is not None and self._ssta.in_band(float(x), float(own[1]), self._boxes):
                 x = own[0]
             h = np.array([x, own[1], own[2]])
             for first, shift in self._shifts:  # push recovery still moves the steps in place

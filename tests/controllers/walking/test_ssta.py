@@ -570,3 +570,13 @@ def test_a_past_swing_reports_the_modification_it_was_walked_with():
     pattern.set_obstacles(t, moved, ssta)
     pattern.sample(t)
     assert {k: pattern.swing_modification(k) for k in range(6)} == walked
+
+
+def test_in_band_is_a_sole_point_in_the_band_of_a_box_in_its_lane():
+    ssta = Ssta(SstaConfig(), LANES)
+    box = bounding_boxes(beam())[0]
+    low, high = ssta.foothold_band(box)
+    assert ssta.in_band(0.5 * (low + high), 0.09, [box])
+    assert not ssta.in_band(low - 1e-3, 0.09, [box]) and not ssta.in_band(high + 1e-3, 0.09, [box])
+    assert not ssta.in_band(0.5 * (low + high), 0.5, [box])  # beside the beam
+    assert not ssta.in_band(0.5 * (low + high), 0.09, [])
