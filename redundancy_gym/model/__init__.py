@@ -5,10 +5,11 @@ Never imports gymnasium, mujoco, envs or eval.
 
 from .collision_geometry import CollisionGeometry, collision_geometry_from_mjcf, collision_model_from_mjcf
 from .exceptions import ModelError, UnknownFrameError
-from .robot_model import JacobianKind, RobotModel
+from .robot_model import AccelerationTerms, JacobianKind, RobotModel
 from .serial_chain import SerialChain
 
 __all__ = [
+    "AccelerationTerms",
     "CollisionGeometry",
     "JacobianKind",
     "ModelError",

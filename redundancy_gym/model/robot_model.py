@@ -12,7 +12,7 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal
+from typing import Literal, NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -23,7 +23,7 @@ from .chain_kernels import FREE, PRISMATIC, REVOLUTE
 from .exceptions import ModelError, UnknownFrameError
 from .serial_chain import SerialChain
 
-__all__ = ["JacobianKind", "RobotModel"]
+__all__ = ["AccelerationTerms", "JacobianKind", "RobotModel"]
 
 JacobianKind = Literal["translational", "rotational", "full"]
 _JACOBIAN_ROWS: dict[str, slice] = {"translational": slice(0, 3), "rotational": slice(3, 6), "full": slice(0, 6)}
@@ -38,6 +38,32 @@ _CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
     "JointModelPX": (PRISMATIC, (1.0, 0.0, 0.0)), "JointModelPY": (PRISMATIC, (0.0, 1.0, 0.0)),
     "JointModelPZ": (PRISMATIC, (0.0, 0.0, 1.0)), "JointModelPrismaticUnaligned": (PRISMATIC, None),
 }
+
+
+class AccelerationTerms(NamedTuple):
+    """What an acceleration-level controller of frames and the centroidal momentum reads at one state
+    (:meth:`RobotModel.acceleration_terms`); world frame, Jacobians world-aligned at the frame origin.
+
+    Attributes:
+        rotation: the frames' orientations (k, 3, 3).
+        position: their origins [m] (k, 3).
+        jacobian: their full Jacobians ``[J_T; J_R]`` (k, 6, nv), as :meth:`RobotModel.frame_jacobian`.
+        drift: their ``Jdot qdot`` [m/s^2, rad/s^2] (k, 6), as
+            :meth:`RobotModel.frames_jacobian_derivative_times_velocity` (classical acceleration at zero
+            joint acceleration).
+        com: the centre of mass [m] (3).
+        centroidal: the centroidal momentum matrix ``A_G`` (6 x nv, linear rows first), as
+            :meth:`RobotModel.centroidal_momentum_matrix`.
+        centroidal_drift: ``Adot_G qdot`` [N, N m] (6), as :meth:`RobotModel.centroidal_momentum_drift`.
+    """
+
+    rotation: NDArray[np.float64]
+    position: NDArray[np.float64]
+    jacobian: NDArray[np.float64]
+    drift: NDArray[np.float64]
+    com: NDArray[np.float64]
+    centroidal: NDArray[np.float64]
+    centroidal_drift: NDArray[np.float64]
 
 
 class RobotModel:
@@ -290,6 +316,38 @@ class RobotModel:
         return np.array([np.asarray(pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(f),
                                                                       _WORLD_ALIGNED).vector)[rows] for f in frames],
                         dtype=np.float64)
+
+    def acceleration_terms(self, q: ArrayLike, qdot: ArrayLike, frames: Sequence[str | int]) -> AccelerationTerms:
+        """The placements, Jacobians and ``Jdot qdot`` of ``frames`` and the CoM, ``A_G`` and ``Adot_G qdot`` at
+        ``(q, qdot)`` from two recursive passes (:class:`AccelerationTerms`).
+
+        Equals :meth:`update` followed by :meth:`frame_placement`, :meth:`frame_jacobian` (``"full"``),
+        :meth:`frames_jacobian_derivative_times_velocity`, :meth:`com_and_centroidal_matrix` and
+        :meth:`centroidal_momentum_drift`, up to round-off, for the price of about one of them. Leaves the
+        kinematic cache (placements and joint Jacobians) at ``q``, as :meth:`update` does.
+        """
+        q = self.check_configuration(q)
+        qdot = self._check_velocity(qdot)
+        indices = self._frame_indices(frames if isinstance(frames, tuple) else tuple(frames))
+        model, data = self._model, self._data
+        # the frames' classical accelerations at zero joint acceleration (data.a); the centroidal pass below runs
+        # the forward kinematics with (q, qdot) again, which leaves data.a as it is, and fills the joint Jacobians
+        pin.forwardKinematics(model, data, q, qdot, np.zeros(self._nv))
+        centroidal_drift = np.asarray(pin.computeCentroidalMapTimeVariation(model, data, q, qdot)) @ qdot
+        centroidal = np.array(data.Ag, dtype=np.float64)
+        pin.updateFramePlacements(model, data)
+        self._q = q.copy()
+        k = len(indices)
+        rotation, position = np.empty((k, 3, 3)), np.empty((k, 3))
+        jacobian, drift = np.empty((k, 6, self._nv)), np.empty((k, 6))
+        for i, f in enumerate(indices):
+            placement = data.oMf[f]
+            rotation[i] = placement.rotation
+            position[i] = placement.translation
+            jacobian[i] = pin.getFrameJacobian(model, data, f, _WORLD_ALIGNED)
+            drift[i] = pin.getFrameClassicalAcceleration(model, data, f, _WORLD_ALIGNED).vector
+        return AccelerationTerms(rotation, position, jacobian, drift, np.array(data.com[0], dtype=np.float64),
+                                 centroidal, centroidal_drift)
 
     # ------------------------------------------------------------------ mass properties and momentum
     def com(self) -> NDArray[np.float64]:

@@ -304,3 +304,56 @@ def test_centroidal_momentum_drift_is_the_rate_of_the_momentum_at_zero_accelerat
         return model.com_and_centroidal_matrix()[1] @ v
 
     np.testing.assert_allclose(drift, (momentum(h) - momentum(-h)) / (2 * h), atol=1e-6)
+
+
+def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
+    """acceleration_terms() gives what update() and the frame, Jdot qdot, CoM, A_G and Adot_G qdot queries give, and
+    leaves the kinematic cache at q as update() does; the frames' drift is the rate of J qdot (finite differences
+    along q(t) = q + v t)."""
+    biped = RobotModel.from_mjcf(BIPED_XML)
+    other = RobotModel.from_mjcf(BIPED_XML)
+    frames = ("r_sole", "l_sole", "imu", biped.frame_id("r_sole"))
+    for _ in range(4):
+        q, v = _random_biped_state(biped, rng)
+        terms = biped.acceleration_terms(q, v, frames)
+        assert terms.rotation.shape == (4, 3, 3) and terms.position.shape == (4, 3)
+        assert terms.jacobian.shape == (4, 6, biped.nv) and terms.drift.shape == (4, 6)
+        drift = other.frames_jacobian_derivative_times_velocity(q, v, frames)
+        momentum_drift = other.centroidal_momentum_drift(q, v)
+        com, centroidal = other.com_and_centroidal_matrix()
+        for k, frame in enumerate(frames):
+            rotation, position = other.frame_placement(frame)
+            np.testing.assert_allclose(terms.rotation[k], rotation, rtol=0.0, atol=1e-15)
+            np.testing.assert_allclose(terms.position[k], position, rtol=0.0, atol=1e-14)
+            np.testing.assert_allclose(terms.jacobian[k], other.frame_jacobian(frame), rtol=0.0, atol=1e-13)
+            np.testing.assert_allclose(terms.drift[k], drift[k], rtol=1e-12, atol=1e-12 * np.abs(drift[k]).max())
+        np.testing.assert_allclose(terms.com, com, rtol=0.0, atol=1e-14)
+        np.testing.assert_allclose(terms.centroidal, centroidal, rtol=0.0, atol=1e-12 * np.abs(centroidal).max())
+        np.testing.assert_allclose(terms.centroidal_drift, momentum_drift, rtol=0.0,
+                                   atol=1e-12 * np.abs(momentum_drift).max())
+        # the cache is at q: every frame and Jacobian, as after update(q)
+        np.testing.assert_array_equal(biped.q, q)
+        for frame in biped.frame_names[::7]:
+            np.testing.assert_allclose(biped.frame_position(frame), other.frame_position(frame), atol=1e-14)
+            np.testing.assert_allclose(biped.frame_jacobian(frame), other.frame_jacobian(frame), atol=1e-13)
+        np.testing.assert_allclose(biped.com_jacobian(), other.com_jacobian(), atol=1e-14)
+    # Jdot qdot is d/dt (J qdot) (the linear rows as classical acceleration) by central differences
+    q, v = _random_biped_state(biped, rng)
+    v *= 0.3
+    terms = biped.acceleration_terms(q, v, frames[:3])
+    h = 1e-6
+
+    def velocities(t: float) -> np.ndarray:
+        qt = biped.integrate(q, v, t)
+        return biped.acceleration_terms(qt, v, frames[:3]).jacobian @ v
+
+    np.testing.assert_allclose(terms.drift, (velocities(h) - velocities(-h)) / (2 * h), atol=1e-5)
+    # a list of frames, and the errors of the separate queries
+    np.testing.assert_array_equal(biped.acceleration_terms(q, v, list(frames)).drift,
+                                  biped.acceleration_terms(q, v, frames).drift)
+    with pytest.raises(UnknownFrameError, match="nope"):
+        biped.acceleration_terms(q, v, ("r_sole", "nope"))
+    with pytest.raises(ModelError, match="velocity"):
+        biped.acceleration_terms(q, v[:-1], frames)
+    with pytest.raises(ModelError, match="configuration"):
+        biped.acceleration_terms(q[:-1], v, frames)

@@ -6,12 +6,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..redundancy_resolution import WeightMatrix, check_configuration, check_finite, resolve
-from ..walking.ik_kernels import rotation_error
+from ..redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
+from ..walking.ik_kernels import rotation_error_into
 
 __all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
 
@@ -137,31 +138,57 @@ class BipedIkd:
         self.moment_gain = float(moment_gain)
         self.com_stiffness = self.moment_gain * 40.0 / float(period)
         self.com_damping = 2.0 * 0.85 * float(np.sqrt(self.com_stiffness))
-
-    def _known(self, q: NDArray[np.float64], qdot: NDArray[np.float64], ref: BipedIkdReference
-               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """The known rows' Jacobian (15 x nv), drift ``Jdot qdot`` and stabilized acceleration: both soles (6 each)
-        and the torso's orientation (3); :meth:`step` adds the CoM's height."""
-        model = self.model
-        drift = model.frames_jacobian_derivative_times_velocity(q, qdot, (*self.feet_frames, self.torso_frame), "full")
-        jacobians, accelerations = [], []
-        for i, frame in enumerate(self.feet_frames):
-            jac = model.frame_jacobian(frame, "full")
-            rotation, position = model.frame_placement(frame)
-            error = np.concatenate([ref.feet_position[i] - position, rotation_error(ref.feet_rotation[i], rotation)])
-            accelerations.append(ref.feet_acceleration[i] + self.kd * (ref.feet_velocity[i] - jac @ qdot)
-                                 + self.kp * error)
-            jacobians.append(jac)
-        jac = model.frame_jacobian(self.torso_frame, "rotational")
-        error = rotation_error(ref.torso_rotation, model.frame_rotation(self.torso_frame))
-        accelerations.append(ref.torso_angular_acceleration + self.kd * (ref.torso_angular_velocity - jac @ qdot)
-                             + self.kp * error)
-        jacobians.append(jac)
-        drifts = [drift[0], drift[1], drift[2, 3:]]
-        return np.vstack(jacobians), np.concatenate(drifts), np.concatenate(accelerations)
+        self._inverse_weights: tuple[WeightMatrix, NDArray[np.float64]] | None = None  # (W, W^-1) of a full W
 
     def step(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference) -> BipedIkdResult:
         """Generalized accelerations at ``(q, qdot)`` for ``reference`` (the contact moment among it)."""
+        # One pinocchio pass (RobotModel.acceleration_terms) and one compiled kernel (_solve) for the algebra and
+        # the solve; inputs that are float64 arrays of the documented shapes are checked in one compiled call, any
+        # others take the general checks and conversions of _checked.
+        model = self.model
+        stabilize = reference.com_plan is not None and self.moment_gain > 0.0
+        plan = _NO_PLAN if reference.com_plan is None else reference.com_plan
+        support = _NO_SUPPORT if reference.support is None else reference.support
+        arrays = (q, qdot, reference.feet_position, reference.feet_rotation, reference.feet_velocity,
+                  reference.feet_acceleration, reference.torso_rotation, reference.torso_angular_velocity,
+                  reference.torso_angular_acceleration, reference.com_height, reference.moment, plan, support)
+        fast = False
+        # numba's TypeError for other types costs some 100 us, so lists and other dtypes are not offered to it
+        if all([type(a) is np.ndarray and a.dtype == _FLOAT64 for a in arrays]):
+            try:
+                fast = _valid(*arrays, model.nq, model.nv, MAX_COORDINATE)
+            except TypeError:  # an array with another number of dimensions
+                pass
+        if fast:
+            ref = reference
+        else:
+            q, qdot, ref, plan, support = self._checked(q, qdot, reference, stabilize)
+        terms = model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
+        has_posture = self.posture is not None
+        offset = model.difference(self.posture, q) if has_posture else qdot
+        diagonal = self.weights.diagonal
+        if diagonal is None:
+            inverse = self._inverse_weights
+            if inverse is None or inverse[0] is not self.weights:
+                inverse = self._inverse_weights = (self.weights, self.weights.solve(np.eye(model.nv)))
+            weights, inverse_weights = _NO_DIAGONAL, inverse[1]
+        else:
+            weights, inverse_weights = diagonal, _NO_INVERSE
+        qddot, com_acceleration, moment, residual, sigma_min, ok = _solve(
+            qdot, terms.rotation, terms.position, terms.jacobian, terms.drift, terms.com, terms.centroidal,
+            terms.centroidal_drift, ref.feet_position, ref.feet_rotation, ref.feet_velocity, ref.feet_acceleration,
+            ref.torso_rotation, ref.torso_angular_velocity, ref.torso_angular_acceleration, ref.com_height,
+            ref.moment, plan, support, offset, weights, inverse_weights, self.kp, self.kd, self.mass,
+            self.com_stiffness, self.com_damping, self.self_motion_damping, self.posture_stiffness,
+            self.singular_threshold, stabilize, reference.support is not None, has_posture, diagonal is not None)
+        return BipedIkdResult(qddot, com_acceleration, residual, sigma_min, ok, "ok" if ok else "singular", moment)
+
+    def _checked(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference, stabilize: bool
+                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], BipedIkdReference, NDArray[np.float64],
+                            NDArray[np.float64]]:
+        """``(q, qdot, reference, plan, support)`` checked (:class:`ControllerError` naming the first bad input)
+        and as float64 C arrays of the documented shapes: a row given with another shape is broadcast to its
+        shape as NumPy would; the plan and the support box are placeholders where they are not used."""
         model = self.model
         q = check_configuration(q, "q")
         qdot = check_finite(qdot, "qdot")
@@ -174,48 +201,248 @@ class BipedIkd:
         height = np.asarray(reference.com_height, dtype=np.float64)
         if moment.shape != (2,) or height.shape != (3,):
             raise ControllerError("reference.moment must be (T_x, T_y) and reference.com_height (z, zdot, zddot)")
-        j_known, drift_known, wddot_known = self._known(q, qdot, reference)
-        momentum_drift = model.centroidal_momentum_drift(q, qdot)  # updates at q
-        com, centroidal = model.com_and_centroidal_matrix()
-        m = self.mass
-        j_com, drift_com = centroidal[:3] / m, momentum_drift[:3] / m
-        z_acceleration = height[2] + self.kd * (height[1] - j_com[2] @ qdot) + self.kp * (height[0] - com[2])
-        # (5.88): A qddot + B (xddot_c, yddot_c) + c = 0
-        a = centroidal[3:5]
-        g = GRAVITY + z_acceleration
-        b_mat = np.array([[0.0, -m * com[2]], [m * com[2], 0.0]])
-        if reference.com_plan is not None and self.moment_gain > 0.0:
-            moment = self._stabilized(moment, reference, com[:2], j_com[:2] @ qdot, b_mat, m * g)
-        c = momentum_drift[3:5] + np.array([m * com[1] * g - moment[0], -m * com[0] * g - moment[1]])
-        b_inverse = np.array([[0.0, 1.0], [-1.0, 0.0]]) / (m * com[2])  # B^-1
-        # (5.91): the known rows and the CoM's x, y replaced by what the angular momentum theorem gives them
-        r_mat = np.vstack([j_known, j_com[2], j_com[:2] + b_inverse @ a])
-        r_vec = np.concatenate([drift_known - wddot_known, [drift_com[2] - z_acceleration],
-                                drift_com[:2] + b_inverse @ c])
-        preferred = -self.self_motion_damping * qdot
-        if self.posture is not None:
-            preferred = preferred - self.posture_stiffness * model.difference(self.posture, q)
-        res = resolve(r_mat, -r_vec, -self.weights.apply(preferred), self.weights,
-                      singular_threshold=self.singular_threshold)
-        if not res.success:
-            return BipedIkdResult(np.zeros(model.nv), np.zeros(3), float(np.linalg.norm(r_vec)), res.sigma_min, False,
-                                  res.status, moment)
-        qddot = res.x
-        com_acceleration = j_com @ qddot + drift_com
-        residual = float(np.linalg.norm(r_mat @ qddot + r_vec))
-        return BipedIkdResult(qddot, com_acceleration, residual, res.sigma_min, True, res.status, moment)
+        plan, support = _NO_PLAN, _NO_SUPPORT
+        if stabilize:
+            plan = np.asarray(reference.com_plan, dtype=np.float64)
+            if plan.shape != (4,):
+                raise ControllerError(f"reference.com_plan must be (x, y, xdot, ydot), got shape {plan.shape}")
+            if reference.support is not None:
+                support = _rows(reference.support, 2, (2,), "support")
+        checked = BipedIkdReference(
+            _rows(reference.feet_position, 2, (3,), "feet_position"),
+            _rows(reference.feet_rotation, 2, (3, 3), "feet_rotation", broadcast=False),
+            _rows(reference.feet_velocity, 2, (6,), "feet_velocity"),
+            _rows(reference.feet_acceleration, 2, (6,), "feet_acceleration"),
+            _rows(reference.torso_rotation, 3, (3,), "torso_rotation", broadcast=False),
+            _rows([reference.torso_angular_velocity], 1, (3,), "torso_angular_velocity")[0],
+            _rows([reference.torso_angular_acceleration], 1, (3,), "torso_angular_acceleration")[0],
+            np.array(height), np.array(moment), plan if stabilize else None, None)
+        return np.array(q), np.array(qdot), checked, np.array(plan), np.array(support)
 
-    def _stabilized(self, moment: NDArray[np.float64], reference: BipedIkdReference, com: NDArray[np.float64],
-                    com_velocity: NDArray[np.float64], b_mat: NDArray[np.float64], force: float
-                    ) -> NDArray[np.float64]:
-        """(5.97): the moment plus ``B [K_p (w_plan - w) + K_d (wdot_plan - wdot)]``, its ZMP (for the vertical
-        force ``force`` [N]) kept in the support box."""
-        plan = np.asarray(reference.com_plan, dtype=np.float64)
-        if plan.shape != (4,):
-            raise ControllerError(f"reference.com_plan must be (x, y, xdot, ydot), got shape {plan.shape}")
-        modified = moment + b_mat @ (self.com_stiffness * (plan[:2] - com) + self.com_damping * (plan[2:] - com_velocity))
-        if reference.support is None or force <= 0.0:
-            return modified
-        box = np.asarray(reference.support, dtype=np.float64)
-        zmp = np.clip(np.array([-modified[1], modified[0]]) / force, box[0], box[1])
-        return force * np.array([zmp[1], -zmp[0]])
+
+def _rows(value: ArrayLike, count: int, shape: tuple[int, ...], name: str, broadcast: bool = True
+          ) -> NDArray[np.float64]:
+    """``value``'s first ``count`` rows (the ones the step reads), each broadcast to ``shape`` (or required to have
+    it), as one float64 C array (``count``, ``*shape``)."""
+    try:
+        rows = [np.asarray(value[i], dtype=np.float64) for i in range(count)]
+        if not broadcast and any(row.shape != shape for row in rows):
+            raise ValueError
+        return np.array([np.broadcast_to(row, shape) for row in rows], dtype=np.float64)
+    except (IndexError, TypeError, ValueError):
+        raise ControllerError(f"reference.{name} must have shape {(count, *shape)}, got {np.shape(value)}") from None
+
+
+_FLOAT64 = np.dtype(np.float64)
+_NO_PLAN = np.zeros(4)
+_NO_SUPPORT = np.zeros((2, 2))
+_NO_DIAGONAL = np.ones(0)
+_NO_INVERSE = np.zeros((0, 0))
+_JIT = {"cache": True, "error_model": "numpy"}
+# the kernels' arrays: float64 of any layout, writable or not (the caller's of other types take BipedIkd._checked);
+# their results are C arrays
+_V, _M, _T = (types.Array(types.float64, n, "A", readonly=True) for n in (1, 2, 3))
+_CV = types.Array(types.float64, 1, "C")
+_F, _B = types.float64, types.boolean
+
+
+@njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **_JIT)
+def _valid(q, qdot, feet_position, feet_rotation, feet_velocity, feet_acceleration, torso_rotation,
+           torso_velocity, torso_acceleration, height, moment, plan, support, nq, nv, max_coordinate
+           ):  # pragma: no cover - compiled
+    """Whether the inputs have the documented shapes and are finite, ``|q|`` within ``max_coordinate``."""
+    if (q.shape[0] != nq or qdot.shape[0] != nv or feet_position.shape != (2, 3) or feet_rotation.shape != (2, 3, 3)
+            or feet_velocity.shape != (2, 6) or feet_acceleration.shape != (2, 6) or torso_rotation.shape != (3, 3)
+            or torso_velocity.shape[0] != 3 or torso_acceleration.shape[0] != 3 or height.shape[0] != 3
+            or moment.shape[0] != 2 or plan.shape[0] != 4 or support.shape != (2, 2)):
+        return False
+    for x in q:
+        if not abs(x) <= max_coordinate:
+            return False
+    total = 0.0  # NaN and inf survive a sum (an overflowing sum of finite entries takes the general checks)
+    for x in qdot:
+        total += x
+    for a in (feet_position, feet_velocity, feet_acceleration, torso_rotation, support, feet_rotation[0],
+              feet_rotation[1]):
+        for row in a:
+            for x in row:
+                total += x
+    for a in (torso_velocity, torso_acceleration, height, moment, plan):
+        for x in a:
+            total += x
+    return np.isfinite(total)
+
+
+@njit(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(_V, _T, _M, _T, _M, _V, _M, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V,
+                                                  _V, _M, _V, _V, _M, _F, _F, _F, _F, _F, _F, _F, _F, _B, _B, _B, _B),
+      **_JIT)
+def _solve(qdot, rotation, position, jacobian, drift, com, centroidal, centroidal_drift, feet_position, feet_rotation,
+           feet_velocity, feet_acceleration, torso_rotation, torso_velocity, torso_acceleration, height, moment, plan,
+           support, offset, weights, inverse_weights, kp, kd, mass, com_stiffness, com_damping, self_motion_damping,
+           posture_stiffness, singular_threshold, stabilize, saturate, has_posture,
+           diagonal):  # pragma: no cover - compiled
+    """``(qddot, com_acceleration, moment, residual, sigma_min, ok)`` of :meth:`BipedIkd.step` from the model's terms
+    (rows: right sole, left sole, torso) and the checked reference.
+
+    ``R`` (18 x nv) and ``r`` of (5.91) are the known rows (both soles, the torso's orientation, the CoM's height)
+    and the CoM's x, y from the angular momentum theorem; ``qddot = W^-1 (R^T lambda - z)``, ``(R W^-1 R^T) lambda =
+    -r + R W^-1 z``, ``z = -W qddot_pref`` (:func:`~redundancy_gym.controllers.redundancy_resolution.resolve`):
+    ``weights`` the diagonal of ``W`` if ``diagonal``, else ``inverse_weights`` is ``W^-1``. ``offset`` is the
+    posture's difference from q (``has_posture``). Not ok (zeros) when ``sigma_min`` of ``R W^-1/2`` is below
+    ``singular_threshold`` or the Cholesky factorization or the solution fails. ``stabilize``: apply (5.97) with
+    ``plan``; ``saturate``: keep its ZMP in the ``support`` box.
+    """
+    nv = qdot.shape[0]
+    rows = 18
+    r_mat = np.empty((rows, nv))
+    r_vec = np.empty(rows)
+    error = np.empty(3)
+    # the known rows, stabilized (5.19): r = Jdot qdot - (wddot + K_D (wdot - J qdot) + K_P e)
+    for i in range(3):
+        first = 0 if i < 2 else 3
+        if i < 2:
+            rotation_error_into(feet_rotation[i], rotation[i], error)
+        else:
+            rotation_error_into(torso_rotation, rotation[2], error)
+        for k in range(first, 6):
+            row = 6 * i + k - first
+            velocity = 0.0
+            for c in range(nv):
+                r_mat[row, c] = jacobian[i, k, c]
+                velocity += jacobian[i, k, c] * qdot[c]
+            if i < 2:
+                e = feet_position[i, k] - position[i, k] if k < 3 else error[k - 3]
+                acceleration = feet_acceleration[i, k] + kd * (feet_velocity[i, k] - velocity) + kp * e
+            else:
+                acceleration = torso_acceleration[k - 3] + kd * (torso_velocity[k - 3] - velocity) + kp * error[k - 3]
+            r_vec[row] = drift[i, k] - acceleration
+    # the CoM: J_c = A_G,lin / m, Jdot_c qdot = Adot_G,lin qdot / m
+    m = mass
+    com_velocity = np.zeros(3)
+    drift_com = np.empty(3)
+    j_com = np.empty((3, nv))
+    for a in range(3):
+        drift_com[a] = centroidal_drift[a] / m
+        for c in range(nv):
+            j_com[a, c] = centroidal[a, c] / m
+            com_velocity[a] += j_com[a, c] * qdot[c]
+    z_acceleration = height[2] + kd * (height[1] - com_velocity[2]) + kp * (height[0] - com[2])
+    g = 9.81 + z_acceleration  # GRAVITY
+    mz = m * com[2]
+    # (5.97): T += B [K_p (w_plan - w) + K_d (wdot_plan - wdot)], B = [[0, -m z_c], [m z_c, 0]], its ZMP kept in
+    # the support box
+    t_x, t_y = moment[0], moment[1]
+    if stabilize:
+        e_x = com_stiffness * (plan[0] - com[0]) + com_damping * (plan[2] - com_velocity[0])
+        e_y = com_stiffness * (plan[1] - com[1]) + com_damping * (plan[3] - com_velocity[1])
+        t_x, t_y = t_x + -mz * e_y, t_y + mz * e_x
+        force = m * g
+        if saturate and force > 0.0:  # np.clip(zmp, support[0], support[1])
+            zmp_x = min(max(-t_y / force, support[0, 0]), support[1, 0])
+            zmp_y = min(max(t_x / force, support[0, 1]), support[1, 1])
+            t_x, t_y = force * zmp_y, force * -zmp_x
+    moment_out = np.empty(2)
+    moment_out[0], moment_out[1] = t_x, t_y
+    # (5.88): c = Adot_L,xy qdot + (m y_c g - T_x, -m x_c g - T_y); (5.91) with B^-1 = [[0, 1], [-1, 0]] / (m z_c)
+    c_x = centroidal_drift[3] + (m * com[1] * g - t_x)
+    c_y = centroidal_drift[4] + (-m * com[0] * g - t_y)
+    b_xy, b_yx = 1.0 / mz, -1.0 / mz
+    for c in range(nv):
+        r_mat[15, c] = j_com[2, c]
+        r_mat[16, c] = j_com[0, c] + b_xy * centroidal[4, c]
+        r_mat[17, c] = j_com[1, c] + b_yx * centroidal[3, c]
+    r_vec[15] = drift_com[2] - z_acceleration
+    r_vec[16] = drift_com[0] + b_xy * c_y
+    r_vec[17] = drift_com[1] + b_yx * c_x
+    # the weighted minimum of |qddot - qddot_pref|: z = -W qddot_pref, W^-1 z
+    winv_z = np.empty(nv)
+    for c in range(nv):
+        preferred = -self_motion_damping * qdot[c]
+        if has_posture:
+            preferred = preferred - posture_stiffness * offset[c]
+        if diagonal:
+            winv_z[c] = -(weights[c] * preferred) / weights[c]
+        else:
+            winv_z[c] = -preferred
+    winv_rt = np.empty((nv, rows))
+    if diagonal:
+        for c in range(nv):
+            for i in range(rows):
+                winv_rt[c, i] = r_mat[i, c] / weights[c]
+    else:
+        for c in range(nv):
+            for i in range(rows):
+                total = 0.0
+                for d in range(nv):
+                    total += inverse_weights[c, d] * r_mat[i, d]
+                winv_rt[c, i] = total
+    b_mat = np.empty((rows, rows))
+    for i in range(rows):
+        for j in range(i + 1):
+            total = 0.0
+            for c in range(nv):
+                total += r_mat[i, c] * winv_rt[c, j]
+            b_mat[i, j] = total
+            b_mat[j, i] = total
+    qddot = np.zeros(nv)
+    com_acceleration = np.zeros(3)
+    sigma = np.sqrt(max(np.linalg.eigvalsh(b_mat)[0], 0.0))
+    ok = sigma >= singular_threshold
+    factor = np.zeros((rows, rows))
+    if ok:  # Cholesky of B, failing where LAPACK's would (a pivot not > 0)
+        for j in range(rows):
+            s = b_mat[j, j]
+            for k in range(j):
+                s -= factor[j, k] * factor[j, k]
+            if not s > 0.0:
+                ok = False
+                break
+            factor[j, j] = np.sqrt(s)
+            for i in range(j + 1, rows):
+                s = b_mat[i, j]
+                for k in range(j):
+                    s -= factor[i, k] * factor[j, k]
+                factor[i, j] = s / factor[j, j]
+    if ok:
+        p = np.empty(rows)  # -r + R W^-1 z
+        for i in range(rows):
+            total = 0.0
+            for c in range(nv):
+                total += r_mat[i, c] * winv_z[c]
+            p[i] = -r_vec[i] + total
+        for i in range(rows):  # L y = p
+            s = p[i]
+            for k in range(i):
+                s -= factor[i, k] * p[k]
+            p[i] = s / factor[i, i]
+        for i in range(rows - 1, -1, -1):  # L^T lambda = y
+            s = p[i]
+            for k in range(i + 1, rows):
+                s -= factor[k, i] * p[k]
+            p[i] = s / factor[i, i]
+        finite = 0.0
+        for c in range(nv):
+            total = 0.0
+            for i in range(rows):
+                total += winv_rt[c, i] * p[i]
+            qddot[c] = total - winv_z[c]
+            finite += qddot[c]
+        ok = np.isfinite(finite) or np.all(np.isfinite(qddot))
+    if not ok:
+        qddot[:] = 0.0
+        total = 0.0
+        for i in range(rows):
+            total += r_vec[i] * r_vec[i]
+        return qddot, com_acceleration, moment_out, np.sqrt(total), sigma, False
+    for a in range(3):
+        total = 0.0
+        for c in range(nv):
+            total += j_com[a, c] * qddot[c]
+        com_acceleration[a] = total + drift_com[a]
+    residual = 0.0
+    for i in range(rows):
+        total = 0.0
+        for c in range(nv):
+            total += r_mat[i, c] * qddot[c]
+        residual += (total + r_vec[i]) ** 2
+    return qddot, com_acceleration, moment_out, np.sqrt(residual), sigma, True
