@@ -17,6 +17,7 @@ __all__ = [
     "BACKENDS",
     "OPTION_RULES",
     "SUFFIX_RULES",
+    "WALKING_IK",
     "OptionRule",
     "config_from_options",
     "control_period",
@@ -28,6 +29,8 @@ __all__ = [
 C = TypeVar("C")
 # how a CLIK policy runs its controller: one fused compiled kernel (CompiledClik) or the Python Clik
 BACKENDS: tuple[str, ...] = ("compiled", "python")
+# how the walking policy turns its pattern into joint trajectories: whole-body CLIK or Inverse Kineto-Dynamics
+WALKING_IK: tuple[str, ...] = ("clik", "ikd")
 
 
 @dataclass(frozen=True)
@@ -114,6 +117,7 @@ OPTION_RULES: dict[str, OptionRule] = {
     "method": OptionRule(kind="str", choices=METHODS), "backend": OptionRule(kind="str", choices=BACKENDS),
     "descent": OptionRule(kind="str", choices=DESCENT_METHODS),
     "collision_avoidance": OptionRule(kind="str", choices=("auto", "on", "off")),
+    "ik": OptionRule(kind="str", choices=WALKING_IK),
 }
 """The range or choices of a policy option, by its name (the same name means the same thing in every config)."""
 

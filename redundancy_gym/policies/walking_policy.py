@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..controllers.ikd import WalkingIkdConfig
 from ..controllers.walking import (
     GaitConfig,
     RcaConfig,
@@ -69,6 +70,11 @@ class WalkingPolicyConfig:
         rca: reactive collision avoidance of the swing leg (task-space modification (5.80)) on.
         obstacle_clearance: height [m] of a swing sole above an obstacle's bounding box it steps over.
         step_over_duration: single-support duration [s] of a step over an obstacle (0: the nominal one).
+        ik: the joint trajectory from the whole-body CLIK (``"clik"``) or from Inverse Kineto-Dynamics (``"ikd"``,
+            :class:`~redundancy_gym.controllers.ikd.WalkingIkd`: the pattern's ZMP realized exactly, hybrid
+            stabilization; ``correction_iterations`` is then not used, the plan is the plain LIPM's).
+        moment_gain: with ``ik="ikd"``, ``k`` of the contact-moment stabilization (5.97) (``K_p = k 40 / dt``).
+        ikd_planning: with ``ik="ikd"``, stabilization via planning on (with ``moment_gain`` > 0: hybrid).
     """
 
     momentum_minimization: bool = True
@@ -95,6 +101,9 @@ class WalkingPolicyConfig:
     rca: bool = True
     obstacle_clearance: float = SstaConfig.clearance
     step_over_duration: float = 0.0
+    ik: str = "clik"
+    moment_gain: float = WalkingIkdConfig.moment_gain
+    ikd_planning: bool = WalkingIkdConfig.planning
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -154,8 +163,9 @@ class WalkingPolicy(PerEnvPolicy):
             self.controller = WalkingController(
                 self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
                 np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik, stepping=stepping,
-                correction_iterations=c.correction_iterations, ssta=ssta, rca=RcaConfig(), use_ssta=c.ssta,
-                use_rca=c.rca, correction_configuration=self._nominal)
+                correction_iterations=c.correction_iterations, ssta=ssta, rca=RcaConfig(),
+                use_ssta=c.ssta, use_rca=c.rca, correction_configuration=self._nominal,
+                ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None)
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc
         self.last_command: WalkingCommand | None = None

@@ -3,5 +3,8 @@ coordinates."""
 
 from .biped_ikd import BipedIkd, BipedIkdReference, BipedIkdResult
 from .general_ikd import WEIGHTINGS, GeneralIkd, GeneralIkdResult
+from .plan_stabilizer import PlanStabilizer, PlanStabilizerOutput
+from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 
-__all__ = ["WEIGHTINGS", "BipedIkd", "BipedIkdReference", "BipedIkdResult", "GeneralIkd", "GeneralIkdResult"]
+__all__ = ["WEIGHTINGS", "BipedIkd", "BipedIkdReference", "BipedIkdResult", "GeneralIkd", "GeneralIkdResult",
+           "PlanStabilizer", "PlanStabilizerOutput", "WalkingIkd", "WalkingIkdConfig", "WalkingIkdStep"]

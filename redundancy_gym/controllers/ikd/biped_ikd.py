@@ -3,14 +3,16 @@ prescribed contact moment exactly, with the horizontal CoM as the unknown task c
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
-from ...model import RobotModel
+from ...model import AccelerationTerms, RobotModel
 from ..exceptions import ControllerError
+from ..objective import Objective, sum_objectives
 from ..redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
 from ..walking.ik_kernels import rotation_error_into
 
@@ -108,18 +110,21 @@ class BipedIkd:
         posture: the posture (nq) of the nullspace term (None: no posture term).
         moment_gain: ``k`` of (5.97) (0: the prescribed moment unmodified).
         period: the control period [s] of the gains ``K_p = k 40 / period``.
+        objectives: nullspace objectives ``H(q)`` (value and gradient, as the CLIK's: joint limits (5.58),
+            self-collision (5.49)); the preferred acceleration adds ``-objective_gain dH/dq``.
+        objective_gain: their gain [1/s^2 per unit of ``H``'s gradient].
     """
 
     def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
                  torso_frame: str = "imu", stiffness: float = 400.0, damping: float = 34.0,
                  self_motion_damping: float = 10.0, posture_stiffness: float = 25.0, posture: ArrayLike | None = None,
                  weights: ArrayLike | float = 1.0, singular_threshold: float = 1e-6, moment_gain: float = 0.0,
-                 period: float = 0.001) -> None:
+                 period: float = 0.001, objectives: Sequence[Objective] = (), objective_gain: float = 100.0) -> None:
         if not model.floating_base:
             raise ControllerError(f"biped IKD needs a floating-base model, {model.source} has a fixed base")
         for name, value in (("stiffness", stiffness), ("damping", damping),
                             ("self_motion_damping", self_motion_damping), ("posture_stiffness", posture_stiffness),
-                            ("moment_gain", moment_gain)):
+                            ("moment_gain", moment_gain), ("objective_gain", objective_gain)):
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         self.model = model
@@ -138,6 +143,13 @@ class BipedIkd:
         self.moment_gain = float(moment_gain)
         self.com_stiffness = self.moment_gain * 40.0 / float(period)
         self.com_damping = 2.0 * 0.85 * float(np.sqrt(self.com_stiffness))
+        self.objectives = tuple(objectives)
+        for objective in self.objectives:
+            if not isinstance(objective, Objective):
+                raise ControllerError(f"objectives must have evaluate(model, q), got {type(objective).__name__}")
+        self.objective_gain = float(objective_gain)
+        self.terms: AccelerationTerms | None = None
+        """The model's terms at the last :meth:`step`'s state (CoM, centroidal map, ...), for callers that need them."""
         self._inverse_weights: tuple[WeightMatrix, NDArray[np.float64]] | None = None  # (W, W^-1) of a full W
 
     def step(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference) -> BipedIkdResult:
@@ -164,8 +176,14 @@ class BipedIkd:
         else:
             q, qdot, ref, plan, support = self._checked(q, qdot, reference, stabilize)
         terms = model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
+        self.terms = terms
         has_posture = self.posture is not None
         offset = model.difference(self.posture, q) if has_posture else qdot
+        stiffness = self.posture_stiffness
+        if self.objectives:  # the kernel's preferred -K offset then carries -K (q - posture) - k_H dH/dq
+            gradient = sum_objectives(self.objectives, model, np.asarray(q, dtype=np.float64)).gradient
+            offset = (stiffness * offset if has_posture else 0.0) + self.objective_gain * gradient
+            has_posture, stiffness = True, 1.0
         diagonal = self.weights.diagonal
         if diagonal is None:
             inverse = self._inverse_weights
@@ -179,7 +197,7 @@ class BipedIkd:
             terms.centroidal_drift, ref.feet_position, ref.feet_rotation, ref.feet_velocity, ref.feet_acceleration,
             ref.torso_rotation, ref.torso_angular_velocity, ref.torso_angular_acceleration, ref.com_height,
             ref.moment, plan, support, offset, weights, inverse_weights, self.kp, self.kd, self.mass,
-            self.com_stiffness, self.com_damping, self.self_motion_damping, self.posture_stiffness,
+            self.com_stiffness, self.com_damping, self.self_motion_damping, stiffness,
             self.singular_threshold, stabilize, reference.support is not None, has_posture, diagonal is not None)
         return BipedIkdResult(qddot, com_acceleration, residual, sigma_min, ok, "ok" if ok else "singular", moment)
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -33,6 +33,9 @@ from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
+
+if TYPE_CHECKING:  # imported where used: the IKD package imports the walking package's kernels
+    from ..ikd.walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 
 __all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
 
@@ -95,7 +98,8 @@ class WalkingCommand(NamedTuple):
         pattern: the pattern sample at the start of the period.
         stabilizer: the stabilizer output.
         contact: the ZMP estimate from the ankle sensors (in the stance foot's frame where ``stance_frame``).
-        ik: the whole-body IK result (``ik.q`` is the kinematic model's configuration).
+        ik: the whole-body IK result, or with an IKD (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`) its step
+            (``ik.q`` is the kinematic model's configuration either way).
         adjustment: the step adjustment made in this period (push recovery), or None.
         avoidance: the swing foot's reactive collision-avoidance modification (RCA) at the period's end, or None
             without obstacles or with RCA off.
@@ -105,7 +109,7 @@ class WalkingCommand(NamedTuple):
     pattern: PatternSample
     stabilizer: StabilizerOutput
     contact: ZmpEstimate
-    ik: WholeBodyIkResult
+    ik: WholeBodyIkResult | WalkingIkdStep
     adjustment: StepAdjustment | None = None
     avoidance: RcaState | None = None
 
@@ -133,6 +137,10 @@ class WalkingController:
         use_ssta, use_rca: switch either obstacle layer off (ablations); without both, obstacles are ignored.
         correction_configuration: the standing joint positions [rad] the ZMP correction is estimated from, once
             per speed (None: from each start's own standing state, about 0.26 s per start).
+        ikd: generate the joint trajectory by Inverse Kineto-Dynamics (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`,
+            monograph 5.5) instead of the whole-body CLIK (None): the pattern's ZMP is then realized exactly, so
+            ``correction_iterations`` should be 0 (the plain LIPM plan). The CLIK still moves the standing start
+            onto the pattern's first reference.
     """
 
     def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
@@ -141,7 +149,8 @@ class WalkingController:
                  ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
                  correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True,
                  ssta: SstaConfig | None = None, rca: RcaConfig | None = None, use_ssta: bool = True,
-                 use_rca: bool = True, correction_configuration: ArrayLike | None = None) -> None:
+                 use_rca: bool = True, correction_configuration: ArrayLike | None = None,
+                 ikd: WalkingIkdConfig | None = None) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -199,6 +208,9 @@ class WalkingController:
         self._world_to_plan: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
         self._ssta_map: tuple[NDArray[np.float64], NDArray[np.float64]] = (np.eye(3), np.zeros(3))
         self._obstacle_step = -1
+        self.ikd_config = ikd
+        self.ikd: WalkingIkd | None = None
+        self._ikd_com = (np.zeros(3), np.zeros(3))
 
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
@@ -229,6 +241,19 @@ class WalkingController:
         q = self.model.check_configuration(q)
         self.ik, self.solver, q_ref, start = self._stand(q)
         self.q_ref = q_ref
+        if self.ikd_config is not None:
+            from ..ikd.walking_ikd import WalkingIkd  # here: the ikd package imports this one's kernels
+
+            # the CLIK's joint-limit objective (without it the IKD stretched a knee at 0.7 m/s); neither its posture
+            # (the IKD has its own posture stiffness) nor its self-collision objective (evaluated in Python it took
+            # some 230 us a period, and the IKD walks on BipedWalk kept 19 mm between the links without it)
+            objectives = tuple(o for o in self.ik.objectives if isinstance(o, ActuatedObjective)
+                               and isinstance(o.objective, JointLimitObjective))
+            self.ikd = WalkingIkd(self.model, self.dt, self.ikd_config, omega=self.stabilizer.omega, posture=q_ref,
+                                  feet_frames=self.feet_frames, torso_frame=self.torso_frame, objectives=objectives)
+            self.ikd.start(q_ref)
+            self.model.update(q_ref)
+            self._ikd_com = (self.model.com().copy(), np.zeros(3))
         feet, com = start
         # from correction_configuration once per speed, else from this start's state (kept for the same state only):
         # a correction kept from an earlier walk's slightly different standing state made a walk's result depend on
@@ -494,17 +519,39 @@ class WalkingController:
             start = self.pattern.sample(self.time)  # the plan changed from now on
         end = self.pattern.sample(self.time + self.dt)
         self._next = end
-        feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
+        if self.ikd is not None:  # the feedback acts about the CoM the IKD's joint trajectory has
+            ikd_com, ikd_velocity = self._ikd_com
+            feedback = self.stabilizer.update(self.dt, ikd_com, ikd_com[:2] + ikd_velocity[:2] / self.stabilizer.omega,
+                                              start.zmp, com, com_velocity, contact.zmp)
+        else:
+            feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         offset_end = feedback.offset + feedback.rate * self.dt
         start_ref = self._reference_array(start, feedback.offset, feedback.rate)
         end_ref = self._reference_array(end, offset_end, feedback.rate)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)
-        result = self.solver.step(self.q_ref, start_ref, end_ref, self.dt)
+        result: WholeBodyIkResult | WalkingIkdStep
+        if self.ikd is not None:
+            result = self._ikd_step(start, start_ref, end_ref, feedback)
+        else:
+            result = self.solver.step(self.q_ref, start_ref, end_ref, self.dt)
         self.q_ref = result.q
         self.time += self.dt
         return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result, adjustment, avoidance)
+
+    def _ikd_step(self, start: PatternSample, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64],
+                  feedback: StabilizerOutput) -> WalkingIkdStep:
+        """The IKD's period: the pattern's soles, torso and ZMP, the balance feedback's CoM offset on the soles."""
+        assert self.ikd is not None and self.pattern is not None
+        k = start.step
+        window = None
+        if k >= 0:
+            window = (self.pattern.step_start(k) + self.pattern.step_single(k), self.pattern.step_start(k + 1))
+        result = self.ikd.step(start, start_ref, end_ref, window, feedback.offset, feedback.rate,
+                               self.pattern.reference_zmp(start.time))
+        self._ikd_com = (result.com + result.com_velocity * self.dt, result.com_velocity)
+        return result
 
     def _avoid(self, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64]) -> RcaState:
         """RCA (5.80)-(5.83): move the swing foot's position references of this period by the modification

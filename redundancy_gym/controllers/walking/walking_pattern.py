@@ -627,6 +627,23 @@ class WalkingPattern:
             feet_yaw_rate=yaw_rate, contact=(contact[0], contact[1]),
             right_load=self._right_load(state.zmp, feet, contact), step=k)
 
+    def reference_zmp(self, t: float) -> NDArray[np.float64]:
+        """The ZMP [m] (x, y) the whole body should have at ``t`` [s]: the piecewise-linear reference under the
+        footholds (heel to toe in single support, foot to foot in double support). Without a :attr:`correction`
+        it is the LIPM plan's ZMP; with one, the plan's ZMP is this minus the multi-body shift (the plan's CoM is
+        the one the whole body needs for this ZMP)."""
+        k = self.step_at(t)
+        if self.correction is None or k < 0:
+            return self._plan.sample(t).zmp
+        a = self.config.heel_toe_shift
+        start, single, end = self.step_start(k), self.step_single(k), self.step_start(k + 1)
+        stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
+        s = t - start
+        if s < single:
+            return stance + (swing_to - stance) * (s / single)
+        landing = self._zmp_point(k + 2, -a)
+        return swing_to + (landing - swing_to) * ((s - single) / (end - start - single))
+
     def _swing_yaw(self, k: int, nominal: float) -> tuple[float, float]:
         """Heading [rad] and its rate [rad/s] of step ``k``'s swing foot at nominal swing time ``nominal`` [s]: a
         quintic (C2, at rest at both ends) from the lift-off foothold's heading to the landing's over the single
