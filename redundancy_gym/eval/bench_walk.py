@@ -14,6 +14,12 @@ largest difference of their configurations [rad or m]. ``controller_vs_lola`` re
 the 548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not
 measured here).
 
+``ikd``: the controller step with the joint trajectory from Inverse Kineto-Dynamics (the policy's ``ik="ikd"``,
+:class:`~redundancy_gym.controllers.ikd.WalkingIkd`) on the same walk, timed in alternating rounds with the CLIK
+controller (CLIK, IKD, CLIK, IKD, ...): ``ikd_vs_clik`` is the median over rounds of the ratio of the two medians
+(Lola: 823 / 548 us = 1.50 on a Core2 Duo; published). ``zmp_rms_mm``: in those walks, the rms distance of the
+measured ZMP (the env's contact pressure, in the plan's frame) from the pattern's reference ZMP, per controller.
+
 ``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
 0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
 distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_cycle`` relates its median to the
@@ -36,11 +42,13 @@ from ..policies.walking_policy import WalkingPolicy
 from .evaluate import make_env
 from .exceptions import EvalError
 
-__all__ = ["LOLA_CYCLE_US", "LOLA_OBSTACLE_CYCLE_US", "OBSTACLE_COURSES", "format_walk_bench", "run_walk_bench"]
+__all__ = ["LOLA_CYCLE_US", "LOLA_IKD_CYCLE_US", "LOLA_OBSTACLE_CYCLE_US", "OBSTACLE_COURSES", "format_walk_bench", "run_walk_bench"]
 
 ENV_ID = "redundancy_gym/BipedWalk-v0"
 LOLA_CYCLE_US = 548.0
 """Lola's whole controller per cycle [us] on a 2.33 GHz Core2 Duo (the issue's reference figure)."""
+LOLA_IKD_CYCLE_US = 823.0
+"""Lola's IKD-based walking controller per cycle [us] on the same Core2 Duo (monograph 5.5.3; published)."""
 LOLA_OBSTACLE_CYCLE_US = 2000.0
 """Lola's control cycle with obstacle avoidance [us] (monograph 5.4.2: all planning, collision avoidance,
 redundancy resolution, force and position control in one 2 ms cycle)."""
@@ -88,10 +96,13 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     return times, active, success, contacts
 
 
-def _walk(speed: float, steps: int, seed: int, record: bool) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
-    """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell."""
+def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[float] | None = None
+          ) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
+    """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell.
+    With a list ``zmp``, appends per period the distance [m] of the measured ZMP (the env's contact pressure, mapped
+    into the plan's frame) from the pattern's reference ZMP, once the first step has begun."""
     env = make_env(ENV_ID, {"target_speed": speed})
-    policy = WalkingPolicy(env)
+    policy = WalkingPolicy(env, ik=ik)
     times: list[float] = []
     recorder: _Recorder | None = None
     fell = False
@@ -105,6 +116,12 @@ def _walk(speed: float, steps: int, seed: int, record: bool) -> tuple[list[float
             action, _ = policy.predict(obs, episode_start=np.array([k == 0]))
             times.append((time.perf_counter() - t0) * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
+            controller = policy.controller
+            if zmp is not None and info["zmp_valid"] and controller.pattern is not None \
+                    and controller.pattern.step_at(controller.time) >= 0:
+                rotation, translation = controller._world_to_plan
+                measured = (rotation @ np.array([*info["zmp"], 0.0]) + translation)[:2]
+                zmp.append(float(np.linalg.norm(measured - controller.pattern.reference_zmp(controller.time))))
             if terminated or truncated:
                 fell = bool(info["fell"])
                 break
@@ -130,7 +147,7 @@ def _time_calls(solver: Any, calls: list[_Call], repeats: int, label: str,
 
 
 def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 3,
-                   progress: bool = True) -> dict[str, Any]:
+                   rounds: int = 3, progress: bool = True) -> dict[str, Any]:
     """Time the walking controller step, then its compiled IK against the pinocchio IK; returns the report.
 
     Args:
@@ -138,10 +155,13 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
         duration: walk length [s].
         seed: reset seed.
         repeats: timed repetitions per IK state (the median is kept).
+        rounds: alternating rounds of the CLIK and the IKD controller walks.
         progress: show progress bars.
     """
     if repeats < 1:
         raise EvalError(f"repeats must be >= 1, got {repeats}")
+    if rounds < 1:
+        raise EvalError(f"rounds must be >= 1, got {rounds}")
     if not np.isfinite(duration) or duration <= 0.0:
         raise EvalError(f"duration must be finite and > 0, got {duration!r}")
     steps = int(round(duration / 0.004))
@@ -155,6 +175,17 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
     compiled_times, compiled_q = _time_calls(compiled, calls, repeats, "compiled", progress)
     python_times, python_q = _time_calls(ik, calls, repeats, "python", progress)
     difference = max(float(np.max(np.abs(a - b))) for a, b in zip(compiled_q, python_q))
+    _walk(speed, min(steps, 50), seed, record=False, ik="ikd")  # warm up the IKD's start
+    ikd_times: list[float] = []
+    ratios, ikd_fell = [], False
+    zmp: dict[str, list[float]] = {"clik": [], "ikd": []}
+    for _ in tqdm(range(rounds), desc="bench walk clik/ikd rounds", disable=not progress):
+        clik_round = _walk(speed, steps, seed, record=False, zmp=zmp["clik"])[0][1:]
+        ikd_round, _, _, fell_round = _walk(speed, steps, seed, record=False, ik="ikd", zmp=zmp["ikd"])
+        ikd_round = ikd_round[1:]
+        ikd_fell = ikd_fell or fell_round
+        ikd_times += ikd_round
+        ratios.append(float(np.median(ikd_round) / np.median(clik_round)))
     obstacles: dict[str, Any] = {}
     all_times: list[float] = []
     for course in tqdm(OBSTACLE_COURSES, desc="bench walk obstacles", disable=not progress):
@@ -179,6 +210,12 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
         "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": float(np.percentile(compiled_times, 90))},
         "ik_python": {"step_us_median": python_median, "step_us_p90": float(np.percentile(python_times, 90))},
         "ik_compiled_vs_python": compiled_median / python_median,
+        "ikd": {"step_us_median": float(np.median(ikd_times)), "step_us_p99": float(np.percentile(ikd_times, 99)),
+                "fell": ikd_fell, "rounds": rounds},
+        "ikd_vs_clik": float(np.median(ratios)),
+        "zmp_rms_mm": {ik: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for ik, d in zmp.items()},
+        "ikd_vs_clik_spread": [float(min(ratios)), float(max(ratios))],
+        "ikd_vs_lola_ikd": float(np.median(ikd_times)) / LOLA_IKD_CYCLE_US,
         "ik_max_difference": difference,
         "controller_vs_lola": controller_median / LOLA_CYCLE_US,
         "obstacles": {"env": OBSTACLE_ENV_ID, "target_speed": 0.4, "courses": obstacles,
@@ -202,6 +239,14 @@ def format_walk_bench(report: dict[str, Any]) -> str:
         f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
         f"(largest difference {report['ik_max_difference']:.1e})",
         f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)",
+        f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
+        + ("  (fell)" if report["ikd"]["fell"] else ""),
+        "measured ZMP from the reference, rms: " + ", ".join(
+            f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")
+            for ik, v in report["zmp_rms_mm"].items()),
+        f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
+        f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
+        f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
         *[f"with obstacles ({course}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us  "
           f"RCA evaluating {100 * r['rca_share']:.0f} % of periods (median then {r['step_us_median_rca']:.1f} us)"
           f"{'' if r['success'] else '  (course not passed)'}"

@@ -12,8 +12,11 @@ from redundancy_gym.eval.exceptions import EvalError
 
 
 def test_walk_bench_report(tmp_path) -> None:
-    report = run_walk_bench(duration=0.4, repeats=1, progress=False)
-    assert report["states"] == 99 and not report["fell"]  # every period after the first records one IK call
+    report = run_walk_bench(duration=0.6, repeats=1, rounds=1, progress=False)
+    # the IKD controller is timed in the same run: a ratio to the CLIK controller, and both ZMPs measured
+    assert report["ikd"]["step_us_median"] > 0.0 and report["ikd_vs_clik"] > 0.0 and not report["ikd"]["fell"]
+    assert all(0.0 < v < 200.0 for v in report["zmp_rms_mm"].values())
+    assert report["states"] == 149 and not report["fell"]  # every period after the first records one IK call
     assert report["ik_max_difference"] < 1e-9  # the same inputs give the same configuration in both backends
     assert report["self_collision_pairs"] > 100
     k, p = report["ik_compiled"], report["ik_python"]
@@ -29,3 +32,5 @@ def test_walk_bench_rejects_bad_options() -> None:
         run_walk_bench(repeats=0, progress=False)
     with pytest.raises(EvalError, match="duration"):
         run_walk_bench(duration=-1.0, progress=False)
+    with pytest.raises(EvalError, match="rounds"):
+        run_walk_bench(rounds=0, progress=False)
