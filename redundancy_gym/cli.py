@@ -129,7 +129,7 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid, and "
                          "every wrapped id against its raw env; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
@@ -138,7 +138,9 @@ def _parser() -> argparse.ArgumentParser:
                          "soak: random, bang-bang and reference-policy actions on every env, counting exceptions "
                          "and non-finite values (exit status 1 when any); "
                          "push: the largest torso push the walking reference recovers from, with and without step "
-                         "adjustment (also writes a PNG beside the JSON)")
+                         "adjustment (also writes a PNG beside the JSON); "
+                         "ikd: the kinematic IKD study of monograph 5.5.3 (figs. 5.21, 5.23, 5.24, 5.27 analogues: "
+                         "unstabilized drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON)")
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
     be.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the benchmark's scenes")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
@@ -354,6 +356,15 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(format_push_bench(report))
                 print(f"wrote {write_push_bench(report, json_path)}")
                 print(f"wrote {plot_push_bench(report, str(Path(json_path).with_suffix('.png')))}")
+            elif args.name == "ikd":
+                from .eval.ikd_study import (IkdStudyConfig, format_ikd_study, plot_ikd_study, run_ikd_study,
+                                             write_ikd_study)
+
+                study = run_ikd_study(IkdStudyConfig(steps=2) if args.quick else None, progress=not args.no_progress)
+                print(format_ikd_study(study.to_json()))
+                print(f"wrote {write_ikd_study(study, json_path)}")
+                for path in plot_ikd_study(study, Path(json_path).parent):
+                    print(f"wrote {path}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

@@ -31,8 +31,8 @@ _OBSTACLE_VIDEO_FPS = 25.0
 
 def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
-    crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle); write JSON, PNG and
-    MP4.
+    crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), and the kinematic IKD
+    study; write JSON, PNG and MP4.
 
     Returns the paths written.
     """
@@ -61,6 +61,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
     written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress))
     written.extend(_predictive(out, seed=seed))
+    written.extend(_ikd_study(out, progress=progress))
     for path in written:
         print(f"wrote {path}")
     return written
@@ -162,6 +163,16 @@ def _predictive(out: Path, *, seed: int) -> list[Path]:
                                        f"PlanarReach, MPC 1 s with {JUMP_SAMPLE_TIME:g} s samples: joint 2 "
                                        "(figs. 5.33/5.34 analogue)"))
     return written
+
+
+def _ikd_study(out: Path, *, progress: bool) -> list[Path]:
+    """The kinematic IKD study (monograph 5.5.3): JSON and the figs. 5.21, 5.23, 5.24 and 5.27 analogues (about 7 s)."""
+    from .ikd_study import format_ikd_study, plot_ikd_study, run_ikd_study, write_ikd_study  # noqa: PLC0415
+
+    print("\n== IKD study: 6 steps at 0.5 m/s, 1 ms, IKD k sweep, LIPM + CLIK, error compensation", flush=True)
+    study = run_ikd_study(progress=progress)
+    print(format_ikd_study(study.to_json()))
+    return [write_ikd_study(study, out / "ikd_study.json"), *plot_ikd_study(study, out)]
 
 
 def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
