@@ -192,7 +192,7 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
     """Time against error, one markdown section and plot per setting: every PlanarReach reference variant and the
     trivial policies (obstacle off; tracking error max), local against predictive and global IK on PlanarReach
     with its obstacle and on AgriReach (pseudoenergy; tracking and goal error in the tables), and the walking
-    reference's variants on BipedWalk (speed error). Each controller runs one untimed warm-up episode first."""
+    reference's variants on BipedWalk, the IKD walker among them (speed error). Each controller runs one untimed warm-up episode first."""
     from .speed_error import plot_speed_error_panels  # noqa: PLC0415
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:
@@ -225,6 +225,7 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
         "walking (pinocchio IK, backend python)": ("walking", {"backend": "python"}),
         "walking, W = I (no L_z minimization)": ("walking", {"momentum_minimization": False}),
         "walking, no self-collision objective": ("walking", {"self_collision_weight": 0.0}),
+        "walking, IKD (hybrid stabilization)": ("walking", {"ik": "ikd"}),
     }
     biped = run(_BIPED, walking, {"target_speed": 0.7}, 2)  # 10 s walks that barely vary with the seed
     sections = [
