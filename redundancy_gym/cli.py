@@ -360,11 +360,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.ikd_study import (IkdStudyConfig, format_ikd_study, plot_ikd_study, run_ikd_study,
                                              write_ikd_study)
 
-                study = run_ikd_study(IkdStudyConfig(steps=2) if args.quick else None, progress=not args.no_progress)
-                print(format_ikd_study(study.to_json()))
-                print(f"wrote {write_ikd_study(study, json_path)}")
-                for path in plot_ikd_study(study, Path(json_path).parent):
-                    print(f"wrote {path}")
+                # the plain LIPM plan, then the walking controller's plan with its multi-body ZMP correction
+                for correction, suffix in ((False, ""), (True, "_corrected")):
+                    config = IkdStudyConfig(steps=2 if args.quick else 6, correction=correction)
+                    study = run_ikd_study(config, progress=not args.no_progress)
+                    print(f"\n{config.plan_name}:")
+                    print(format_ikd_study(study.to_json()))
+                    path = Path(json_path)
+                    print(f"wrote {write_ikd_study(study, path.with_name(path.stem + suffix + path.suffix))}")
+                    for written in plot_ikd_study(study, path.parent, suffix):
+                        print(f"wrote {written}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

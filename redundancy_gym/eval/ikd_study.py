@@ -1,8 +1,9 @@
 """The kinematic IKD study (monograph 5.5.3): figs. 5.21, 5.23, 5.24 and 5.27 as analogues on the biped.
 
-One walk of the plain LIPM walking pattern (:class:`~redundancy_gym.controllers.walking.WalkingPattern` without
-the multi-body ZMP correction, ``speed`` and ``steps`` of :class:`IkdStudyConfig`, default 6 steps at 0.5 m/s,
-1 ms control period) is turned into joint motion on the kinematic model (no simulator) by
+One walk of the walking pattern (:class:`~redundancy_gym.controllers.walking.WalkingPattern`: the plain LIPM plan,
+or with ``correction`` the walking controller's plan with its multi-body ZMP correction, the analogue of the
+monograph's three-mass model; ``speed`` and ``steps`` of :class:`IkdStudyConfig`, default 6 steps at 0.5 m/s, 1 ms
+control period) is turned into joint motion on the kinematic model (no simulator) by
 
 - the biped IKD (:class:`~redundancy_gym.controllers.ikd.BipedIkd`, (5.84)-(5.91)) with the pattern's ZMP as the
   prescribed contact moment, unstabilized, stabilized via the contact moment (5.97) for a sweep of the gain ``k``,
@@ -33,8 +34,9 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +59,7 @@ from ..controllers.walking import (  # noqa: E402
     CompiledWholeBodyIk,
     GaitConfig,
     PatternSample,
+    WalkingController,
     WalkingPattern,
     WholeBodyIk,
     WholeBodyReference,
@@ -93,6 +96,10 @@ class IkdStudyConfig:
         comparison_gain: ``k`` of the hybrid IKD in the comparison (fig. 5.27; the monograph's experiments used
             2e-4).
         divergence: a run stops when its CoM is this far from the plan [m] (the legs would stretch).
+        correction: plan with the walking controller's multi-body ZMP correction (its CLIK rollouts, as the
+            ``walking`` policy plans; the analogue of the monograph's three-mass model): the ideal moment is then
+            the reference ZMP's (:meth:`~redundancy_gym.controllers.walking.WalkingPattern.reference_zmp`), the plan's
+            CoM the one the whole body needs for it. False: the plain LIPM plan.
     """
 
     speed: float = 0.5
@@ -101,6 +108,12 @@ class IkdStudyConfig:
     gains: tuple[float, ...] = (0.0, 2e-4, 1e-3, 1e-2)
     comparison_gain: float = 2e-4
     divergence: float = 0.2
+    correction: bool = False
+
+    @property
+    def plan_name(self) -> str:
+        """What the plan is, for labels."""
+        return "LIPM plan + ZMP correction" if self.correction else "LIPM plan"
 
     def __post_init__(self) -> None:
         for name in ("speed", "period", "divergence"):
@@ -197,8 +210,8 @@ class IkdStudy:
                                                                                           self.step_ends)},
             "k_sweep": sweep,
             "fig_5_27_comparison": {
-                "lipm_clik": _summary(self.clik, self.step_ends),
-                "lipm_error_compensation": _summary(self.error_compensation, self.step_ends),
+                "plan_clik": _summary(self.clik, self.step_ends),
+                "plan_error_compensation": _summary(self.error_compensation, self.step_ends),
                 "ikd_hybrid": {"k": c.comparison_gain, **_summary(self.comparison, self.step_ends)},
             },
             "wall_s": self.wall_s,
@@ -262,10 +275,20 @@ class _Walk:
         self.start = q
         model.update(q)
         feet = np.array([model.frame_position(f) for f in FEET])
-        self.pattern = pattern = WalkingPattern(gait, feet[0], feet[1], model.com()[:2], config.speed)
+        if config.correction:  # the walking controller's plan: its correction rollouts from this standing state
+            controller = WalkingController(model, h, *self._limits, gait=gait, correction_iterations=3)
+            controller.start(q, config.speed)
+            assert controller.pattern is not None and controller.q_ref is not None
+            self.start, pattern = controller.q_ref, controller.pattern
+        else:
+            pattern = WalkingPattern(gait, feet[0], feet[1], model.com()[:2], config.speed)
+        self.pattern = pattern
         self.count = int(round(pattern.step_start(config.steps) / h))
         self.step_ends = tuple(pattern.step_start(k + 1) for k in range(config.steps))
-        self.samples: list[PatternSample] = [pattern.sample(n * h) for n in range(self.count + 1)]
+        # each sample's ZMP is the reference ZMP that the whole body should have (the plan's own without a correction)
+        self.samples: list[PatternSample] = [replace(sample, zmp=pattern.reference_zmp(n * h).copy())
+                                             for n, sample in ((n, pattern.sample(n * h))
+                                                               for n in range(self.count + 1))]
         self.ground = pattern.ground
         self.windows = {k: (pattern.step_start(k) + pattern.step_single(k), pattern.step_start(k + 1))
                         for k in range(config.steps + 1)}
@@ -407,8 +430,9 @@ def _clik_walks(walk: _Walk, bar: Any) -> tuple[IkdWalk, IkdWalk]:
         compensated.add(moment, force, moment, com)
         del q_plain[0], q_comp[0]
         bar.update(1)
-    return (plain.done("LIPM plan, CLIK", True),
-            compensated.done("LIPM plan + error compensation (5.98), CLIK", True))
+    name = walk.config.plan_name
+    return (plain.done(f"{name}, CLIK", True),
+            compensated.done(f"{name} + error compensation (5.98), CLIK", True))
 
 
 def _differenced_wrench(model: RobotModel, q: list[NDArray[np.float64]], h: float
@@ -547,7 +571,7 @@ def _moment_figure(walks: tuple[IkdWalk, ...], reference: IkdWalk, title: str, p
     for row, ax in enumerate(axes):
         _shade_double_support(ax, reference, label=row == 0)
         ax.grid(alpha=0.3)
-    axes[0].plot(reference.time, reference.ideal_moment[:, 0], color="k", lw=2.2, label="ideal (LIPM plan)")
+    axes[0].plot(reference.time, reference.ideal_moment[:, 0], color="k", lw=2.2, label="ideal (reference ZMP)")
     for ax in axes[1:]:
         ax.axhline(0.0, color="k", lw=1.6)
     for i, walk in enumerate(walks):
@@ -560,7 +584,7 @@ def _moment_figure(walks: tuple[IkdWalk, ...], reference: IkdWalk, title: str, p
     axes[0].set_ylabel("$T_x$ [N m]")
     axes[1].set_ylabel("$T_x - T_{x,ideal}$ [N m]")
     axes[2].set_ylabel("$T_y - T_{y,ideal}$ [N m]")
-    axes[0].set_title(title)
+    axes[0].set_title(textwrap.fill(title, 100), fontsize=10)
     axes[0].legend(fontsize=7, loc="upper left", ncol=2)
     for ax in axes[1:]:
         ax.legend(fontsize=7, loc="upper left", ncol=len(walks))
@@ -568,19 +592,19 @@ def _moment_figure(walks: tuple[IkdWalk, ...], reference: IkdWalk, title: str, p
     return save_figure(fig, path)
 
 
-def plot_ikd_study(study: IkdStudy, out_dir: str | Path) -> list[Path]:
-    """Write the figures' analogues into ``out_dir``: ``ikd_fig_5_21.png`` (unstabilized drift), ``ikd_fig_5_23.png``
-    (k sweep, contact-moment feedback), ``ikd_fig_5_24.png`` (k sweep, hybrid) and ``ikd_fig_5_27.png`` (LIPM, error
-    compensation, IKD hybrid)."""
+def plot_ikd_study(study: IkdStudy, out_dir: str | Path, suffix: str = "") -> list[Path]:
+    """Write the figures' analogues into ``out_dir``: ``ikd_fig_5_21{suffix}.png`` (unstabilized drift),
+    ``ikd_fig_5_23{suffix}.png`` (k sweep, contact-moment feedback), ``ikd_fig_5_24{suffix}.png`` (k sweep, hybrid)
+    and ``ikd_fig_5_27{suffix}.png`` (the plan by CLIK, with error compensation, IKD hybrid)."""
     out = Path(out_dir)
     c = study.config
-    speed = f"{c.speed:g} m/s, {c.steps} steps, {1e3 * c.period:g} ms"
+    speed = f"{c.plan_name}; {c.speed:g} m/s, {c.steps} steps, {1e3 * c.period:g} ms"
     written = []
     # fig. 5.21: the lateral CoM and the distance from the plan
     walk = study.unstabilized
     reference = study.clik
     fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    axes[0].plot(reference.time, 1e3 * reference.plan_com[:, 1], color="k", lw=2, label="plan (LIPM)")
+    axes[0].plot(reference.time, 1e3 * reference.plan_com[:, 1], color="k", lw=2, label=f"plan ({c.plan_name})")
     axes[0].plot(walk.time, 1e3 * walk.com[:, 1], label="IKD, no stabilization (moment tracked exactly)")
     for other in study.moment_feedback:
         if other.gain and other.completed:
@@ -599,16 +623,17 @@ def plot_ikd_study(study: IkdStudy, out_dir: str | Path) -> list[Path]:
     axes[1].set_ylabel("CoM distance from the plan [mm]")
     axes[1].set_xlabel("time [s] (dots: step ends)")
     axes[1].grid(alpha=0.3, which="both")
-    axes[0].set_title(f"Kinematic IKD without stabilization drifts off the plan (fig. 5.21 analogue; {speed})")
-    written.append(save_figure(fig, out / "ikd_fig_5_21.png"))
+    axes[0].set_title(textwrap.fill(f"Kinematic IKD without stabilization drifts off the plan (fig. 5.21 analogue; "
+                                    f"{speed})", 90), fontsize=10)
+    written.append(save_figure(fig, out / f"ikd_fig_5_21{suffix}.png"))
     written.append(_moment_figure(study.moment_feedback, reference,
                                   f"Contact moment, IKD stabilized via the contact moment (5.97) (fig. 5.23 analogue; "
-                                  f"{speed})", out / "ikd_fig_5_23.png"))
+                                  f"{speed})", out / f"ikd_fig_5_23{suffix}.png"))
     written.append(_moment_figure(study.hybrid, reference,
                                   f"Contact moment, IKD hybrid: planning + contact moment (fig. 5.24 analogue; {speed})",
-                                  out / "ikd_fig_5_24.png"))
+                                  out / f"ikd_fig_5_24{suffix}.png"))
     comparison = (study.clik, study.error_compensation, study.comparison)
     written.append(_moment_figure(comparison, reference,
                                   f"Contact moment by inverse dynamics against the ideal (fig. 5.27 analogue; {speed})",
-                                  out / "ikd_fig_5_27.png"))
+                                  out / f"ikd_fig_5_27{suffix}.png"))
     return written
