@@ -10,8 +10,11 @@ import numpy as np
 from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
+from ...geometry.potentials import PiecewisePotential, piecewise_potential_kernel
 from ...model import AccelerationTerms, RobotModel
+from ..actuated_objective import ActuatedObjective
 from ..exceptions import ControllerError
+from ..joint_limit_objective import JointLimitObjective
 from ..objective import Objective, sum_objectives
 from ..redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
 from ..walking.ik_kernels import rotation_error_into
@@ -181,8 +184,14 @@ class BipedIkd:
         offset = model.difference(self.posture, q) if has_posture else qdot
         stiffness = self.posture_stiffness
         if self.objectives:  # the kernel's preferred -K offset then carries -K (q - posture) - k_H dH/dq
-            gradient = sum_objectives(self.objectives, model, np.asarray(q, dtype=np.float64)).gradient
-            offset = (stiffness * offset if has_posture else 0.0) + self.objective_gain * gradient
+            limits = _joint_limits(self.objectives, model.nq, model.nv)
+            combined = None
+            if limits is not None:  # the walking controller's one joint-limit objective: one compiled call
+                combined = _limit_offset(q, offset, *limits, self.objective_gain, stiffness, has_posture)
+            if combined is None:  # other objectives, or non-finite distances (the objective's own error)
+                gradient = sum_objectives(self.objectives, model, np.asarray(q, dtype=np.float64)).gradient
+                combined = (stiffness * offset if has_posture else 0.0) + self.objective_gain * gradient
+            offset = combined
             has_posture, stiffness = True, 1.0
         diagonal = self.weights.diagonal
         if diagonal is None:
@@ -262,6 +271,65 @@ _JIT = {"cache": True, "error_model": "numpy"}
 _V, _M, _T = (types.Array(types.float64, n, "A", readonly=True) for n in (1, 2, 3))
 _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
+
+
+def _joint_limits(objectives: tuple[Objective, ...], nq: int, nv: int
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float] | None:
+    """``(lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight)`` when ``objectives``
+    are exactly one :class:`ActuatedObjective` of a :class:`JointLimitObjective` (with its
+    :class:`PiecewisePotential`) whose limits fit the actuated joints, read at each call (so a changed objective
+    counts); None otherwise (:func:`sum_objectives` then evaluates them)."""
+    if len(objectives) != 1:
+        return None
+    actuated = objectives[0]
+    if type(actuated) is not ActuatedObjective:
+        return None
+    limit = actuated.objective
+    if type(limit) is not JointLimitObjective:
+        return None
+    potential = limit.potential
+    lower, upper = limit.lower, limit.upper
+    base_nq, base_nv = actuated._nq, actuated._nv
+    n = nq - base_nq
+    if (type(potential) is not PiecewisePotential or nv - base_nv != n or type(lower) is not np.ndarray
+            or type(upper) is not np.ndarray or lower.dtype != _FLOAT64 or upper.dtype != _FLOAT64
+            or lower.shape != (n,) or upper.shape != (n,)):
+        return None
+    return (lower, upper, base_nq, base_nv, float(potential.activation_distance), float(potential.slope),
+            float(potential.switch_ratio), float(limit.weight))
+
+
+def _limit_offset(q: NDArray[np.float64], offset: NDArray[np.float64], lower: NDArray[np.float64],
+                  upper: NDArray[np.float64], base_nq: int, base_nv: int, activation_distance: float, slope: float,
+                  switch_ratio: float, weight: float, gain: float, stiffness: float, has_posture: bool
+                  ) -> NDArray[np.float64] | None:
+    """``(stiffness offset if has_posture else 0) + gain dH/dq`` of the joint-limit objective (5.58)
+    (:class:`JointLimitObjective` on the joints after the base's, as :class:`ActuatedObjective` evaluates it),
+    the same arithmetic as :func:`sum_objectives` and the objective's; None where a distance to a limit is not
+    finite (the objective raises its error there)."""
+    out = np.empty(offset.shape[0])
+    if not _limit_offset_into(q, offset, lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio,
+                              weight, gain, stiffness, has_posture, out):
+        return None
+    return out
+
+
+@njit(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **_JIT)
+def _limit_offset_into(q, offset, lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight,
+                       gain, stiffness, has_posture, out):  # pragma: no cover - compiled
+    """:func:`_limit_offset` into ``out`` (nv); False (``out`` unfinished) at a non-finite distance."""
+    for c in range(base_nv):  # the base's gradient entries are zeros
+        out[c] = (stiffness * offset[c] if has_posture else 0.0) + gain * 0.0
+    for k in range(lower.shape[0]):
+        x = q[base_nq + k]
+        below, above = x - lower[k], upper[k] - x
+        if not (np.isfinite(below) and np.isfinite(above)):
+            return False
+        _, d0, _ = piecewise_potential_kernel(below, activation_distance, slope, switch_ratio)
+        _, d1, _ = piecewise_potential_kernel(above, activation_distance, slope, switch_ratio)
+        c = base_nv + k
+        out[c] = (stiffness * offset[c] if has_posture else 0.0) + gain * (weight * (d0 - d1))
+    return True
 
 
 @njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **_JIT)

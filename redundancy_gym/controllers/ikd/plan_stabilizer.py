@@ -124,15 +124,29 @@ class PlanStabilizer:
     def advance(self, t: float, dt: float) -> PlanStabilizerOutput:
         """The modification over ``[t, t + dt]`` and the restarted plan's deviation at ``t``; then moves the
         deviation to ``t + dt`` (exact LIPM solution with the ZMP shift held at the period's mid-point value)."""
-        shift = self.amplitude * self.shape(t + 0.5 * dt)
-        out = PlanStabilizerOutput(shift, self.offset.copy(), self.offset_rate.copy())
+        shift_x, shift_y, offset_x, offset_y, rate_x, rate_y = self._advance(t, dt)
+        return PlanStabilizerOutput(np.array([shift_x, shift_y]), np.array([offset_x, offset_y]),
+                                    np.array([rate_x, rate_y]))
+
+    def _advance(self, t: float, dt: float) -> tuple[float, float, float, float, float, float]:
+        """:meth:`advance` as plain floats ``(zmp_shift, com_offset, com_offset_rate)`` (x, y each): the same
+        arithmetic per axis as on the arrays, without their overhead."""
+        phi = self.shape(t + 0.5 * dt)
+        amplitude_x, amplitude_y = self.amplitude.tolist()
+        offset_x, offset_y = self.offset.tolist()
+        rate_x, rate_y = self.offset_rate.tolist()
+        shift_x, shift_y = amplitude_x * phi, amplitude_y * phi
         w = self.omega
         c, s = math.cosh(w * dt), math.sinh(w * dt)
-        relative = self.offset - shift
-        self.offset = shift + relative * c + self.offset_rate * (s / w)
-        self.offset_rate = relative * (w * s) + self.offset_rate * c
+        ratio, gain = s / w, w * s
+        relative_x, relative_y = offset_x - shift_x, offset_y - shift_y
+        new_x = shift_x + relative_x * c + rate_x * ratio
+        new_y = shift_y + relative_y * c + rate_y * ratio
         if t + dt >= self.window[1]:  # past the double support: the convergent part only (DCM deviation 0)
-            self.offset_rate = -w * self.offset
+            self.offset_rate = np.array([-w * new_x, -w * new_y])
             self.amplitude = np.zeros(2)
             self.window = (math.inf, math.inf)
-        return out
+        else:
+            self.offset_rate = np.array([relative_x * gain + rate_x * c, relative_y * gain + rate_y * c])
+        self.offset = np.array([new_x, new_y])
+        return shift_x, shift_y, offset_x, offset_y, rate_x, rate_y

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
+from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
@@ -160,10 +161,15 @@ class WalkingIkd:
                             moment_gain=config.moment_gain, period=self.dt, objectives=objectives,
                             objective_gain=config.objective_gain)
         self.planner = PlanStabilizer(omega, ramp=config.planning_ramp, max_shift=config.planning_max_shift)
-        self.force = model.total_mass * GRAVITY
+        self._mass = model.total_mass  # RobotModel sums it over the bodies at each read
+        self.force = self._mass * GRAVITY
         self.q = model.check_configuration(posture)
         self.qdot = np.zeros(model.nv)
         self._step = -1
+        # the fast step's reference rows, filled in place by one compiled call (_assemble) and read by the IKD's
+        # step only (never returned): views of one buffer in BipedIkdReference's shapes (_buffer_views)
+        self._buffer = np.zeros(_BUFFER_SIZE)
+        self._views: tuple[NDArray[np.float64], ...] = ()
 
     def start(self, q: ArrayLike) -> None:
         """Begin at ``q`` at rest."""
@@ -172,8 +178,42 @@ class WalkingIkd:
         self.planner.reset()
         self._step = -1
 
-    def _support(self, sample: PatternSample, shift: NDArray[np.float64]) -> NDArray[np.float64]:
+    def _support(self, sample: PatternSample, shift: NDArray[np.float64] | tuple[float, float]) -> NDArray[np.float64]:
         """The bounding box of the soles planned on the ground (moved by ``shift``), inset by the margin."""
+        # plain float arithmetic, the corners as _support_general computes them (a sole without yaw: cos 1, sin 0,
+        # whose products change no corner); non-finite inputs and no foot down take _support_general
+        c = self.config
+        feet, yaws, contact = sample.feet, sample.feet_yaw, sample.contact
+        heel, toe, half = c.heel_length, c.toe_length, c.foot_half_width
+        x_min = y_min = math.inf
+        x_max = y_max = -math.inf
+        down = False
+        for i in range(2):
+            if not contact[i]:
+                continue
+            down = True
+            yaw = float(yaws[i])
+            x, y = float(feet[i, 0] + shift[0]), float(feet[i, 1] + shift[1])
+            if not math.isfinite(x + y + yaw):
+                return self._support_general(sample, shift)
+            if yaw == 0.0:
+                x_min, x_max = min(x_min, x + -heel), max(x_max, x + toe)
+                y_min, y_max = min(y_min, y + -half), max(y_max, y + half)
+                continue
+            cz, sz = math.cos(yaw), math.sin(yaw)
+            for along in (-heel, toe):
+                for across in (-half, half):
+                    px, py = x + cz * along - sz * across, y + sz * along + cz * across
+                    x_min, x_max = min(x_min, px), max(x_max, px)
+                    y_min, y_max = min(y_min, py), max(y_max, py)
+        if not down:
+            return self._support_general(sample, shift)
+        m = c.support_margin
+        return np.array([[x_min + m, y_min + m], [x_max - m, y_max - m]])
+
+    def _support_general(self, sample: PatternSample, shift: NDArray[np.float64] | tuple[float, float]
+                         ) -> NDArray[np.float64]:
+        """:meth:`_support` on arrays (any inputs; NaN propagates, no foot down raises NumPy's error)."""
         c = self.config
         corners = []
         for i in range(2):
@@ -205,6 +245,75 @@ class WalkingIkd:
                 gives its reference ZMP here (:meth:`~redundancy_gym.controllers.walking.WalkingPattern.reference_zmp`),
                 its CoM the plan that this ZMP needs.
         """
+        # the common inputs (packed float64 references, a float pair or float64 (2,) shifts, a float64 (2,) ZMP)
+        # take one compiled assembly of the IKD's reference and one of the result; others _step_general
+        if not (_is_float_array(start_reference, _REFERENCE_SHAPE)
+                and _is_float_array(end_reference, _REFERENCE_SHAPE)):
+            return self._step_general(start, start_reference, end_reference, double_support, feet_shift,
+                                      feet_shift_rate, zmp)
+        shift = _pair(feet_shift)
+        rate = _pair(feet_shift_rate)
+        ideal = np.asarray(start.zmp if zmp is None else zmp, dtype=np.float64)
+        if shift is None or rate is None or ideal.shape != (2,):
+            return self._step_general(start, start_reference, end_reference, double_support, feet_shift,
+                                      feet_shift_rate, zmp)
+        dt, model, c = self.dt, self.model, self.config
+        shift_x, shift_y = -shift[0], -shift[1]
+        t = float(start.time)
+        if (c.planning and double_support is not None and start.step >= 0 and start.step != self._step
+                and t >= double_support[0] - 0.5 * dt):
+            self._replan(start, t, double_support)
+        com, com_velocity = start.com, start.com_velocity
+        plan_x, plan_y = float(com[0]), float(com[1])
+        plan_xdot, plan_ydot = float(com_velocity[0]), float(com_velocity[1])
+        zmp_x, zmp_y = ideal.tolist()
+        if c.planning:
+            planning_x, planning_y, offset_x, offset_y, offset_rate_x, offset_rate_y = self.planner._advance(t, dt)
+            zmp_x, zmp_y = zmp_x + planning_x, zmp_y + planning_y
+            plan_x, plan_y = plan_x + offset_x, plan_y + offset_y
+            plan_xdot, plan_ydot = plan_xdot + offset_rate_x, plan_ydot + offset_rate_y
+            planning_shift = np.array([planning_x, planning_y])
+        else:
+            planning_shift = np.zeros(2)
+        support = self._support(start, (shift_x, shift_y))
+        force = self.force
+        _assemble(start_reference, end_reference, shift_x, shift_y, -rate[0], -rate[1], dt, float(com[2]),
+                  force * zmp_y, force * -zmp_x, plan_x, plan_y, plan_xdot, plan_ydot, self._buffer)
+        views = self._views
+        if not views or views[0].base is not self._buffer:  # first use, or a copy's views (copies, not views)
+            views = self._views = _buffer_views(self._buffer)
+        position, rotation, velocity, acceleration, torso_rotation, torso_rate, torso_acceleration, height, moment, \
+            plan = views
+        reference = BipedIkdReference(position, rotation, velocity, acceleration, torso_rotation, torso_rate,
+                                      torso_acceleration, height, moment, plan if c.moment_gain > 0.0 else None,
+                                      support)
+        result = self.ikd.step(self.q, self.qdot, reference)
+        terms = self.ikd.terms
+        assert terms is not None
+        com_velocity, lz, realized, qdot, limited = _finish(
+            terms.centroidal, self.qdot, result.qddot, result.com_acceleration, result.moment, dt, self._mass,
+            c.max_velocity, force, result.success)
+        self.qdot = qdot
+        if result.success:
+            self.q = model.integrate(self.q, qdot, dt)
+        return WalkingIkdStep(self.q.copy(), qdot.copy(), result.qddot, terms.com, com_velocity, realized, ideal.copy(),
+                              planning_shift, result.moment, support, lz, result.residual, result.sigma_min,
+                              result.success, limited)
+
+    def _replan(self, start: PatternSample, t: float, double_support: tuple[float, float]) -> None:
+        """Restart the plan from the IKD's CoM at the double support's start (once per step)."""
+        model = self.model
+        self._step = start.step
+        model.update(self.q)
+        com, centroidal = model.com_and_centroidal_matrix()
+        com_velocity = centroidal[:2] @ self.qdot / model.total_mass
+        self.planner.replan(t, com[:2] - start.com[:2], com_velocity - start.com_velocity[:2], double_support)
+
+    def _step_general(self, start: PatternSample, start_reference: NDArray[np.float64],
+                      end_reference: NDArray[np.float64], double_support: tuple[float, float] | None,
+                      feet_shift: ArrayLike = (0.0, 0.0), feet_shift_rate: ArrayLike = (0.0, 0.0),
+                      zmp: ArrayLike | None = None) -> WalkingIkdStep:
+        """:meth:`step` for any inputs, on NumPy arrays (the fast path's arithmetic, entry by entry)."""
         dt, model, c = self.dt, self.model, self.config
         shift = -np.asarray(feet_shift, dtype=np.float64)
         shift_rate = -np.asarray(feet_shift_rate, dtype=np.float64)
@@ -220,11 +329,7 @@ class WalkingIkd:
         t = float(start.time)
         if (c.planning and double_support is not None and start.step >= 0 and start.step != self._step
                 and t >= double_support[0] - 0.5 * dt):
-            self._step = start.step
-            model.update(self.q)
-            com, centroidal = model.com_and_centroidal_matrix()
-            com_velocity = centroidal[:2] @ self.qdot / model.total_mass
-            self.planner.replan(t, com[:2] - start.com[:2], com_velocity - start.com_velocity[:2], double_support)
+            self._replan(start, t, double_support)
         planned = self.planner.advance(t, dt) if c.planning else None
         ideal = np.asarray(start.zmp if zmp is None else zmp, dtype=np.float64)
         zmp = ideal + (planned.zmp_shift if planned is not None else 0.0)
@@ -258,3 +363,107 @@ class WalkingIkd:
         return WalkingIkdStep(self.q.copy(), self.qdot.copy(), result.qddot, com, com_velocity, realized, ideal.copy(),
                               planned.zmp_shift if planned is not None else np.zeros(2), result.moment, support, lz,
                               result.residual, result.sigma_min, result.success, limited)
+
+
+_FLOAT64 = np.dtype(np.float64)
+_REFERENCE_SHAPE = (54,)  # whole_body_kernels.REFERENCE_SIZE
+# the fast step's buffer: feet position (2, 3), rotation (2, 3, 3), velocity (2, 6), acceleration (2, 6), torso
+# rotation (3, 3), rate (3), acceleration (3), CoM height (3), moment (2), CoM plan (4)
+_BUFFER_SIZE = 72
+
+
+def _buffer_views(b: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
+    """The reference rows in ``b`` (:data:`_BUFFER_SIZE`), in BipedIkdReference's order, then the CoM plan."""
+    return (b[0:6].reshape(2, 3), b[6:24].reshape(2, 3, 3), b[24:36].reshape(2, 6), b[36:48].reshape(2, 6),
+            b[48:57].reshape(3, 3), b[57:60], b[60:63], b[63:66], b[66:68], b[68:72])
+
+
+def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
+    return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
+
+
+def _pair(value: object) -> tuple[float, float] | None:
+    """``value`` as two floats where it is a float64 array of shape (2,) or a tuple of two floats or ints (as
+    ``np.asarray(value, dtype=np.float64)`` gives them), else None."""
+    if type(value) is np.ndarray:
+        if value.dtype == _FLOAT64 and value.shape == (2,):
+            x, y = value.tolist()
+            return x, y
+        return None
+    if type(value) is tuple and len(value) == 2 and all([type(v) is float or type(v) is int for v in value]):
+        return float(value[0]), float(value[1])
+    return None
+
+
+_JIT = {"cache": True, "error_model": "numpy"}
+_V = types.Array(types.float64, 1, "A", readonly=True)
+_M = types.Array(types.float64, 2, "A", readonly=True)
+_CV = types.Array(types.float64, 1, "C")
+_F, _B = types.float64, types.boolean
+
+
+@njit(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **_JIT)
+def _assemble(ref, ahead, shift_x, shift_y, rate_x, rate_y, dt, com_z, moment_x, moment_y, plan_x, plan_y,
+              plan_xdot, plan_ydot, buffer):  # pragma: no cover - compiled
+    """The IKD's reference of one period into ``buffer`` (:data:`_BUFFER_SIZE`), as :meth:`WalkingIkd._step_general`
+    builds it from the packed references (REFERENCE_LAYOUT): the soles moved by the shift and its rate, the
+    accelerations as the references' difference over ``dt``."""
+    for i in range(2):
+        for k in range(3):
+            buffer[3 * i + k] = ref[6 + 3 * i + k]
+        buffer[3 * i] += shift_x
+        buffer[3 * i + 1] += shift_y
+        for k in range(6):
+            buffer[24 + 6 * i + k] = ref[30 + 6 * i + k]
+            buffer[36 + 6 * i + k] = (ahead[30 + 6 * i + k] - ref[30 + 6 * i + k]) / dt
+        buffer[24 + 6 * i] += rate_x
+        buffer[24 + 6 * i + 1] += rate_y
+    for k in range(18):
+        buffer[6 + k] = ref[12 + k]
+    for k in range(9):
+        buffer[48 + k] = ref[42 + k]
+    for k in range(3):
+        buffer[57 + k] = ref[51 + k]
+        buffer[60 + k] = (ahead[51 + k] - ref[51 + k]) / dt
+    buffer[63], buffer[64], buffer[65] = com_z, 0.0, 0.0
+    buffer[66], buffer[67] = moment_x, moment_y
+    buffer[68], buffer[69], buffer[70], buffer[71] = plan_x, plan_y, plan_xdot, plan_ydot
+
+
+@njit(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **_JIT)
+def _finish(centroidal, qdot, qddot, com_acceleration, moment, dt, mass, max_velocity, hold_force,
+            success):  # pragma: no cover - compiled
+    """``(com_velocity, lz, zmp, qdot_next, limited)`` of :meth:`WalkingIkd._step_general` after the IKD: the CoM's
+    velocity and ``L_z`` at the period's start, the realized ZMP (for ``m (g + zddot_c)``, or ``hold_force`` at a
+    failed step), the velocity at its end bounded by ``max_velocity`` (zeros at a failed step)."""
+    nv = qdot.shape[0]
+    com_velocity = np.empty(3)
+    for a in range(3):
+        total = 0.0
+        for c in range(nv):
+            total += centroidal[a, c] * qdot[c]
+        com_velocity[a] = total / mass
+    lz = 0.0
+    for c in range(nv):
+        lz += centroidal[5, c] * qdot[c]
+    force = mass * (9.81 + com_acceleration[2]) if success else hold_force  # GRAVITY
+    zmp = np.empty(2)
+    zmp[0], zmp[1] = -moment[1] / force, moment[0] / force
+    following = np.zeros(nv)
+    limited = False
+    if success:
+        fastest = 0.0
+        for c in range(nv):
+            following[c] = qdot[c] + dt * qddot[c]
+            size = abs(following[c])
+            if size > fastest or size != size:  # np.max's: a NaN wins (no size is > NaN)
+                fastest = size
+        if not fastest <= max_velocity:  # NaN included
+            limited = True
+            if np.isfinite(fastest):
+                scale = max_velocity / fastest
+                for c in range(nv):
+                    following[c] = following[c] * scale
+            else:
+                following[:] = 0.0
+    return com_velocity, lz, zmp, following, limited

@@ -372,3 +372,50 @@ def test_a_singular_task_is_reported_as_the_reference_computation_reports_it(bip
     assert result.sigma_min < 1e-6 and slow.sigma_min < 1e-6
     assert result.residual == pytest.approx(slow.residual, rel=1e-9)
     np.testing.assert_allclose(result.moment, slow.moment, rtol=1e-9)
+
+
+class _Plain:
+    """An objective passed through as it is: keeps BipedIkd on sum_objectives (the general evaluation)."""
+
+    def __init__(self, objective) -> None:
+        self.objective = objective
+
+    def evaluate(self, model, q):
+        return self.objective.evaluate(model, q)
+
+
+def test_the_compiled_joint_limit_gradient_equals_the_objectives_evaluation(biped):
+    # ActuatedObjective(JointLimitObjective) exactly (the walking controller's) takes one compiled call: the same
+    # step as through sum_objectives along a walk with active limits, with or without a posture; a changed weight
+    # counts; non-finite distances (an unbounded limit) raise the objective's own error; other objectives and
+    # limits of another length take sum_objectives
+    from redundancy_gym.controllers import JointLimitObjective
+    from redundancy_gym.controllers.actuated_objective import ActuatedObjective
+    from redundancy_gym.geometry import GeometryError
+
+    states = _walk_states(biped, 0.6)
+    limits = ActuatedObjective(JointLimitObjective(biped.lower_limits[7:], biped.upper_limits[7:],
+                                                   activation_distance=0.6, slope=2.0, weight=1.5), biped)
+    posture = standing(biped)
+    active = 0
+    for kwargs in ({"posture": posture}, {}, {"posture": posture, "posture_stiffness": 0.0}):
+        fast = BipedIkd(biped, moment_gain=1e-3, objectives=(limits,), objective_gain=80.0, **kwargs)
+        slow = BipedIkd(biped, moment_gain=1e-3, objectives=(_Plain(limits),), objective_gain=80.0, **kwargs)
+        for q, qdot, reference in states:
+            _assert_same_result(fast.step(q, qdot, reference), slow.step(q, qdot, reference), rtol=1e-12)
+            active += bool(np.any(limits.evaluate(biped, q).gradient != 0.0))
+    assert active > 30
+    q, qdot, reference = states[-1]
+    fast = BipedIkd(biped, posture=posture, objectives=(limits,))
+    slow = BipedIkd(biped, posture=posture, objectives=(_Plain(limits),))
+    limits.objective.weight = 4.0
+    _assert_same_result(fast.step(q, qdot, reference), slow.step(q, qdot, reference), rtol=1e-12)
+    unbounded = ActuatedObjective(JointLimitObjective(np.full(biped.nq - 7, -np.inf), biped.upper_limits[7:]), biped)
+    with pytest.raises(GeometryError, match="finite"):
+        BipedIkd(biped, posture=posture, objectives=(unbounded,)).step(q, qdot, reference)
+    short = ActuatedObjective(JointLimitObjective(biped.lower_limits[8:], biped.upper_limits[8:]), biped)
+    with pytest.raises(ControllerError, match="q must have shape"):
+        BipedIkd(biped, posture=posture, objectives=(short,)).step(q, qdot, reference)
+    both = BipedIkd(biped, posture=posture, objectives=(limits, limits))
+    twice = BipedIkd(biped, posture=posture, objectives=(_Plain(limits), _Plain(limits)))
+    _assert_same_result(both.step(q, qdot, reference), twice.step(q, qdot, reference), rtol=0.0)
