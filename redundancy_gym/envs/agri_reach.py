@@ -73,7 +73,7 @@ def default_config() -> dict[str, Any]:
         "max_lift_speed": 0.4,
         "position_weight": 1.0,
         "orientation_weight": 0.2,
-        "energy_weight": 0.01,
+        "energy_weight": 10.0,
         "leaf_penalty": 0.1,
         "collision_penalty": 10.0,
         "success_bonus": 10.0,
@@ -191,7 +191,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     - v0: initial version (physics step 10 ms, ``frame_skip`` 1; leaf blades drawn as one ellipsoid each).
       Before release, ``info["task_error"]`` (the distance to the grasp point) was renamed ``goal_error``, and
       ``tracking_error`` (against the reference path, new ``reference_*`` arguments), ``goal_reached`` and
-      ``tcp_ref`` were added; rewards and dynamics are unchanged.
+      ``tcp_ref`` were added; rewards and dynamics are unchanged. Before release the default ``energy_weight``
+      became 10 (was 0.01): random actions (about 15 rad^2/s of pseudoenergy per episode) earned about as much
+      as holding still.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -208,7 +210,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                  harvest_band: Sequence[float] = (0.9, 1.3), prune: bool = True, pregrasp_distance: float = 0.15,
                  approach_elevation: Sequence[float] = (0.0, 30.0), observed_obstacles: int = 32,
                  max_joint_speed: float = 1.5, max_lift_speed: float = 0.4, position_weight: float = 1.0,
-                 orientation_weight: float = 0.2, energy_weight: float = 0.01, leaf_penalty: float = 0.1,
+                 orientation_weight: float = 0.2, energy_weight: float = 10.0, leaf_penalty: float = 0.1,
                  collision_penalty: float = 10.0, success_bonus: float = 10.0,
                  success_position_tolerance: float = 0.01, success_angle_tolerance: float = 10.0,
                  clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,

@@ -165,7 +165,9 @@ class BipedObstaclesEnv(BipedWalkEnv):
     - ``success_distance`` ([m], >= 0; default 1.0): how far past the last obstacle the pelvis must walk.
 
     ## Version History
-    - v0: initial version.
+    - v0: initial version. Before release its walking reward became BipedWalk-v0's bounded speed tracking
+      (``speed_scale``) with ``healthy_reward`` 0.05 (was 1): standing still for the whole 45 s earned more than
+      walking the course, which ends the episode.
     """
 
     OBSTACLE_FEATURES = OBSTACLE_FEATURES
@@ -178,7 +180,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
     CAPABILITIES = frozenset({"biped"})
 
     def __init__(self, target_speed: float = _WALK_SPEED, speed_weight: float = 1.0, lateral_weight: float = 0.5,
-                 healthy_reward: float = 1.0, energy_weight: float = 0.001, fall_penalty: float = 10.0,
+                 healthy_reward: float = 0.05, energy_weight: float = 0.001, fall_penalty: float = 10.0,
                  min_base_height: float = 0.55, max_torso_tilt: float = 0.8, reset_noise_scale: float = 0.02,
                  velocity_feedforward: bool = True, floor_friction: float = 1.0, frame_skip: int = 2,
                  render_mode: str | None = None, width: int = 640, height: int = 480,
@@ -187,7 +189,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
                  course: str = "random", obstacles: Sequence[Mapping[str, Any]] | None = None,
                  n_obstacles: Sequence[int] = (3, 6), obstacle_spacing: Sequence[float] = (1.2, 3.0),
                  first_obstacle_distance: float = 1.5, observed_obstacles: int = 8, contact_weight: float = 1.0,
-                 success_distance: float = 1.0, **kwargs: Any) -> None:
+                 success_distance: float = 1.0, speed_scale: float = 0.25, **kwargs: Any) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
@@ -224,7 +226,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
                          reset_noise_scale=reset_noise_scale, velocity_feedforward=velocity_feedforward,
                          floor_friction=floor_friction, frame_skip=frame_skip, render_mode=render_mode, width=width,
                          height=height, camera_name=camera_name, sensor_noise=sensor_noise, push=push,
-                         actuator_torque_scale=actuator_torque_scale)
+                         actuator_torque_scale=actuator_torque_scale, speed_scale=speed_scale)
         utils.EzPickle.__init__(
             self, target_speed=target_speed, speed_weight=speed_weight, lateral_weight=lateral_weight,
             healthy_reward=healthy_reward, energy_weight=energy_weight, fall_penalty=fall_penalty,
@@ -234,7 +236,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
             push=push, actuator_torque_scale=actuator_torque_scale, course=course, obstacles=obstacles,
             n_obstacles=n_obstacles, obstacle_spacing=obstacle_spacing,
             first_obstacle_distance=first_obstacle_distance, observed_obstacles=observed_obstacles,
-            contact_weight=contact_weight, success_distance=success_distance)
+            contact_weight=contact_weight, success_distance=success_distance, speed_scale=speed_scale)
         if self._explicit:
             self._check_clear_of_standing_robot()
 
