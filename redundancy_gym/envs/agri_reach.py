@@ -75,7 +75,7 @@ def default_config() -> dict[str, Any]:
         "orientation_weight": 0.2,
         "energy_weight": 10.0,
         "leaf_penalty": 0.1,
-        "collision_penalty": 10.0,
+        "collision_penalty": 200.0,
         "success_bonus": 10.0,
         "success_position_tolerance": 0.01,
         "success_angle_tolerance": 10.0,
@@ -193,7 +193,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``tracking_error`` (against the reference path, new ``reference_*`` arguments), ``goal_reached`` and
       ``tcp_ref`` were added; rewards and dynamics are unchanged. Before release the default ``energy_weight``
       became 10 (was 0.01): random actions (about 15 rad^2/s of pseudoenergy per episode) earned about as much
-      as holding still.
+      as holding still; ``collision_penalty`` became 200 (was 10), more than the reference's costliest
+      episode, so that ending an episode early by a collision never pays.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -211,7 +212,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                  approach_elevation: Sequence[float] = (0.0, 30.0), observed_obstacles: int = 32,
                  max_joint_speed: float = 1.5, max_lift_speed: float = 0.4, position_weight: float = 1.0,
                  orientation_weight: float = 0.2, energy_weight: float = 10.0, leaf_penalty: float = 0.1,
-                 collision_penalty: float = 10.0, success_bonus: float = 10.0,
+                 collision_penalty: float = 200.0, success_bonus: float = 10.0,
                  success_position_tolerance: float = 0.01, success_angle_tolerance: float = 10.0,
                  clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,
                  reference_speed: float = 0.35, reference_turn_rate: float = 0.8, reference_min_duration: float = 1.5,

@@ -53,7 +53,7 @@ def default_config() -> dict[str, Any]:
         "max_joint_speed": 3.0,
         "tracking_weight": 10.0,
         "energy_weight": 40.0,
-        "collision_penalty": 10.0,
+        "collision_penalty": 100.0,
         "reset_noise_scale": 0.1,
         "success_tolerance": 1e-3,
         "frame_skip": 10,
@@ -154,7 +154,9 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - Before release, ``info["task_error"]`` / ``max_task_error`` were renamed ``tracking_error`` /
       ``max_tracking_error``, and ``goal_error`` / ``goal_reached`` were added; rewards and dynamics are unchanged.
     - Before release the default ``energy_weight`` became 40 (was 0.1): random actions (about 25 rad^2/s of
-      pseudoenergy per episode, the CLIK about 1) earned about as much as holding still.
+      pseudoenergy per episode, the CLIK about 1) earned about as much as holding still; and
+      ``collision_penalty`` 100 (was 10): an episode ended early by a collision saved more energy than the
+      penalty cost and paid more than the collision-free reference.
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
@@ -178,7 +180,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
                  obstacle_radius: float = 0.1, line_start: Sequence[float] = (0.9, 0.45),
                  line_end: Sequence[float] = (0.9, -0.45), duration: float = 2.0,
                  initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5), max_joint_speed: float = 3.0,
-                 tracking_weight: float = 10.0, energy_weight: float = 40.0, collision_penalty: float = 10.0,
+                 tracking_weight: float = 10.0, energy_weight: float = 40.0, collision_penalty: float = 100.0,
                  reset_noise_scale: float = 0.1, success_tolerance: float = 1e-3, frame_skip: int = 10, render_mode: str | None = None,
                  width: int = 480, height: int = 480, camera_name: str | None = "side",
                  obs_noise: float | dict[str, float] | None = None, **kwargs: Any) -> None:

@@ -41,3 +41,15 @@ def test_reference_beats_standing_still_which_beats_random_actions(env_id, env_k
     assert best.min() > still.max() + 0.05 * span, (best, still)
     assert still.min() > random.max() + 0.05 * span, (still, random)
     assert still.mean() - random.mean() <= still_share * span, (best, still, random)
+
+
+def test_ending_the_episode_by_a_collision_pays_less_than_finishing_it():
+    # through the nullspace wrapper the zero action is the plain minimum-norm tracker, which runs into
+    # PlanarReach's obstacle: its shorter episode must not pay more than the reference's full, collision-free one
+    # (with a collision penalty of 10 it did, -38 against -41: the energy of the rest of the line was saved)
+    crash = evaluate("redundancy_gym/PlanarReach-Nullspace-v0", "zero", episodes=2, seed=13000, progress=False)
+    crash_json = crash.to_json()
+    assert crash_json["collision_rate"] == 1.0
+    best = _returns("redundancy_gym/PlanarReach-v0", {"obstacle": True}, "clik", 2)
+    worst_crash = max(episode["return"] for episode in crash_json["per_episode"])
+    assert worst_crash < best.min() - 50.0
