@@ -39,7 +39,7 @@ def test_list_json(capsys) -> None:
     assert main(["list", "--json"]) == 0
     rows = {row["id"]: row for row in json.loads(capsys.readouterr().out)}
     assert tuple(rows) == redundancy_gym.ENV_IDS
-    assert rows[PLANAR]["observation_shape"] == [18] and rows[PLANAR]["action_shape"] == [4]
+    assert rows[PLANAR]["observation_shape"] == [20] and rows[PLANAR]["action_shape"] == [4]
     assert rows[PLANAR]["control_period_s"] == pytest.approx(0.01) and rows[PLANAR]["max_episode_steps"] == 250
     assert rows[BIPED]["policies"] == ["walking", "zero", "random", "SB3 .zip"]
 

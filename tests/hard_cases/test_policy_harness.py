@@ -174,7 +174,7 @@ def test_bad_batch_shapes_are_a_clear_error() -> None:
     obs, _ = env.reset(seed=SEED)
     policy = redundancy_gym.make_policy("clik", env)
     for bad in (obs[:-1], np.stack([obs, obs])[:, :-1], obs.reshape(1, 1, -1)):
-        with pytest.raises(PolicyError, match=r"\(18,\)"):
+        with pytest.raises(PolicyError, match=r"\(20,\)"):
             policy.predict(bad)
     with pytest.raises(PolicyError, match="episode_start"):
         policy.predict(np.stack([obs, obs]), episode_start=np.array([True, False, True]))
