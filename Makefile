@@ -3,13 +3,34 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test system-deps clean
+.PHONY: demo test baselines system-deps clean
 
 demo: $(VENV)/.core-installed
 	$(BIN)/redundancy-gym demo --out results
 
 test: $(VENV)/.test-installed
 	$(BIN)/python -m pytest -q
+
+# the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb) into
+# baselines/models/, then evaluates it on held-out seeds 20000-20019 into baselines/results/ (about 5 min here)
+BASELINE_SEEDS := --episodes 20 --seed 20000 --no-progress
+baselines: $(VENV)/.test-installed
+	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --wrapper nullspace --algo ppo --seed 0 --no-progress \
+	  --config baselines/ppo-nullspace-planar_reach.yaml --out baselines/models/ppo-nullspace-planar_reach.zip \
+	  --tensorboard runs/baselines_tb
+	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --algo ppo --seed 0 --no-progress \
+	  --config baselines/ppo-joint-planar_reach.yaml --out baselines/models/ppo-joint-planar_reach.zip \
+	  --tensorboard runs/baselines_tb
+	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --algo bc --seed 0 --no-progress \
+	  --config baselines/bc-joint-planar_reach.yaml --out baselines/models/bc-joint-planar_reach.zip
+	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-Nullspace-v0 --policy ppo-nullspace $(BASELINE_SEEDS) \
+	  --json baselines/results/ppo-nullspace-planar_reach.json
+	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy ppo-joint $(BASELINE_SEEDS) \
+	  --json baselines/results/ppo-joint-planar_reach.json
+	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy bc-joint $(BASELINE_SEEDS) \
+	  --json baselines/results/bc-joint-planar_reach.json
+	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy clik $(BASELINE_SEEDS) \
+	  --json baselines/results/clik-planar_reach.json
 
 # libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
 # missing and run as root

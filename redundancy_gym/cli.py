@@ -25,8 +25,8 @@ EPILOG = """examples:
   redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy runs/ppo_PlanarReach-v0.zip
 """
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
-POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip "
-               "(redundancy-gym list shows which envs each accepts)")
+POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip | a shipped learned "
+               "baseline <learner>-<action>, e.g. ppo-nullspace (redundancy-gym list shows which envs each accepts)")
 WRAPPER_HELP = ("task_space | nullspace | residual | walking_command: the env in that action wrapper (the same as "
                 "its id <Env>-<Wrapper>-v0; redundancy-gym list shows which env takes which)")
 
@@ -92,7 +92,11 @@ def _parser() -> argparse.ArgumentParser:
     tr.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
     tr.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
                     help="JSON object of the wrapper's options (with --wrapper)")
-    tr.add_argument("--algo", choices=("ppo", "sac"), default="ppo", help="stable-baselines3 algorithm")
+    tr.add_argument("--algo", choices=("ppo", "sac", "bc"), default="ppo",
+                    help="stable-baselines3 algorithm, or bc: behaviour cloning with DAgger from --expert (its "
+                         "budget is the config's episodes and dagger_rounds, not --steps)")
+    tr.add_argument("--expert", metavar="NAME",
+                    help="with --algo bc: the policy to clone (default: the env's reference, clik or walking)")
     tr.add_argument("--config", metavar="YAML",
                     help="rl-zoo3 style YAML keyed by env id (see configs/); its n_timesteps and n_envs are the "
                          "defaults of --steps and --n-envs (default: none, SB3's own defaults)")
@@ -206,6 +210,11 @@ def format_registry() -> str:
         ids = "every env" if set(supported) == set(ENV_IDS) else \
             ", ".join(i.split("/")[-1] for i in supported) or "-"
         table.append((entry.name, entry.kind, ids, entry.summary))
+    from .policies.shipped_models import shipped_models
+
+    for stem in shipped_models():  # the learned baselines of baselines/models/, by short name
+        learner, action, slug = stem.split("-", 2)
+        table.append((f"{learner}-{action}", "model", slug, f"shipped learned baseline baselines/models/{stem}.zip"))
     widths = [max(len(r[i]) for r in table) for i in range(3)]
     return "\n".join("  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3]
                      for r in table)
@@ -256,6 +265,11 @@ def _train(args: argparse.Namespace) -> None:
     from .eval.training import TrainingConfig, load_config, train
 
     config = load_config(args.config, args.env_id) if args.config else TrainingConfig(hyperparameters={})
+    if args.algo == "bc":
+        _train_behaviour_cloning(args, config)
+        return
+    if args.expert is not None:
+        raise EvalError("--expert applies to --algo bc only")
     steps = args.steps if args.steps is not None else config.n_timesteps
     if steps is None:
         raise EvalError("give --steps, or a --config whose section has n_timesteps")
@@ -270,6 +284,34 @@ def _train(args: argparse.Namespace) -> None:
                  vec_env=args.vec_env, policy=config.policy, print_every=args.print_every,
                  torch_threads=args.torch_threads)
     print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
+
+
+def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
+    """``train --algo bc``: the config section's keys are :func:`train_behaviour_cloning`'s options."""
+    import inspect
+
+    from .eval.behaviour_cloning import train_behaviour_cloning
+    from .eval.exceptions import EvalError
+
+    if args.steps is not None or args.n_envs is not None:
+        raise EvalError("--steps and --n-envs do not apply to --algo bc: its budget is the config's episodes, "
+                        "dagger_rounds and dagger_episodes")
+    options = dict(config.hyperparameters)
+    valid = set(inspect.signature(train_behaviour_cloning).parameters) - {"env_id", "out", "env_kwargs", "seed",
+                                                                          "progress", "log"}
+    unknown = sorted(set(options) - valid)
+    if unknown:
+        raise EvalError(f"unknown behaviour-cloning option(s) {', '.join(unknown)} in {args.config}; valid: "
+                        f"{', '.join(sorted(valid))}")
+    if "net_arch" in options:
+        options["net_arch"] = tuple(options["net_arch"])
+    if args.expert is not None:
+        options["expert"] = args.expert
+    out = args.out or f"runs/bc_{args.env_id.split('/')[-1]}.zip"
+    print(f"behaviour cloning on {args.env_id} from {options.get('expert') or 'the reference'}, seed {args.seed}")
+    summary = train_behaviour_cloning(args.env_id, out, env_kwargs={**config.env_kwargs, **args.env_kwargs},
+                                      seed=args.seed, progress=not args.no_progress, **options)
+    print(f"wrote {summary.path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {summary.path}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

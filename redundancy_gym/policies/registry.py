@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .exceptions import PolicyError
+from .shipped_models import is_shipped_name, shipped_model_path
 from .options import env_name
 from .per_env_policy import Policy
 
@@ -350,7 +351,8 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
             :class:`~redundancy_gym.policies.GraspClikPolicy` on grasp tasks); ``"walking"``
             (:class:`~redundancy_gym.policies.WalkingPolicy`); ``"predictive"`` or ``"global"``
             (:class:`~redundancy_gym.policies.PredictivePolicy`); ``"zero"``; ``"random"``), or the path of a
-            stable-baselines3 ``.zip``.
+            stable-baselines3 ``.zip``, or a shipped learned baseline by short name ``<learner>-<action>``
+            (``"ppo-nullspace"``, ``"bc-joint"``: ``baselines/models/<name>-<env>.zip`` of the source checkout).
         env: the environment the policy will act in (or a stable-baselines3 ``DummyVecEnv`` of such envs). The
             policy takes one observation of it or a batch (a VecEnv's, one controller state per env index).
         **kwargs: options of the policy (the fields of its options dataclass: ``ClikPolicyConfig`` for ``clik``,
@@ -362,6 +364,8 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
             supports).
     """
     env = _one_env(env)
+    if is_shipped_name(name) and name not in _REGISTRY:  # a shipped baseline by short name, e.g. "ppo-nullspace"
+        name = str(shipped_model_path(name, env))
     if _is_model_file(name) and name not in _REGISTRY:
         from .sb3_policy import Sb3Policy
 

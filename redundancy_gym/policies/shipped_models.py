@@ -1,0 +1,55 @@
+"""The learned baselines shipped in the repository (``baselines/models/<learner>-<action>-<env>.zip``), by short
+name: ``make_policy("ppo-nullspace", env)`` loads ``ppo-nullspace-planar_reach.zip`` on a PlanarReach env."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+from .exceptions import PolicyError
+
+__all__ = ["ACTIONS", "LEARNERS", "SHIPPED_MODELS_DIR", "env_slug", "is_shipped_name", "shipped_model_path",
+           "shipped_models"]
+
+SHIPPED_MODELS_DIR = Path(__file__).resolve().parents[2] / "baselines" / "models"
+"""Where the trained baselines live: ``baselines/models/`` of the source checkout (``make baselines`` writes it)."""
+LEARNERS: tuple[str, ...] = ("ppo", "sac", "bc")
+"""The learners of the shipped models."""
+ACTIONS: tuple[str, ...] = ("joint", "nullspace", "task_space", "residual", "walking_command")
+"""Their action spaces: the raw joint action, or the action wrapper's."""
+_NAME = re.compile(rf"({'|'.join(LEARNERS)})-({'|'.join(ACTIONS)})")
+
+
+def is_shipped_name(name: Any) -> bool:
+    """Whether ``name`` has the form ``<learner>-<action>`` of a shipped model."""
+    return isinstance(name, str) and _NAME.fullmatch(name) is not None
+
+
+def env_slug(env: Any) -> str:
+    """The env's name in model file names: its base class name without ``Env``, in snake case
+    (``PlanarReachEnv`` -> ``planar_reach``)."""
+    name = type(getattr(env, "unwrapped", env)).__name__.removesuffix("Env")
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", name).lower()
+
+
+def shipped_models() -> tuple[str, ...]:
+    """The file stems of the shipped models (``ppo-nullspace-planar_reach``, ...)."""
+    if not SHIPPED_MODELS_DIR.is_dir():
+        return ()
+    return tuple(sorted(p.stem for p in SHIPPED_MODELS_DIR.glob("*.zip")))
+
+
+def shipped_model_path(name: str, env: Any) -> Path:
+    """The ``.zip`` of the shipped model ``name`` (``<learner>-<action>``) for ``env``.
+
+    Raises:
+        PolicyError: no such model for this env (the message lists the shipped ones).
+    """
+    path = SHIPPED_MODELS_DIR / f"{name}-{env_slug(env)}.zip"
+    if path.is_file():
+        return path
+    available = ", ".join(shipped_models()) or f"none ({SHIPPED_MODELS_DIR} is empty or absent: the models ship " \
+                                                "with the source checkout; `make baselines` trains them)"
+    raise PolicyError(f"no shipped model {name!r} for {type(getattr(env, 'unwrapped', env)).__name__} "
+                      f"({path.name}); shipped: {available}")
