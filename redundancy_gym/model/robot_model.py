@@ -86,6 +86,8 @@ class RobotModel:
     def __init__(self, model: pin.Model, source: str = "<pinocchio model>") -> None:
         self._model = model
         self._data = model.createData()
+        # read several times a control period by the controllers; nothing changes the inertias after loading
+        self._total_mass = float(sum(inertia.mass for inertia in model.inertias))
         self.source = source
         self._frame_ids: dict[str, int] = {}
         for index, frame in enumerate(model.frames):
@@ -168,8 +170,8 @@ class RobotModel:
 
     @property
     def total_mass(self) -> float:
-        """Total mass [kg]."""
-        return float(sum(inertia.mass for inertia in self._model.inertias))
+        """Total mass [kg] (summed over the bodies once, when the model is built)."""
+        return self._total_mass
 
     def frame_id(self, name: str) -> int:
         """Index of a frame; raises :class:`UnknownFrameError` naming the valid frames."""

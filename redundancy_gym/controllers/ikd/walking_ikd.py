@@ -161,7 +161,7 @@ class WalkingIkd:
                             moment_gain=config.moment_gain, period=self.dt, objectives=objectives,
                             objective_gain=config.objective_gain)
         self.planner = PlanStabilizer(omega, ramp=config.planning_ramp, max_shift=config.planning_max_shift)
-        self._mass = model.total_mass  # RobotModel sums it over the bodies at each read
+        self._mass = model.total_mass
         self.force = self._mass * GRAVITY
         self.q = model.check_configuration(posture)
         self.qdot = np.zeros(model.nv)
