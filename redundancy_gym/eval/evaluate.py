@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from .. import ENV_IDS, make_policy
+from ..wrappers.action_check import CONTROLLER_TIME_KEY
 from .exceptions import EvalError
 
 __all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env", "run_episode"]
@@ -30,7 +31,7 @@ class EpisodeTrace:
         goal_error: TCP distance to the goal [m] (``info["goal_error"]``).
         speed_error: ``|v_x - target_speed|`` of the biped [m/s] (``info["speed_error"]``).
         joint_speed: largest joint speed of the step [rad/s]; min_clearance: [m]; pseudoenergy: ``qdot^T qdot dt``.
-        step_time_us: the policy's compute time for the step [us].
+        step_time_us: the policy's compute time for the step [us] (an action wrapper's controller included).
     """
 
     time: NDArray[np.float64]
@@ -200,7 +201,8 @@ def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **make_kwarg
 
 def run_episode(env: gym.Env, policy: Any, seed: int, *,
                 frames: list[NDArray[np.uint8]] | None = None) -> tuple[EpisodeSummary, EpisodeTrace]:
-    """Run one episode from ``env.reset(seed=seed)``, timing only ``policy.predict``.
+    """Run one episode from ``env.reset(seed=seed)``, timing only the policy: ``policy.predict`` plus, in an action
+    wrapper, the wrapper's controller (``info["controller_time_us"]``); the simulation is not counted.
 
     ``frames``: when given, ``env.render()`` output is appended after the reset and after every step.
     """
@@ -221,6 +223,8 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         episode_start = np.array([False])
         obs, reward, terminated, truncated, info = env.step(action)
+        # an action wrapper's controller is part of the policy: its time counts with the learner's
+        elapsed_us += float(info.get(CONTROLLER_TIME_KEY, 0.0))
         if frames is not None:
             frames.append(env.render())
         ret += float(reward)

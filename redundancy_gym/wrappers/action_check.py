@@ -12,7 +12,12 @@ from numpy.typing import NDArray
 
 from .exceptions import WrapperActionError, WrapperError
 
-__all__ = ["check_action", "check_policy_kwargs", "normalized_box"]
+__all__ = ["CONTROLLER_TIME_KEY", "check_action", "check_policy_kwargs", "normalized_box"]
+
+CONTROLLER_TIME_KEY = "controller_time_us"
+"""The ``info`` key of a wrapper's own compute time in the step [us]: its controller turning the learner's action
+into the env's (the env's simulation excluded). ``eval`` adds it to the learner's time, so that a wrapped learner's
+step time is that of the whole policy."""
 
 
 def normalized_box(dim: int) -> spaces.Box:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
 from ..validation import check_bool, check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
@@ -128,10 +129,12 @@ class NullspaceAction(gym.Wrapper):
         if self._obs is None:
             raise WrapperError("NullspaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "NullspaceAction")
+        began = time.perf_counter_ns()
         result, fraction = self.command(a * self._scale)
+        elapsed_us = (time.perf_counter_ns() - began) * 1e-3
         joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    nullspace_fraction=fraction)
+                    nullspace_fraction=fraction, **{CONTROLLER_TIME_KEY: elapsed_us})
         return obs, reward, terminated, truncated, info

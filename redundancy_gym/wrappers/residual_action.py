@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -12,7 +13,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy, supported_policies
 from ..validation import check_bool, check_real
-from .action_check import check_action, check_policy_kwargs
+from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs
 from .exceptions import WrapperError
 
 __all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
@@ -106,11 +107,14 @@ class ResidualAction(gym.Wrapper):
                                                 np.concatenate([obs.high, space.high]).astype(obs.dtype),
                                                 dtype=obs.dtype)
         self._reference_action: NDArray[Any] | None = None
+        self._reference_time_us = 0.0
         self._starting = True
 
     def _observe(self, obs: NDArray[np.floating], starting: bool) -> NDArray[np.floating]:
         """Compute the reference action of ``obs`` (kept for the next step) and the wrapper's observation."""
+        began = time.perf_counter_ns()
         action, _ = self.reference.predict(obs, episode_start=np.array([starting]))
+        self._reference_time_us = (time.perf_counter_ns() - began) * 1e-3
         self._reference_action = np.asarray(action, dtype=self._dtype)
         if self.config.observe_reference:
             return np.concatenate([obs, self._reference_action.astype(obs.dtype)])
@@ -126,9 +130,11 @@ class ResidualAction(gym.Wrapper):
             raise WrapperError("ResidualAction: call reset() before step()")
         a = check_action(action, self.action_space, "ResidualAction")
         reference = self._reference_action
+        reference_time_us = self._reference_time_us  # computed after the previous step, applied in this one
         # in the env's dtype, so that a = 0 gives the reference action bit for bit
         residual = (self.config.scale * self._range * a).astype(self._dtype)
         applied = np.clip(reference + residual, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(applied)
-        info = {**info, "reference_action": reference, "residual_action": applied - reference}
+        info = {**info, "reference_action": reference, "residual_action": applied - reference,
+                CONTROLLER_TIME_KEY: reference_time_us}
         return self._observe(obs, False), reward, terminated, truncated, info

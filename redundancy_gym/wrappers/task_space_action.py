@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -14,7 +15,7 @@ from ..controllers import ClikResult
 from ..geometry import SSV, Segment
 from ..policies import PolicyError, make_policy
 from ..validation import check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
@@ -323,11 +324,13 @@ class TaskSpaceAction(gym.Wrapper):
         if self._obs is None:
             raise WrapperError("TaskSpaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "TaskSpaceAction")
+        began = time.perf_counter_ns()
         result = self.last_result = self.command(a)
+        elapsed_us = (time.perf_counter_ns() - began) * 1e-3
         joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         lag = math.dist(self._position, self._tcp(self._obs))
         info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    target_lag=lag)
+                    target_lag=lag, **{CONTROLLER_TIME_KEY: elapsed_us})
         return obs, reward, terminated, truncated, info

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -11,7 +12,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy
 from ..validation import check_int, check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
@@ -136,9 +137,12 @@ class WalkingCommandAction(gym.Wrapper):
         self.reference.controller.set_command(forward, lateral, yaw_rate)
         total = 0.0
         adjusted = False
+        elapsed_ns = 0
         limit = self._period_limit() if self.config.command_period > 1 else None
         for _ in range(self.config.command_period):
+            began = time.perf_counter_ns()
             joint_action = self.reference.command(self._obs)
+            elapsed_ns += time.perf_counter_ns() - began
             adjusted |= self.reference.last_command.adjustment is not None
             obs, reward, terminated, truncated, info = self.env.step(joint_action)
             self._obs = np.asarray(obs, dtype=np.float64)
@@ -150,5 +154,5 @@ class WalkingCommandAction(gym.Wrapper):
                 break
         info = {**info, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
                 "commanded_yaw_rate": yaw_rate,
-                "step_adjusted": adjusted}
+                "step_adjusted": adjusted, CONTROLLER_TIME_KEY: elapsed_ns * 1e-3}
         return obs, total, terminated, truncated, info
