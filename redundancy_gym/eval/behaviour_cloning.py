@@ -12,7 +12,6 @@ even when sampled (and could be fine-tuned with PPO from there).
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +24,7 @@ from ..policies import make_policy
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .evaluate import make_env
 from .exceptions import EvalError
+from .training_record import CpuClock, TrainingRecord, machine
 
 __all__ = ["BehaviourCloningSummary", "train_behaviour_cloning"]
 
@@ -118,7 +118,7 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
             raise EvalError(f"{name} must be an int >= {low}, got {value!r}")
     if not math.isfinite(learning_rate) or learning_rate <= 0.0:
         raise EvalError(f"learning_rate must be finite and > 0, got {learning_rate!r}")
-    began = time.perf_counter()
+    clock = CpuClock().__enter__()
     env = make_env(env_id, env_kwargs)
     if expert is None:
         expert = "walking" if "Biped" in env_id else "clik"
@@ -175,8 +175,18 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
     finally:
         env.close()
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
-    summary = BehaviourCloningSummary(len(observations), 1 + dagger_rounds, steps, time.perf_counter() - began, loss,
+    clock.__exit__()
+    summary = BehaviourCloningSummary(len(observations), 1 + dagger_rounds, steps, clock.wall_s, loss,
                                       tuple(success), path)
+    TrainingRecord(learner="bc", env_id=env_id, env_steps=steps, wall_s=clock.wall_s, cpu_s=clock.cpu_s, seed=seed,
+                   settings={"expert": expert, "expert_kwargs": dict(expert_kwargs or {}),
+                             "env_kwargs": dict(env_kwargs or {}), "episodes": episodes,
+                             "dagger_rounds": dagger_rounds, "dagger_episodes": dagger_episodes, "epochs": epochs,
+                             "batch_size": batch_size, "learning_rate": learning_rate, "net_arch": list(net_arch),
+                             "log_std": log_std},
+                   machine=machine(),
+                   result={"samples": len(observations), "action_mse": loss,
+                           "learner_success_per_dagger_round": list(success)}).write(path)
     if log is not None:
         log(summary.format())
     return summary

@@ -24,11 +24,16 @@ from ..registration import ENV_IDS
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .evaluate import make_env
 from .exceptions import EvalError
+from .training_record import CpuClock, TrainingRecord, machine
 
-__all__ = ["ALGOS", "LEARN_EXTRA_HINT", "VEC_ENVS", "LinearSchedule", "TrainingConfig", "TrainingSummary",
+__all__ = ["ALGOS", "EVAL_CALLBACK_SEED", "KEEP", "LEARN_EXTRA_HINT", "VEC_ENVS", "LinearSchedule", "TrainingConfig", "TrainingSummary",
            "load_config", "load_hyperparameters", "train"]
 
 ALGOS: tuple[str, ...] = ("ppo", "sac")
+KEEP: tuple[str, ...] = ("last", "best")
+EVAL_CALLBACK_SEED = 30000
+"""First seed of the episodes the training-time evaluation callback runs: apart from the seeds results are reported
+on (the learned-baselines table uses 21000 onwards)."""
 VEC_ENVS: tuple[str, ...] = ("dummy", "subproc")
 DEFAULT_POLICY = "MlpPolicy"
 RECENT_EPISODES = 20  # episodes averaged in the printed statistics
@@ -249,7 +254,9 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
           env_kwargs: dict[str, Any] | None = None, hyperparameters: dict[str, Any] | None = None,
           progress_bar: bool = True, tensorboard_log: str | None = None, n_envs: int = 1,
           vec_env: str = "dummy", policy: str = DEFAULT_POLICY, print_every: int | None = None,
-          log: Callable[[str], None] | None = print, torch_threads: int | None = 1) -> Path:
+          log: Callable[[str], None] | None = print, torch_threads: int | None = 1,
+          eval_freq: int | None = None, eval_episodes: int = 5, eval_seed: int = EVAL_CALLBACK_SEED,
+          checkpoint_freq: int | None = None, keep: str = "last") -> Path:
     """Train an SB3 agent for ``steps`` environment steps and save it to ``out`` (a ``.zip`` that ``eval`` loads).
 
     Every env is wrapped in SB3's ``Monitor`` (recording ``is_success``); the statistics of the recent episodes
@@ -273,10 +280,22 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
         torch_threads: torch's CPU threads while training (None: torch's default, one per core). The default 1
             suits MLP policies: their layers are too small to split, and on a busy machine torch's thread pool
             made a smoke run 30-100 times slower.
+        eval_freq: every this many steps (over all envs), evaluate the deterministic agent on ``eval_episodes``
+            episodes of a separate env with seeds from ``eval_seed`` (SB3's ``EvalCallback``; logged to
+            TensorBoard, the best agent saved as ``<out>_best.zip``); None: no evaluation while training.
+        eval_episodes, eval_seed: the callback's episodes and first seed (keep them apart from the seeds a
+            result is reported on: the default :data:`EVAL_CALLBACK_SEED` is).
+        checkpoint_freq: every this many steps (over all envs) save the agent as
+            ``<out>_checkpoints/<algo>_<steps>_steps.zip``; None: no checkpoints.
+        keep: ``"last"`` saves the agent at the end of training to ``out``; ``"best"`` saves the evaluation
+            callback's best agent there instead (needs ``eval_freq``), and the last as ``<out>_last.zip``.
+
+    Beside ``out`` goes its :class:`~redundancy_gym.eval.training_record.TrainingRecord` (``.json``): steps, wall
+    and CPU time, settings, machine and the final statistics.
     """
     try:
         sb3 = import_stable_baselines3()
-        from stable_baselines3.common.callbacks import BaseCallback
+        from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback, EvalCallback
         from stable_baselines3.common.env_util import make_vec_env
         from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
     except ImportError as exc:
@@ -293,37 +312,89 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
         raise EvalError(f"print_every must be >= 1, got {print_every}")
     if torch_threads is not None and torch_threads < 1:
         raise EvalError(f"torch_threads must be >= 1, got {torch_threads}")
+    for name, value in (("eval_freq", eval_freq), ("checkpoint_freq", checkpoint_freq)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise EvalError(f"{name} must be an int >= 1 or None, got {value!r}")
+    if isinstance(eval_episodes, bool) or not isinstance(eval_episodes, int) or eval_episodes < 1:
+        raise EvalError(f"eval_episodes must be an int >= 1, got {eval_episodes!r}")
+    if keep not in KEEP:
+        raise EvalError(f"unknown keep {keep!r}; valid: {', '.join(KEEP)}")
+    if keep == "best" and eval_freq is None:
+        raise EvalError("keep='best' needs eval_freq (the evaluation callback chooses the best agent)")
     make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs, before any worker starts
-    env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=n_envs, seed=seed,
-                       vec_env_cls=SubprocVecEnv if vec_env == "subproc" else DummyVecEnv,
-                       monitor_kwargs={"info_keywords": ("is_success",) if env_id in ENV_IDS else ()})
+    out = Path(out)
+    out = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+    stem = out.with_suffix("")
+    monitor = {"info_keywords": ("is_success",) if env_id in ENV_IDS else ()}
     import torch
 
     threads = torch.get_num_threads()
     if torch_threads is not None:
         torch.set_num_threads(torch_threads)
-    try:
-        cls = {"ppo": sb3.PPO, "sac": sb3.SAC}[algo]
+    eval_env = None
+    with CpuClock() as clock:
+        env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=n_envs, seed=seed,
+                           vec_env_cls=SubprocVecEnv if vec_env == "subproc" else DummyVecEnv, monitor_kwargs=monitor)
         try:
-            model = cls(policy, env, seed=seed, device="cpu", verbose=0, tensorboard_log=tensorboard_log,
-                        **(hyperparameters or {}))
-        except TypeError as exc:  # a keyword the algorithm does not take
-            raise EvalError(f"invalid {algo.upper()} hyperparameters: {exc}") from None
-        total = int(steps)
-        rollout = int(getattr(model, "n_steps", 0) or 0) * n_envs  # on-policy learners collect whole rollouts
-        if rollout and total % rollout:
-            total = -(-total // rollout) * rollout
-            if log is not None:
-                log(f"note: {algo.upper()} collects n_steps x n_envs = {rollout} steps per update, so training "
-                    f"runs {total} steps, not {steps} (pass a multiple of {rollout} to --steps)")
-        callback = _statistics_callback(BaseCallback, total, print_every or max(1000, total // 20),
-                                        log or (lambda line: None))
-        model.learn(total_timesteps=int(steps), progress_bar=progress_bar, callback=callback,
-                    tb_log_name=f"{algo}_{env_id.split('/')[-1]}")
-        out = Path(out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        model.save(str(out))
-    finally:
-        env.close()
-        torch.set_num_threads(threads)
-    return out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
+            cls = {"ppo": sb3.PPO, "sac": sb3.SAC}[algo]
+            try:
+                model = cls(policy, env, seed=seed, device="cpu", verbose=0, tensorboard_log=tensorboard_log,
+                            **(hyperparameters or {}))
+            except TypeError as exc:  # a keyword the algorithm does not take
+                raise EvalError(f"invalid {algo.upper()} hyperparameters: {exc}") from None
+            total = int(steps)
+            rollout = int(getattr(model, "n_steps", 0) or 0) * n_envs  # on-policy learners collect whole rollouts
+            if rollout and total % rollout:
+                total = -(-total // rollout) * rollout
+                if log is not None:
+                    log(f"note: {algo.upper()} collects n_steps x n_envs = {rollout} steps per update, so training "
+                        f"runs {total} steps, not {steps} (pass a multiple of {rollout} to --steps)")
+            statistics = _statistics_callback(BaseCallback, total, print_every or max(1000, total // 20),
+                                              log or (lambda line: None))
+            callbacks: list[Any] = [statistics]
+            if eval_freq is not None:
+                # a separate env, seeded apart from training and from the reported seeds; SB3 counts the
+                # callback's frequency in calls, one per vectorized step of n_envs env steps
+                eval_env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=1, seed=eval_seed,
+                                        monitor_kwargs=monitor)
+                callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes,
+                                              eval_freq=max(1, eval_freq // n_envs),
+                                              best_model_save_path=str(stem) + "_best_dir", log_path=None,
+                                              deterministic=True, verbose=0))
+            if checkpoint_freq is not None:
+                callbacks.append(CheckpointCallback(save_freq=max(1, checkpoint_freq // n_envs),
+                                                    save_path=str(stem) + "_checkpoints", name_prefix=algo))
+            model.learn(total_timesteps=int(steps), progress_bar=progress_bar, callback=CallbackList(callbacks),
+                        tb_log_name=f"{algo}_{env_id.split('/')[-1]}")
+            out.parent.mkdir(parents=True, exist_ok=True)
+            best_eval = None
+            if eval_freq is not None:
+                best_dir = Path(str(stem) + "_best_dir")
+                best_eval = float(callbacks[1].best_mean_reward)
+                if (best_dir / "best_model.zip").is_file():
+                    (best_dir / "best_model.zip").replace(str(stem) + "_best.zip")
+                    best_dir.rmdir()
+            if keep == "best" and Path(str(stem) + "_best.zip").is_file():
+                model.save(str(stem) + "_last.zip")
+                Path(str(stem) + "_best.zip").replace(out)
+            else:
+                model.save(str(out))
+        finally:
+            env.close()
+            if eval_env is not None:
+                eval_env.close()
+            torch.set_num_threads(threads)
+    summary = statistics.summary
+    result: dict[str, Any] = {} if summary is None else {
+        "recent_return": summary.recent_return, "recent_success": summary.recent_success,
+        "episodes": summary.episodes}
+    if best_eval is not None:
+        result["best_eval_return"] = best_eval
+        result["eval_seed"] = eval_seed
+        result["kept"] = keep
+    TrainingRecord(learner=algo, env_id=env_id, env_steps=int(model.num_timesteps), wall_s=clock.wall_s,
+                   cpu_s=clock.cpu_s, seed=seed,
+                   settings={"policy": policy, "n_envs": n_envs, "vec_env": vec_env, "steps": int(steps),
+                             "env_kwargs": dict(env_kwargs or {}), "hyperparameters": dict(hyperparameters or {})},
+                   machine=machine(), result=result).write(out)
+    return out

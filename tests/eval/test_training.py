@@ -1,4 +1,5 @@
 import json
+import math
 import os
 import subprocess
 import sys
@@ -9,7 +10,8 @@ import yaml
 
 from redundancy_gym.cli import main
 from redundancy_gym.eval.exceptions import EvalError
-from redundancy_gym.eval.training import LinearSchedule, load_config, load_hyperparameters
+from redundancy_gym.eval.training import LinearSchedule, load_config, load_hyperparameters, train
+from redundancy_gym.eval.training_record import read_training_record
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
 ROOT = Path(__file__).resolve().parents[2]
@@ -118,3 +120,32 @@ def test_rl_zoo3_trains_on_our_config(tmp_path) -> None:
     models = list((tmp_path / "logs" / "ppo").glob("*/redundancy_gym-PlanarReach-v0.zip"))
     assert len(models) == 1
     assert main(["eval", ENV_ID, "--policy", str(models[0]), "--episodes", "1", "--no-progress"]) == 0
+
+
+def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, capsys) -> None:
+    """--eval-freq evaluates on seeds apart from training, --checkpoint-freq saves along the way, --keep best ships
+    the evaluation's best agent (the last goes beside it), and the record beside the .zip states steps and cost."""
+    zip_path = tmp_path / "m.zip"
+    config = _smoke_config(tmp_path, n_timesteps=1024, n_envs=2, n_steps=128, batch_size=64, n_epochs=1)
+    assert main(["train", ENV_ID, "--out", str(zip_path), "--config", str(config), "--no-progress",
+                 "--eval-freq", "512", "--eval-episodes", "1", "--checkpoint-freq", "512", "--keep", "best"]) == 0
+    assert zip_path.is_file() and (tmp_path / "m_last.zip").is_file()
+    assert sorted(p.name for p in (tmp_path / "m_checkpoints").iterdir()) == ["ppo_1024_steps.zip",
+                                                                              "ppo_512_steps.zip"]
+    record = read_training_record(zip_path)
+    assert record is not None and record.learner == "ppo" and record.env_id == ENV_ID
+    assert record.env_steps == 1024 and record.seed == 0
+    assert 0.0 < record.cpu_s and 0.0 < record.wall_s
+    assert record.result["kept"] == "best" and record.result["eval_seed"] == 30000
+    # one PlanarReach episode of 250 steps; a return is a finite sum of per-step rewards
+    assert math.isfinite(record.result["best_eval_return"])
+    assert record.settings["hyperparameters"]["n_steps"] == 128 and record.machine["cores"] >= 1
+
+
+def test_keep_best_needs_the_eval_callback(tmp_path, capsys) -> None:
+    config = _smoke_config(tmp_path, n_timesteps=256, n_envs=1, n_steps=128)
+    assert main(["train", ENV_ID, "--out", str(tmp_path / "x.zip"), "--config", str(config), "--no-progress",
+                 "--keep", "best"]) == 2
+    assert "eval_freq" in capsys.readouterr().err
+    with pytest.raises(EvalError, match="eval_freq must be an int >= 1"):
+        train(ENV_ID, "ppo", 128, tmp_path / "y.zip", eval_freq=0)
