@@ -11,26 +11,13 @@ demo: $(VENV)/.core-installed
 test: $(VENV)/.test-installed
 	$(BIN)/python -m pytest -q
 
-# the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb) into
-# baselines/models/, then evaluates it on held-out seeds 20000-20019 into baselines/results/ (about 5 min here)
-BASELINE_SEEDS := --episodes 20 --seed 20000 --no-progress
+# the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb,
+# checkpoints in runs/baselines) into baselines/models/ with its training record, then evaluates every analytic
+# reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}
+# (about 1 h 40 min here, 2 cores)
 baselines: $(VENV)/.test-installed
-	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --wrapper nullspace --algo ppo --seed 0 --no-progress \
-	  --config baselines/ppo-nullspace-planar_reach.yaml --out baselines/models/ppo-nullspace-planar_reach.zip \
-	  --tensorboard runs/baselines_tb
-	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --algo ppo --seed 0 --no-progress \
-	  --config baselines/ppo-joint-planar_reach.yaml --out baselines/models/ppo-joint-planar_reach.zip \
-	  --tensorboard runs/baselines_tb
-	$(BIN)/redundancy-gym train redundancy_gym/PlanarReach-v0 --algo bc --seed 0 --no-progress \
-	  --config baselines/bc-joint-planar_reach.yaml --out baselines/models/bc-joint-planar_reach.zip
-	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-Nullspace-v0 --policy ppo-nullspace $(BASELINE_SEEDS) \
-	  --json baselines/results/ppo-nullspace-planar_reach.json
-	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy ppo-joint $(BASELINE_SEEDS) \
-	  --json baselines/results/ppo-joint-planar_reach.json
-	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy bc-joint $(BASELINE_SEEDS) \
-	  --json baselines/results/bc-joint-planar_reach.json
-	$(BIN)/redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy clik $(BASELINE_SEEDS) \
-	  --json baselines/results/clik-planar_reach.json
+	$(BIN)/redundancy-gym baselines
+	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress
 
 # libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
 # missing and run as root

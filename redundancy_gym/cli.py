@@ -62,7 +62,7 @@ def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="redundancy-gym", description=__doc__, epilog=EPILOG,
                                      formatter_class=_RawHelpFormatter)
     parser.add_argument("--version", action="version", version=f"redundancy-gym {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{list,eval,train,render,bench,demo}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="{list,eval,train,baselines,render,bench,demo}")
 
     ls = _add_parser(sub, "list", "list the registered envs: spaces, control period, episode length, policies")
     ls.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -116,6 +116,17 @@ def _parser() -> argparse.ArgumentParser:
                     help="steps between printed statistics lines (default: steps / 20, at least 1000)")
     tr.add_argument("--torch-threads", type=int, default=1, metavar="N",
                     help="torch CPU threads (more pay off only for networks larger than the default MLP)")
+    tr.add_argument("--eval-freq", type=int, metavar="STEPS",
+                    help="evaluate the deterministic agent every STEPS steps on a separate env (SB3 EvalCallback; "
+                         "TensorBoard, best agent saved as <out>_best.zip) (default: never)")
+    tr.add_argument("--eval-episodes", type=int, default=5, metavar="N", help="episodes per evaluation")
+    tr.add_argument("--eval-seed", type=int, default=30000, metavar="N",
+                    help="first seed of the evaluation episodes (keep it apart from the seeds you report on)")
+    tr.add_argument("--checkpoint-freq", type=int, metavar="STEPS",
+                    help="save the agent every STEPS steps into <out>_checkpoints/ (default: never)")
+    tr.add_argument("--keep", choices=("last", "best"), default="last",
+                    help="save the last agent to --out, or the evaluation's best (needs --eval-freq; the last then "
+                         "goes to <out>_last.zip)")
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     re = _add_parser(sub, "render", "record one episode as .mp4 or .gif")
@@ -133,7 +144,7 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd", "learned"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid, and "
                          "every wrapped id against its raw env; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
@@ -144,9 +155,13 @@ def _parser() -> argparse.ArgumentParser:
                          "push: the largest torso push the walking reference recovers from, with and without step "
                          "adjustment (also writes a PNG beside the JSON); "
                          "ikd: the kinematic IKD study of monograph 5.5.3 (figs. 5.21, 5.23, 5.24, 5.27 analogues: "
-                         "unstabilized drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON)")
+                         "unstabilized drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON); "
+                         "learned: every analytic reference and shipped learned baseline per env on held-out seeds "
+                         "(success, failures, errors, pseudoenergy, step time, training cost; markdown and one "
+                         "time-vs-error PNG per env beside the JSON)")
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
-    be.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the benchmark's scenes")
+    be.add_argument("--seed", type=int, metavar="N",
+                    help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
     be.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     budget = be.add_mutually_exclusive_group()
@@ -157,6 +172,20 @@ def _parser() -> argparse.ArgumentParser:
                         help="soak only: steps per env instead of --seconds, split over the action sources")
     be.add_argument("--trials", type=int, metavar="N",
                     help="push only: trials per impulse level (default: 20, --quick: 5)")
+    be.add_argument("--episodes", type=int, metavar="N",
+                    help="learned only: episodes per policy from --seed (default: 20, --quick: 2)")
+    be.add_argument("--envs", nargs="+", metavar="ENV",
+                    help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)")
+
+    ba = _add_parser(sub, "baselines", "train the learned baselines of baselines/*.yaml (seeded; each into "
+                                       "baselines/models/<name>.zip with its training record <name>.json); "
+                                       "bench learned then evaluates them")
+    ba.add_argument("names", nargs="*", metavar="NAME",
+                    help="baselines to train, e.g. ppo-residual-agri_reach (default: all; --list shows them)")
+    ba.add_argument("--list", action="store_true", help="list the baselines and their shipped models, train nothing")
+    ba.add_argument("--steps", type=int, metavar="N", help="PPO/SAC budget instead of each file's n_timesteps "
+                    "(a smoke run; the shipped models use the files')")
+    ba.add_argument("--models", default=None, metavar="DIR", help="where the models go (default: baselines/models)")
 
     de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
@@ -282,8 +311,29 @@ def _train(args: argparse.Namespace) -> None:
                  env_kwargs={**config.env_kwargs, **args.env_kwargs}, hyperparameters=config.hyperparameters,
                  progress_bar=not args.no_progress, tensorboard_log=args.tensorboard, n_envs=n_envs,
                  vec_env=args.vec_env, policy=config.policy, print_every=args.print_every,
-                 torch_threads=args.torch_threads)
+                 torch_threads=args.torch_threads, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
+                 eval_seed=args.eval_seed, checkpoint_freq=args.checkpoint_freq, keep=args.keep)
     print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
+
+
+def _baselines(args: argparse.Namespace) -> None:
+    from .eval.baselines import baselines, train_baseline
+
+    chosen = baselines(args.names)
+    if args.list:
+        for b in chosen:
+            record = b.record()
+            trained = "not trained" if record is None else \
+                f"{record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min"
+            print(f"{b.name:32s} {b.learner:4s} {b.env_id:45s} {trained}")
+        return
+    for k, b in enumerate(chosen, 1):
+        print(f"[{k}/{len(chosen)}] {b.name}: {b.learner} on {b.env_id} ({b.config})", flush=True)
+        options = {} if args.models is None else {"models_dir": args.models}
+        path = train_baseline(b, steps=args.steps, **options)
+        record = b.record() if args.models is None else None
+        cost = "" if record is None else f" ({record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min)"
+        print(f"wrote {path}{cost}", flush=True)
 
 
 def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
@@ -296,6 +346,9 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
     if args.steps is not None or args.n_envs is not None:
         raise EvalError("--steps and --n-envs do not apply to --algo bc: its budget is the config's episodes, "
                         "dagger_rounds and dagger_episodes")
+    if args.eval_freq is not None or args.checkpoint_freq is not None or args.keep != "last":
+        raise EvalError("--eval-freq, --checkpoint-freq and --keep apply to ppo and sac, not to --algo bc (it "
+                        "reports its learner's success after every DAgger round)")
     options = dict(config.hyperparameters)
     valid = set(inspect.signature(train_behaviour_cloning).parameters) - {"env_id", "out", "env_kwargs", "seed",
                                                                           "progress", "log"}
@@ -322,6 +375,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--seconds and --steps apply to bench soak only")
     if args.command == "bench" and args.name != "push" and args.trials is not None:
         parser.error("--trials applies to bench push only")
+    if args.command == "bench" and args.name != "learned" and (args.episodes is not None or args.envs is not None):
+        parser.error("--episodes and --envs apply to bench learned only")
+    if args.command == "bench" and args.seed is None and args.name != "learned":
+        args.seed = 0
     from .policies import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
@@ -344,6 +401,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"wrote {report.write_json(args.json_path)}")
         elif args.command == "train":
             _train(args)
+        elif args.command == "baselines":
+            _baselines(args)
         elif args.command == "demo":
             from .eval.demo import run_demo
 
@@ -412,6 +471,23 @@ def main(argv: Sequence[str] | None = None) -> int:
                     print(f"wrote {write_ikd_study(study, path.with_name(path.stem + suffix + path.suffix))}")
                     for written in plot_ikd_study(study, path.parent, suffix):
                         print(f"wrote {written}")
+            elif args.name == "learned":
+                from .eval.bench_learned import (HELD_OUT_SEED, learned_markdown, plot_learned_bench,
+                                                 run_learned_bench, write_learned_bench)
+
+                episodes = args.episodes if args.episodes is not None else (2 if args.quick else 20)
+                seed = args.seed if args.seed is not None else HELD_OUT_SEED
+                table = run_learned_bench(episodes=episodes, seed=seed, envs=args.envs,
+                                          progress=not args.no_progress)
+                markdown = learned_markdown(table)
+                print(markdown)
+                path = write_learned_bench(table, json_path)
+                print(f"wrote {path}")
+                md = path.with_suffix(".md")
+                md.write_text("# Learned baselines against the analytic references\n\n" + markdown)
+                print(f"wrote {md}")
+                for written in plot_learned_bench(table, path.parent, prefix=path.stem + "_"):
+                    print(f"wrote {written}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -31,8 +32,9 @@ _OBSTACLE_VIDEO_FPS = 25.0
 
 def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
-    crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), and the kinematic IKD
-    study; write JSON, PNG and MP4.
+    crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), the shipped learned
+    baselines against every analytic reference (appended to the speed-vs-error report) and the kinematic IKD study;
+    write JSON, PNG and MP4.
 
     Returns the paths written.
     """
@@ -57,6 +59,7 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
                                  env_kwargs={"obstacle": obstacle}, progress=progress)
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
+    written.extend(_learned(out, episodes=min(episodes, 5), progress=progress))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
     written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress))
@@ -198,6 +201,24 @@ def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
             report.traces[0]
     return plot_clearance(traces, out / "planar_reach_clearance.png",
                           f"PlanarReach-v0 with obstacle (seed {seed}; an episode ends at contact)")
+
+
+def _learned(out: Path, *, episodes: int, progress: bool) -> list[Path]:
+    """The learned baselines against the analytic references, per env, on the first ``episodes`` held-out seeds of
+    ``bench learned`` (seeds 20000 onwards, never trained on): a section appended to ``speed_vs_error.md`` and a
+    time-vs-error plot per env (``speed_vs_error_learned_<env>.png``, learned policies with their own markers)."""
+    from .bench_learned import HELD_OUT_SEED, learned_markdown, plot_learned_bench, run_learned_bench  # noqa: PLC0415
+
+    table = run_learned_bench(episodes=episodes, seed=HELD_OUT_SEED, progress=progress)
+    command = f"redundancy-gym bench learned --episodes {episodes}"
+    text = "\n## Learned baselines against the analytic references\n\n" + learned_markdown(table, command=command)
+    markdown = out / "speed_vs_error.md"
+    with markdown.open("a") as handle:
+        handle.write(text)
+    print(text)
+    path = out / "learned.json"
+    path.write_text(json.dumps(table, indent=2) + "\n")
+    return [path, *plot_learned_bench(table, out, prefix="speed_vs_error_learned_")]
 
 
 def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -79,7 +79,8 @@ METRICS: dict[str, Metric] = {
 
 _LOG_SPREAD = 20.0
 _SIZE = 150.0
-_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "<", ">", "p", "h", "*")
+_MARKERS = ("o", "s", "^", "D", "v", "<", ">", "p", "h")
+_LEARNED_MARKERS = ("*", "P", "X")  # the learned policies' family, apart from the analytic controllers' shapes
 
 
 def _metric(name: str) -> Metric:
@@ -266,9 +267,10 @@ class _Label:
     median: float
 
 
-def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, title: str) -> list[_Label]:
+def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, title: str,
+                learned: Collection[str] = ()) -> list[_Label]:
     """Scatter (amortized time, error) with a thin line back to the median time; returns the labels to place
-    once the figure is laid out."""
+    once the figure is laid out. Labels in ``learned`` get the learned marker family."""
     metric = _metric(error)
     points = []
     for k, (label, r) in enumerate(reports.items()):
@@ -295,12 +297,16 @@ def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, t
                  if np.hypot(*(screen[j] - xy)) < 0.6 * px * 0.5 * (math.sqrt(sizes[j]) + math.sqrt(_SIZE))]
         sizes.append(max(0.4 * min(under), 16.0) if under else _SIZE)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    markers = {label: (_LEARNED_MARKERS[i % len(_LEARNED_MARKERS)] if label in learned else
+                       _MARKERS[i % len(_MARKERS)])
+               for group in ([p[1] for p in points if p[1] not in learned], [p[1] for p in points if p[1] in learned])
+               for i, label in enumerate(group)}
     labels = []
     for (k, label, mean, median, value, failed), size in zip(points, sizes, strict=True):
         colour = colours[k % len(colours)]
         ax.plot([median, mean], [value, value], color=colour, lw=1.0, alpha=0.8, zorder=2)
         ax.plot([median], [value], marker="|", color=colour, ms=7, zorder=2)
-        ax.scatter([mean], [value], s=size, marker=_MARKERS[k % len(_MARKERS)], zorder=4 - size / 1000,
+        ax.scatter([mean], [value], s=size, marker=markers[label], zorder=4 - size / 1000,
                    linewidths=1.6, facecolors="none" if failed else colour, edgecolors=colour,
                    label=label + (" (failed)" if failed else ""))
         text = ax.annotate(label + (" (failed)" if failed else ""), (mean, value), xytext=(8, 0),
@@ -317,6 +323,9 @@ def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, t
     handles, names = ax.get_legend_handles_labels()
     handles.append(Line2D([], [], color="grey", lw=1.0, marker="|", ms=7))
     names.append("thin line: median step time (|) to amortized mean (marker)")
+    if learned:
+        handles.append(Line2D([], [], color="grey", lw=0, marker="*", ms=9))
+        names.append("star, plus, cross markers: learned policies; others: analytic controllers")
     legend = ax.legend(handles, names, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2,
                        frameon=False)
     for handle in legend.legend_handles:  # nested markers are small on the plot, not in the legend
@@ -370,14 +379,14 @@ def _run_title(title: str, reports: Mapping[str, Mapping[str, Any]]) -> str:
 
 
 def plot_speed_error_panels(panels: Sequence[tuple[Mapping[str, Mapping[str, Any]], str, str]], path: str | Path,
-                            title: str = "") -> Path:
+                            title: str = "", learned: Collection[str] = ()) -> Path:
     """Side-by-side speed-vs-error panels, each ``(reports, panel title, error)`` as in :func:`plot_speed_error`
-    (the panel title gets the episodes and seeds appended)."""
+    (the panel title gets the episodes and seeds appended); labels in ``learned`` get the learned markers."""
     for _, _, error in panels:
         _metric(error)
     fig, axes = plt.subplots(1, len(panels), figsize=(7.2 * len(panels), 6.2), squeeze=False)
     axes = list(axes[0])
-    labels = [_draw_panel(ax, reports, error, _run_title(panel_title, reports))
+    labels = [_draw_panel(ax, reports, error, _run_title(panel_title, reports), learned)
               for ax, (reports, panel_title, error) in zip(axes, panels, strict=True)]
     if title:
         fig.suptitle(title)
@@ -387,15 +396,17 @@ def plot_speed_error_panels(panels: Sequence[tuple[Mapping[str, Mapping[str, Any
 
 
 def plot_speed_error(reports: Mapping[str, Mapping[str, Any]], path: str | Path, title: str,
-                     error: str = "tracking_max") -> Path:
+                     error: str = "tracking_max", learned: Collection[str] = ()) -> Path:
     """Scatter of the amortized compute time per step [us] (first-step plan included; a thin line reaches back
     to the median) against ``error``, a name of :data:`METRICS`, one labelled point per policy.
 
     Each axis is logarithmic only where its data spread over more than a factor 20 (:func:`axis_scale`); a
-    policy that failed every episode is hollow and labelled "(failed)"; the title states episodes and seeds.
+    policy that failed every episode is hollow and labelled "(failed)"; the title states episodes and seeds. The
+    labels in ``learned`` (learned policies) are drawn as stars, plusses and crosses, the others (analytic
+    controllers) as circles, squares, triangles and the like.
 
     Raises:
         ValueError: an unknown ``error``, or no report that defines it.
     """
-    return plot_speed_error_panels([(reports, title, error)], path)
+    return plot_speed_error_panels([(reports, title, error)], path, learned=learned)
 
