@@ -29,8 +29,10 @@ class WalkingCommandActionConfig:
             sideways step come within 0.1 m of each other).
         max_yaw_rate: the yaw rate of an action of +-1 [rad/s] (+: turning left; 0 <= max <= 0.5, a heading change
             of 0.4 rad per 0.8 s step).
-        command_period: control periods each action is held for (>= 1); the rewards of the periods are summed, and
-            the episode still ends at the env's time limit (its ``max_episode_steps`` control periods).
+        command_period: control periods each action is held for (>= 1); the rewards of the periods are summed (and
+            in ``info`` the reward terms and ``pseudoenergy``; contacts and falls of any period count, the peak
+            joint speed and the clearances are the worst of the periods), and the episode still ends at the env's
+            time limit (its ``max_episode_steps`` control periods).
         policy_kwargs: options of the ``walking`` reference (``WalkingPolicyConfig`` fields).
     """
 
@@ -40,6 +42,26 @@ class WalkingCommandActionConfig:
     max_yaw_rate: float = 0.3
     command_period: int = 1
     policy_kwargs: dict[str, Any] = field(default_factory=dict)
+
+
+# info entries of one control period that an action held over several periods reports over all of them
+_SUMMED = ("pseudoenergy",)  # and every reward term (reward_*), as the step's reward is their sum
+_ANY = ("collision", "self_collision", "fell")
+_MAX = ("peak_joint_speed",)
+_MIN = ("min_clearance", "min_self_clearance")
+
+
+def _hold(held: dict[str, Any], info: dict[str, Any]) -> None:
+    """Fold one period's ``info`` into ``held``: sums, any, max and min over the periods so far."""
+    for key, value in info.items():
+        if key in _SUMMED or key.startswith("reward_"):
+            held[key] = held.get(key, 0.0) + float(value)
+        elif key in _ANY:
+            held[key] = held.get(key, False) or bool(value)
+        elif key in _MAX:
+            held[key] = max(held.get(key, -np.inf), float(value))
+        elif key in _MIN:
+            held[key] = min(held.get(key, np.inf), float(value))
 
 
 class WalkingCommandAction(gym.Wrapper):
@@ -64,7 +86,9 @@ class WalkingCommandAction(gym.Wrapper):
     The env's: its reward and ``is_success`` still measure the walk against its ``target_speed``, not against
     the commanded speed (pass ``target_speed`` to ``gym.make`` for another); they reward progress along +x, so a
     walker that turns away from +x scores less. With ``command_period`` > 1 the
-    rewards of the periods are summed, and the episode ends at the env's time limit in control periods (10 s). ``info`` keeps every
+    rewards of the periods are summed (so are ``info``'s reward terms and ``pseudoenergy``; ``collision``,
+    ``self_collision`` and ``fell`` hold if they held in any period, ``peak_joint_speed`` and the clearances are
+    the worst of the periods), and the episode ends at the env's time limit in control periods (10 s). ``info`` keeps every
     entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s], ``commanded_yaw_rate`` [rad/s] and
     ``step_adjusted`` (the push-recovery step adjustment acted in this period).
 
@@ -139,6 +163,7 @@ class WalkingCommandAction(gym.Wrapper):
         adjusted = False
         elapsed_ns = 0
         limit = self._period_limit() if self.config.command_period > 1 else None
+        held: dict[str, Any] = {}  # the per-period info entries summed / worst over the periods of this action
         for _ in range(self.config.command_period):
             began = time.perf_counter_ns()
             joint_action = self.reference.command(self._obs)
@@ -148,11 +173,12 @@ class WalkingCommandAction(gym.Wrapper):
             self._obs = np.asarray(obs, dtype=np.float64)
             self._periods += 1
             total += float(reward)
+            _hold(held, info)
             if limit is not None and self._periods >= limit:
                 truncated = True  # the time limit counts this wrapper's steps, each command_period periods long
             if terminated or truncated:
                 break
-        info = {**info, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
+        info = {**info, **held, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
                 "commanded_yaw_rate": yaw_rate,
                 "step_adjusted": adjusted, CONTROLLER_TIME_KEY: elapsed_ns * 1e-3}
         return obs, total, terminated, truncated, info

@@ -99,3 +99,23 @@ def test_a_held_command_keeps_the_ten_second_episode() -> None:
         if terminated or truncated:
             break
     assert truncated and not terminated and steps == 625 and info["time"] == pytest.approx(10.0)
+
+
+def test_a_held_command_reports_its_periods_together() -> None:
+    """With command_period 4, info sums the per-period pseudoenergy and reward terms and keeps the worst peak speed
+    and clearance of the four periods: the same numbers as four single-period steps of the same command."""
+    action = np.array([0.3, 0.2, -0.1], dtype=np.float32)
+    single, held = gym.make(ID), gym.make(ID, command_period=4)
+    single.reset(seed=3)
+    held.reset(seed=3)
+    periods = [single.step(action)[4] for _ in range(8)]
+    for k in range(2):
+        info = held.step(action)[4]
+        part = periods[4 * k:4 * k + 4]
+        assert info["pseudoenergy"] == pytest.approx(sum(p["pseudoenergy"] for p in part), rel=1e-12)
+        assert info["reward_speed"] == pytest.approx(sum(p["reward_speed"] for p in part), rel=1e-12)
+        assert info["peak_joint_speed"] == max(p["peak_joint_speed"] for p in part)
+        assert info["min_self_clearance"] == min(p["min_self_clearance"] for p in part)
+        assert info["fell"] is False and info["time"] == part[-1]["time"]
+    single.close()
+    held.close()
