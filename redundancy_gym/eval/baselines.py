@@ -60,6 +60,14 @@ class Baseline:
         """The shipped model (``baselines/models/<name>.zip``)."""
         return SHIPPED_MODELS_DIR / f"{self.name}.zip"
 
+    @property
+    def env_kwargs(self) -> dict[str, Any]:
+        """The file's ``env_kwargs``: the env (and wrapper) options the model was trained with, and is evaluated
+        with (e.g. a ``WalkingCommandAction``'s ``command_period``)."""
+        from .training import load_config
+
+        return dict(load_config(self.config, self.env_id).env_kwargs)
+
     def record(self) -> TrainingRecord | None:
         """The training record beside the shipped model, None when there is none."""
         return read_training_record(self.model)

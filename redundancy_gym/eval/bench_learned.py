@@ -125,19 +125,22 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
     for setting in chosen:
         rows: dict[str, Any] = {}
         untrained: list[str] = []
-        runs: list[tuple[str, str, str, dict[str, Any], Baseline | None]] = [
-            (label, setting.env_id, name, kwargs, None) for label, (name, kwargs) in setting.references.items()]
+        runs: list[tuple[str, str, str, dict[str, Any], dict[str, Any], Baseline | None]] = [
+            (label, setting.env_id, name, kwargs, setting.env_kwargs, None)
+            for label, (name, kwargs) in setting.references.items()]
         for b in _models_for(setting, found):
             if not b.model.is_file():
                 untrained.append(b.name)
                 continue
-            runs.append((b.short_name, b.env_id, b.short_name, {}, b))
-        for label, env_id, policy, kwargs, baseline in runs:
+            # the options the model was trained with (a wrapper's command period, say) over the setting's
+            runs.append((b.short_name, b.env_id, b.short_name, {}, {**setting.env_kwargs, **b.env_kwargs}, b))
+        for label, env_id, policy, kwargs, env_kwargs, baseline in runs:
             if log is not None:
                 log(f"{setting.title}: {label} on {env_id}")
-            report = evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=setting.env_kwargs,
+            report = evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs,
                               policy_kwargs=kwargs, progress=progress, warmup=1).to_json()
-            row: dict[str, Any] = {"kind": "analytic" if baseline is None else "learned", "report": report}
+            row: dict[str, Any] = {"kind": "analytic" if baseline is None else "learned", "report": report,
+                                   "periods_per_step": int(env_kwargs.get("command_period", 1))}
             if baseline is not None:
                 record = baseline.record()
                 row["model"] = f"baselines/models/{baseline.name}.zip"
@@ -169,12 +172,26 @@ def _fmt(value: float | None, digits: int = 3) -> str:
     return f"{value:.{digits}g}"
 
 
+def _per_period(rows: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """Label -> report with its step times per control period: a policy whose action holds k periods
+    (``periods_per_step``, a ``WalkingCommandAction``'s ``command_period``) computes once per k periods, so its
+    times per action are divided by k to compare with the others'."""
+    out = {}
+    for label, row in rows.items():
+        k = int(row.get("periods_per_step", 1))
+        report = dict(row["report"])
+        report["step_time_us"] = {key: (value / k if key != "steps" else value)
+                                  for key, value in report["step_time_us"].items()}
+        out[label] = report
+    return out
+
+
 def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
     """What to pick: among the policies whose success is within :data:`SUCCESS_SLACK` of the best and whose failure
     rate is within :data:`RATE_SLACK` of the lowest, the fastest (median step time) and the most accurate (the
     setting's first error; of those within :data:`ERROR_TIE` of the lowest, the fastest); then how the learned
     policies did."""
-    reports = {label: row["report"] for label, row in rows.items()}
+    reports = _per_period(rows)
     best_success = max(r["success_rate"] for r in reports.values())
     lowest_rate = min(float(r.get(setting.rate) or 0.0) for r in reports.values())
     good = {label: r for label, r in reports.items()
@@ -219,8 +236,9 @@ def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
 def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym bench learned") -> str:
     """The table as markdown: one section per env with a row per policy and the paragraph of what to pick."""
     out = [f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
-           f"per policy; `{command}`). Step time: the policy's compute per step (an action wrapper's controller "
-           "included, the simulation excluded) after one warm-up episode. Training: environment steps and CPU time "
+           f"per policy; `{command}`). Step time: the policy's compute per control period (an action wrapper's "
+           "controller included, the simulation excluded; an action held for k periods counts 1/k of its time) after "
+           "one warm-up episode. Training: environment steps and CPU time "
            "of the run that produced the shipped model (`baselines/models/<name>.json`).", ""]
     for key, env in table["envs"].items():
         setting = _setting(key)
@@ -231,8 +249,9 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
                 + ["pseudoenergy [rad^2/s]", "step time median / p99 [us]", "training steps", "training CPU [min]"])
         out += [f"### {env['title']}", "", f"`{env['env_id']}`, env kwargs `{json.dumps(env['env_kwargs'])}`.", "",
                 "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+        display = _per_period(env["rows"])
         for label, row in env["rows"].items():
-            r = row["report"]
+            r = display[label]
             training = row.get("training")
             cells = ([label, row["kind"], f"{r['success_rate']:.2f}", f"{float(r.get(setting.rate) or 0.0):.2f}"]
                      + [_fmt(m.value(r)) for m in metrics]
@@ -242,6 +261,10 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
                         "-" if training is None else f"{training['env_steps']:,}",
                         "-" if training is None else f"{training['cpu_s'] / 60.0:.1f}"])
             out.append("| " + " | ".join(cells) + " |")
+        own = [f"{label} `{json.dumps(row['report']['env_kwargs'])}`" for label, row in env["rows"].items()
+               if row["report"]["env_kwargs"] != env["env_kwargs"]]
+        if own:
+            out += ["", f"Run with the env kwargs they were trained with: {', '.join(own)}."]
         if env.get("untrained"):
             out.append("")
             out.append(f"Not trained yet (no model in baselines/models): {', '.join(env['untrained'])}.")
@@ -260,7 +283,7 @@ def plot_learned_bench(table: Mapping[str, Any], directory: str | Path, prefix: 
     written = []
     for key, env in table["envs"].items():
         setting = _setting(key)
-        reports = {label: row["report"] for label, row in env["rows"].items()}
+        reports = _per_period(env["rows"])
         learned = {label for label, row in env["rows"].items() if row["kind"] == "learned"}
         written.append(plot_speed_error(reports, Path(directory) / f"{prefix}{key}.png",
                                         f"{env['title']}: time per step vs {METRICS[setting.errors[0]].label}",

@@ -40,14 +40,35 @@ def shipped_models() -> tuple[str, ...]:
     return tuple(sorted(p.stem for p in SHIPPED_MODELS_DIR.glob("*.zip")))
 
 
+def _check_action_space(name: str, env: Any) -> None:
+    """A model acts in its action space: a wrapper's model runs on that wrapper's env id, a joint model on the raw
+    env (the network's output means something else elsewhere, even where the shapes agree)."""
+    from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS, wrapped_env_id
+
+    spec = getattr(env, "spec", None)
+    env_id = getattr(spec, "id", None)
+    if env_id not in BASE_ENV_IDS and env_id not in WRAPPED_ENV_IDS:
+        return  # an env built outside the registry: nothing to compare against
+    action = name.split("-", 1)[1]
+    base = next((b for b in BASE_ENV_IDS if b == env_id or env_id in (wrapped_env_id(b, a) for a in ACTIONS)),
+                env_id)
+    expected = base if action == "joint" else wrapped_env_id(base, action)
+    if expected is not None and env_id != expected:
+        where = "the raw env" if action == "joint" else f"--wrapper {action}"
+        raise PolicyError(f"{name} acts in the {action} action space: evaluate it on {expected} ({where}), "
+                          f"not on {env_id}")
+
+
 def shipped_model_path(name: str, env: Any) -> Path:
     """The ``.zip`` of the shipped model ``name`` (``<learner>-<action>``) for ``env``.
 
     Raises:
-        PolicyError: no such model for this env (the message lists the shipped ones).
+        PolicyError: no such model for this env (the message lists the shipped ones), or an env in another action
+            space than the model's (a wrapper's model on the raw env, a joint model in a wrapper).
     """
     path = SHIPPED_MODELS_DIR / f"{name}-{env_slug(env)}.zip"
     if path.is_file():
+        _check_action_space(name, env)
         return path
     available = ", ".join(shipped_models()) or f"none ({SHIPPED_MODELS_DIR} is empty or absent: the models ship " \
                                                 "with the source checkout; `make baselines` trains them)"

@@ -1,5 +1,6 @@
 """The learned baselines shipped in baselines/models/: each loads by its short name on its env and reproduces the
-first episodes of its recorded evaluation (baselines/results/, held-out seeds 20000-20019) exactly."""
+first episodes of its row in the learned-baselines table (baselines/results/learned.json, held-out seeds
+20000-20019)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import gymnasium as gym
 import pytest
 
 import redundancy_gym
+from redundancy_gym.eval.baselines import baselines
 from redundancy_gym.eval.evaluate import evaluate
 from redundancy_gym.policies import PolicyError
 from redundancy_gym.policies.shipped_models import (
@@ -18,38 +20,37 @@ from redundancy_gym.policies.shipped_models import (
     shipped_models,
 )
 
-RESULTS = SHIPPED_MODELS_DIR.parent / "results"
-_WRAPPERS = {"nullspace": "Nullspace", "task_space": "TaskSpace", "residual": "Residual",
-             "walking_command": "WalkingCommand"}
+TABLE = SHIPPED_MODELS_DIR.parent / "results" / "learned.json"
 
 
-def _env_id(stem: str) -> tuple[str, str]:
-    """``(env id, short name)`` of a model file stem ``<learner>-<action>-<env>``."""
-    learner, action, slug = stem.split("-", 2)
-    for env_id in redundancy_gym.ENV_IDS:
-        env = gym.make(env_id)
-        matches = env_slug(env) == slug
-        env.close()
-        if matches:
-            base = env_id.removesuffix("-v0")
-            return (env_id if action == "joint" else f"{base}-{_WRAPPERS[action]}-v0"), f"{learner}-{action}"
-    raise AssertionError(f"no env for {stem}")
+def test_every_baseline_has_its_model_and_training_record():
+    for b in baselines():
+        assert b.model.is_file(), f"{b.name}: run `redundancy-gym baselines {b.name}`"
+        record = b.record()
+        assert record is not None and record.env_id == b.env_id and record.learner == b.learner
+        assert record.env_steps > 0 and record.cpu_s > 0
+    assert set(shipped_models()) == {b.name for b in baselines()}
 
 
-def test_every_env_the_baselines_cover_has_its_shipped_models():
-    # the issue's rows so far: PlanarReach (with the obstacle) by PPO on the nullspace and the raw action, and
-    # behaviour cloning from the clik reference
-    assert {"ppo-nullspace-planar_reach", "ppo-joint-planar_reach", "bc-joint-planar_reach"} <= set(shipped_models())
+def _rows() -> list[tuple[str, str, dict]]:
+    table = json.loads(TABLE.read_text())
+    return [(key, label, row) for key, env in table["envs"].items() for label, row in env["rows"].items()
+            if row["kind"] == "learned"]
 
 
-@pytest.mark.parametrize("stem", shipped_models())
-def test_a_shipped_model_reproduces_its_recorded_evaluation(stem):
-    env_id, short = _env_id(stem)
-    recorded = json.loads((RESULTS / f"{stem}.json").read_text())
-    assert recorded["env"] == env_id and recorded["seed"] == 20000
-    report = evaluate(env_id, short, episodes=3, seed=20000, progress=False).to_json()
+def test_the_table_has_a_row_for_every_shipped_model():
+    assert sorted(row["model"] for _, _, row in _rows()) == sorted(f"baselines/models/{stem}.zip"
+                                                                   for stem in shipped_models())
+
+
+@pytest.mark.parametrize("key, label, row", _rows(), ids=lambda v: v if isinstance(v, str) else "")
+def test_a_shipped_model_reproduces_its_table_row(key, label, row):
+    recorded = row["report"]
+    assert recorded["seed"] == 20000 and is_shipped_name(label)
+    report = evaluate(recorded["env"], label, episodes=3, seed=20000, env_kwargs=recorded["env_kwargs"],
+                      progress=False).to_json()
     for got, want in zip(report["per_episode"], recorded["per_episode"][:3], strict=True):
-        assert got["seed"] == want["seed"]
+        assert got["seed"] == want["seed"] and got["length"] == want["length"]
         assert got["success"] == want["success"] and got["collision"] == want["collision"]
         # deterministic on one machine; another CPU may round the network differently in the last digits
         assert got["return"] == pytest.approx(want["return"], rel=1e-3, abs=1e-3)
@@ -62,3 +63,21 @@ def test_short_names_resolve_per_env_and_name_what_is_shipped():
     with pytest.raises(PolicyError, match="shipped: .*bc-joint-planar_reach"):
         redundancy_gym.make_policy("sac-joint", env)
     env.close()
+
+
+def test_a_model_runs_only_in_its_own_action_space():
+    raw = gym.make("redundancy_gym/PlanarReach-v0")
+    wrapped = gym.make("redundancy_gym/PlanarReach-Residual-v0")
+    try:
+        # same shapes (4 joint speeds), other meaning: a residual on the reference is not a joint speed
+        with pytest.raises(PolicyError, match="ppo-residual acts in the residual action space: evaluate it on "
+                                              "redundancy_gym/PlanarReach-Residual-v0"):
+            redundancy_gym.make_policy("ppo-residual", raw)
+        with pytest.raises(PolicyError, match="bc-joint acts in the joint action space: evaluate it on "
+                                              "redundancy_gym/PlanarReach-v0 \\(the raw env\\)"):
+            redundancy_gym.make_policy("bc-joint", wrapped)
+        redundancy_gym.make_policy("ppo-residual", wrapped)
+        redundancy_gym.make_policy("bc-joint", raw)
+    finally:
+        raw.close()
+        wrapped.close()
