@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from .. import ENV_IDS, make_policy
-from ..wrappers.action_check import CONTROLLER_TIME_KEY
+from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
 from .exceptions import EvalError
 
 __all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env", "run_episode"]
@@ -199,14 +199,24 @@ def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **make_kwarg
     return gym.make(env_id, **(env_kwargs or {}), **make_kwargs)
 
 
+def _controller_clock(env: gym.Env) -> Any:
+    """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
+    while env is not None:
+        if CONTROLLER_TIME_ATTRIBUTE in vars(env):
+            return env
+        env = getattr(env, "env", None)
+    return None
+
+
 def run_episode(env: gym.Env, policy: Any, seed: int, *,
                 frames: list[NDArray[np.uint8]] | None = None) -> tuple[EpisodeSummary, EpisodeTrace]:
     """Run one episode from ``env.reset(seed=seed)``, timing only the policy: ``policy.predict`` plus, in an action
-    wrapper, the wrapper's controller (``info["controller_time_us"]``); the simulation is not counted.
+    wrapper, the wrapper's controller (its ``controller_time_us`` attribute); the simulation is not counted.
 
     ``frames``: when given, ``env.render()`` output is appended after the reset and after every step.
     """
     obs, info = env.reset(seed=seed)
+    controller = _controller_clock(env)
     if frames is not None:
         frames.append(env.render())
     rows: list[tuple[float, ...]] = []
@@ -223,8 +233,8 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
         episode_start = np.array([False])
         obs, reward, terminated, truncated, info = env.step(action)
-        # an action wrapper's controller is part of the policy: its time counts with the learner's
-        elapsed_us += float(info.get(CONTROLLER_TIME_KEY, 0.0))
+        if controller is not None:  # an action wrapper's controller is part of the policy: its time counts too
+            elapsed_us += float(getattr(controller, CONTROLLER_TIME_ATTRIBUTE))
         if frames is not None:
             frames.append(env.render())
         ret += float(reward)

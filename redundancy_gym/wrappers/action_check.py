@@ -12,12 +12,13 @@ from numpy.typing import NDArray
 
 from .exceptions import WrapperActionError, WrapperError
 
-__all__ = ["CONTROLLER_TIME_KEY", "check_action", "check_policy_kwargs", "normalized_box"]
+__all__ = ["CONTROLLER_TIME_ATTRIBUTE", "check_action", "check_policy_kwargs", "normalized_box"]
 
-CONTROLLER_TIME_KEY = "controller_time_us"
-"""The ``info`` key of a wrapper's own compute time in the step [us]: its controller turning the learner's action
-into the env's (the env's simulation excluded). ``eval`` adds it to the learner's time, so that a wrapped learner's
-step time is that of the whole policy."""
+CONTROLLER_TIME_ATTRIBUTE = "controller_time_us"
+"""The wrapper attribute holding its own compute time in the last step [us]: its controller turning the learner's
+action into the env's (the env's simulation excluded). ``eval`` adds it to the learner's time, so that a wrapped
+learner's step time is that of the whole policy. An attribute, not an ``info`` key: ``info`` stays a deterministic
+function of the seed and the actions (Gymnasium's ``check_env`` compares it across runs)."""
 
 
 def normalized_box(dim: int) -> spaces.Box:

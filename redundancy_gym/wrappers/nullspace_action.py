@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
 from ..validation import check_bool, check_real
-from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
@@ -84,6 +84,8 @@ class NullspaceAction(gym.Wrapper):
     def __init__(self, env: gym.Env, max_nullspace_speed: float = NullspaceActionConfig.max_nullspace_speed,
                  objectives: bool = False, policy_kwargs: dict[str, Any] | None = None) -> None:
         super().__init__(env)
+        self.controller_time_us = 0.0
+        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = NullspaceActionConfig(
             max_nullspace_speed=check_real("max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0,
                                            low_open=True, error=WrapperError),
@@ -131,10 +133,10 @@ class NullspaceAction(gym.Wrapper):
         a = check_action(action, self.action_space, "NullspaceAction")
         began = time.perf_counter_ns()
         result, fraction = self.command(a * self._scale)
-        elapsed_us = (time.perf_counter_ns() - began) * 1e-3
+        self.controller_time_us = (time.perf_counter_ns() - began) * 1e-3
         joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    nullspace_fraction=fraction, **{CONTROLLER_TIME_KEY: elapsed_us})
+                    nullspace_fraction=fraction)
         return obs, reward, terminated, truncated, info

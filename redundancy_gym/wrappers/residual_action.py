@@ -13,7 +13,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy, supported_policies
 from ..validation import check_bool, check_real
-from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs
+from .action_check import check_action, check_policy_kwargs
 from .exceptions import WrapperError
 
 __all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
@@ -108,6 +108,8 @@ class ResidualAction(gym.Wrapper):
                                                 dtype=obs.dtype)
         self._reference_action: NDArray[Any] | None = None
         self._reference_time_us = 0.0
+        self.controller_time_us = 0.0
+        """Compute time of the reference action applied in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self._starting = True
 
     def _observe(self, obs: NDArray[np.floating], starting: bool) -> NDArray[np.floating]:
@@ -130,11 +132,10 @@ class ResidualAction(gym.Wrapper):
             raise WrapperError("ResidualAction: call reset() before step()")
         a = check_action(action, self.action_space, "ResidualAction")
         reference = self._reference_action
-        reference_time_us = self._reference_time_us  # computed after the previous step, applied in this one
+        self.controller_time_us = self._reference_time_us  # computed after the previous step, applied in this one
         # in the env's dtype, so that a = 0 gives the reference action bit for bit
         residual = (self.config.scale * self._range * a).astype(self._dtype)
         applied = np.clip(reference + residual, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(applied)
-        info = {**info, "reference_action": reference, "residual_action": applied - reference,
-                CONTROLLER_TIME_KEY: reference_time_us}
+        info = {**info, "reference_action": reference, "residual_action": applied - reference}
         return self._observe(obs, False), reward, terminated, truncated, info

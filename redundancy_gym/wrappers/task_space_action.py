@@ -15,7 +15,7 @@ from ..controllers import ClikResult
 from ..geometry import SSV, Segment
 from ..policies import PolicyError, make_policy
 from ..validation import check_real
-from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
@@ -164,6 +164,8 @@ class TaskSpaceAction(gym.Wrapper):
                  stop_distance: float = TaskSpaceActionConfig.stop_distance,
                  policy_kwargs: dict[str, Any] | None = None) -> None:
         super().__init__(env)
+        self.controller_time_us = 0.0
+        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = TaskSpaceActionConfig(
             max_speed=check_real("max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s",
                                  error=WrapperError),
@@ -326,11 +328,11 @@ class TaskSpaceAction(gym.Wrapper):
         a = check_action(action, self.action_space, "TaskSpaceAction")
         began = time.perf_counter_ns()
         result = self.last_result = self.command(a)
-        elapsed_us = (time.perf_counter_ns() - began) * 1e-3
+        self.controller_time_us = (time.perf_counter_ns() - began) * 1e-3
         joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         lag = math.dist(self._position, self._tcp(self._obs))
         info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    target_lag=lag, **{CONTROLLER_TIME_KEY: elapsed_us})
+                    target_lag=lag)
         return obs, reward, terminated, truncated, info

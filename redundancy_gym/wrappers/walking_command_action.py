@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy
 from ..validation import check_int, check_real
-from .action_check import CONTROLLER_TIME_KEY, check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_policy_kwargs, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
@@ -109,6 +109,8 @@ class WalkingCommandAction(gym.Wrapper):
                  command_period: int = WalkingCommandActionConfig.command_period,
                  policy_kwargs: dict[str, Any] | None = None) -> None:
         super().__init__(env)
+        self.controller_time_us = 0.0
+        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = WalkingCommandActionConfig(
             min_forward_speed=check_real("min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s",
                                          error=WrapperError),
@@ -180,5 +182,6 @@ class WalkingCommandAction(gym.Wrapper):
                 break
         info = {**info, **held, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
                 "commanded_yaw_rate": yaw_rate,
-                "step_adjusted": adjusted, CONTROLLER_TIME_KEY: elapsed_ns * 1e-3}
+                "step_adjusted": adjusted}
+        self.controller_time_us = elapsed_ns * 1e-3
         return obs, total, terminated, truncated, info
