@@ -113,7 +113,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     :class:`~redundancy_gym.envs.InvalidActionError`.
 
     ## Observation Space
-    ``Box(-inf, inf, (33 + 15 K,), float64)`` with ``K = observed_obstacles``; slices in
+    ``Box(-inf, inf, (48 + 15 K,), float64)`` with ``K = observed_obstacles``; slices in
     :attr:`observation_layout` (robot base frame = world frame, the trolley stands at the origin):
 
     | name | size | content |
@@ -126,6 +126,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     | ``approach`` | 3 | unit approach direction (the tool axis at the grasp pose) |
     | ``pregrasp_position`` | 3 | ``grasp - pregrasp_distance * approach`` [m] |
     | ``time`` | 1 | time since reset [s] |
+    | ``tcp_reference`` | 6 | the reference path's TCP position [m] and tool axis (unit) now (``info["tcp_ref"]``) |
+    | ``tcp_reference_velocity`` | 6 | the reference's velocity [m/s] and angular velocity [rad/s] now |
+    | ``tcp_error`` | 3 | reference position minus the observed, possibly noisy, TCP position [m] |
     | ``obstacles`` | 15 K | the K plant parts nearest to the approach corridor, each ``[mask, PSS, LSS, TSS, hard, v0, v1, v2, radius]`` (one-hot kind, vertices [m], radius [m]; unused rows repeat the last vertex; zero rows with mask 0 pad) |
 
     ## Rewards
@@ -184,7 +187,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       a float std applies to ``q`` [m, rad], ``qdot`` [m/s, rad/s] and ``tcp`` (``tcp_position``) [m] alike, a
       dict gives one per group (``{"q": 0.001, "qdot": 0.01, "tcp": 0.001, "tcp_quaternion": 0.001}``; groups
       not named get none; the quaternion's entries are not renormalized). The episode constants (grasp,
-      approach, pre-grasp, obstacles) and ``time`` stay exact, and ``info`` and the rewards use the true state.
+      approach, pre-grasp, obstacles), ``time`` and the reference entries stay exact (``tcp_error`` is computed
+      from the noisy TCP), and ``info`` and the rewards use the true state.
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
@@ -194,7 +198,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``tcp_ref`` were added; rewards and dynamics are unchanged. Before release the default ``energy_weight``
       became 10 (was 0.01): random actions (about 15 rad^2/s of pseudoenergy per episode) earned about as much
       as holding still; ``collision_penalty`` became 200 (was 10), more than the reference's costliest
-      episode, so that ending an episode early by a collision never pays.
+      episode, so that ending an episode early by a collision never pays. Before release the observation gained
+      ``tcp_reference``, ``tcp_reference_velocity`` and ``tcp_error`` (515 -> 530 entries with the default 32
+      obstacles): the reference path is planned from the start pose, so a learner could not see what the
+      tracking error measures against, and behaviour cloning of the ``clik`` reference collided in most episodes.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -303,7 +310,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(9,), dtype=np.float32)
         sizes = {"q": 9, "qdot": 9, "tcp_position": 3, "tcp_quaternion": 4, "grasp_position": 3, "approach": 3,
-                 "pregrasp_position": 3, "time": 1, "obstacles": _OBSTACLE_FEATURES * self._k}
+                 "pregrasp_position": 3, "time": 1, "tcp_reference": 6, "tcp_reference_velocity": 6, "tcp_error": 3,
+                 "obstacles": _OBSTACLE_FEATURES * self._k}
         self.observation_layout: dict[str, slice] = {}
         start = 0
         for name, size in sizes.items():
@@ -451,11 +459,18 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         mujoco.mju_mat2Quat(self._quat, self.data.site_xmat[self._tcp_site])
         o[lay["tcp_quaternion"]] = self._quat
         o[lay["time"]] = self._time
+        # the reference path is planned from the start pose, which a policy sees only at the first step: without
+        # these entries the tracking error is measured against something the observation does not hold
+        target, velocity = self._path(self._time)  # type: ignore[misc]  # planned at reset
+        o[lay["tcp_reference"]] = target
+        o[lay["tcp_reference_velocity"]] = velocity
         if self._noise is None:
+            o[lay["tcp_error"]] = target[:3] - o[lay["tcp_position"]]
             return o.copy()
         index, std = self._noise
         obs = o.copy()
         obs[index] += std * self.np_random.standard_normal(index.size)
+        obs[lay["tcp_error"]] = target[:3] - obs[lay["tcp_position"]]  # from the observed, possibly noisy, TCP
         return obs
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:

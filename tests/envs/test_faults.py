@@ -56,7 +56,7 @@ def test_faults_off_are_bitwise_identical_to_the_defaults(env_id: str, off: dict
     (BIPED, "sensor_noise", [LAYOUT[k] for k in ("q", "qdot", "right_force", "right_torque", "left_force",
                                                   "left_torque", "imu_acceleration", "imu_gyro")]),
     (PLANAR, "obs_noise", [slice(0, 4), slice(4, 8), slice(8, 10), slice(18, 20)]),  # tcp_error: from the noisy TCP
-    (AGRI, "obs_noise", [slice(0, 9), slice(9, 18), slice(18, 21)]),
+    (AGRI, "obs_noise", [slice(0, 9), slice(9, 18), slice(18, 21), slice(47, 50)]),  # tcp_error as PlanarReach's
 ])
 def test_observation_noise_is_seeded_and_on_the_measured_channels_only(env_id: str, kwarg: str,
                                                                         channels: list[slice]) -> None:

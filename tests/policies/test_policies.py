@@ -81,7 +81,7 @@ def test_sb3_model_of_another_env_is_refused_at_load(tmp_path) -> None:
     path = tmp_path / "agri.zip"
     PPO("MlpPolicy", agri, n_steps=64, batch_size=64, device="cpu").save(str(path))
     assert redundancy_gym.make_policy(str(path), agri).predict(agri.reset(seed=0)[0])[0].shape == (9,)
-    with pytest.raises(PolicyError, match=r"observation shape \(515,\).*PlanarReach-v0 has \(20,\)"):
+    with pytest.raises(PolicyError, match=r"observation shape \(530,\).*PlanarReach-v0 has \(20,\)"):
         redundancy_gym.make_policy(str(path), gym.make("redundancy_gym/PlanarReach-v0"))
 
 
