@@ -246,7 +246,8 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
         rate = _RATE_NAMES[setting.rate]
         head = (["policy", "kind", "success", rate] + [m.heading for m in metrics]
                 + [label for _, label, _ in setting.extra]
-                + ["pseudoenergy [rad^2/s]", "step time median / p99 [us]", "training steps", "training CPU [min]"])
+                + ["pseudoenergy [rad^2/s]", "return", "step time median / p99 [us]", "training steps",
+                   "training CPU [min]"])
         out += [f"### {env['title']}", "", f"`{env['env_id']}`, env kwargs `{json.dumps(env['env_kwargs'])}`.", "",
                 "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
         display = _per_period(env["rows"])
@@ -256,7 +257,7 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
             cells = ([label, row["kind"], f"{r['success_rate']:.2f}", f"{float(r.get(setting.rate) or 0.0):.2f}"]
                      + [_fmt(m.value(r)) for m in metrics]
                      + [_fmt(None if r.get(k) is None else float(r[k]) * scale) for k, _, scale in setting.extra]
-                     + [_fmt(r["pseudoenergy"]),
+                     + [_fmt(r["pseudoenergy"]), f"{r['episode_return']:.1f}",
                         f"{_fmt(r['step_time_us']['median'])} / {_fmt(r['step_time_us']['p99'])}",
                         "-" if training is None else f"{training['env_steps']:,}",
                         "-" if training is None else f"{training['cpu_s'] / 60.0:.1f}"])
