@@ -84,6 +84,12 @@ def _parser() -> argparse.ArgumentParser:
     ev.add_argument("--warmup", type=int, default=0, metavar="N",
                     help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
                          "counted in the step times")
+    ev.add_argument("--workers", type=int, default=1, metavar="N",
+                    help="split the episodes across N processes; each keeps its seed, so the JSON is the serial "
+                         "run's (timings excepted)")
+    ev.add_argument("--retries", type=int, default=0, metavar="K",
+                    help="with --workers: run episodes whose worker raised or died again, up to K times (a run "
+                         "with failed episodes left names their seeds and exits with status 2)")
     ev.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     tr = _add_parser(sub, "train", "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
@@ -174,6 +180,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="push only: trials per impulse level (default: 20, --quick: 5)")
     be.add_argument("--episodes", type=int, metavar="N",
                     help="learned only: episodes per policy from --seed (default: 20, --quick: 2)")
+    be.add_argument("--workers", type=int, metavar="N",
+                    help="learned only: split each evaluation's episodes across N processes (default: 1)")
     be.add_argument("--envs", nargs="+", metavar="ENV",
                     help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)")
 
@@ -375,8 +383,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--seconds and --steps apply to bench soak only")
     if args.command == "bench" and args.name != "push" and args.trials is not None:
         parser.error("--trials applies to bench push only")
-    if args.command == "bench" and args.name != "learned" and (args.episodes is not None or args.envs is not None):
-        parser.error("--episodes and --envs apply to bench learned only")
+    if args.command == "bench" and args.name != "learned" and (args.episodes is not None or args.envs is not None
+                                                                or args.workers is not None):
+        parser.error("--episodes, --envs and --workers apply to bench learned only")
     if args.command == "bench" and args.seed is None and args.name != "learned":
         args.seed = 0
     from .policies import PolicyError
@@ -394,7 +403,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
             report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
                               env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
-                              progress=not args.no_progress, warmup=args.warmup)
+                              progress=not args.no_progress, warmup=args.warmup, workers=args.workers,
+                              retries=args.retries)
             contract = report.to_json()
             print(format_report(contract))
             if args.json_path:
@@ -478,7 +488,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 episodes = args.episodes if args.episodes is not None else (2 if args.quick else 20)
                 seed = args.seed if args.seed is not None else HELD_OUT_SEED
                 table = run_learned_bench(episodes=episodes, seed=seed, envs=args.envs,
-                                          progress=not args.no_progress)
+                                          progress=not args.no_progress, workers=args.workers or 1)
                 markdown = learned_markdown(table)
                 print(markdown)
                 path = write_learned_bench(table, json_path)

@@ -199,6 +199,14 @@ def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **make_kwarg
     return gym.make(env_id, **(env_kwargs or {}), **make_kwargs)
 
 
+def reseed_policy(policy: Any, seed: int) -> None:
+    """Restart a stochastic policy's generator from the episode's seed (its ``reseed`` method, where it has one), so
+    that the episode depends on its seed only: the same serially and on parallel workers."""
+    reseed = getattr(policy, "reseed", None)
+    if callable(reseed):
+        reseed(seed)
+
+
 def _controller_clock(env: gym.Env) -> Any:
     """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
     while env is not None:
@@ -284,7 +292,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
 
 def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
              policy_kwargs: dict[str, Any] | None = None, keep_traces: bool = False,
-             progress: bool = True, warmup: int = 0) -> EvalReport:
+             progress: bool = True, warmup: int = 0, workers: int = 1, retries: int = 0) -> EvalReport:
     """Evaluate a policy (name or SB3 ``.zip``) on ``episodes`` episodes with seeds ``seed, seed + 1, ...``.
 
     Args:
@@ -298,7 +306,15 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         progress: show a progress bar.
         warmup: untimed episodes (seed ``seed``) run first with the same policy object and env, so that one-time
             costs (JIT compilation, lazily built models) are not counted in the step times or as a plan-once
-            policy's per-episode solve.
+            policy's per-episode solve (with ``workers``, on every worker).
+        workers: processes the episodes are split across (:mod:`redundancy_gym.eval.parallel`); each episode
+            keeps its seed, so the report is the serial one's, timings excepted.
+        retries: with ``workers`` > 1, how many times episodes whose worker failed or died run again.
+
+    A stochastic policy (``random``) is reseeded with each episode's seed before it (:func:`reseed_policy`).
+
+    Raises:
+        ParallelEvalError: with ``workers`` > 1, episodes that failed on every attempt (named by seed).
     """
     if episodes < 1:
         raise EvalError(f"episodes must be >= 1, got {episodes}")
@@ -306,6 +322,9 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         raise EvalError(f"warmup must be an int >= 0, got {warmup!r}")
     env_kwargs = dict(env_kwargs or {})
     policy_kwargs = dict(policy_kwargs or {})
+    if workers != 1 or retries:
+        return _evaluate_parallel(env_id, policy, episodes, seed, env_kwargs, policy_kwargs, keep_traces, progress,
+                                  warmup, workers, retries)
     env = make_env(env_id, env_kwargs)
     try:
         if policy == "random":
@@ -317,6 +336,7 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         traces: list[EpisodeTrace] = []
         step_times: list[NDArray[np.float64]] = []
         for k in tqdm(range(episodes), desc=f"eval {policy} on {env_id}", disable=not progress, leave=False):
+            reseed_policy(agent, seed + k)
             summary, trace = run_episode(env, agent, seed + k)
             summaries.append(summary)
             step_times.append(trace.step_time_us)
@@ -325,6 +345,24 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
     finally:
         env.close()
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries, np.concatenate(step_times), traces)
+
+
+def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_kwargs: dict[str, Any],
+                       policy_kwargs: dict[str, Any], keep_traces: bool, progress: bool, warmup: int, workers: int,
+                       retries: int) -> EvalReport:
+    """:func:`evaluate` on worker processes."""
+    from .parallel import run_parallel
+
+    make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs before any worker starts
+    seeds = [seed + k for k in range(episodes)]
+    with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} workers)", disable=not progress,
+              leave=False) as bar:
+        outcomes = run_parallel(env_id, policy, seeds, env_kwargs=env_kwargs, policy_kwargs=policy_kwargs,
+                                warmup=warmup, workers=workers, retries=retries, progress=bar.update)
+    summaries = [summary for summary, _ in outcomes]
+    traces = [trace for _, trace in outcomes]
+    return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries,
+                      np.concatenate([t.step_time_us for t in traces]), traces if keep_traces else [])
 
 
 def format_report(report: dict[str, Any]) -> str:

@@ -30,7 +30,8 @@ class RandomPolicy(PerEnvPolicy):
     """Uniform random actions in the action box, from the policy's own seeded generator.
 
     In a batch, env index ``i`` draws from its own generator, seeded with ``seed + i`` (as ``make_vec_env``
-    seeds its envs); a generator runs on over episodes (``episode_start`` does not reseed it).
+    seeds its envs); a generator runs on over episodes (``episode_start`` does not reseed it; :meth:`reseed`
+    does, and ``eval`` calls it with each episode's seed).
 
     Args:
         env: the environment (its action space bounds are used).
@@ -50,6 +51,13 @@ class RandomPolicy(PerEnvPolicy):
 
     def _new_core(self, index: int) -> PerEnvPolicy:
         return RandomPolicy(self._env, seed=None if self._seed is None else self._seed + index)
+
+    def reseed(self, seed: int) -> None:
+        """Restart the generator from ``seed``. ``eval`` does so before every episode with the episode's seed, so
+        that an episode's actions depend on its seed only, not on the episodes before it (the same in a serial run
+        and on parallel workers)."""
+        self._seed = check_int("seed", seed, low=0, error=PolicyError)
+        self._rng = np.random.default_rng(self._seed)
 
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
         """A uniform random action."""

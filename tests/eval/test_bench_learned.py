@@ -51,16 +51,16 @@ def test_planar_reach_table_holds_every_reference_and_shipped_model(tmp_path) ->
 
 def test_cli_writes_json_markdown_and_one_plot_per_env(tmp_path, capsys) -> None:
     path = tmp_path / "learned.json"
-    assert main(["bench", "learned", "--envs", "planar_reach", "--episodes", "1", "--seed", "21000",
-                 "--json", str(path), "--no-progress"]) == 0
+    assert main(["bench", "learned", "--envs", "planar_reach", "--episodes", "2", "--seed", "21000",
+                 "--json", str(path), "--no-progress", "--workers", "2"]) == 0
     data = json.loads(path.read_text())
-    assert data["seed"] == 21000 and data["episodes"] == 1 and set(data["envs"]) == {"planar_reach"}
+    assert data["seed"] == 21000 and data["episodes"] == 2 and set(data["envs"]) == {"planar_reach"}
     assert (tmp_path / "learned.md").read_text().startswith("# Learned baselines")
     assert (tmp_path / "learned_planar_reach.png").stat().st_size > 10_000
     capsys.readouterr()
     with pytest.raises(SystemExit):
         main(["bench", "ssv", "--episodes", "3"])
-    assert "--episodes and --envs apply to bench learned only" in capsys.readouterr().err
+    assert "--episodes, --envs and --workers apply to bench learned only" in capsys.readouterr().err
 
 
 def test_unknown_env_is_named() -> None:

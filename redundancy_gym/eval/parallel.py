@@ -1,0 +1,141 @@
+"""The episodes of one evaluation across worker processes: each worker builds the env and the policy once, runs the
+warm-up episodes, then one episode per seed it is given. Every episode keeps its seed, so the evaluation's JSON is
+the serial run's, timings excepted.
+
+A worker that raises inside an episode, or dies (killed, out of memory), fails the episodes it had not finished;
+those seeds run again in a fresh pool ``retries`` times, and a run that still has failed episodes raises
+:class:`ParallelEvalError` naming them, never a partial table.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import traceback
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from typing import Any
+
+from .exceptions import EvalError
+
+__all__ = ["EpisodeFailure", "ParallelEvalError", "run_parallel"]
+
+
+@dataclass(frozen=True)
+class EpisodeFailure:
+    """One episode that did not finish: its seed and why (the exception's traceback, or the worker's death)."""
+
+    seed: int
+    error: str
+
+
+class ParallelEvalError(EvalError):
+    """Episodes of a parallel evaluation failed after every retry; ``failures`` names them by seed."""
+
+    def __init__(self, failures: Sequence[EpisodeFailure], attempts: int) -> None:
+        self.failures = tuple(sorted(failures, key=lambda f: f.seed))
+        seeds = ", ".join(str(f.seed) for f in self.failures)
+        first = self.failures[0].error.strip().splitlines()[-1] if self.failures else ""
+        super().__init__(f"{len(self.failures)} episode(s) failed after {attempts} attempt(s): seeds {seeds} "
+                         f"(first: {first}); --retries K runs failed episodes again")
+
+
+# the worker's env and policy, built once per process by _init_worker
+_WORKER: dict[str, Any] = {}
+
+
+def _init_worker(env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
+                 warmup: int, warmup_seed: int) -> None:
+    from .evaluate import make_env, make_policy, run_episode
+
+    try:
+        import torch
+
+        torch.set_num_threads(1)  # one process per core: torch's own pool would oversubscribe them
+    except ImportError:
+        pass
+    try:
+        env = make_env(env_id, env_kwargs)
+        agent = make_policy(policy, env, **policy_kwargs)
+        for _ in range(warmup):
+            run_episode(env, agent, warmup_seed)
+    except Exception:  # every episode of this worker reports it (an initializer's exception breaks the pool mutely)
+        _WORKER.update(error=traceback.format_exc())
+        return
+    _WORKER.update(env=env, agent=agent)
+
+
+def _run_seed(seed: int) -> Any:
+    """One episode in this worker: ``(summary, trace)``, or the failure's traceback as text."""
+    from .evaluate import reseed_policy, run_episode
+
+    if "error" in _WORKER:
+        return _WORKER["error"]
+    try:
+        reseed_policy(_WORKER["agent"], seed)
+        return run_episode(_WORKER["env"], _WORKER["agent"], seed)
+    except Exception:  # reported by seed in the parent; the worker stays usable
+        return traceback.format_exc()
+
+
+def _task(seed: int) -> Any:
+    # looks _run_seed up when it runs, in the worker (a fault-injecting test replaces it before the fork)
+    return _run_seed(seed)
+
+
+def _start_method() -> str:
+    # fork starts a worker in milliseconds (spawn: seconds of imports); the parent holds no policy or threads yet
+    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+
+
+def run_parallel(env_id: str, policy: str, seeds: Sequence[int], *, env_kwargs: dict[str, Any],
+                 policy_kwargs: dict[str, Any], warmup: int, workers: int, retries: int = 0,
+                 start_method: str | None = None, progress: Callable[[int], None] | None = None) -> list[Any]:
+    """Run one episode per seed on ``workers`` processes; returns ``(summary, trace)`` per seed, in ``seeds``'
+    order.
+
+    Args:
+        warmup: untimed episodes (seed ``seeds[0]``) each worker runs first.
+        retries: how many times failed episodes run again, each time in a fresh pool.
+        start_method: ``fork`` (default where the platform has it) or ``spawn``.
+        progress: called with the number of episodes finished by each result.
+
+    Raises:
+        ParallelEvalError: episodes failed on every attempt (named by seed).
+    """
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise EvalError(f"workers must be an int >= 1, got {workers!r}")
+    if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
+        raise EvalError(f"retries must be an int >= 0, got {retries!r}")
+    context = multiprocessing.get_context(start_method or _start_method())
+    results: dict[int, Any] = {}
+    pending = list(seeds)
+    failures: dict[int, EpisodeFailure] = {}
+    for _ in range(1 + retries):
+        failures = {}
+        with ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context,
+                                 initializer=_init_worker,
+                                 initargs=(env_id, policy, env_kwargs, policy_kwargs, warmup, seeds[0])) as pool:
+            futures = {pool.submit(_task, seed): seed for seed in pending}
+            for future in as_completed(futures):
+                seed = futures[future]
+                try:
+                    outcome = future.result()
+                except BrokenProcessPool as exc:
+                    failures[seed] = EpisodeFailure(seed, f"a worker process died (pid {os.getpid()}'s pool): "
+                                                          f"{exc}")
+                    continue
+                if isinstance(outcome, str):
+                    failures[seed] = EpisodeFailure(seed, outcome)
+                    continue
+                results[seed] = outcome
+                if progress is not None:
+                    progress(1)
+        pending = sorted(failures)
+        if not pending:
+            break
+    if failures:
+        raise ParallelEvalError(list(failures.values()), 1 + retries)
+    return [results[seed] for seed in seeds]
