@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -17,6 +19,7 @@ from tqdm.auto import tqdm
 from .. import ENV_IDS, make_policy
 from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
 from .exceptions import EvalError
+from .parallel import run_parallel
 
 __all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env", "run_episode"]
 
@@ -347,18 +350,31 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries, np.concatenate(step_times), traces)
 
 
+def _episode_runner(env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
+                    warmup: int, warmup_seed: int) -> Callable[[int], tuple[EpisodeSummary, EpisodeTrace]]:
+    """A worker's setup: the env and the policy, the warm-up episodes, and the function running a seed's episode."""
+    env = make_env(env_id, env_kwargs)
+    agent = make_policy(policy, env, **policy_kwargs)
+    for _ in range(warmup):
+        run_episode(env, agent, warmup_seed)
+
+    def run(seed: int) -> tuple[EpisodeSummary, EpisodeTrace]:
+        reseed_policy(agent, seed)
+        return run_episode(env, agent, seed)
+
+    return run
+
+
 def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_kwargs: dict[str, Any],
                        policy_kwargs: dict[str, Any], keep_traces: bool, progress: bool, warmup: int, workers: int,
                        retries: int) -> EvalReport:
     """:func:`evaluate` on worker processes."""
-    from .parallel import run_parallel
-
     make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs before any worker starts
     seeds = [seed + k for k in range(episodes)]
     with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} workers)", disable=not progress,
               leave=False) as bar:
-        outcomes = run_parallel(env_id, policy, seeds, env_kwargs=env_kwargs, policy_kwargs=policy_kwargs,
-                                warmup=warmup, workers=workers, retries=retries, progress=bar.update)
+        setup = functools.partial(_episode_runner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
+        outcomes = run_parallel(setup, seeds, workers=workers, retries=retries, progress=bar.update)
     summaries = [summary for summary, _ in outcomes]
     traces = [trace for _, trace in outcomes]
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries,

@@ -1,5 +1,5 @@
-"""The episodes of one evaluation across worker processes: each worker builds the env and the policy once, runs the
-warm-up episodes, then one episode per seed it is given. Every episode keeps its seed, so the evaluation's JSON is
+"""The episodes of one evaluation across worker processes: each worker runs a setup once (``eval`` builds the env and
+the policy and runs the warm-up episodes there), then one episode per seed it is given. Every episode keeps its seed, so the evaluation's JSON is
 the serial run's, timings excepted.
 
 A worker that raises inside an episode, or dies (killed, out of memory), fails the episodes it had not finished;
@@ -42,14 +42,11 @@ class ParallelEvalError(EvalError):
                          f"(first: {first}); --retries K runs failed episodes again")
 
 
-# the worker's env and policy, built once per process by _init_worker
+# the worker's episode runner, built once per process by _init_worker
 _WORKER: dict[str, Any] = {}
 
 
-def _init_worker(env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
-                 warmup: int, warmup_seed: int) -> None:
-    from .evaluate import make_env, make_policy, run_episode
-
+def _init_worker(setup: Callable[[], Callable[[int], Any]]) -> None:
     try:
         import torch
 
@@ -57,25 +54,17 @@ def _init_worker(env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kw
     except ImportError:
         pass
     try:
-        env = make_env(env_id, env_kwargs)
-        agent = make_policy(policy, env, **policy_kwargs)
-        for _ in range(warmup):
-            run_episode(env, agent, warmup_seed)
+        _WORKER.update(run=setup())
     except Exception:  # every episode of this worker reports it (an initializer's exception breaks the pool mutely)
         _WORKER.update(error=traceback.format_exc())
-        return
-    _WORKER.update(env=env, agent=agent)
 
 
 def _run_seed(seed: int) -> Any:
-    """One episode in this worker: ``(summary, trace)``, or the failure's traceback as text."""
-    from .evaluate import reseed_policy, run_episode
-
+    """One episode in this worker: the runner's result, or the failure's traceback as text."""
     if "error" in _WORKER:
         return _WORKER["error"]
     try:
-        reseed_policy(_WORKER["agent"], seed)
-        return run_episode(_WORKER["env"], _WORKER["agent"], seed)
+        return _WORKER["run"](seed)
     except Exception:  # reported by seed in the parent; the worker stays usable
         return traceback.format_exc()
 
@@ -90,14 +79,15 @@ def _start_method() -> str:
     return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
-def run_parallel(env_id: str, policy: str, seeds: Sequence[int], *, env_kwargs: dict[str, Any],
-                 policy_kwargs: dict[str, Any], warmup: int, workers: int, retries: int = 0,
-                 start_method: str | None = None, progress: Callable[[int], None] | None = None) -> list[Any]:
-    """Run one episode per seed on ``workers`` processes; returns ``(summary, trace)`` per seed, in ``seeds``'
-    order.
+def run_parallel(setup: Callable[[], Callable[[int], Any]], seeds: Sequence[int], *, workers: int,
+                 retries: int = 0, start_method: str | None = None,
+                 progress: Callable[[int], None] | None = None) -> list[Any]:
+    """Run one episode per seed on ``workers`` processes; returns each seed's result, in ``seeds``' order.
 
     Args:
-        warmup: untimed episodes (seed ``seeds[0]``) each worker runs first.
+        setup: called once in each worker (a module-level function or a ``functools.partial`` of one, so that a
+            spawned worker can unpickle it); returns the function that runs the episode of a seed (building the
+            env and the policy and running any warm-up is the setup's work).
         retries: how many times failed episodes run again, each time in a fresh pool.
         start_method: ``fork`` (default where the platform has it) or ``spawn``.
         progress: called with the number of episodes finished by each result.
@@ -116,8 +106,7 @@ def run_parallel(env_id: str, policy: str, seeds: Sequence[int], *, env_kwargs: 
     for _ in range(1 + retries):
         failures = {}
         with ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context,
-                                 initializer=_init_worker,
-                                 initargs=(env_id, policy, env_kwargs, policy_kwargs, warmup, seeds[0])) as pool:
+                                 initializer=_init_worker, initargs=(setup,)) as pool:
             futures = {pool.submit(_task, seed): seed for seed in pending}
             for future in as_completed(futures):
                 seed = futures[future]
