@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..sb3_import import import_stable_baselines3
 from .baselines import Baseline, baselines
 from .evaluate import evaluate
 from .exceptions import EvalError
@@ -125,6 +126,13 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
     chosen = [_setting(k) for k in envs] if envs else list(LEARNED_SETTINGS)
     found = baselines()
     table: dict[str, Any] = {"episodes": episodes, "seed": seed, "machine": machine(), "envs": {}}
+    try:
+        import_stable_baselines3()
+    except ImportError as exc:  # a core install: the analytic rows still run, the table says what is missing
+        table["learned_skipped"] = str(exc)
+        found = []
+        if log is not None:
+            log(f"learned models left out: {exc}")
     for setting in chosen:
         rows: dict[str, Any] = {}
         untrained: list[str] = []
@@ -238,7 +246,9 @@ def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
 
 def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym bench learned") -> str:
     """The table as markdown: one section per env with a row per policy and the paragraph of what to pick."""
-    out = [f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
+    skipped = [f"The learned models are left out: {table['learned_skipped']}.", ""] \
+        if table.get("learned_skipped") else []
+    out = skipped + [f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
            f"per policy; `{command}`). Step time: the policy's compute per control period (an action wrapper's "
            "controller included, the simulation excluded; an action held for k periods counts 1/k of its time) after "
            "one warm-up episode. Training: environment steps and CPU time "
