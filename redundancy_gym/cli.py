@@ -110,8 +110,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="total environment steps (default: n_timesteps of --config)")
     tr.add_argument("--n-envs", type=int, metavar="N",
                     help="envs stepped together (default: n_envs of --config, else 1)")
-    tr.add_argument("--vec-env", choices=("dummy", "subproc"), default="dummy",
-                    help="dummy: all envs in this process; subproc: one process per env")
+    tr.add_argument("--vec-env", "--vec", choices=("dummy", "subproc", "sync", "async"), default="dummy",
+                    help="dummy (= sync): all envs in this process; subproc (= async): one process per env")
     tr.add_argument("--out", metavar="ZIP", help="output .zip path (default: runs/<algo>_<env name>.zip)")
     tr.add_argument("--seed", type=int, default=0, metavar="N",
                     help="seed of the agent; env i is reset with seed + i first")
@@ -150,7 +150,7 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd", "learned"),
+    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd", "learned", "scale"),
                     help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid, and "
                          "every wrapped id against its raw env; "
                          "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
@@ -164,7 +164,10 @@ def _parser() -> argparse.ArgumentParser:
                          "unstabilized drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON); "
                          "learned: every analytic reference and shipped learned baseline per env on held-out seeds "
                          "(success, failures, errors, pseudoenergy, step time, training cost; markdown and one "
-                         "time-vs-error PNG per env beside the JSON)")
+                         "time-vs-error PNG per env beside the JSON); "
+                         "scale: eval's episodes/s with --workers against the serial loop (alternating rounds, "
+                         "Amdahl's serial fraction and its 64-core prediction) and make_vec's steps/s by num_envs, "
+                         "sync and async")
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
     be.add_argument("--seed", type=int, metavar="N",
                     help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)")
@@ -181,7 +184,8 @@ def _parser() -> argparse.ArgumentParser:
     be.add_argument("--episodes", type=int, metavar="N",
                     help="learned only: episodes per policy from --seed (default: 20, --quick: 2)")
     be.add_argument("--workers", type=int, metavar="N",
-                    help="learned only: split each evaluation's episodes across N processes (default: 1)")
+                    help="learned: split each evaluation's episodes across N processes (default: 1); scale: the "
+                         "worker count compared with the serial loop (default: 2)")
     be.add_argument("--envs", nargs="+", metavar="ENV",
                     help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)")
 
@@ -383,9 +387,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--seconds and --steps apply to bench soak only")
     if args.command == "bench" and args.name != "push" and args.trials is not None:
         parser.error("--trials applies to bench push only")
-    if args.command == "bench" and args.name != "learned" and (args.episodes is not None or args.envs is not None
-                                                                or args.workers is not None):
-        parser.error("--episodes, --envs and --workers apply to bench learned only")
+    if args.command == "bench" and args.name not in ("learned", "scale") and (
+            args.episodes is not None or args.envs is not None or args.workers is not None):
+        parser.error("--episodes, --envs and --workers apply to bench learned and scale only")
+    if args.command == "bench" and args.name == "scale" and args.envs is not None:
+        parser.error("--envs applies to bench learned only")
     if args.command == "bench" and args.seed is None and args.name != "learned":
         args.seed = 0
     from .policies import PolicyError
@@ -498,6 +504,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"wrote {md}")
                 for written in plot_learned_bench(table, path.parent, prefix=path.stem + "_"):
                     print(f"wrote {written}")
+            elif args.name == "scale":
+                from .eval.bench_scale import format_scale_bench, run_scale_bench
+                from .eval.bench_ssv import write_ssv_bench as write_scale_bench
+
+                episodes = args.episodes if args.episodes is not None else (4 if args.quick else None)
+                report = run_scale_bench(workers=(args.workers or 2,), episodes=episodes,
+                                         rounds=1 if args.quick else 3, vec_steps=30 if args.quick else 300,
+                                         seed=args.seed, progress=not args.no_progress)
+                print(format_scale_bench(report))
+                print(f"wrote {write_scale_bench(report, json_path)}")
             elif args.name == "walk":
                 from .eval.bench_ssv import write_ssv_bench as write_walk_bench
                 from .eval.bench_walk import format_walk_bench, run_walk_bench

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import sys
 import traceback
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -48,15 +49,12 @@ _WORKER: dict[str, Any] = {}
 
 def _init_worker(setup: Callable[[], Callable[[int], Any]]) -> None:
     try:
-        import torch
-
-        torch.set_num_threads(1)  # one process per core: torch's own pool would oversubscribe them
-    except ImportError:
-        pass
-    try:
         _WORKER.update(run=setup())
     except Exception:  # every episode of this worker reports it (an initializer's exception breaks the pool mutely)
         _WORKER.update(error=traceback.format_exc())
+    torch = sys.modules.get("torch")  # only where the policy brought it: importing torch costs a worker ~1 s
+    if torch is not None:
+        torch.set_num_threads(1)  # one process per core: torch's own pool would oversubscribe them
 
 
 def _run_seed(seed: int) -> Any:

@@ -34,7 +34,9 @@ KEEP: tuple[str, ...] = ("last", "best")
 EVAL_CALLBACK_SEED = 30000
 """First seed of the episodes the training-time evaluation callback runs: apart from the seeds results are reported
 on (the learned-baselines table uses 21000 onwards)."""
-VEC_ENVS: tuple[str, ...] = ("dummy", "subproc")
+VEC_ENVS: tuple[str, ...] = ("dummy", "subproc", "sync", "async")
+"""SB3's vector envs by name: ``dummy`` (= ``sync``, every env in this process) and ``subproc`` (= ``async``, one
+process per env), as Gymnasium's ``make_vec`` names them too."""
 DEFAULT_POLICY = "MlpPolicy"
 RECENT_EPISODES = 20  # episodes averaged in the printed statistics
 
@@ -273,7 +275,7 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
         progress_bar: show SB3's progress bar.
         tensorboard_log: TensorBoard log directory (``tensorboard --logdir`` it).
         n_envs: environments stepped together (a vectorized env).
-        vec_env: ``"dummy"`` (one process) or ``"subproc"`` (one process per env).
+        vec_env: ``"dummy"`` / ``"sync"`` (one process) or ``"subproc"`` / ``"async"`` (one process per env).
         policy: SB3 policy name.
         print_every: steps between printed lines; default: about 20 lines per run, at least 1000 steps apart.
         log: where the lines go (None: nowhere).
@@ -334,7 +336,8 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
     eval_env = None
     with CpuClock() as clock:
         env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=n_envs, seed=seed,
-                           vec_env_cls=SubprocVecEnv if vec_env == "subproc" else DummyVecEnv, monitor_kwargs=monitor)
+                           vec_env_cls=SubprocVecEnv if vec_env in ("subproc", "async") else DummyVecEnv,
+                           monitor_kwargs=monitor)
         try:
             cls = {"ppo": sb3.PPO, "sac": sb3.SAC}[algo]
             try:

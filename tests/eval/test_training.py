@@ -149,3 +149,19 @@ def test_keep_best_needs_the_eval_callback(tmp_path, capsys) -> None:
     assert "eval_freq" in capsys.readouterr().err
     with pytest.raises(EvalError, match="eval_freq must be an int >= 1"):
         train(ENV_ID, "ppo", 128, tmp_path / "y.zip", eval_freq=0)
+
+
+def test_train_on_async_envs_gives_the_sync_agent(tmp_path) -> None:
+    """--vec async (SB3's SubprocVecEnv, one process per env) trains the agent --vec sync does: same seeds, same
+    rollouts, same network."""
+    import numpy as np
+    from stable_baselines3 import PPO
+
+    hyper = {"n_steps": 64, "batch_size": 64, "n_epochs": 1}
+    paths = []
+    for vec in ("sync", "async"):
+        paths.append(train(ENV_ID, "ppo", 128, tmp_path / f"{vec}.zip", n_envs=2, vec_env=vec, hyperparameters=hyper,
+                           progress_bar=False, log=None))
+    a, b = (PPO.load(p, device="cpu") for p in paths)
+    for x, y in zip(a.policy.parameters(), b.policy.parameters(), strict=True):
+        np.testing.assert_array_equal(x.detach().numpy(), y.detach().numpy())
