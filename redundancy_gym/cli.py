@@ -84,9 +84,12 @@ def _parser() -> argparse.ArgumentParser:
     ev.add_argument("--warmup", type=int, default=0, metavar="N",
                     help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
                          "counted in the step times")
-    ev.add_argument("--workers", type=int, default=1, metavar="N",
+    ev.add_argument("--workers", type=int, default=None, metavar="N",
                     help="split the episodes across N processes; each keeps its seed, so the JSON is the serial "
-                         "run's (timings excepted)")
+                         "run's (timings excepted) (default: 1; with --ray the Ray cluster's CPUs)")
+    ev.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                    help="run the episodes on Ray actors: on the cluster at ADDRESS, or without one on a local Ray "
+                         "instance (the ray extra); --workers defaults to the cluster's CPUs")
     ev.add_argument("--retries", type=int, default=0, metavar="K",
                     help="with --workers: run episodes whose worker raised or died again, up to K times (a run "
                          "with failed episodes left names their seeds and exits with status 2)")
@@ -407,10 +410,15 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "eval":
             from .eval.evaluate import evaluate, format_report
 
+            workers = args.workers
+            if workers is None:
+                from .eval.parallel import ray_cpus
+
+                workers = ray_cpus(args.ray) if args.ray is not None else 1
             report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
                               env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
-                              progress=not args.no_progress, warmup=args.warmup, workers=args.workers,
-                              retries=args.retries)
+                              progress=not args.no_progress, warmup=args.warmup, workers=workers,
+                              retries=args.retries, ray_address=args.ray)
             contract = report.to_json()
             print(format_report(contract))
             if args.json_path:

@@ -295,7 +295,8 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
 
 def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
              policy_kwargs: dict[str, Any] | None = None, keep_traces: bool = False,
-             progress: bool = True, warmup: int = 0, workers: int = 1, retries: int = 0) -> EvalReport:
+             progress: bool = True, warmup: int = 0, workers: int = 1, retries: int = 0,
+             ray_address: str | None = None) -> EvalReport:
     """Evaluate a policy (name or SB3 ``.zip``) on ``episodes`` episodes with seeds ``seed, seed + 1, ...``.
 
     Args:
@@ -312,7 +313,9 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
             policy's per-episode solve (with ``workers``, on every worker).
         workers: processes the episodes are split across (:mod:`redundancy_gym.eval.parallel`); each episode
             keeps its seed, so the report is the serial one's, timings excepted.
-        retries: with ``workers`` > 1, how many times episodes whose worker failed or died run again.
+        retries: with ``workers`` > 1 or Ray, how many times episodes whose worker failed or died run again.
+        ray_address: run the episodes on ``workers`` Ray actors: a cluster's address or ``"local"`` (a local
+            instance); the ``ray`` extra.
 
     A stochastic policy (``random``) is reseeded with each episode's seed before it (:func:`reseed_policy`).
 
@@ -325,9 +328,9 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         raise EvalError(f"warmup must be an int >= 0, got {warmup!r}")
     env_kwargs = dict(env_kwargs or {})
     policy_kwargs = dict(policy_kwargs or {})
-    if workers != 1 or retries:
+    if workers != 1 or retries or ray_address is not None:
         return _evaluate_parallel(env_id, policy, episodes, seed, env_kwargs, policy_kwargs, keep_traces, progress,
-                                  warmup, workers, retries)
+                                  warmup, workers, retries, ray_address)
     env = make_env(env_id, env_kwargs)
     try:
         if policy == "random":
@@ -367,14 +370,16 @@ def _episode_runner(env_id: str, policy: str, env_kwargs: dict[str, Any], policy
 
 def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_kwargs: dict[str, Any],
                        policy_kwargs: dict[str, Any], keep_traces: bool, progress: bool, warmup: int, workers: int,
-                       retries: int) -> EvalReport:
+                       retries: int, ray_address: str | None) -> EvalReport:
     """:func:`evaluate` on worker processes."""
     make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs before any worker starts
     seeds = [seed + k for k in range(episodes)]
-    with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} workers)", disable=not progress,
+    where = "Ray actors" if ray_address is not None else "workers"
+    with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} {where})", disable=not progress,
               leave=False) as bar:
         setup = functools.partial(_episode_runner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
-        outcomes = run_parallel(setup, seeds, workers=workers, retries=retries, progress=bar.update)
+        outcomes = run_parallel(setup, seeds, workers=workers, retries=retries, progress=bar.update,
+                                ray_address=ray_address)
     summaries = [summary for summary, _ in outcomes]
     traces = [trace for _, trace in outcomes]
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries,

@@ -9,6 +9,7 @@ those seeds run again in a fresh pool ``retries`` times, and a run that still ha
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import os
 import sys
@@ -21,7 +22,7 @@ from typing import Any
 
 from .exceptions import EvalError
 
-__all__ = ["EpisodeFailure", "ParallelEvalError", "run_parallel"]
+__all__ = ["LOCAL_RAY", "RAY_EXTRA_HINT", "EpisodeFailure", "ParallelEvalError", "import_ray", "ray_cpus", "run_parallel"]
 
 
 @dataclass(frozen=True)
@@ -77,49 +78,135 @@ def _start_method() -> str:
     return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
 
 
+LOCAL_RAY = "local"
+"""``ray_address`` of a Ray instance started on this machine (``ray.init()`` without an address)."""
+RAY_EXTRA_HINT = ("Ray is not installed; pip install -e '.[ray]' (in a clone) or pip install 'redundancy-gym[ray]'")
+
+
+def import_ray() -> Any:
+    """The ``ray`` module; an EvalError saying how to install it when it is missing."""
+    try:
+        import ray
+    except ImportError:
+        raise EvalError(RAY_EXTRA_HINT) from None
+    return ray
+
+
+def ray_cpus(address: str) -> int:
+    """The CPUs of the Ray cluster at ``address`` (:data:`LOCAL_RAY`: a local instance), starting Ray if needed."""
+    ray = _init_ray(address)
+    return max(1, int(ray.cluster_resources().get("CPU", 1)))
+
+
+def _init_ray(address: str) -> Any:
+    ray = import_ray()
+    if not ray.is_initialized():
+        ray.init(address=None if address == LOCAL_RAY else address, include_dashboard=False, log_to_driver=False,
+                 ignore_reinit_error=True)
+    return ray
+
+
+class _RayWorker:
+    """A Ray actor holding one worker's env and policy (its own process, so the module's _WORKER is its own)."""
+
+    def __init__(self, setup: Callable[[], Callable[[int], Any]]) -> None:
+        _init_worker(setup)
+
+    def run(self, seed: int) -> Any:
+        return _task(seed)
+
+
+def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, address: str,
+                 progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
+                                                                                           dict[int, EpisodeFailure]]:
+    ray = _init_ray(address)
+    actor = ray.remote(num_cpus=1)(_RayWorker)
+    actors = [actor.remote(setup) for _ in range(min(workers, len(pending)))]
+    refs = {actors[k % len(actors)].run.remote(seed): seed for k, seed in enumerate(pending)}
+    results: dict[int, Any] = {}
+    failures: dict[int, EpisodeFailure] = {}
+    remaining = list(refs)
+    try:
+        while remaining:
+            done, remaining = ray.wait(remaining, num_returns=1)
+            seed = refs[done[0]]
+            try:
+                outcome = ray.get(done[0])
+            except ray.exceptions.RayError as exc:  # the actor died (killed, out of memory) or its task broke
+                failures[seed] = EpisodeFailure(seed, f"a Ray worker died: {type(exc).__name__}: "
+                                                      f"{str(exc).strip().splitlines()[0]}")
+                continue
+            if isinstance(outcome, str):
+                failures[seed] = EpisodeFailure(seed, outcome)
+                continue
+            results[seed] = outcome
+            if progress is not None:
+                progress(1)
+    finally:
+        for a in actors:
+            ray.kill(a)
+    return results, failures
+
+
+def _pool_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, context: Any,
+                  progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
+                                                                                           dict[int, EpisodeFailure]]:
+    results: dict[int, Any] = {}
+    failures: dict[int, EpisodeFailure] = {}
+    with ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context,
+                             initializer=_init_worker, initargs=(setup,)) as pool:
+        futures = {pool.submit(_task, seed): seed for seed in pending}
+        for future in as_completed(futures):
+            seed = futures[future]
+            try:
+                outcome = future.result()
+            except BrokenProcessPool as exc:
+                failures[seed] = EpisodeFailure(seed, f"a worker process died (pid {os.getpid()}'s pool): {exc}")
+                continue
+            if isinstance(outcome, str):
+                failures[seed] = EpisodeFailure(seed, outcome)
+                continue
+            results[seed] = outcome
+            if progress is not None:
+                progress(1)
+    return results, failures
+
+
 def run_parallel(setup: Callable[[], Callable[[int], Any]], seeds: Sequence[int], *, workers: int,
                  retries: int = 0, start_method: str | None = None,
-                 progress: Callable[[int], None] | None = None) -> list[Any]:
-    """Run one episode per seed on ``workers`` processes; returns each seed's result, in ``seeds``' order.
+                 progress: Callable[[int], None] | None = None, ray_address: str | None = None) -> list[Any]:
+    """Run one episode per seed on ``workers`` processes (or Ray actors); returns each seed's result, in ``seeds``'
+    order.
 
     Args:
         setup: called once in each worker (a module-level function or a ``functools.partial`` of one, so that a
             spawned worker can unpickle it); returns the function that runs the episode of a seed (building the
             env and the policy and running any warm-up is the setup's work).
-        retries: how many times failed episodes run again, each time in a fresh pool.
-        start_method: ``fork`` (default where the platform has it) or ``spawn``.
+        retries: how many times failed episodes run again, each time in a fresh pool (fresh actors).
+        start_method: ``fork`` (default where the platform has it) or ``spawn``; not for Ray.
         progress: called with the number of episodes finished by each result.
+        ray_address: run on Ray actors instead of local processes: a cluster's address, or :data:`LOCAL_RAY` for
+            a local instance (started once, with one CPU per core, unless the process started Ray itself).
 
     Raises:
         ParallelEvalError: episodes failed on every attempt (named by seed).
+        EvalError: ``ray_address`` without Ray installed (naming the extra).
     """
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise EvalError(f"workers must be an int >= 1, got {workers!r}")
     if isinstance(retries, bool) or not isinstance(retries, int) or retries < 0:
         raise EvalError(f"retries must be an int >= 0, got {retries!r}")
-    context = multiprocessing.get_context(start_method or _start_method())
+    if ray_address is not None:
+        attempt = functools.partial(_ray_attempt, setup, workers, ray_address, progress)
+    else:
+        attempt = functools.partial(_pool_attempt, setup, workers,
+                                    multiprocessing.get_context(start_method or _start_method()), progress)
     results: dict[int, Any] = {}
     pending = list(seeds)
     failures: dict[int, EpisodeFailure] = {}
     for _ in range(1 + retries):
-        failures = {}
-        with ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context,
-                                 initializer=_init_worker, initargs=(setup,)) as pool:
-            futures = {pool.submit(_task, seed): seed for seed in pending}
-            for future in as_completed(futures):
-                seed = futures[future]
-                try:
-                    outcome = future.result()
-                except BrokenProcessPool as exc:
-                    failures[seed] = EpisodeFailure(seed, f"a worker process died (pid {os.getpid()}'s pool): "
-                                                          f"{exc}")
-                    continue
-                if isinstance(outcome, str):
-                    failures[seed] = EpisodeFailure(seed, outcome)
-                    continue
-                results[seed] = outcome
-                if progress is not None:
-                    progress(1)
+        done, failures = attempt(pending)
+        results.update(done)
         pending = sorted(failures)
         if not pending:
             break
