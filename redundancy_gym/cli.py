@@ -133,6 +133,11 @@ def _parser() -> argparse.ArgumentParser:
                     help="first seed of the evaluation episodes (keep it apart from the seeds you report on)")
     tr.add_argument("--checkpoint-freq", type=int, metavar="STEPS",
                     help="save the agent every STEPS steps into <out>_checkpoints/ (default: never)")
+    tr.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                    help="a seed sweep on Ray (the cluster at ADDRESS, or a local instance): one task per --seeds "
+                         "entry, each trained and evaluated on held-out seeds 20000+; writes <out>_seed<S>.zip and "
+                         "<out>_sweep.json")
+    tr.add_argument("--seeds", type=int, nargs="+", metavar="S", help="with --ray: the seeds of the sweep")
     tr.add_argument("--keep", choices=("last", "best"), default="last",
                     help="save the last agent to --out, or the evaluation's best (needs --eval-freq; the last then "
                          "goes to <out>_last.zip)")
@@ -201,6 +206,9 @@ def _parser() -> argparse.ArgumentParser:
     ba.add_argument("--steps", type=int, metavar="N", help="PPO/SAC budget instead of each file's n_timesteps "
                     "(a smoke run; the shipped models use the files')")
     ba.add_argument("--models", default=None, metavar="DIR", help="where the models go (default: baselines/models)")
+    ba.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                    help="train the baselines as Ray tasks, one CPU each (the cluster at ADDRESS, or a local "
+                         "instance); the models come back to this machine")
 
     de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
@@ -318,6 +326,19 @@ def _train(args: argparse.Namespace) -> None:
     if steps is None:
         raise EvalError("give --steps, or a --config whose section has n_timesteps")
     n_envs = args.n_envs if args.n_envs is not None else (config.n_envs or 1)
+    if (args.ray is None) != (args.seeds is None):
+        raise EvalError("--ray and --seeds go together: a seed sweep on Ray")
+    if args.ray is not None:
+        from .eval.sweep import train_seed_sweep
+
+        out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
+        sweep = train_seed_sweep(args.env_id, args.algo, steps, out, args.seeds, ray_address=args.ray,
+                                 train_kwargs={"env_kwargs": {**config.env_kwargs, **args.env_kwargs},
+                                               "hyperparameters": config.hyperparameters, "n_envs": n_envs,
+                                               "vec_env": args.vec_env, "policy": config.policy})
+        print(f"success over seeds {sweep['success_mean']:.2f} +- {sweep['success_std']:.2f}, return "
+              f"{sweep['return_mean']:.1f} +- {sweep['return_std']:.1f}")
+        return
     out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
     source = f" from {args.config}" if args.config else ""
     print(f"training {args.algo.upper()} ({config.policy}{source}) on {args.env_id}: {steps} steps, {n_envs} "
@@ -341,6 +362,14 @@ def _baselines(args: argparse.Namespace) -> None:
             trained = "not trained" if record is None else \
                 f"{record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min"
             print(f"{b.name:32s} {b.learner:4s} {b.env_id:45s} {trained}")
+        return
+    if args.ray is not None:
+        from .eval.sweep import train_baselines_on_ray
+        from .policies.shipped_models import SHIPPED_MODELS_DIR
+
+        for path in train_baselines_on_ray([b.name for b in chosen], args.models or SHIPPED_MODELS_DIR,
+                                           ray_address=args.ray, steps=args.steps):
+            print(f"wrote {path}")
         return
     for k, b in enumerate(chosen, 1):
         print(f"[{k}/{len(chosen)}] {b.name}: {b.learner} on {b.env_id} ({b.config})", flush=True)

@@ -22,7 +22,8 @@ from typing import Any
 
 from .exceptions import EvalError
 
-__all__ = ["LOCAL_RAY", "RAY_EXTRA_HINT", "EpisodeFailure", "ParallelEvalError", "import_ray", "ray_cpus", "run_parallel"]
+__all__ = ["LOCAL_RAY", "RAY_EXTRA_HINT", "EpisodeFailure", "ParallelEvalError", "import_ray", "init_ray", "ray_cpus",
+           "run_parallel"]
 
 
 @dataclass(frozen=True)
@@ -94,11 +95,13 @@ def import_ray() -> Any:
 
 def ray_cpus(address: str) -> int:
     """The CPUs of the Ray cluster at ``address`` (:data:`LOCAL_RAY`: a local instance), starting Ray if needed."""
-    ray = _init_ray(address)
+    ray = init_ray(address)
     return max(1, int(ray.cluster_resources().get("CPU", 1)))
 
 
-def _init_ray(address: str) -> Any:
+def init_ray(address: str) -> Any:
+    """Connect to the Ray cluster at ``address`` (:data:`LOCAL_RAY`: start a local instance) unless this process
+    already did; returns the ``ray`` module."""
     ray = import_ray()
     if not ray.is_initialized():
         ray.init(address=None if address == LOCAL_RAY else address, include_dashboard=False, log_to_driver=False,
@@ -119,7 +122,7 @@ class _RayWorker:
 def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, address: str,
                  progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
                                                                                            dict[int, EpisodeFailure]]:
-    ray = _init_ray(address)
+    ray = init_ray(address)
     actor = ray.remote(num_cpus=1)(_RayWorker)
     actors = [actor.remote(setup) for _ in range(min(workers, len(pending)))]
     refs = {actors[k % len(actors)].run.remote(seed): seed for k, seed in enumerate(pending)}

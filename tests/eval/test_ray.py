@@ -88,3 +88,41 @@ def test_without_ray_the_option_says_how_to_install_it(monkeypatch, capsys) -> N
     assert main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "zero", "--episodes", "1", "--ray", "1.2.3.4:6379",
                  "--no-progress"]) == 2
     assert "pip install -e '.[ray]'" in capsys.readouterr().err
+
+
+def test_seed_sweep_on_ray_trains_each_seed_as_a_serial_run_would(tmp_path: Path, capsys) -> None:
+    """train --ray --seeds: each seed's model is the one a serial train with that seed makes, and the sweep JSON
+    holds each seed's held-out evaluation and the spread over seeds."""
+    import json
+
+    import numpy as np
+    from stable_baselines3 import PPO
+
+    from redundancy_gym.eval.training import train
+
+    config = tmp_path / "ppo.yaml"
+    config.write_text("redundancy_gym/PlanarReach-v0:\n  n_timesteps: 128\n  n_envs: 1\n  n_steps: 128\n"
+                      "  batch_size: 64\n  n_epochs: 1\n")
+    out = tmp_path / "sweep.zip"
+    assert main(["train", "redundancy_gym/PlanarReach-v0", "--config", str(config), "--ray", "--seeds", "0", "3",
+                 "--out", str(out), "--no-progress"]) == 0
+    sweep = json.loads((tmp_path / "sweep_sweep.json").read_text())
+    assert set(sweep["rows"]) == {"0", "3"} and sweep["failed"] == {}
+    assert sweep["rows"]["3"]["report"]["seed"] == 20000 and sweep["rows"]["3"]["training"]["env_steps"] == 128
+    serial = train("redundancy_gym/PlanarReach-v0", "ppo", 128, tmp_path / "serial3.zip", seed=3,
+                   hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1}, progress_bar=False, log=None)
+    a, b = PPO.load(serial, device="cpu"), PPO.load(tmp_path / "sweep_seed3.zip", device="cpu")
+    for x, y in zip(a.policy.parameters(), b.policy.parameters(), strict=True):
+        np.testing.assert_array_equal(x.detach().numpy(), y.detach().numpy())
+    assert "success over seeds" in capsys.readouterr().out
+
+
+def test_baselines_on_ray_write_models_and_records(tmp_path: Path, capsys) -> None:
+    from redundancy_gym.eval.training_record import read_training_record
+
+    # one rollout instead of the file's budget (a smoke run)
+    assert main(["baselines", "ppo-residual-planar_reach", "--ray", "--steps", "1", "--models", str(tmp_path)]) == 0
+    path = tmp_path / "ppo-residual-planar_reach.zip"
+    record = read_training_record(path)
+    assert path.is_file() and record is not None and record.env_steps == 8192
+    assert f"wrote {path}" in capsys.readouterr().out
