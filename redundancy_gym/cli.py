@@ -546,7 +546,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.bench_ssv import write_ssv_bench as write_scale_bench
 
                 episodes = args.episodes if args.episodes is not None else (4 if args.quick else None)
-                report = run_scale_bench(workers=(args.workers or 2,), episodes=episodes,
+                try:
+                    import ray  # noqa: F401  (the Ray rows need the ray extra)
+
+                    ray_workers: tuple[int, ...] = () if args.quick else (4, 8)
+                except ImportError:
+                    ray_workers = ()
+                    print("Ray is not installed: the Ray rows are left out (pip install -e '.[ray]')")
+                report = run_scale_bench(workers=(args.workers or 2,), episodes=episodes, ray_workers=ray_workers,
                                          rounds=1 if args.quick else 3, vec_steps=30 if args.quick else 300,
                                          seed=args.seed, progress=not args.no_progress)
                 print(format_scale_bench(report))

@@ -6,6 +6,8 @@
   as a user's run does. The speedup's median over rounds gives the serial fraction ``f`` of Amdahl's law,
   ``S(n) = 1 / (f + (1 - f) / n)``, solved for the largest measured ``n``, and what that ``f`` predicts for
   64 cores.
+- **Ray**: the same against Ray actors on a local instance started with ``num_cpus`` 4 and 8 (``--ray-workers``);
+  on a 2-core machine the actors share the cores, so this shows Ray's overhead, not a larger machine's speedup.
 - **make_vec**: env steps per second of ``gym.make_vec(id, num_envs=n, vectorization_mode="sync" | "async")``
   with random actions, per env step summed over the ``n`` envs.
 """
@@ -23,6 +25,7 @@ from tqdm.auto import tqdm
 
 from .evaluate import evaluate
 from .exceptions import EvalError
+from .parallel import LOCAL_RAY, import_ray
 from .training_record import machine
 
 __all__ = ["SCALE_CASES", "amdahl_serial_fraction", "amdahl_speedup", "format_scale_bench", "run_scale_bench"]
@@ -48,10 +51,11 @@ def amdahl_speedup(f: float, n: int) -> float:
     return 1.0 / (f + (1.0 - f) / n)
 
 
-def _eval_rate(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: int, seed: int, workers: int) -> float:
+def _eval_rate(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: int, seed: int, workers: int,
+               ray_address: str | None = None) -> float:
     start = time.perf_counter()
     evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs, progress=False, warmup=1,
-             workers=workers)
+             workers=workers, ray_address=ray_address)
     return episodes / (time.perf_counter() - start)
 
 
@@ -73,7 +77,7 @@ def _vec_rate(env_id: str, num_envs: int, mode: str, steps: int, seed: int) -> f
 def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = None, rounds: int = 3, seed: int = 0,
                     vec_env: str = "redundancy_gym/AgriReach-v0", num_envs: Sequence[int] = (1, 2, 4),
                     vec_steps: int = 300, cases: Sequence[str] = tuple(SCALE_CASES),
-                    progress: bool = True) -> dict[str, Any]:
+                    ray_workers: Sequence[int] = (), progress: bool = True) -> dict[str, Any]:
     """Measure eval's episodes/s against workers and make_vec's steps/s against ``num_envs``; returns the report.
 
     Args:
@@ -82,6 +86,9 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
         rounds: alternating serial / parallel rounds per worker count.
         vec_env, num_envs, vec_steps: the make_vec measurement: env, env counts, vector steps per measurement.
         cases: keys of :data:`SCALE_CASES`.
+        ray_workers: Ray actor counts measured as well, each on a local Ray instance started with that many
+            ``num_cpus`` (more than the machine's cores simulates a larger node: the actors then share the cores, so
+            the speedup is bounded by the core count); the Ray start is not timed.
     """
     if any(n < 2 for n in workers):
         raise EvalError(f"workers must each be >= 2 (1 is the serial loop measured beside them), got {list(workers)}")
@@ -90,7 +97,7 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
             raise EvalError(f"unknown case {case!r}; valid: {', '.join(SCALE_CASES)}")
     report: dict[str, Any] = {"machine": {**machine(), "load_average": list(os.getloadavg())},
                               "rounds": rounds, "eval": {}, "make_vec": {}}
-    total = len(cases) * len(workers) * rounds + len(num_envs) * 2
+    total = len(cases) * (len(workers) + len(ray_workers)) * rounds + len(num_envs) * 2
     with tqdm(total=total, desc="bench scale", disable=not progress) as bar:
         for case in cases:
             env_id, policy, kwargs, own_episodes = SCALE_CASES[case]
@@ -109,7 +116,25 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
                                 "speedup_max": float(max(speedups))}
             largest = max(workers)
             f = amdahl_serial_fraction(rows[str(largest)]["speedup"], largest)
-            report["eval"][case] = {"env": env_id, "policy": policy, "episodes": n_episodes, "workers": rows,
+            on_ray = {}
+            for n in ray_workers:
+                ray = import_ray()
+                ray.shutdown()
+                ray.init(num_cpus=n, include_dashboard=False, log_to_driver=False)
+                try:
+                    serial, parallel = [], []
+                    for _ in range(rounds):
+                        serial.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, 1))
+                        parallel.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, n, LOCAL_RAY))
+                        bar.update(1)
+                finally:
+                    ray.shutdown()
+                speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
+                on_ray[str(n)] = {"num_cpus": n, "serial_episodes_per_second": float(np.median(serial)),
+                                  "episodes_per_second": float(np.median(parallel)),
+                                  "speedup": float(np.median(speedups)), "speedup_min": float(min(speedups)),
+                                  "speedup_max": float(max(speedups))}
+            report["eval"][case] = {"ray": on_ray,"env": env_id, "policy": policy, "episodes": n_episodes, "workers": rows,
                                     "serial_fraction": f,
                                     "predicted_speedup_64": amdahl_speedup(f, 64)}
         for mode in ("sync", "async"):
@@ -131,10 +156,11 @@ def format_scale_bench(report: dict[str, Any]) -> str:
     for case, row in report["eval"].items():
         lines.append(f"{case} ({row['policy']}, {row['episodes']} episodes per run): serial fraction {row['serial_fraction']:.3f}, predicted speedup "
                      f"on 64 cores {row['predicted_speedup_64']:.1f}x")
-        for n, r in row["workers"].items():
-            lines.append(f"  {n} workers: {r['episodes_per_second']:.2f} episodes/s against "
-                         f"{r['serial_episodes_per_second']:.2f} serial, speedup {r['speedup']:.2f}x "
-                         f"(rounds {r['speedup_min']:.2f}-{r['speedup_max']:.2f})")
+        for kind, rows in (("workers", row["workers"]), ("Ray actors (num_cpus as many)", row.get("ray", {}))):
+            for n, r in rows.items():
+                lines.append(f"  {n} {kind}: {r['episodes_per_second']:.2f} episodes/s against "
+                             f"{r['serial_episodes_per_second']:.2f} serial, speedup {r['speedup']:.2f}x "
+                             f"(rounds {r['speedup_min']:.2f}-{r['speedup_max']:.2f})")
     vec = report["make_vec"]
     lines += ["", f"make_vec {vec['env']}: env steps/s (random actions) by num_envs"]
     for mode in ("sync", "async"):
