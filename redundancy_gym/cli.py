@@ -214,6 +214,9 @@ def _parser() -> argparse.ArgumentParser:
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
     de.add_argument("--episodes", type=int, default=20, metavar="N", help="episodes per evaluation")
     de.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the first episode")
+    de.add_argument("--workers", type=int, default=1, metavar="N",
+                    help="split each evaluation's episodes across N processes (the same results, timings excepted; "
+                         "the step times are then those of a machine with every core busy)")
     return parser
 
 
@@ -459,7 +462,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "demo":
             from .eval.demo import run_demo
 
-            run_demo(args.out, episodes=args.episodes, seed=args.seed)
+            run_demo(args.out, episodes=args.episodes, seed=args.seed, workers=args.workers)
         elif args.command == "render":
             from .eval.video import record_episode
 

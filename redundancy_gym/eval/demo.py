@@ -30,11 +30,15 @@ _OBSTACLE_DEMO_STEPS = 2500
 _OBSTACLE_VIDEO_FPS = 25.0
 
 
-def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True) -> list[Path]:
+def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True,
+             workers: int = 1) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
     crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), the shipped learned
     baselines against every analytic reference (appended to the speed-vs-error report) and the kinematic IKD study;
     write JSON, PNG and MP4.
+
+    ``workers``: processes each evaluation's episodes are split across (the same numbers, timings excepted; with
+    both cores busy the step times are those of a loaded machine).
 
     Returns the paths written.
     """
@@ -45,24 +49,24 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
         report = evaluate(_PLANAR, "clik", episodes=episodes, seed=seed, env_kwargs={"obstacle": obstacle},
-                          keep_traces=True, progress=progress)
+                          keep_traces=True, progress=progress, workers=workers)
         contract = report.to_json()
         written.append(report.write_json(out / f"planar_reach_clik_{tag}.json"))
         print(f"\n== PlanarReach-v0, clik, obstacle={obstacle}\n{format_report(contract)}")
         traces[f"clik, obstacle={obstacle} (seed {seed})"] = report.traces[0]
     written.append(plot_traces(traces, out / "planar_reach_clik.png",
                                title="PlanarReach-v0: velocity-level CLIK (DLS) with joint-limit objective"))
-    written.append(_clearance(out, episodes=min(episodes, 5), seed=seed, progress=progress))
+    written.append(_clearance(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
         path, _ = record_episode(_PLANAR, "clik", out / f"planar_reach_clik_{tag}.mp4", seed=seed,
                                  env_kwargs={"obstacle": obstacle}, progress=progress)
         written.append(path)
-    written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress))
-    written.extend(_learned(out, episodes=min(episodes, 5), progress=progress))
-    written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress))
-    written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress))
-    written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress))
+    written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
+    written.extend(_learned(out, episodes=min(episodes, 5), progress=progress, workers=workers))
+    written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress, workers=workers))
+    written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress, workers=workers))
+    written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
     written.extend(_predictive(out, seed=seed))
     written.extend(_ikd_study(out, progress=progress))
     for path in written:
@@ -70,13 +74,13 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     return written
 
 
-def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+def _agri(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> list[Path]:
     """The grasp-approach CLIK reference on AgriReach, medium and hard crops: JSON and one video; the fig. 5.10
     self-collision plot."""
     written = []
     for difficulty in ("medium", "hard"):
         report = evaluate(_AGRI, "clik", episodes=episodes, seed=seed, env_kwargs={"difficulty": difficulty},
-                          progress=progress)
+                          progress=progress, workers=workers)
         written.append(report.write_json(out / f"agri_reach_clik_{difficulty}.json"))
         print(f"\n== AgriReach-v0, clik, difficulty={difficulty}\n{format_report(report.to_json())}")
     path, _ = record_episode(_AGRI, "clik", out / "agri_reach_clik_medium.mp4", seed=seed,
@@ -89,13 +93,13 @@ def _agri(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
     return written
 
 
-def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+def _biped(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> list[Path]:
     """The walking reference on BipedWalk at 0.5 and 0.7 m/s: JSON, CoM/ZMP plot, L_z with and without (5.62),
     one video."""
     written = []
     for speed in (0.5, 0.7):
         report = evaluate(_BIPED, "walking", episodes=episodes, seed=seed, env_kwargs={"target_speed": speed},
-                          progress=progress)
+                          progress=progress, workers=workers)
         written.append(report.write_json(out / f"biped_walk_walking_{speed:.1f}.json"))
         print(f"\n== BipedWalk-v0, walking, target_speed={speed}\n{format_report(report.to_json())}")
     trace = record_walk(0.7, 6.0, seed)
@@ -115,7 +119,7 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]
     return written
 
 
-def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> list[Path]:
     """The walking reference (SSTA and RCA) on BipedObstacles, the monograph's beam and triangle courses: per course
     an eval JSON, the swing-foot figure (figs. 5.16 / 5.19 analogue), the footholds' top view (fig. 5.17 analogue)
     and one video at 25 fps; every episode is limited to 10 s (:data:`_OBSTACLE_DEMO_STEPS`). About 36 s on 2
@@ -124,7 +128,7 @@ def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool) -> 
     for course in ("beam", "triangle"):
         env_kwargs = {"course": course, "max_episode_steps": _OBSTACLE_DEMO_STEPS}
         report = evaluate(_OBSTACLES, "walking", episodes=episodes, seed=seed, env_kwargs=env_kwargs,
-                          progress=progress)
+                          progress=progress, workers=workers)
         written.append(report.write_json(out / f"biped_obstacles_walking_{course}.json"))
         print(f"\n== BipedObstacles-v0, walking, course={course}\n{format_report(report.to_json())}")
         trace = record_obstacle_walk(course, seed)
@@ -190,12 +194,12 @@ def _ikd_study(out: Path, *, progress: bool) -> list[Path]:
     return written
 
 
-def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
+def _clearance(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> Path:
     """Clearance to the obstacle over time, CLIK with and without the nullspace collision objective."""
     traces = {}
     for mode, label in (("off", "clik without collision objective"), ("auto", "clik with collision objective")):
         report = evaluate(_PLANAR, "clik", episodes=episodes, seed=seed, policy_kwargs={"collision_avoidance": mode},
-                          keep_traces=True, progress=progress)
+                          keep_traces=True, progress=progress, workers=workers)
         c = report.to_json()
         traces[f"{label}: collisions {c['collision_rate']:.0%}, min {1e3 * c['min_clearance']:.1f} mm"] = \
             report.traces[0]
@@ -203,13 +207,13 @@ def _clearance(out: Path, *, episodes: int, seed: int, progress: bool) -> Path:
                           f"PlanarReach-v0 with obstacle (seed {seed}; an episode ends at contact)")
 
 
-def _learned(out: Path, *, episodes: int, progress: bool) -> list[Path]:
+def _learned(out: Path, *, episodes: int, progress: bool, workers: int = 1) -> list[Path]:
     """The learned baselines against the analytic references, per env, on the first ``episodes`` held-out seeds of
     ``bench learned`` (seeds 20000 onwards, never trained on): a section appended to ``speed_vs_error.md`` and a
     time-vs-error plot per env (``speed_vs_error_learned_<env>.png``, learned policies with their own markers)."""
     from .bench_learned import HELD_OUT_SEED, learned_markdown, plot_learned_bench, run_learned_bench  # noqa: PLC0415
 
-    table = run_learned_bench(episodes=episodes, seed=HELD_OUT_SEED, progress=progress)
+    table = run_learned_bench(episodes=episodes, seed=HELD_OUT_SEED, progress=progress, workers=workers)
     command = f"redundancy-gym bench learned --episodes {episodes}"
     text = "\n## Learned baselines against the analytic references\n\n" + learned_markdown(table, command=command)
     markdown = out / "speed_vs_error.md"
@@ -221,7 +225,7 @@ def _learned(out: Path, *, episodes: int, progress: bool) -> list[Path]:
     return [path, *plot_learned_bench(table, out, prefix="speed_vs_error_learned_")]
 
 
-def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list[Path]:
+def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> list[Path]:
     """Time against error, one markdown section and plot per setting: every PlanarReach reference variant and the
     trivial policies (obstacle off; tracking error max), local against predictive and global IK on PlanarReach
     with its obstacle and on AgriReach (pseudoenergy; tracking and goal error in the tables), and the walking
@@ -230,7 +234,7 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool) -> list
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:
         return {label: evaluate(env_id, policy, episodes=n, seed=seed, env_kwargs=env_kwargs, policy_kwargs=kwargs,
-                                progress=progress, warmup=1).to_json()
+                                progress=progress, warmup=1, workers=workers).to_json()
                 for label, (policy, kwargs) in variants.items()}
 
     free = run(_PLANAR, {
