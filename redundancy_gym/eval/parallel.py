@@ -119,6 +119,17 @@ class _RayWorker:
         return _task(seed)
 
 
+def _keep(seed: int, outcome: Any, results: dict[int, Any], failures: dict[int, EpisodeFailure],
+          progress: Callable[[int], None] | None) -> None:
+    """File a worker's outcome for ``seed``: a traceback (text) is a failure, anything else the episode's result."""
+    if isinstance(outcome, str):
+        failures[seed] = EpisodeFailure(seed, outcome)
+        return
+    results[seed] = outcome
+    if progress is not None:
+        progress(1)
+
+
 def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, address: str,
                  progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
                                                                                            dict[int, EpisodeFailure]]:
@@ -139,12 +150,7 @@ def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, addres
                 failures[seed] = EpisodeFailure(seed, f"a Ray worker died: {type(exc).__name__}: "
                                                       f"{str(exc).strip().splitlines()[0]}")
                 continue
-            if isinstance(outcome, str):
-                failures[seed] = EpisodeFailure(seed, outcome)
-                continue
-            results[seed] = outcome
-            if progress is not None:
-                progress(1)
+            _keep(seed, outcome, results, failures, progress)
     finally:
         for a in actors:
             ray.kill(a)
@@ -166,12 +172,7 @@ def _pool_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, conte
             except BrokenProcessPool as exc:
                 failures[seed] = EpisodeFailure(seed, f"a worker process died (pid {os.getpid()}'s pool): {exc}")
                 continue
-            if isinstance(outcome, str):
-                failures[seed] = EpisodeFailure(seed, outcome)
-                continue
-            results[seed] = outcome
-            if progress is not None:
-                progress(1)
+            _keep(seed, outcome, results, failures, progress)
     return results, failures
 
 
