@@ -194,6 +194,9 @@ def _parser() -> argparse.ArgumentParser:
     be.add_argument("--workers", type=int, metavar="N",
                     help="learned: split each evaluation's episodes across N processes (default: 1); scale: the "
                          "worker count compared with the serial loop (default: 2)")
+    be.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
+                    help="learned only: evaluate on Ray actors (the cluster at ADDRESS, or a local instance); "
+                         "--workers defaults to the cluster's CPUs")
     be.add_argument("--envs", nargs="+", metavar="ENV",
                     help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)")
 
@@ -425,8 +428,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command == "bench" and args.name not in ("learned", "scale") and (
             args.episodes is not None or args.envs is not None or args.workers is not None):
         parser.error("--episodes, --envs and --workers apply to bench learned and scale only")
-    if args.command == "bench" and args.name == "scale" and args.envs is not None:
-        parser.error("--envs applies to bench learned only")
+    if args.command == "bench" and args.name != "learned" and (args.envs is not None or args.ray is not None):
+        parser.error("--envs and --ray apply to bench learned only")
     if args.command == "bench" and args.seed is None and args.name != "learned":
         args.seed = 0
     from .policies import PolicyError
@@ -533,8 +536,13 @@ def main(argv: Sequence[str] | None = None) -> int:
 
                 episodes = args.episodes if args.episodes is not None else (2 if args.quick else 20)
                 seed = args.seed if args.seed is not None else HELD_OUT_SEED
+                workers = args.workers
+                if workers is None:
+                    from .eval.parallel import ray_cpus
+
+                    workers = ray_cpus(args.ray) if args.ray is not None else 1
                 table = run_learned_bench(episodes=episodes, seed=seed, envs=args.envs,
-                                          progress=not args.no_progress, workers=args.workers or 1)
+                                          progress=not args.no_progress, workers=workers, ray_address=args.ray)
                 markdown = learned_markdown(table)
                 print(markdown)
                 path = write_learned_bench(table, json_path)

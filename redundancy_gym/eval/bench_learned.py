@@ -106,7 +106,7 @@ def _models_for(setting: LearnedSetting, found: Sequence[Baseline]) -> list[Base
 
 def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Sequence[str] | None = None,
                       progress: bool = True, log: Callable[[str], None] | None = print,
-                      workers: int = 1) -> dict[str, Any]:
+                      workers: int = 1, ray_address: str | None = None) -> dict[str, Any]:
     """Evaluate every reference and every shipped model of each env on ``episodes`` episodes from ``seed``.
 
     Each policy runs one untimed warm-up episode first (JIT compilation and model loading are not counted). A
@@ -116,6 +116,7 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
         envs: keys of :data:`LEARNED_SETTINGS` (default: all).
         workers: processes each evaluation's episodes are split across (the table is the serial one's, step times
             excepted; with one worker per core the times stay comparable, on a busy machine they do not).
+        ray_address: evaluate on ``workers`` Ray actors instead (a cluster's address or ``"local"``).
 
     Returns:
         The table as JSON: per env, per policy label, ``kind`` (analytic / learned), the evaluation-contract
@@ -149,7 +150,8 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
             if log is not None:
                 log(f"{setting.title}: {label} on {env_id}")
             report = evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs,
-                              policy_kwargs=kwargs, progress=progress, warmup=1, workers=workers).to_json()
+                              policy_kwargs=kwargs, progress=progress, warmup=1, workers=workers,
+                              ray_address=ray_address).to_json()
             row: dict[str, Any] = {"kind": "analytic" if baseline is None else "learned", "report": report,
                                    "periods_per_step": int(env_kwargs.get("command_period", 1))}
             if baseline is not None:

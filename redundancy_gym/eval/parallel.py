@@ -75,8 +75,12 @@ def _task(seed: int) -> Any:
 
 
 def _start_method() -> str:
-    # fork starts a worker in milliseconds (spawn: seconds of imports); the parent holds no policy or threads yet
-    return "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+    """``fork`` starts a worker in milliseconds (``spawn``: seconds of imports), but a forked child that runs torch
+    hangs when the parent has run torch before (its OpenMP pool does not survive a fork): spawn once torch is in
+    this process."""
+    if "torch" in sys.modules or "fork" not in multiprocessing.get_all_start_methods():
+        return "spawn"
+    return "fork"
 
 
 LOCAL_RAY = "local"

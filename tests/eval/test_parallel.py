@@ -53,6 +53,7 @@ def test_a_killed_worker_fails_its_seeds_and_a_retry_completes_the_serial_json(t
     env_id, kwargs = "redundancy_gym/PlanarReach-v0", {"obstacle": False}
     serial = evaluate(env_id, "clik", episodes=4, seed=7, env_kwargs=kwargs, progress=False).to_json()
     marker = tmp_path / "kill"
+    monkeypatch.setattr(parallel, "_start_method", lambda: "fork")  # clik only: no torch in the workers
     monkeypatch.setattr(parallel, "_run_seed", _dies_once(marker, 9))  # fork: the workers inherit the patch
     marker.touch()
     with pytest.raises(ParallelEvalError, match=r"failed after 1 attempt\(s\): seeds .*9") as failed:
@@ -79,6 +80,7 @@ def test_an_exception_in_an_episode_is_reported_with_its_seed_and_the_cli_exits_
                 return traceback.format_exc()
         return original(seed)
 
+    monkeypatch.setattr(parallel, "_start_method", lambda: "fork")  # the zero policy: no torch in the workers
     monkeypatch.setattr(parallel, "_run_seed", run)
     path = tmp_path / "eval.json"
     code = main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "zero", "--episodes", "4", "--seed", "0",
@@ -86,6 +88,17 @@ def test_an_exception_in_an_episode_is_reported_with_its_seed_and_the_cli_exits_
     err = capsys.readouterr().err
     assert code == 2 and not path.exists()  # never a partial table
     assert "1 episode(s) failed after 2 attempt(s): seeds 2" in err and "simulated fault in episode 2" in err
+
+
+def test_workers_spawn_once_torch_is_loaded(monkeypatch) -> None:
+    """A forked child that runs torch hangs when the parent ran torch first (it did in the full test suite, on a
+    bench learned run over the shipped models): with torch loaded, workers are spawned."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "torch", object())
+    assert parallel._start_method() == "spawn"
+    monkeypatch.delitem(sys.modules, "torch")
+    assert parallel._start_method() == "fork"
 
 
 def test_bad_arguments_are_named() -> None:

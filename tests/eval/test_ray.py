@@ -126,3 +126,14 @@ def test_baselines_on_ray_write_models_and_records(tmp_path: Path, capsys) -> No
     record = read_training_record(path)
     assert path.is_file() and record is not None and record.env_steps == 8192
     assert f"wrote {path}" in capsys.readouterr().out
+
+
+def test_bench_learned_on_ray_gives_the_local_table(tmp_path: Path) -> None:
+    from redundancy_gym.eval.bench_learned import run_learned_bench
+
+    local = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None)
+    remote = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None, workers=2,
+                               ray_address=LOCAL_RAY)
+    for label, row in local["envs"]["planar_reach"]["rows"].items():
+        other = remote["envs"]["planar_reach"]["rows"][label]
+        assert _without_timings(other["report"]) == _without_timings(row["report"])
