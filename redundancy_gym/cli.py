@@ -358,6 +358,17 @@ def _train(args: argparse.Namespace) -> None:
     print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
 
 
+def _workers(args: argparse.Namespace) -> int:
+    """``--workers``, defaulting to 1, or with ``--ray`` to the Ray cluster's CPUs."""
+    if args.workers is not None:
+        return int(args.workers)
+    if args.ray is None:
+        return 1
+    from .eval.parallel import ray_cpus
+
+    return ray_cpus(args.ray)
+
+
 def _baselines(args: argparse.Namespace) -> None:
     from .eval.baselines import baselines, train_baseline
 
@@ -445,11 +456,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "eval":
             from .eval.evaluate import evaluate, format_report
 
-            workers = args.workers
-            if workers is None:
-                from .eval.parallel import ray_cpus
-
-                workers = ray_cpus(args.ray) if args.ray is not None else 1
+            workers = _workers(args)
             report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
                               env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
                               progress=not args.no_progress, warmup=args.warmup, workers=workers,
@@ -536,11 +543,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
                 episodes = args.episodes if args.episodes is not None else (2 if args.quick else 20)
                 seed = args.seed if args.seed is not None else HELD_OUT_SEED
-                workers = args.workers
-                if workers is None:
-                    from .eval.parallel import ray_cpus
-
-                    workers = ray_cpus(args.ray) if args.ray is not None else 1
+                workers = _workers(args)
                 table = run_learned_bench(episodes=episodes, seed=seed, envs=args.envs,
                                           progress=not args.no_progress, workers=workers, ray_address=args.ray)
                 markdown = learned_markdown(table)

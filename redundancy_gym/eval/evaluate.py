@@ -8,7 +8,6 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Callable
 from typing import Any
 
 import gymnasium as gym
@@ -328,44 +327,45 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
         raise EvalError(f"warmup must be an int >= 0, got {warmup!r}")
     env_kwargs = dict(env_kwargs or {})
     policy_kwargs = dict(policy_kwargs or {})
+    if policy == "random":
+        policy_kwargs.setdefault("seed", seed)
     if workers != 1 or retries or ray_address is not None:
         return _evaluate_parallel(env_id, policy, episodes, seed, env_kwargs, policy_kwargs, keep_traces, progress,
                                   warmup, workers, retries, ray_address)
-    env = make_env(env_id, env_kwargs)
+    runner = _EpisodeRunner(env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
     try:
-        if policy == "random":
-            policy_kwargs.setdefault("seed", seed)
-        agent = make_policy(policy, env, **policy_kwargs)
-        for _ in range(warmup):
-            run_episode(env, agent, seed)
         summaries: list[EpisodeSummary] = []
         traces: list[EpisodeTrace] = []
         step_times: list[NDArray[np.float64]] = []
         for k in tqdm(range(episodes), desc=f"eval {policy} on {env_id}", disable=not progress, leave=False):
-            reseed_policy(agent, seed + k)
-            summary, trace = run_episode(env, agent, seed + k)
+            summary, trace = runner(seed + k)
             summaries.append(summary)
             step_times.append(trace.step_time_us)
             if keep_traces:
                 traces.append(trace)
     finally:
-        env.close()
+        runner.env.close()
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries, np.concatenate(step_times), traces)
 
 
-def _episode_runner(env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
-                    warmup: int, warmup_seed: int) -> Callable[[int], tuple[EpisodeSummary, EpisodeTrace]]:
-    """A worker's setup: the env and the policy, the warm-up episodes, and the function running a seed's episode."""
-    env = make_env(env_id, env_kwargs)
-    agent = make_policy(policy, env, **policy_kwargs)
-    for _ in range(warmup):
-        run_episode(env, agent, warmup_seed)
+class _EpisodeRunner:
+    """The env and the policy of an evaluation, after its warm-up episodes; called with a seed, it runs that seed's
+    episode (the policy reseeded first). The serial loop uses one; each parallel worker builds its own."""
 
-    def run(seed: int) -> tuple[EpisodeSummary, EpisodeTrace]:
-        reseed_policy(agent, seed)
-        return run_episode(env, agent, seed)
+    def __init__(self, env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
+                 warmup: int, warmup_seed: int) -> None:
+        self.env = make_env(env_id, env_kwargs)
+        try:
+            self.agent = make_policy(policy, self.env, **policy_kwargs)
+            for _ in range(warmup):
+                run_episode(self.env, self.agent, warmup_seed)
+        except BaseException:
+            self.env.close()
+            raise
 
-    return run
+    def __call__(self, seed: int) -> tuple[EpisodeSummary, EpisodeTrace]:
+        reseed_policy(self.agent, seed)
+        return run_episode(self.env, self.agent, seed)
 
 
 def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_kwargs: dict[str, Any],
@@ -377,7 +377,7 @@ def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_k
     where = "Ray actors" if ray_address is not None else "workers"
     with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} {where})", disable=not progress,
               leave=False) as bar:
-        setup = functools.partial(_episode_runner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
+        setup = functools.partial(_EpisodeRunner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
         outcomes = run_parallel(setup, seeds, workers=workers, retries=retries, progress=bar.update,
                                 ray_address=ray_address)
     summaries = [summary for summary, _ in outcomes]

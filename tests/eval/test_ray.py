@@ -63,7 +63,7 @@ def _dying_setup(marker: str, kill_seed: int, inner):
 def test_a_killed_ray_actor_fails_its_seeds_and_a_retry_completes(tmp_path: Path) -> None:
     env_id, kwargs = "redundancy_gym/PlanarReach-v0", {"obstacle": False}
     serial = evaluate(env_id, "clik", episodes=4, seed=7, env_kwargs=kwargs, progress=False)
-    inner = functools.partial(evaluate_module._episode_runner, env_id, "clik", kwargs, {}, 0, 7)
+    inner = functools.partial(evaluate_module._EpisodeRunner, env_id, "clik", kwargs, {}, 0, 7)
     marker = tmp_path / "kill"
     setup = functools.partial(_dying_setup, str(marker), 9, inner)
     marker.touch()
