@@ -80,19 +80,14 @@ def read_training_record(model_path: str | Path) -> TrainingRecord | None:
 
 
 def machine() -> dict[str, Any]:
-    """Processor model, logical cores and Python version of this machine."""
-    import platform
+    """Processor model, logical cores and Python version of this machine (from the benches' ``machine_info``)."""
+    from .bench_soak import machine_info
 
-    info: dict[str, Any] = {"processor": platform.processor() or platform.machine(), "cores": os.cpu_count(),
-                            "python": platform.python_version()}
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                info["cpu_model"] = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return info
+    info = machine_info()
+    out = {"processor": info["processor"], "cores": info["cpu_count"], "python": info["python"]}
+    if "cpu_model" in info:
+        out["cpu_model"] = info["cpu_model"]
+    return out
 
 
 class CpuClock:
