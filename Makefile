@@ -31,17 +31,21 @@ system-deps:
 	  fi; \
 	fi
 
+# the learn extra brings torch with its CUDA wheels: about 7 GB installed, and as much again while pip unpacks them;
+# no pip cache (it would keep a third copy), and a clear message when the disk is short instead of pip's OSError
 $(VENV)/bin/python:
+	@free=$$(df -Pk . | awk 'NR==2 {print int($$4 / 1048576)}'); \
+	if [ "$$free" -lt 12 ]; then echo "warning: $$free GiB free here; installing the test and learn extras needs about 12 GiB"; fi
 	$(PYTHON) -m venv $(VENV)
-	$(BIN)/pip install -q --upgrade pip
+	$(BIN)/pip install -q --no-cache-dir --upgrade pip
 
 # the demo evaluates the shipped learned baselines (stable-baselines3 .zip files): core + the learn extra
 $(VENV)/.learn-installed: pyproject.toml | $(VENV)/bin/python system-deps
-	$(BIN)/pip install -q -e ".[learn]"
+	$(BIN)/pip install -q --no-cache-dir -e ".[learn]"
 	touch $@
 
 $(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps
-	$(BIN)/pip install -q -e ".[test]"
+	$(BIN)/pip install -q --no-cache-dir -e ".[test]"
 	touch $@ $(VENV)/.learn-installed
 
 # numba's on-disk cache keys a kernel on its own file only: after editing a kernel that others call, clean
