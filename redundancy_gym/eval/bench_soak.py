@@ -25,8 +25,6 @@ on the arms. The issue's acceptance is ``--steps 1000000`` with no exception and
 from __future__ import annotations
 
 import math
-import os
-import platform
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -37,6 +35,7 @@ from tqdm.auto import tqdm
 
 from .. import ENV_IDS
 from .bench_ssv import write_ssv_bench as write_soak_bench
+from .bench_timing import machine_info  # re-exported: bench push and the IKD study import it from here
 from .exceptions import EvalError
 
 __all__ = ["BANG_BANG_SWITCH", "DEFAULT_SHARES", "SOURCES", "format_soak_bench", "machine_info",
@@ -58,31 +57,6 @@ MAX_MESSAGES = 5
 MAX_CONSECUTIVE_FAILURES = 20
 """A source whose reset fails this many times in a row is stopped (the env cannot be driven any further)."""
 _CHECK_EVERY = 64  # steps between clock reads and progress-bar updates
-
-
-def machine_info() -> dict[str, Any]:
-    """The machine as the other benches record it (processor, Python), plus CPU count and package versions."""
-    info: dict[str, Any] = {"processor": platform.processor() or platform.machine(),
-                            "python": platform.python_version(), "platform": platform.platform(),
-                            "cpu_count": os.cpu_count()}
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    info["cpu_model"] = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    versions = {}
-    for name in ("numpy", "gymnasium", "mujoco", "pinocchio", "numba"):
-        try:
-            from importlib.metadata import version
-
-            versions[name] = version("pin" if name == "pinocchio" else name)
-        except Exception:  # noqa: BLE001 - a missing package is left out
-            continue
-    info["versions"] = versions
-    return info
 
 
 def _reference_name(env: gym.Env) -> str | None:

@@ -81,7 +81,7 @@ def read_training_record(model_path: str | Path) -> TrainingRecord | None:
 
 def machine() -> dict[str, Any]:
     """Processor model, logical cores and Python version of this machine (from the benches' ``machine_info``)."""
-    from .bench_soak import machine_info
+    from .bench_timing import machine_info
 
     info = machine_info()
     out = {"processor": info["processor"], "cores": info["cpu_count"], "python": info["python"]}

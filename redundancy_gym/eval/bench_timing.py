@@ -1,0 +1,303 @@
+"""Alternating-rounds timing and the machine record shared by the benchmarks.
+
+A benchmark compares ours with one or more peers. Timing each candidate once, one after the other, lets a slow
+moment of the machine (another process, a frequency change) fall on one candidate only, and the ratio moves from
+run to run. :func:`alternating_rounds` instead runs a warm-up round (not recorded), then ``rounds`` rounds in
+which every candidate is sampled once, in the candidates' order in even rounds and in the reverse order in odd
+rounds (``AB BA AB ...``), so that neither always goes first. Each ratio ``a / b`` is formed per round, from two
+samples taken moments apart, and reported by its median over the rounds with the smallest and largest round
+(:class:`RatioStats`); ``spread`` is ``(max - min) / median``.
+
+A sample is whatever a candidate's sampler returns, in seconds: :func:`timed_calls` makes a sampler that times
+enough calls of a function to last at least ``min_time`` (above the timer's resolution) and returns the time per
+call; a bench that times its own work (one pass over recorded states, one walk) returns its own figure.
+
+:func:`machine_info` records the machine beside the figures: CPU model, family and model numbers, the vector
+flags that the compiled kernels can use, logical and usable cores, platform, Python, package versions and the load
+average; :func:`finish_machine_info` adds the load average at the end of the bench.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
+
+from .exceptions import EvalError
+
+__all__ = ["RELEVANT_CPU_FLAGS", "RatioStats", "Rounds", "alternating_rounds", "finish_machine_info", "machine_info",
+           "timed_calls"]
+
+Sampler = Callable[[], float]
+"""One sample of a candidate: its time [s] (per call, per state, per step: the same unit for all candidates)."""
+
+RELEVANT_CPU_FLAGS = ("sse4_2", "avx", "avx2", "fma", "bmi2", "avx512f", "avx512dq", "avx512cd", "avx512bw",
+                      "avx512vl", "avx512_vnni", "avx512_bf16", "avx512ifma", "avx_vnni", "neon", "asimd")
+"""CPU flags that numba/LLVM, numpy, MuJoCo and pinocchio may use for vector code; those present are recorded."""
+
+_VERSIONS = {"numpy": "numpy", "numba": "numba", "llvmlite": "llvmlite", "scipy": "scipy", "mujoco": "mujoco",
+             "pinocchio": "pin", "coal": "coal", "gymnasium": "gymnasium", "mink": "mink", "daqp": "daqp"}
+"""Recorded package -> its distribution name (pinocchio's wheel is ``pin``)."""
+
+
+@dataclass(frozen=True)
+class RatioStats:
+    """A ratio over rounds: its median, smallest and largest round value, and the number of rounds.
+
+    Attributes:
+        median: median over the rounds of the per-round ratio [-].
+        min: smallest round ratio [-].
+        max: largest round ratio [-].
+        rounds: number of rounds.
+    """
+
+    median: float
+    min: float
+    max: float
+    rounds: int
+
+    @property
+    def spread(self) -> float:
+        """``(max - min) / median`` [-]: how far apart the rounds were, relative to the reported median."""
+        return (self.max - self.min) / self.median if self.median else float("nan")
+
+    def to_json(self) -> dict[str, float | int]:
+        """``{"median", "min", "max", "spread", "rounds"}``."""
+        return {"median": self.median, "min": self.min, "max": self.max, "spread": self.spread, "rounds": self.rounds}
+
+    @classmethod
+    def of(cls, values: Sequence[float]) -> RatioStats:
+        """The statistics of per-round ratios ``values`` (at least one)."""
+        if not len(values):
+            raise EvalError("a ratio needs at least one round")
+        array = np.asarray(values, dtype=np.float64)
+        return cls(float(np.median(array)), float(array.min()), float(array.max()), int(array.size))
+
+
+@dataclass
+class Rounds:
+    """The samples of :func:`alternating_rounds`.
+
+    Attributes:
+        names: the candidates, in the order of the even rounds.
+        samples: per candidate, its sample of each round [s].
+        orders: the order in which the candidates ran in each round.
+        warmup: untimed warm-up rounds run before.
+    """
+
+    names: tuple[str, ...]
+    samples: dict[str, list[float]] = field(default_factory=dict)
+    orders: list[list[str]] = field(default_factory=list)
+    warmup: int = 1
+
+    def median(self, name: str) -> float:
+        """Median over the rounds of ``name``'s samples [s]."""
+        return float(np.median(self._samples(name)))
+
+    def round_ratios(self, numerator: str, denominator: str | Sequence[str]) -> list[float]:
+        """Per round, ``numerator``'s sample over ``denominator``'s (a sequence of names: the smallest of theirs in
+        that round, i.e. against the fastest peer)."""
+        top = self._samples(numerator)
+        names = [denominator] if isinstance(denominator, str) else list(denominator)
+        if not names:
+            raise EvalError("a ratio needs at least one denominator candidate")
+        bottom = np.min([self._samples(n) for n in names], axis=0)
+        return [float(a / b) for a, b in zip(top, bottom)]
+
+    def ratio(self, numerator: str, denominator: str | Sequence[str]) -> RatioStats:
+        """:meth:`round_ratios` by their median, min and max."""
+        return RatioStats.of(self.round_ratios(numerator, denominator))
+
+    def to_json(self) -> dict[str, Any]:
+        """Rounds, warm-up, order of each round and every sample [s]."""
+        return {"rounds": len(self.orders), "warmup": self.warmup, "orders": self.orders,
+                "samples_s": {n: list(v) for n, v in self.samples.items()}}
+
+    def _samples(self, name: str) -> NDArray[np.float64]:
+        if name not in self.samples:
+            raise EvalError(f"unknown candidate {name!r}; the candidates are {list(self.names)}")
+        return np.asarray(self.samples[name], dtype=np.float64)
+
+
+
+def alternating_rounds(samplers: Mapping[str, Sampler], *, rounds: int, warmup: int = 1, progress: bool = False,
+                       desc: str = "rounds") -> Rounds:
+    """Sample every candidate once per round, alternating the order, after ``warmup`` unrecorded rounds.
+
+    Args:
+        samplers: candidate name -> sampler returning one sample [s] (e.g. :func:`timed_calls`); ours first.
+        rounds: recorded rounds (>= 1). Round ``k`` runs the candidates in the mapping's order for even ``k`` and
+            in the reverse order for odd ``k`` (``AB BA AB ...``).
+        warmup: rounds run first and discarded (compilation, caches, a :func:`timed_calls` calibration).
+        progress: show a progress bar over the rounds.
+        desc: the progress bar's label.
+
+    Returns:
+        The samples, per candidate and round, with each round's order.
+
+    Raises:
+        EvalError: no candidate, ``rounds < 1`` or ``warmup < 0``, or a sampler returned a non-positive or
+            non-finite time.
+    """
+    if not samplers:
+        raise EvalError("alternating_rounds needs at least one candidate")
+    if int(rounds) != rounds or rounds < 1:
+        raise EvalError(f"rounds must be an integer >= 1, got {rounds!r}")
+    if int(warmup) != warmup or warmup < 0:
+        raise EvalError(f"warmup must be an integer >= 0, got {warmup!r}")
+    names = tuple(samplers)
+    result = Rounds(names, {n: [] for n in names}, [], int(warmup))
+    for k in tqdm(range(-int(warmup), int(rounds)), desc=desc, disable=not progress):
+        order = list(names) if k % 2 == 0 else list(reversed(names))
+        values = {}
+        for name in order:
+            value = float(samplers[name]())
+            if not np.isfinite(value) or value <= 0.0:
+                raise EvalError(f"candidate {name!r} returned the time {value!r}; a sample must be finite and > 0 s")
+            values[name] = value
+        if k >= 0:
+            result.orders.append(order)
+            for name in names:
+                result.samples[name].append(values[name])
+    return result
+
+
+def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 << 20) -> Sampler:
+    """A sampler of ``fn``'s time per call [s]: each sample times a fixed number of calls lasting at least
+    ``min_time`` [s]. The number is found on the first sample (which is therefore slower: run it in a warm-up
+    round) by doubling from one call, at most ``max_calls``.
+
+    Raises:
+        EvalError: ``min_time`` not finite and > 0, or ``max_calls < 1``.
+    """
+    if not np.isfinite(min_time) or min_time <= 0.0:
+        raise EvalError(f"min_time must be finite and > 0 s, got {min_time!r}")
+    if max_calls < 1:
+        raise EvalError(f"max_calls must be >= 1, got {max_calls}")
+    number = 0
+
+    def run(count: int) -> float:
+        start = time.perf_counter()
+        for _ in range(count):
+            fn()
+        return time.perf_counter() - start
+
+    def sample() -> float:
+        nonlocal number
+        if number == 0:
+            fn()  # first call: compilation, lazy set-up
+            count = 1
+            while True:
+                elapsed = run(count)
+                if elapsed >= min_time or count >= max_calls:
+                    break
+                grow = 2 if elapsed <= 0.0 else max(2, min(16, int(min_time / elapsed) + 1))
+                count = min(max_calls, count * grow)
+            number = count
+            return elapsed / count
+        return run(number) / number
+
+    return sample
+
+
+def machine_info() -> dict[str, Any]:
+    """This machine, as every bench records it.
+
+    Keys: ``processor``, ``python``, ``platform``, ``cpu_count`` (logical cores), ``affinity_cores`` (the cores
+    this process may run on), ``cpu_model`` (model name), ``cpu_family`` and ``cpu_model_number`` (``/proc/cpuinfo``
+    numbers), ``cpu_mhz``, ``cpu_flags`` (those of :data:`RELEVANT_CPU_FLAGS` present), ``llvm_cpu`` (the target
+    numba compiles for), ``versions`` (numpy, numba, llvmlite, scipy, mujoco, pinocchio, coal, gymnasium, mink,
+    daqp where installed; torch when already imported) and ``load_average`` (1, 5 and 15 min, now). Keys that this
+    machine cannot tell are left out.
+    """
+    info: dict[str, Any] = {"processor": platform.processor() or platform.machine(),
+                            "python": platform.python_version(), "platform": platform.platform(),
+                            "cpu_count": os.cpu_count()}
+    try:
+        info["affinity_cores"] = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        pass
+    info.update(_cpuinfo())
+    try:
+        import llvmlite.binding as llvm  # noqa: PLC0415 - numba's backend, a dependency
+
+        info["llvm_cpu"] = str(llvm.get_host_cpu_name())
+    except Exception:  # noqa: BLE001 - recorded when available
+        pass
+    info["versions"] = _versions()
+    info["load_average"] = _load_average()
+    return info
+
+
+def finish_machine_info(info: Mapping[str, Any]) -> dict[str, Any]:
+    """``info`` (from :func:`machine_info` at the bench's start) with ``load_average_start`` (its load average)
+    and ``load_average_end`` (now): how busy the machine was while the bench ran."""
+    out = dict(info)
+    out["load_average_start"] = out.pop("load_average", None)
+    out["load_average_end"] = _load_average()
+    return out
+
+
+def _load_average() -> list[float] | None:
+    try:
+        return [float(x) for x in os.getloadavg()]
+    except (AttributeError, OSError):
+        return None
+
+
+def _cpuinfo() -> dict[str, Any]:
+    """Model name, family and model numbers, clock and relevant flags of the first CPU in ``/proc/cpuinfo``."""
+    out: dict[str, Any] = {}
+    try:
+        with open("/proc/cpuinfo") as f:
+            text = f.read()
+    except OSError:
+        return out
+    keys = {"model name": "cpu_model", "cpu family": "cpu_family", "model": "cpu_model_number", "cpu MHz": "cpu_mhz",
+            "flags": "cpu_flags", "Features": "cpu_flags"}
+    for line in text.splitlines():
+        if not line.strip():
+            if out:
+                break  # the first processor only
+            continue
+        key, _, value = line.partition(":")
+        name = keys.get(key.strip())
+        if name is None or name in out:
+            continue
+        value = value.strip()
+        if name == "cpu_flags":
+            present = set(value.split())
+            out[name] = [f for f in RELEVANT_CPU_FLAGS if f in present]
+        elif name in ("cpu_family", "cpu_model_number"):
+            out[name] = int(value) if value.isdigit() else value
+        elif name == "cpu_mhz":
+            try:
+                out[name] = float(value)
+            except ValueError:
+                pass
+        else:
+            out[name] = value
+    return out
+
+
+def _versions() -> dict[str, str]:
+    """Installed versions of the packages that the timed code runs on; torch only when already imported."""
+    from importlib.metadata import PackageNotFoundError, version  # noqa: PLC0415
+
+    out = {}
+    for name, dist in _VERSIONS.items():
+        try:
+            out[name] = version(dist)
+        except PackageNotFoundError:
+            continue
+    if "torch" in sys.modules:
+        out["torch"] = str(getattr(sys.modules["torch"], "__version__", "?"))
+    return out

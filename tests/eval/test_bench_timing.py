@@ -1,0 +1,109 @@
+"""The benches' alternating-rounds timer and machine record: ratios of known work, the order of each round, the
+statistics' bounds, bad arguments, and the machine's fields."""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+import pytest
+
+from redundancy_gym.eval.bench_timing import (RatioStats, alternating_rounds, finish_machine_info, machine_info,
+                                              timed_calls)
+from redundancy_gym.eval.exceptions import EvalError
+
+
+def _spin(seconds: float) -> None:
+    end = time.perf_counter() + seconds
+    while time.perf_counter() < end:
+        pass
+
+
+def test_twice_the_work_gives_a_ratio_near_two() -> None:
+    # the spins end by the clock, so a busy machine (preemption) lengthens a call but rarely both alike: the
+    # median over rounds is what stays near 2
+    rounds = alternating_rounds({"ours": timed_calls(lambda: _spin(2e-4), min_time=0.01),
+                                 "peer": timed_calls(lambda: _spin(1e-4), min_time=0.01)}, rounds=7)
+    stats = rounds.ratio("ours", "peer")
+    assert stats.rounds == 7
+    assert stats.min <= stats.median <= stats.max
+    assert 1.5 < stats.median < 2.7
+    assert stats.spread == pytest.approx((stats.max - stats.min) / stats.median)
+    assert rounds.median("ours") >= 2e-4 and rounds.median("peer") >= 1e-4  # a spin never ends early
+    # the inverse ratio is the reciprocal, round by round
+    inverse = rounds.round_ratios("peer", "ours")
+    assert [1.0 / r for r in inverse] == pytest.approx(rounds.round_ratios("ours", "peer"))
+
+
+def test_order_alternates_and_warmup_is_not_recorded() -> None:
+    calls: list[str] = []
+    values = itertools.count(1)
+
+    def sampler(name: str):  # type: ignore[no-untyped-def]
+        def sample() -> float:
+            calls.append(name)
+            return float(next(values))
+        return sample
+
+    rounds = alternating_rounds({"a": sampler("a"), "b": sampler("b"), "c": sampler("c")}, rounds=4, warmup=2)
+    assert rounds.orders == [["a", "b", "c"], ["c", "b", "a"], ["a", "b", "c"], ["c", "b", "a"]]
+    assert len(calls) == 3 * 6 and calls[:6] == ["a", "b", "c", "c", "b", "a"]  # two warm-up rounds first
+    # samples 1..6 were the warm-up; round 0 ran a, b, c -> 7, 8, 9; round 1 ran c, b, a -> 10, 11, 12
+    assert rounds.samples["a"][:2] == [7.0, 12.0] and rounds.samples["c"][:2] == [9.0, 10.0]
+    report = rounds.to_json()
+    assert report["rounds"] == 4 and report["warmup"] == 2 and report["orders"] == rounds.orders
+
+
+def test_ratio_against_the_fastest_peer_takes_each_rounds_smaller_time() -> None:
+    samples = {"ours": iter([2.0, 4.0, 3.0]), "p": iter([4.0, 2.0, 6.0]), "q": iter([8.0, 8.0, 1.0])}
+    rounds = alternating_rounds({k: (lambda it=it: next(it)) for k, it in samples.items()}, rounds=3, warmup=0)
+    assert rounds.round_ratios("ours", ("p", "q")) == [0.5, 2.0, 3.0]
+    assert rounds.ratio("ours", ("p", "q")) == RatioStats(2.0, 0.5, 3.0, 3)
+    assert rounds.median("p") == 4.0
+
+
+def test_bad_arguments_raise_eval_error() -> None:
+    one = {"a": lambda: 1.0}
+    with pytest.raises(EvalError, match="rounds"):
+        alternating_rounds(one, rounds=0)
+    with pytest.raises(EvalError, match="warmup"):
+        alternating_rounds(one, rounds=1, warmup=-1)
+    with pytest.raises(EvalError, match="candidate"):
+        alternating_rounds({}, rounds=1)
+    with pytest.raises(EvalError, match="finite"):
+        alternating_rounds({"a": lambda: 0.0}, rounds=1)
+    with pytest.raises(EvalError, match="min_time"):
+        timed_calls(lambda: None, min_time=0.0)
+    with pytest.raises(EvalError, match="unknown candidate"):
+        alternating_rounds(one, rounds=1).ratio("a", "b")
+    with pytest.raises(EvalError, match="at least one"):
+        RatioStats.of([])
+
+
+def test_timed_calls_sample_lasts_at_least_min_time() -> None:
+    count = 0
+
+    def fn() -> None:
+        nonlocal count
+        count += 1
+
+    sample = timed_calls(fn, min_time=0.002)
+    sample()  # calibration
+    before = count
+    start = time.perf_counter()
+    per_call = sample()
+    assert time.perf_counter() - start >= 0.002 * 0.9 and count - before > 1
+    assert 0.0 < per_call < 1e-3
+
+
+def test_machine_record_fields() -> None:
+    info = machine_info()
+    for key in ("processor", "python", "platform", "cpu_count", "versions", "load_average"):
+        assert key in info
+    assert info["cpu_count"] >= 1 and len(info["load_average"]) == 3
+    assert {"numpy", "numba", "mujoco", "pinocchio", "gymnasium"} <= set(info["versions"])
+    if "cpu_flags" in info:  # Linux: the first CPU's relevant flags, family and model numbers
+        assert isinstance(info["cpu_flags"], list) and isinstance(info["cpu_family"], int)
+    finished = finish_machine_info(info)
+    assert finished["load_average_start"] == info["load_average"] and len(finished["load_average_end"]) == 3
+    assert "load_average" not in finished and finished["versions"] == info["versions"]
