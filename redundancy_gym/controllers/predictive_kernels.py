@@ -155,24 +155,36 @@ def _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, 
 
 
 @njit(**_JIT)
-def _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot, y, a1, mu, a2, out):
-    """``out[i] += y^T (dJ/dq_i) a1 - mu^T (dJ/dq_i) a2 + mu^T d wdot/dq_i`` along the task frame's path."""
+def _vjp_scratch(nj):
+    """The work arrays of :func:`_vjp` for a chain of ``nj`` joints: the path, suffix sums, ``dv``, ``dw``."""
+    return (np.empty(nj, dtype=np.int64), np.empty((nj + 1, 2, 3)), np.empty((nj + 1, 2, 3)), np.empty(3),
+            np.empty(3))
+
+
+@njit(**_JIT)
+def _vjp(chain_i, task_i, position, world_axis, frame, wdot, y, a1, mu, a2, out, scratch):
+    """``out[i] += y^T (dJ/dq_i) a1 - mu^T (dJ/dq_i) a2 + mu^T d wdot/dq_i`` along the task frame's path.
+    ``scratch`` is :func:`_vjp_scratch` (allocated once per kernel call: this runs once per sample)."""
     parent, joint_type, _, v_index = chain_i
     kind, joint, tool_axis = task_i[0], task_i[1], task_i[2]
     rows = task_i[3:]
     px, py, pz = frame[9], frame[10], frame[11]
-    # the path from the root to the task joint
-    path = np.empty(parent.shape[0], dtype=np.int64)
+    path, vs, ws, dv, dw = scratch
+    # the path from the root to the task joint, root first
     length = 0
     k = joint
     while k >= 0:
-        path[length] = k
         length += 1
         k = parent[k]
-    path[:length] = path[:length][::-1].copy()
+    k = joint
+    for idx in range(length - 1, -1, -1):
+        path[idx] = k
+        k = parent[k]
     # suffix sums of each joint's linear velocity contribution and angular velocities, for a1 and a2
-    vs = np.zeros((length + 1, 2, 3))
-    ws = np.zeros((length + 1, 2, 3))
+    for r in range(3):
+        for s in range(2):
+            vs[length, s, r] = 0.0
+            ws[length, s, r] = 0.0
     for idx in range(length - 1, -1, -1):
         j = path[idx]
         c = v_index[j]
@@ -194,8 +206,6 @@ def _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot, y, a1, mu
                 ws[idx, s, 1] = ws[idx + 1, s, 1] + aj * zy
                 ws[idx, s, 2] = ws[idx + 1, s, 2] + aj * zz
     m = rows.shape[0] if kind == 0 else 5
-    dv = np.empty(3)
-    dw = np.empty(3)
     for idx in range(length):
         j = path[idx]
         if joint_type[j] == FREE:
@@ -301,6 +311,7 @@ def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
     lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
     mu = np.empty(m)
     qdot, v, nv, grad_q, scratch = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(16)
+    vjp_scratch = _vjp_scratch(rotation.shape[0])
     lam = np.zeros(n)
     for k in range(steps - 1, -1, -1):
         q = q_traj[k]
@@ -325,7 +336,7 @@ def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
         _limits(q, lower, upper, lp, grad_q)
         if collision:
             _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, grad_q, scratch)
-        _vjp(chain_i, task_i, rotation, position, world_axis, frame, wdot[k], y, nv, mu, qdot, grad_q)
+        _vjp(chain_i, task_i, position, world_axis, frame, wdot[k], y, nv, mu, qdot, grad_q, vjp_scratch)
         for i in range(n):
             lam[i] += dt * grad_q[i]
     lam0[:] = lam
