@@ -181,6 +181,9 @@ def _parser() -> argparse.ArgumentParser:
                     help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)")
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
     be.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    be.add_argument("--rounds", type=int, metavar="N",
+                    help="ssv, envs, ik, walk, pik, scale: alternating timing rounds of ours and the peer (after a "
+                         "warm-up; ratios are medians over the rounds; default: each bench's, --quick: 3)")
     budget = be.add_mutually_exclusive_group()
     budget.add_argument("--seconds", type=float, metavar="S",
                         help="soak only: wall time per env, split over the action sources (default: 10, "
@@ -428,6 +431,17 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
     print(f"wrote {summary.path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {summary.path}")
 
 
+_ROUNDS_BENCHES = ("ssv", "envs", "ik", "walk", "pik", "scale")
+"""Benches timed in alternating rounds (``--rounds``)."""
+
+
+def _rounds(args: argparse.Namespace) -> dict[str, int]:
+    """``{"rounds": N}`` from ``--rounds``, or 3 with ``--quick``; empty: the bench's default."""
+    if args.rounds is not None:
+        return {"rounds": args.rounds}
+    return {"rounds": 3} if args.quick else {}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = _parser()
@@ -441,6 +455,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error("--episodes, --envs and --workers apply to bench learned and scale only")
     if args.command == "bench" and args.name != "learned" and (args.envs is not None or args.ray is not None):
         parser.error("--envs and --ray apply to bench learned only")
+    if args.command == "bench" and args.rounds is not None and args.name not in _ROUNDS_BENCHES:
+        parser.error(f"--rounds applies to bench {', '.join(_ROUNDS_BENCHES)} only")
+    if args.command == "bench" and args.rounds is not None and args.rounds < 1:
+        parser.error(f"--rounds must be >= 1, got {args.rounds}")
     if args.command == "bench" and args.seed is None and args.name != "learned":
         args.seed = 0
     from .policies import PolicyError
@@ -485,8 +503,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.name == "ssv":
                 from .eval.bench_ssv import format_ssv_bench, run_ssv_bench, write_ssv_bench
 
-                timing = {"min_time": 0.002, "repeats": 2} if args.quick else {}
-                report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing)
+                timing = {"min_time": 0.002} if args.quick else {}
+                report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing, **_rounds(args))
                 print(format_ssv_bench(report))
                 print(f"wrote {write_ssv_bench(report, json_path)}")
             elif args.name == "ik":

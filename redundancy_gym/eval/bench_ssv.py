@@ -9,15 +9,17 @@ and 1000 with three implementations measured in the same run:
 - ``coal_pinocchio``: ``pinocchio.computeDistances`` over a geometry model holding the same pairs (coal's
   C++ loop, no Python per pair).
 
-``ratio_vs_coal_batch100`` is our time divided by the faster coal variant for the same 100 pairs. The
-monograph's Table 5.1 (C++ on a Core2 Duo) is printed next to our relative costs.
+The three are timed in alternating rounds (:func:`~redundancy_gym.eval.bench_timing.alternating_rounds`: a
+warm-up round, then ``rounds`` rounds of ours, coal, pinocchio / pinocchio, coal, ours, ...; each sample lasts at
+least ``min_time``); the per-pair times are medians over the rounds. ``ratio_vs_coal_batch100`` is, per pair type,
+the median over rounds of our time divided by the faster coal variant's in the same round, for the same 100 pairs;
+``ratio_vs_coal_batch100_rounds`` gives its median, min, max and spread ``(max - min) / median`` over the rounds.
+The monograph's Table 5.1 (C++ on a Core2 Duo) is printed next to our relative costs.
 """
 
 from __future__ import annotations
 
 import json
-import platform
-import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,6 +30,7 @@ import pinocchio as pin
 from tqdm.auto import tqdm
 
 from ..geometry import LSS, PSS, SSV, TSS, PairBatch, distance
+from .bench_timing import alternating_rounds, finish_machine_info, machine_info, timed_calls
 from .coal_shapes import to_coal
 from .exceptions import EvalError
 
@@ -55,27 +58,6 @@ def _separated_pairs(rng: np.random.Generator, pair_type: str, n: int) -> list[t
         if distance(a, b).distance > 1e-3:  # coal reports penetration depth, not the SSV distance, on overlap
             pairs.append((a, b))
     return pairs
-
-
-def _seconds_per_call(fn: Callable[[], Any], min_time: float, repeats: int) -> float:
-    """Median over ``repeats`` of the mean time of enough calls to fill ``min_time`` seconds."""
-    fn()
-    number = 1
-    while True:
-        start = time.perf_counter()
-        for _ in range(number):
-            fn()
-        elapsed = time.perf_counter() - start
-        if elapsed >= min_time or number >= 1 << 20:
-            break
-        number *= 2 if elapsed <= 0.0 else max(2, min(16, int(min_time / elapsed) + 1))
-    samples = [elapsed / number]
-    for _ in range(repeats - 1):
-        start = time.perf_counter()
-        for _ in range(number):
-            fn()
-        samples.append((time.perf_counter() - start) / number)
-    return float(np.median(samples))
 
 
 def _ours(pairs: Sequence[tuple[SSV, SSV]]) -> Callable[[], Any]:
@@ -119,39 +101,50 @@ def _coal_pinocchio(pairs: Sequence[tuple[SSV, SSV]]) -> Callable[[], Any]:
 
 
 def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, min_time: float = 0.02,
-                  repeats: int = 5, progress: bool = True) -> dict[str, Any]:
-    """Time ours and coal on the same pairs; returns the report written by ``bench ssv --json``.
+                  rounds: int = 9, progress: bool = True) -> dict[str, Any]:
+    """Time ours and coal on the same pairs in alternating rounds; returns the report written by ``bench ssv --json``.
 
     Args:
         batch_sizes: pairs per call; 100 must be among them for ``ratio_vs_coal_batch100``.
         seed: seed of the pair generator.
-        min_time: seconds each timing sample lasts at least.
-        repeats: samples per measurement (the median is reported).
+        min_time: least duration of each timing sample [s].
+        rounds: alternating rounds per pair type and batch size (after one warm-up round); medians are reported.
         progress: show a progress bar.
+
+    Raises:
+        EvalError: a batch size below 1, no batch size 100, ``rounds < 1`` or ``min_time <= 0``.
     """
     sizes = sorted({int(s) for s in batch_sizes})
     if not sizes or sizes[0] < 1:
         raise EvalError(f"batch sizes must be positive integers, got {list(batch_sizes)}")
     if 100 not in sizes:
         raise EvalError("batch sizes must include 100 (ratio_vs_coal_batch100)")
+    if int(rounds) != rounds or rounds < 1:
+        raise EvalError(f"rounds must be an integer >= 1, got {rounds!r}")
+    if not np.isfinite(min_time) or min_time <= 0.0:
+        raise EvalError(f"min_time must be finite and > 0 s, got {min_time!r}")
+    machine = machine_info()
     rng = np.random.default_rng(seed)
     per_type: dict[str, Any] = {}
+    ratios: dict[str, float] = {}
+    ratio_rounds: dict[str, Any] = {}
     bar = tqdm(total=len(PAIR_TYPES) * len(sizes), desc="bench ssv", disable=not progress)
     for pair_type in PAIR_TYPES:
         pairs = _separated_pairs(rng, pair_type, max(sizes))
         rows = {}
         for size in sizes:
             subset = pairs[:size]
-            times = {name: _seconds_per_call(make(subset), min_time, repeats) / size * 1e6
-                     for name, make in (("ours", _ours), ("coal", _coal_loop), ("coal_pinocchio", _coal_pinocchio))}
-            rows[str(size)] = {f"{name}_us_per_pair": value for name, value in times.items()}
+            samplers = {name: timed_calls(make(subset), min_time=min_time)
+                        for name, make in (("ours", _ours), ("coal", _coal_loop), ("coal_pinocchio", _coal_pinocchio))}
+            timed = alternating_rounds(samplers, rounds=rounds)
+            rows[str(size)] = {f"{name}_us_per_pair": timed.median(name) / size * 1e6 for name in samplers}
+            if size == 100:
+                stats = timed.ratio("ours", ("coal", "coal_pinocchio"))
+                ratios[pair_type] = stats.median
+                ratio_rounds[pair_type] = stats.to_json()
             bar.update()
         per_type[pair_type] = rows
     bar.close()
-    ratios = {}
-    for pair_type, rows in per_type.items():
-        row = rows["100"]
-        ratios[pair_type] = row["ours_us_per_pair"] / min(row["coal_us_per_pair"], row["coal_pinocchio_us_per_pair"])
     largest = str(sizes[-1])
     base = per_type["PSS-PSS"][largest]["ours_us_per_pair"]
     table = {t: {"monograph_abs_us": TABLE_5_1[t][0], "monograph_rel": TABLE_5_1[t][1],
@@ -159,8 +152,11 @@ def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, mi
                  "ours_rel": per_type[t][largest]["ours_us_per_pair"] / base} for t in PAIR_TYPES}
     return {"benchmark": "ssv", "seed": seed, "batch_sizes": sizes,
             "peer": "coal %s (coal.distance loop and pinocchio.computeDistances)" % coal.__version__,
-            "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
+            "timing": {"rounds": rounds, "warmup": 1, "min_time_s": min_time,
+                       "order": "ours, coal, coal_pinocchio; reversed every other round"},
+            "machine": finish_machine_info(machine),
             "per_pair_us": per_type, "ratio_vs_coal_batch100": ratios,
+            "ratio_vs_coal_batch100_rounds": ratio_rounds,
             "ratio_vs_coal_batch100_max": max(ratios.values()), "table_5_1": table}
 
 
@@ -175,11 +171,19 @@ def format_ssv_bench(report: dict[str, Any]) -> str:
         tab = report["table_5_1"][t]
         lines.append(f"{t:9s} | " + " | ".join(f"{rows[s]['ours_us_per_pair']:.3f}" for s in sizes)
                      + f" | {rows['100']['coal_us_per_pair']:.3f} | {rows['100']['coal_pinocchio_us_per_pair']:.3f}"
-                     + f" | {report['ratio_vs_coal_batch100'][t]:.3f} | {tab['monograph_abs_us']:.4f}"
+                     + f" | {_ratio_cell(report, t)} | {tab['monograph_abs_us']:.4f}"
                      + f" | {tab['monograph_rel']:.2f} | {tab['ours_rel']:.2f}")
-    lines.append("times are microseconds per pair; ratio = ours / faster coal variant on the same 100 pairs")
+    lines.append("times are microseconds per pair (medians over rounds); ratio = ours / faster coal variant on the same "
+                 "100 pairs, median (min-max) over rounds")
     lines.append(f"max ratio_vs_coal_batch100 = {report['ratio_vs_coal_batch100_max']:.3f}")
     return "\n".join(lines)
+
+
+def _ratio_cell(report: dict[str, Any], pair_type: str) -> str:
+    """``median (min-max)`` of one pair type's ratio, or the median alone in a report without rounds."""
+    median = report["ratio_vs_coal_batch100"][pair_type]
+    stats = report.get("ratio_vs_coal_batch100_rounds", {}).get(pair_type)
+    return f"{median:.3f}" + (f" ({stats['min']:.3f}-{stats['max']:.3f})" if stats else "")
 
 
 def write_ssv_bench(report: dict[str, Any], path: str | Path) -> Path:
