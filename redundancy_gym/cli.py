@@ -602,7 +602,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
 
                 report = run_envs_bench(seconds=0.3 if args.quick else 3.0, seed=args.seed,
-                                        progress=not args.no_progress)
+                                        progress=not args.no_progress, **_rounds(args))
                 print(format_envs_bench(report))
                 print(f"wrote {write_envs_bench(report, json_path)}")
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
