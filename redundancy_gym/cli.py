@@ -511,7 +511,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.bench_ik import format_ik_bench, run_ik_bench, write_ik_bench
 
                 kwargs = {"repeats": 1, "scaling": (10, 100)} if args.quick else {}
-                report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
+                report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs, **_rounds(args))
                 print(format_ik_bench(report))
                 print(f"wrote {write_ik_bench(report, json_path)}")
             elif args.name == "pik":

@@ -12,14 +12,18 @@ reference, and at every visited configuration
   ``CollisionAvoidanceLimit`` over the same geoms: the arm's capsules and spheres against each other and
   against the MuJoCo geoms of the same observed hard obstacles, with the same 0.1 m detection distance.
 
-``ratio_vs_mink`` is the ratio of the medians (ours / mink). The scaling part times our control step along
-the same states with 10 to 1000 hard obstacle primitives (the nearest of a long unpruned row).
+The two are timed in alternating rounds (:func:`~redundancy_gym.eval.bench_timing.alternating_rounds`: a warm-up
+round, then ``rounds`` rounds of ours, mink / mink, ours / ...), each sample one pass over all the states
+(``repeats`` calls per state, the median kept). ``ratio_vs_mink`` is the median over the rounds of the ratio of the
+two passes' medians over the states (ours / mink); ``ratio_vs_mink_rounds`` gives its median, min, max and spread
+``(max - min) / median``. A controller's ``step_us_median`` and ``step_us_p90`` are over the states of each state's
+median over the rounds. The scaling part times our control step along the same states with 10 to 1000 hard obstacle
+primitives (the nearest of a long unpruned row).
 """
 
 from __future__ import annotations
 
 import copy
-import platform
 import time
 from collections.abc import Sequence
 from typing import Any
@@ -33,6 +37,7 @@ from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..geometry import LSS, PSS, Segment, distance
 from ..sb3_import import install_hint
 from .bench_ssv import write_ssv_bench as write_ik_bench
+from .bench_timing import alternating_rounds, finish_machine_info, machine_info
 from .exceptions import EvalError
 
 __all__ = ["format_ik_bench", "run_ik_bench", "write_ik_bench"]
@@ -69,44 +74,79 @@ def _observed_hard_geoms(env: Any, obs: NDArray[np.float64]) -> list[int]:
     return geoms
 
 
-def _mink_steps(env: Any, policy: GraspClikPolicy, observations: list[NDArray[np.float64]],
-                repeats: int) -> tuple[list[float], int]:
-    """Median-of-``repeats`` time [us] of mink's update + solve_ik at each observation; the pair count."""
-    import mink  # noqa: PLC0415 - benchmark-only dependency
+class _MinkSolver:
+    """mink's ``Configuration.update`` + ``solve_ik`` (daqp) on the AgriReach arm with the same tasks, limits and
+    collision geoms as our controller sees; :meth:`step` times one solve at an observation."""
 
-    from ..assets import AGRI_ARM_GEOMS, AGRI_ARM_TCP  # noqa: PLC0415
+    def __init__(self, env: Any, policy: GraspClikPolicy, first: NDArray[np.float64]) -> None:
+        import mink  # noqa: PLC0415 - benchmark-only dependency
 
-    u = env.unwrapped
-    model = copy.deepcopy(u.model)
-    arm = [model.geom(n).id for n in AGRI_ARM_GEOMS]
-    obstacles = _observed_hard_geoms(env, observations[0])
-    model.geom_contype[arm + obstacles] = 1
-    model.geom_conaffinity[arm + obstacles] = 1
-    configuration = mink.Configuration(model)
-    frame = mink.FrameTask(AGRI_ARM_TCP, "site", position_cost=1.0, orientation_cost=1.0, gain=1.0)
-    posture = mink.PostureTask(model, cost=1e-2)
-    posture.set_target(observations[0][u.observation_layout["q"]])
-    collision = mink.CollisionAvoidanceLimit(model, [(arm, obstacles), (arm, arm)],
-                                             collision_detection_distance=policy.config.collision_activation,
-                                             minimum_distance_from_collisions=0.005)
-    limits = [mink.ConfigurationLimit(model), collision]
-    times = []
-    lay = u.observation_layout
-    dt = float(u.dt)
-    for obs in observations:
+        from ..assets import AGRI_ARM_GEOMS, AGRI_ARM_TCP  # noqa: PLC0415
+
+        u = env.unwrapped
+        model = copy.deepcopy(u.model)
+        arm = [model.geom(n).id for n in AGRI_ARM_GEOMS]
+        obstacles = _observed_hard_geoms(env, first)
+        model.geom_contype[arm + obstacles] = 1
+        model.geom_conaffinity[arm + obstacles] = 1
+        self.mink, self.tcp, self.policy = mink, AGRI_ARM_TCP, policy
+        self.configuration = mink.Configuration(model)
+        self.frame = mink.FrameTask(AGRI_ARM_TCP, "site", position_cost=1.0, orientation_cost=1.0, gain=1.0)
+        self.posture = mink.PostureTask(model, cost=1e-2)
+        self.layout = u.observation_layout
+        self.posture.set_target(first[self.layout["q"]])
+        self.collision = mink.CollisionAvoidanceLimit(model, [(arm, obstacles), (arm, arm)],
+                                                      collision_detection_distance=policy.config.collision_activation,
+                                                      minimum_distance_from_collisions=0.005)
+        self.limits = [mink.ConfigurationLimit(model), self.collision]
+        self.dt = float(u.dt)
+
+    @property
+    def geom_pairs(self) -> int:
+        """Collision geom pairs mink checks."""
+        return len(self.collision.geom_id_pairs)
+
+    def step(self, obs: NDArray[np.float64]) -> float:
+        """Time [s] of one update + solve_ik at ``obs``."""
+        mink, lay = self.mink, self.layout
         q = obs[lay["q"]]
-        target, _ = policy.path(float(obs[lay["time"]][0]))
-        runs = []
-        for _ in range(repeats):
-            start = time.perf_counter()
-            configuration.update(q)
-            current = configuration.get_transform_frame_to_world(AGRI_ARM_TCP, "site")
-            rotation = _turn_x_onto(current.rotation().as_matrix(), target[3:])
-            frame.set_target(mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), target[:3]))
-            mink.solve_ik(configuration, [frame, posture], dt, "daqp", damping=1e-6, limits=limits)
-            runs.append((time.perf_counter() - start) * 1e6)
-        times.append(float(np.median(runs)))
-    return times, len(collision.geom_id_pairs)
+        target, _ = self.policy.path(float(obs[lay["time"]][0]))
+        start = time.perf_counter()
+        self.configuration.update(q)
+        current = self.configuration.get_transform_frame_to_world(self.tcp, "site")
+        rotation = _turn_x_onto(current.rotation().as_matrix(), target[3:])
+        self.frame.set_target(mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), target[:3]))
+        mink.solve_ik(self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6,
+                      limits=self.limits)
+        return time.perf_counter() - start
+
+
+class _Pass:
+    """A sampler: one pass over the states, ``repeats`` timed calls of ``step`` per state (the median kept); keeps
+    each pass's per-state times [s] and returns their median over the states."""
+
+    def __init__(self, step: Any, observations: list[NDArray[np.float64]], repeats: int) -> None:
+        self.step, self.observations, self.repeats = step, observations, repeats
+        self.passes: list[list[float]] = []
+
+    def __call__(self) -> float:
+        times = [float(np.median([self.step(obs) for _ in range(self.repeats)])) for obs in self.observations]
+        self.passes.append(times)
+        return float(np.median(times))
+
+    def summary(self, skip: int) -> tuple[float, float]:
+        """Median and 90th percentile over the states [us] of each state's median over the passes after ``skip``."""
+        per_state = np.median(np.array(self.passes[skip:]), axis=0) * 1e6
+        return float(np.median(per_state)), float(np.percentile(per_state, 90))
+
+
+def _ours_step(policy: GraspClikPolicy) -> Any:
+    def step(obs: NDArray[np.float64]) -> float:
+        start = time.perf_counter()
+        policy.predict(obs)
+        return time.perf_counter() - start
+
+    return step
 
 
 def _turn_x_onto(rotation: NDArray[np.float64], axis: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -156,52 +196,60 @@ def _volume(row: Any, k: int) -> PSS | LSS:
     return PSS(v[0], r) if row.kind[k] == 0 else LSS(v[0], v[1], r)
 
 
-def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 5,
+def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3, rounds: int = 15,
                  scaling: Sequence[int] = SCALING, progress: bool = True) -> dict[str, Any]:
-    """Time our CLIK control step against mink's ``solve_ik`` on the same states; returns the report.
+    """Time our CLIK control step against mink's ``solve_ik`` on the same states in alternating rounds; returns the
+    report.
 
     Args:
         seed: reset seed of the AgriReach episode.
         difficulty: AgriReach difficulty preset.
-        repeats: timed repetitions per state (the median is kept).
+        repeats: timed calls per state within a pass (the median is kept).
+        rounds: alternating rounds (one pass over the states by each controller) after a warm-up round.
         scaling: obstacle primitive counts of the scaling study (empty to skip it).
         progress: show progress bars.
+
+    Raises:
+        EvalError: ``repeats < 1`` or ``rounds < 1``; mink or daqp not installed.
     """
     if repeats < 1:
         raise EvalError(f"repeats must be >= 1, got {repeats}")
+    if int(rounds) != rounds or rounds < 1:
+        raise EvalError(f"rounds must be an integer >= 1, got {rounds!r}")
+    machine = machine_info()
     env = gym.make(ENV_ID, difficulty=difficulty)
     try:
         policy = GraspClikPolicy(env)
         _episode(env, policy, seed)  # warm up compiled kernels and caches
         observations, first = _episode(env, policy, seed)
-        ours = []
-        for obs in tqdm(observations, desc="bench ik ours", disable=not progress):
-            runs = []
-            for _ in range(repeats):
-                start = time.perf_counter()
-                policy.predict(obs)
-                runs.append((time.perf_counter() - start) * 1e6)
-            ours.append(float(np.median(runs)))
         # predict re-plans at time 0, so re-planning the episode's first state leaves the path as it was
         pairs = policy.collision.collision_model.num_volume_pairs if policy.collision is not None else 0
         try:
-            mink_times, mink_pairs = _mink_steps(env, policy, observations, repeats)
+            solver = _MinkSolver(env, policy, observations[0])
         except ImportError as exc:
             raise EvalError(f"bench ik needs mink and daqp: {install_hint('bench')}") from exc
+        ours, mink = _Pass(_ours_step(policy), observations, repeats), _Pass(solver.step, observations, repeats)
+        timed = alternating_rounds({"ours": ours, "mink": mink}, rounds=rounds, progress=progress,
+                                   desc="bench ik rounds")
         scale = _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) \
             if scaling else []
     finally:
         env.close()
-    ours_median, mink_median = float(np.median(ours)), float(np.median(mink_times))
+    ours_median, ours_p90 = ours.summary(timed.warmup)
+    mink_median, mink_p90 = mink.summary(timed.warmup)
+    stats = timed.ratio("ours", "mink")
     return {
         "benchmark": "ik", "env": ENV_ID, "difficulty": difficulty, "seed": seed, "states": len(observations),
         "repeats": repeats,
-        "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
-        "ours": {"step_us_median": ours_median, "step_us_p90": float(np.percentile(ours, 90)),
+        "timing": {"rounds": rounds, "warmup": timed.warmup, "sample": "one pass over the states",
+                   "order": "ours, mink; reversed every other round"},
+        "machine": finish_machine_info(machine),
+        "ours": {"step_us_median": ours_median, "step_us_p90": ours_p90,
                  "first_step_us": first[0], "volume_pairs": pairs},
-        "mink": {"step_us_median": mink_median, "step_us_p90": float(np.percentile(mink_times, 90)),
-                 "geom_pairs": mink_pairs, "solver": "daqp"},
-        "ratio_vs_mink": ours_median / mink_median,
+        "mink": {"step_us_median": mink_median, "step_us_p90": mink_p90,
+                 "geom_pairs": solver.geom_pairs, "solver": "daqp"},
+        "ratio_vs_mink": stats.median,
+        "ratio_vs_mink_rounds": stats.to_json(),
         "scaling": scale,
     }
 
@@ -212,8 +260,15 @@ def format_ik_bench(report: dict[str, Any]) -> str:
     lines = [f"{report['env']} ({report['difficulty']}, seed {report['seed']}): {report['states']} states",
              f"ours  median {o['step_us_median']:.1f} us  p90 {o['step_us_p90']:.1f} us  ({o['volume_pairs']} pairs)",
              f"mink  median {m['step_us_median']:.1f} us  p90 {m['step_us_p90']:.1f} us  ({m['geom_pairs']} pairs)",
-             f"ratio_vs_mink = {report['ratio_vs_mink']:.3f}"]
+             f"ratio_vs_mink = {report['ratio_vs_mink']:.3f}" + _rounds_text(report.get("ratio_vs_mink_rounds"))]
     if report["scaling"]:
         lines.append("primitives | step median [us] | p90 [us]")
         lines += [f"{s['primitives']} | {s['step_us_median']:.1f} | {s['step_us_p90']:.1f}" for s in report["scaling"]]
     return "\n".join(lines)
+
+
+def _rounds_text(stats: dict[str, Any] | None) -> str:
+    """``  (rounds MIN-MAX, spread S %)`` of a ratio's round statistics, or nothing."""
+    if not stats:
+        return ""
+    return f"  (rounds {stats['min']:.3f}-{stats['max']:.3f}, spread {100 * stats['spread']:.1f} %)"
