@@ -37,7 +37,7 @@ from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..geometry import LSS, PSS, Segment, distance
 from ..sb3_import import install_hint
 from .bench_ssv import write_ssv_bench as write_ik_bench
-from .bench_timing import alternating_rounds, finish_machine_info, machine_info
+from .bench_timing import TimedPasses, alternating_rounds, finish_machine_info, machine_info
 from .exceptions import EvalError
 
 __all__ = ["format_ik_bench", "run_ik_bench", "write_ik_bench"]
@@ -119,25 +119,6 @@ class _MinkSolver:
         mink.solve_ik(self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6,
                       limits=self.limits)
         return time.perf_counter() - start
-
-
-class _Pass:
-    """A sampler: one pass over the states, ``repeats`` timed calls of ``step`` per state (the median kept); keeps
-    each pass's per-state times [s] and returns their median over the states."""
-
-    def __init__(self, step: Any, observations: list[NDArray[np.float64]], repeats: int) -> None:
-        self.step, self.observations, self.repeats = step, observations, repeats
-        self.passes: list[list[float]] = []
-
-    def __call__(self) -> float:
-        times = [float(np.median([self.step(obs) for _ in range(self.repeats)])) for obs in self.observations]
-        self.passes.append(times)
-        return float(np.median(times))
-
-    def summary(self, skip: int) -> tuple[float, float]:
-        """Median and 90th percentile over the states [us] of each state's median over the passes after ``skip``."""
-        per_state = np.median(np.array(self.passes[skip:]), axis=0) * 1e6
-        return float(np.median(per_state)), float(np.percentile(per_state, 90))
 
 
 def _ours_step(policy: GraspClikPolicy) -> Any:
@@ -228,15 +209,15 @@ def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3,
             solver = _MinkSolver(env, policy, observations[0])
         except ImportError as exc:
             raise EvalError(f"bench ik needs mink and daqp: {install_hint('bench')}") from exc
-        ours, mink = _Pass(_ours_step(policy), observations, repeats), _Pass(solver.step, observations, repeats)
+        ours, mink = TimedPasses(_ours_step(policy), observations, repeats), TimedPasses(solver.step, observations, repeats)
         timed = alternating_rounds({"ours": ours, "mink": mink}, rounds=rounds, progress=progress,
                                    desc="bench ik rounds")
         scale = _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) \
             if scaling else []
     finally:
         env.close()
-    ours_median, ours_p90 = ours.summary(timed.warmup)
-    mink_median, mink_p90 = mink.summary(timed.warmup)
+    ours_median, ours_p90 = ours.summary_us(timed.warmup)
+    mink_median, mink_p90 = mink.summary_us(timed.warmup)
     stats = timed.ratio("ours", "mink")
     return {
         "benchmark": "ik", "env": ENV_ID, "difficulty": difficulty, "seed": seed, "states": len(observations),

@@ -10,7 +10,8 @@ samples taken moments apart, and reported by its median over the rounds with the
 
 A sample is whatever a candidate's sampler returns, in seconds: :func:`timed_calls` makes a sampler that times
 enough calls of a function to last at least ``min_time`` (above the timer's resolution) and returns the time per
-call; a bench that times its own work (one pass over recorded states, one walk) returns its own figure.
+call; :class:`TimedPasses` one that makes a pass over recorded inputs (states) and returns the median time per
+input; a bench that times its own work (one walk) returns its own figure.
 
 :func:`machine_info` records the machine beside the figures: CPU model, family and model numbers, the vector
 flags that the compiled kernels can use, logical and usable cores, platform, Python, package versions and the load
@@ -25,7 +26,7 @@ import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,9 +34,10 @@ from tqdm.auto import tqdm
 
 from .exceptions import EvalError
 
-__all__ = ["RELEVANT_CPU_FLAGS", "RatioStats", "Rounds", "alternating_rounds", "finish_machine_info", "machine_info",
-           "timed_calls"]
+__all__ = ["RELEVANT_CPU_FLAGS", "RatioStats", "Rounds", "TimedPasses", "alternating_rounds", "finish_machine_info",
+           "machine_info", "timed_calls"]
 
+T = TypeVar("T")
 Sampler = Callable[[], float]
 """One sample of a candidate: its time [s] (per call, per state, per step: the same unit for all candidates)."""
 
@@ -206,6 +208,41 @@ def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 <<
         return run(number) / number
 
     return sample
+
+
+class TimedPasses(Generic[T]):
+    """A sampler that makes one pass over ``items``: ``repeats`` calls of ``timed(item)`` per item (each returns its
+    own time [s], so set-up outside the timed part is left out), the median kept per item; returns the median over
+    the items [s] and keeps every pass's per-item times.
+
+    Raises:
+        EvalError: no items or ``repeats < 1``.
+    """
+
+    def __init__(self, timed: Callable[[T], float], items: Sequence[T], repeats: int = 1) -> None:
+        if not len(items):
+            raise EvalError("TimedPasses needs at least one item")
+        if repeats < 1:
+            raise EvalError(f"repeats must be >= 1, got {repeats}")
+        self.timed, self.items, self.repeats = timed, items, int(repeats)
+        self.passes: list[list[float]] = []
+
+    def __call__(self) -> float:
+        times = [float(np.median([self.timed(item) for _ in range(self.repeats)])) for item in self.items]
+        self.passes.append(times)
+        return float(np.median(times))
+
+    def per_item(self, skip: int = 0) -> NDArray[np.float64]:
+        """Each item's median time [s] over the passes after the first ``skip`` (the warm-up rounds)."""
+        kept = self.passes[skip:]
+        if not kept:
+            raise EvalError(f"no pass after the first {skip}")
+        return np.median(np.array(kept), axis=0)
+
+    def summary_us(self, skip: int = 0, percentile: float = 90.0) -> tuple[float, float]:
+        """Median and ``percentile`` over the items of :meth:`per_item` [us]."""
+        per_item = self.per_item(skip) * 1e6
+        return float(np.median(per_item)), float(np.percentile(per_item, percentile))
 
 
 def machine_info() -> dict[str, Any]:

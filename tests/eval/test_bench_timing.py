@@ -8,7 +8,7 @@ import time
 
 import pytest
 
-from redundancy_gym.eval.bench_timing import (RatioStats, alternating_rounds, finish_machine_info, machine_info,
+from redundancy_gym.eval.bench_timing import (RatioStats, TimedPasses, alternating_rounds, finish_machine_info, machine_info,
                                               timed_calls)
 from redundancy_gym.eval.exceptions import EvalError
 
@@ -107,3 +107,16 @@ def test_machine_record_fields() -> None:
     finished = finish_machine_info(info)
     assert finished["load_average_start"] == info["load_average"] and len(finished["load_average_end"]) == 3
     assert "load_average" not in finished and finished["versions"] == info["versions"]
+
+
+def test_timed_passes_keep_each_pass_and_drop_the_warmup() -> None:
+    clock = itertools.count(1)
+    passes = TimedPasses(lambda item: float(item) * next(clock), [1, 2, 3], repeats=1)
+    assert passes() == 2.0 * 2  # items 1, 2, 3 times clocks 1, 2, 3: 1, 4, 9 -> median 4
+    assert passes() == 2.0 * 5  # 4, 10, 18 -> 10
+    assert passes.per_item(skip=1).tolist() == [4.0, 10.0, 18.0]
+    assert passes.summary_us(skip=1)[0] == pytest.approx(10.0e6)
+    with pytest.raises(EvalError, match="item"):
+        TimedPasses(lambda item: 1.0, [])
+    with pytest.raises(EvalError, match="no pass"):
+        passes.per_item(skip=2)
