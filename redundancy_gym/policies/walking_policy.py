@@ -197,9 +197,9 @@ class WalkingPolicy(PerEnvPolicy):
     def command(self, obs: NDArray[np.float64]) -> NDArray[np.float32]:
         """One control period of the walk under way: normalized joint position targets for ``obs``."""
         self._observe_obstacles(obs)
-        q, v = self._state(obs)
-        wrench = obs[self._wrench].reshape(2, 6)
-        command = self.controller.step(q, v, wrench[:, :3], wrench[:, 3:])
+        # MuJoCo's state and the ankle wrenches as they lie in the observation: the controller converts them in its
+        # measurement kernel (WalkingController.step_mujoco)
+        command = self.controller.step_mujoco(obs[self._qpos], obs[self._qvel], obs[self._wrench])
         self.last_command = command
         # np.minimum(np.maximum(...)) is np.clip (NaN included) without its Python-side dispatch, once per period
         action = (command.joint_targets - self._nominal) / self._scale

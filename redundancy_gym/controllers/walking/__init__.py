@@ -4,6 +4,7 @@ stabilizer and whole-body IK with angular-momentum minimization (5.62), each a s
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
+from .measure_kernels import CompiledMeasurement, Measurement
 from .quintic import PiecewiseQuintic, Quintic
 from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
 from .ssta import (
@@ -27,6 +28,7 @@ from .zmp_estimator import ZmpEstimate, estimate_zmp
 __all__ = [
     "BACKENDS",
     "BLOCKED_COST",
+    "CompiledMeasurement",
     "CompiledWholeBodyIk",
     "GRAVITY",
     "LEG_SEGMENTS",
@@ -38,6 +40,7 @@ __all__ = [
     "DcmPlan",
     "DcmPlanner",
     "GaitConfig",
+    "Measurement",
     "LinePlan",
     "ObstacleBox",
     "ObstacleDecision",

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel
-from ...model import RobotModel, collision_model_from_mjcf
+from ...model import ModelError, RobotModel, collision_model_from_mjcf
 from ..actuated_objective import ActuatedObjective
 from ..collision_objective import CollisionObjective
 from ..exceptions import ControllerError
@@ -26,6 +26,7 @@ from ..joint_limit_objective import JointLimitObjective
 from ..posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
+from .measure_kernels import CompiledMeasurement
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .rca import Rca, RcaConfig, RcaState
 from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
@@ -46,6 +47,16 @@ BACKENDS = ("compiled", "python")
 SSTA_REMAP = 0.01
 """How far [m] the map from the world into the plan's frame must have moved the obstacles (at the sole's reach)
 since SSTA last planned for SSTA to plan again (at a step start)."""
+
+_Measured = tuple[NDArray[np.float64], NDArray[np.float64], ZmpEstimate]
+"""The measurement of one period: CoM [m], its velocity [m/s] (in the plan's frame) and the ZMP estimate."""
+_FLOAT64 = np.dtype(np.float64)
+
+
+def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
+    """Whether ``value`` is a float64 array of ``shape`` (what the compiled measurement reads without conversion)."""
+    return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
+
 
 COMMAND_REPLAN_INTERVAL = 0.04
 """Shortest time [s] between two CoM replans for new walking commands (:meth:`WalkingController.set_command`)."""
@@ -173,6 +184,14 @@ class WalkingController:
             raise ControllerError(f"soft limits must have length {model.nv - self._nv}")
         self._feet = tuple(model.frame_id(f) for f in feet_frames)
         self._ankles = tuple(model.frame_id(f) for f in ankle_frames)
+        # the per-period measurement in one kernel call; a model the compiled kinematics do not cover (not 1-DoF
+        # joints on a free flyer) is measured through pinocchio
+        self._measurement: CompiledMeasurement | None
+        try:
+            self._measurement = CompiledMeasurement(model, self._ankles + self._feet)
+        except ModelError:
+            self._measurement = None
+        self._sensors = np.zeros((2, 6))  # step()'s forces and torques, packed as the kernel reads them
         self.feet_frames, self.torso_frame = feet_frames, torso_frame
         self.correction_iterations = int(correction_iterations)
         self.correction_samples = int(correction_samples)
@@ -495,24 +514,96 @@ class WalkingController:
             q, v: measured configuration and velocity (pinocchio convention; the base from the IMU/estimator).
             forces, torques: ankle force/torque sensor readings [N, N m] (2, 3).
         """
+        start = self._start_sample()
+        measured = None
+        if _is_float_array(q, (self.model.nq,)) and _is_float_array(v, (self.model.nv,)) \
+                and _is_float_array(forces, (2, 3)) and _is_float_array(torques, (2, 3)):
+            sensors = self._sensors
+            sensors[:, :3] = forces
+            sensors[:, 3:] = torques
+            measured = self._measure_compiled(q, v, sensors.reshape(-1), False, start)
+        if measured is None:  # other input types, or a non-finite value: checked (and the error named) on this path
+            measured = self._measure_python(q, v, forces, torques, start)
+        return self._step(start, *measured)
+
+    def step_mujoco(self, qpos: ArrayLike, qvel: ArrayLike, wrenches: ArrayLike) -> WalkingCommand:
+        """:meth:`step` from MuJoCo's state: the same as ``step(*model.from_mujoco_state(qpos, qvel),
+        wrenches[:, :3], wrenches[:, 3:])`` to round-off, with the conversion in the measurement's kernel.
+
+        Args:
+            qpos, qvel: MuJoCo's ``qpos`` and ``qvel`` of the robot (free joint first).
+            wrenches: the ankle sensor readings (2, 6) or (12,): per foot (right, left) force [N] then torque [N m].
+        """
+        start = self._start_sample()
+        measured = None
+        if _is_float_array(qpos, (self.model.nq,)) and _is_float_array(qvel, (self.model.nv,)) \
+                and _is_float_array(wrenches, (12,)):
+            measured = self._measure_compiled(qpos, qvel, wrenches, True, start)
+        if measured is None:
+            q, v = self.model.from_mujoco_state(qpos, qvel)
+            wrench = np.asarray(wrenches, dtype=np.float64).reshape(2, 6)
+            measured = self._measure_python(q, v, wrench[:, :3], wrench[:, 3:], start)
+        return self._step(start, *measured)
+
+    def _start_sample(self) -> PatternSample:
+        """The pattern at the period's start (kept from the previous period's end where it is that instant)."""
         if self.pattern is None or self.solver is None or self.q_ref is None:
             raise ControllerError("call WalkingController.start(q, speed) before step()")
+        nxt = self._next
+        return nxt if nxt is not None and nxt.time == self.time else self.pattern.sample(self.time)
+
+    def _measure_compiled(self, q: NDArray[np.float64], v: NDArray[np.float64], sensors: NDArray[np.float64],
+                          mujoco: bool, start: PatternSample) -> _Measured | None:
+        """The measurement (CoM, its velocity, the ZMP) in one kernel call (:class:`CompiledMeasurement`): the
+        same as :meth:`_measure_python` to round-off; None for a non-finite input (the checked path names it)."""
+        assert self.pattern is not None
+        if self._measurement is None:
+            return None
+        k = start.step
+        stance = (k + 1) % 2 if k >= 0 else 1  # the standing start: the left foot, the first stance foot
+        planned = start.feet[stance]
+        m = self._measurement.measure(q, v, sensors, mujoco=mujoco, stance_frame=self.stance_frame, stance=stance,
+                                      planned=(planned.item(0), planned.item(1), start.feet_yaw.item(stance)),
+                                      ground=self.pattern.ground)
+        if m is None:
+            return None
+        if self.ikd is not None:
+            # The IKD's RobotModel.acceleration_terms reads the CoM velocity that the last pinocchio pass left in the
+            # model's data (pinocchio 4.1's computeCentroidalMapTimeVariation uses data.vcom without computing it):
+            # its Adot_G qdot has been the one with the measured CoM velocity, which RobotModel.measure left there.
+            # The pass is kept so that IKD walks stay as they were, until acceleration_terms sets it itself.
+            self.model.measure(m.q, m.v)
+        if self.stance_frame:
+            self._world_to_plan = (m.turn.copy(), m.shift.copy())
+        # copies: the estimate outlives the period (WalkingCommand.contact), the kernel's buffers do not
+        contact = ZmpEstimate(None if m.zmp is None else m.zmp.copy(), m.cop.copy(), m.normal_force.copy(),
+                              m.moment.copy())
+        return m.com.copy(), m.com_velocity.copy(), contact
+
+    def _measure_python(self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike,
+                        start: PatternSample) -> _Measured:
+        """The measurement through pinocchio and NumPy, with every input checked (the errors name the bad one)."""
+        assert self.pattern is not None
         model = self.model
         q = model.check_configuration(q)
         v = np.asarray(v, dtype=np.float64)
-        start = self._next if self._next is not None and self._next.time == self.time else self.pattern.sample(self.time)
         com, com_velocity, rotations, positions = model.measure(q, v, self._ankles + self._feet)
         if self.stance_frame:
             com, com_velocity, rotations, positions = self._in_stance_frame(start, com, com_velocity, rotations,
                                                                              positions)
+        contact = estimate_zmp(rotations[:2], positions[:2], forces, torques, ground=self.pattern.ground)
+        return com, com_velocity, contact
+
+    def _step(self, start: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
+              contact: ZmpEstimate) -> WalkingCommand:
+        """The period after the measurement: obstacles, step adjustment, stabilizer, IK."""
+        assert self.pattern is not None and self.solver is not None and self.q_ref is not None
         if self._obstacle_volumes and start.step != self._obstacle_step:
             # once a step, the obstacles are mapped into the plan's frame again as the robot drifts from it
             self._obstacle_step = start.step
             self._map_obstacles()
             if self._next is None:
                 start = self.pattern.sample(self.time)
-        rotations, positions = rotations[:2], positions[:2]
-        contact = estimate_zmp(rotations, positions, forces, torques, ground=self.pattern.ground)
         adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega,
                                                planned=start.dcm)
         if adjustment is not None:

@@ -1,0 +1,316 @@
+"""The walking controller's per-period measurement as one compiled kernel call (:class:`CompiledMeasurement`).
+
+What :meth:`~redundancy_gym.controllers.walking.WalkingController.step` did before its IK through some forty
+pinocchio and NumPy calls on 3-vectors (about 40 us of Python per period, a third of the step): the MuJoCo
+state in pinocchio's convention (:meth:`~redundancy_gym.model.RobotModel.from_mujoco_state`), the CoM, its
+velocity and the ankle and sole placements (:meth:`~redundancy_gym.model.RobotModel.measure`), the rigid move
+into the stance foot's planned pose (``WalkingController._in_stance_frame``) and the ZMP from the ankle wrenches
+(:func:`~.zmp_estimator.estimate_zmp`). The same formulas in the same order, on the compiled kinematics of
+:mod:`redundancy_gym.model.chain_kernels`: the results agree with the pinocchio/NumPy path to round-off (a test
+holds them to 1e-12).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from ...model import RobotModel
+from ...model.chain_kernels import FREE, chain_centroidal, chain_forward, place_frame
+from ..kernel_buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
+
+__all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "Measurement"]
+
+FLOAT_FIELDS: tuple[str, ...] = (
+    "placement_rotation", "placement_translation", "axis", "body_mass", "body_com", "body_inertia",
+    "rotation", "position", "world_axis", "composite", "frame_rotation", "frame_translation",
+    "jacobian_com", "jacobian_angular", "inputs", "outputs",
+)
+INT_FIELDS: tuple[str, ...] = ("dims", "parent", "joint_type", "q_index", "v_index", "frame_joint")
+FRAMES = 4
+"""Frames measured: the ankle sensors (right, left), then the soles (right, left)."""
+PARAMETERS = ("mujoco", "stance_frame", "stance", "planned_x", "planned_y", "planned_yaw", "ground", "min_force")
+"""Scalar inputs after ``q``, ``v`` and the ankle wrenches (12: right force, right torque, left force, left torque): 1.0 where the state is MuJoCo's ``qpos``,
+``qvel`` (else pinocchio's), 1.0 to move into the stance foot's planned pose, the stance foot (0 right, 1 left),
+its planned sole position (x, y) [m] and heading [rad], the ground height [m] and the ZMP's ``min_force`` [N]."""
+OUTPUT_SIZES = (("com", 3), ("com_velocity", 3), ("rotations", 9 * FRAMES), ("positions", 3 * FRAMES), ("turn", 9),
+                ("shift", 3), ("zmp", 3), ("cop", 4), ("normal_force", 2), ("moment", 6))
+"""After the pinocchio ``q`` (nq) and ``v`` (nv) in ``outputs``: the fields of :class:`Measurement` (``zmp`` is x,
+y and 1.0 where valid)."""
+OK, BAD_INPUT = 0, 1
+
+_NF = len(FLOAT_FIELDS)
+(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_BODY_MASS, _F_BODY_COM, _F_BODY_INERTIA, _F_ROTATION,
+ _F_POSITION, _F_WORLD_AXIS, _F_COMPOSITE, _F_FRAME_ROTATION, _F_FRAME_TRANSLATION, _F_JACOBIAN_COM,
+ _F_JACOBIAN_ANGULAR, _F_INPUTS, _F_OUTPUTS) = range(_NF)
+(_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT) = range(_NF, _NF + len(INT_FIELDS))
+
+# the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
+_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+
+
+@njit(**_JIT)
+def _from_mujoco(joint_type, q_index, v_index, q, v):
+    """MuJoCo's free joint (``[x y z qw qx qy qz]``, ``[v_world; omega_body]``) in place into pinocchio's free flyer
+    (``[x y z qx qy qz qw]``, ``[v_body; omega_body]``), as :meth:`RobotModel.from_mujoco_state`; returns False
+    for a zero quaternion."""
+    for j in range(joint_type.shape[0]):
+        if joint_type[j] != FREE:
+            continue
+        a, b = q_index[j], v_index[j]
+        w, x, y, z = q[a + 3], q[a + 4], q[a + 5], q[a + 6]
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        if not norm > 0.0:
+            return False
+        x, y, z, w = x / norm, y / norm, z / norm, w / norm
+        q[a + 3], q[a + 4], q[a + 5], q[a + 6] = x, y, z, w
+        # Eigen's Quaternion::toRotationMatrix, then v_body = R^T v_world
+        tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+        twx, twy, twz = tx * w, ty * w, tz * w
+        txx, txy, txz = tx * x, ty * x, tz * x
+        tyy, tyz, tzz = ty * y, tz * y, tz * z
+        r00, r01, r02 = 1.0 - (tyy + tzz), txy - twz, txz + twy
+        r10, r11, r12 = txy + twz, 1.0 - (txx + tzz), tyz - twx
+        r20, r21, r22 = txz - twy, tyz + twx, 1.0 - (txx + tyy)
+        vx, vy, vz = v[b], v[b + 1], v[b + 2]
+        v[b] = r00 * vx + r10 * vy + r20 * vz
+        v[b + 1] = r01 * vx + r11 * vy + r21 * vz
+        v[b + 2] = r02 * vx + r12 * vy + r22 * vz
+    return True
+
+
+@njit(**_JIT)
+def measure_step(f, i):
+    """One measurement on the buffers: reads ``inputs`` (``q``, ``v``, forces, torques, :data:`PARAMETERS`) and
+    writes ``outputs`` (pinocchio ``q``, ``v``, then :data:`OUTPUT_SIZES`); returns :data:`OK` or :data:`BAD_INPUT`
+    (a non-finite input or a zero base quaternion; the outputs are then incomplete)."""
+    dims = int_field(i, _I_DIMS)
+    nj, nq, nv = dims[0], dims[1], dims[2]
+    inputs = float_field(f, i, _F_INPUTS)
+    n_state = nq + nv + 12
+    for k in range(n_state):
+        if not np.isfinite(inputs[k]):
+            return BAD_INPUT
+    params = inputs[n_state:]
+    outputs = float_field(f, i, _F_OUTPUTS)
+    q = outputs[:nq]
+    v = outputs[nq:nq + nv]
+    q[:] = inputs[:nq]
+    v[:] = inputs[nq:nq + nv]
+    parent = int_field(i, _I_PARENT)
+    joint_type = int_field(i, _I_JOINT_TYPE)
+    q_index = int_field(i, _I_Q_INDEX)
+    v_index = int_field(i, _I_V_INDEX)
+    if params[0] != 0.0 and not _from_mujoco(joint_type, q_index, v_index, q, v):
+        return BAD_INPUT
+    rotation = float_field(f, i, _F_ROTATION).reshape((nj, 3, 3))
+    position = float_field(f, i, _F_POSITION).reshape((nj, 3))
+    world_axis = float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3))
+    chain_forward(parent, float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
+                  float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
+                  float_field(f, i, _F_AXIS).reshape((nj, 3)), joint_type, q_index, q, rotation, position, world_axis)
+    o = nq + nv
+    com = outputs[o:o + 3]
+    com_velocity = outputs[o + 3:o + 6]
+    rotations = outputs[o + 6:o + 6 + 9 * FRAMES].reshape((FRAMES, 3, 3))
+    o += 6 + 9 * FRAMES
+    positions = outputs[o:o + 3 * FRAMES].reshape((FRAMES, 3))
+    o += 3 * FRAMES
+    turn = outputs[o:o + 9].reshape((3, 3))
+    shift = outputs[o + 9:o + 12]
+    zmp = outputs[o + 12:o + 15]
+    cop = outputs[o + 15:o + 19].reshape((2, 2))
+    normal_force = outputs[o + 19:o + 21]
+    moment = outputs[o + 21:o + 27].reshape((2, 3))
+    jac_com = float_field(f, i, _F_JACOBIAN_COM).reshape((3, nv))
+    chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis, float_field(f, i, _F_BODY_MASS),
+                     float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
+                     float_field(f, i, _F_BODY_INERTIA).reshape((nj, 3, 3)),
+                     float_field(f, i, _F_COMPOSITE).reshape((nj, 13)), com,
+                     jac_com, float_field(f, i, _F_JACOBIAN_ANGULAR).reshape((3, nv)))
+    for r in range(3):
+        acc = 0.0
+        for k in range(nv):
+            acc += jac_com[r, k] * v[k]
+        com_velocity[r] = acc
+    frame_joint = int_field(i, _I_FRAME_JOINT)
+    frame_rotation = float_field(f, i, _F_FRAME_ROTATION).reshape((FRAMES, 3, 3))
+    frame_translation = float_field(f, i, _F_FRAME_TRANSLATION).reshape((FRAMES, 3))
+    for k in range(FRAMES):
+        place_frame(rotation, position, frame_joint[k], frame_rotation[k], frame_translation[k], rotations[k],
+                    positions[k])
+    # the stance frame (WalkingController._in_stance_frame): R_z(-yaw) and a horizontal shift that put the measured
+    # stance sole on its planned position and heading
+    turn[:, :] = 0.0
+    turn[0, 0] = turn[1, 1] = turn[2, 2] = 1.0
+    shift[:] = 0.0
+    if params[1] != 0.0:
+        stance = 2 + int(params[2])
+        yaw = math.atan2(rotations[stance, 1, 0], rotations[stance, 0, 0])
+        if params[5] != 0.0:
+            yaw -= params[5]
+        c, s = math.cos(yaw), math.sin(yaw)
+        turn[0, 0], turn[0, 1], turn[1, 0], turn[1, 1] = c, s, -s, c
+        rx, ry = positions[stance, 0], positions[stance, 1]
+        shift[0] = params[3] - (c * rx + s * ry)
+        shift[1] = params[4] - (-s * rx + c * ry)
+        _turn_point(turn, com, shift)
+        _turn_point(turn, com_velocity, shift[:0])
+        for k in range(FRAMES):
+            for col in range(3):
+                x, y = rotations[k, 0, col], rotations[k, 1, col]
+                rotations[k, 0, col] = c * x + s * y
+                rotations[k, 1, col] = -s * x + c * y
+            _turn_point(turn, positions[k], shift)
+    # the ZMP from the ankle sensors (estimate_zmp): the ground reaction is minus the reading, in the world frame
+    sensors = inputs[nq + nv:nq + nv + 12]  # rows right, left: force (3) then torque (3)
+    ground, min_force = params[6], params[7]
+    total = weighted_x = weighted_y = 0.0
+    for side in range(2):
+        r = rotations[side]
+        a = 6 * side
+        fx = -(r[0, 0] * sensors[a] + r[0, 1] * sensors[a + 1] + r[0, 2] * sensors[a + 2])
+        fy = -(r[1, 0] * sensors[a] + r[1, 1] * sensors[a + 1] + r[1, 2] * sensors[a + 2])
+        fz = -(r[2, 0] * sensors[a] + r[2, 1] * sensors[a + 1] + r[2, 2] * sensors[a + 2])
+        for row in range(3):
+            moment[side, row] = -(r[row, 0] * sensors[a + 3] + r[row, 1] * sensors[a + 4] + r[row, 2] * sensors[a + 5])
+        normal_force[side] = fz
+        cop[side, 0] = cop[side, 1] = np.nan
+        if fz < min_force:
+            continue
+        h = positions[side, 2] - ground
+        x = positions[side, 0] + -(moment[side, 1] + h * fx) / fz
+        y = positions[side, 1] + (moment[side, 0] - h * fy) / fz
+        cop[side, 0], cop[side, 1] = x, y
+        total += fz
+        weighted_x, weighted_y = weighted_x + fz * x, weighted_y + fz * y
+    if total > 0.0:
+        zmp[0], zmp[1], zmp[2] = weighted_x / total, weighted_y / total, 1.0
+    else:
+        zmp[0], zmp[1], zmp[2] = np.nan, np.nan, 0.0
+    return OK
+
+
+@njit(**_JIT)
+def _turn_point(turn, point, shift):
+    """``point = turn @ point + shift`` in place for a yaw ``turn``; ``shift`` empty: no shift."""
+    x, y = point[0], point[1]
+    point[0] = turn[0, 0] * x + turn[0, 1] * y + turn[0, 2] * point[2]
+    point[1] = turn[1, 0] * x + turn[1, 1] * y + turn[1, 2] * point[2]
+    point[2] = turn[2, 0] * x + turn[2, 1] * y + turn[2, 2] * point[2]
+    if shift.shape[0] == 3:
+        for r in range(3):
+            point[r] += shift[r]
+
+
+class Measurement(NamedTuple):
+    """One :meth:`CompiledMeasurement.measure` (views of the kernel's outputs: valid until the next call).
+
+    Attributes:
+        q, v: the state in pinocchio's convention.
+        com, com_velocity: CoM [m] and its velocity [m/s].
+        rotations, positions: (4, 3, 3) and (4, 3) [m]: ankle sensors (right, left), soles (right, left).
+        turn, shift: the map from the world into the plan's frame, ``x -> turn @ x + shift`` (identity and zero
+            without the stance frame).
+        zmp: ZMP (x, y) [m], or None when no foot carries ``min_force``.
+        cop, normal_force, moment: as :class:`~.zmp_estimator.ZmpEstimate`.
+    """
+
+    q: NDArray[np.float64]
+    v: NDArray[np.float64]
+    com: NDArray[np.float64]
+    com_velocity: NDArray[np.float64]
+    rotations: NDArray[np.float64]
+    positions: NDArray[np.float64]
+    turn: NDArray[np.float64]
+    shift: NDArray[np.float64]
+    zmp: NDArray[np.float64] | None
+    cop: NDArray[np.float64]
+    normal_force: NDArray[np.float64]
+    moment: NDArray[np.float64]
+
+
+class CompiledMeasurement:
+    """The walking controller's measurement (see the module docstring) as one kernel call.
+
+    Args:
+        model: the floating-base model (1-DoF joints and a free flyer: :meth:`RobotModel.serial_chain`).
+        frames: the four frames measured (ankle sensors right, left, then soles right, left), names or indices.
+    """
+
+    def __init__(self, model: RobotModel, frames: tuple[str | int, ...]) -> None:
+        if len(frames) != FRAMES:
+            raise ValueError(f"CompiledMeasurement measures {FRAMES} frames, got {len(frames)}")
+        chain = model.serial_chain()
+        nj, nq, nv = chain.num_joints, model.nq, model.nv
+        attachments = [model.frame_attachment(f) for f in frames]
+        outputs = nq + nv + sum(size for _, size in OUTPUT_SIZES)
+        floats: dict[str, NDArray[np.float64]] = {
+            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
+            "axis": chain.axis, "body_mass": chain.body_mass, "body_com": chain.body_com,
+            "body_inertia": chain.body_inertia, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)), "composite": np.zeros((nj, 13)),
+            "frame_rotation": np.array([r for _, r, _ in attachments]),
+            "frame_translation": np.array([p for _, _, p in attachments]),
+            "jacobian_com": np.zeros((3, nv)), "jacobian_angular": np.zeros((3, nv)),
+            "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)), "outputs": np.zeros(outputs),
+        }
+        ints: dict[str, NDArray[np.int64]] = {
+            "dims": np.array([nj, nq, nv, FRAMES], dtype=np.int64), "parent": chain.parent,
+            "joint_type": chain.joint_type, "q_index": chain.q_index, "v_index": chain.v_index,
+            "frame_joint": np.array([j for j, _, _ in attachments], dtype=np.int64),
+        }
+        self._nq, self._nv = nq, nv
+        self._f, self._i = pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
+        inputs = buffer_view(self._f, self._i, FLOAT_FIELDS, "inputs")
+        out = buffer_view(self._f, self._i, FLOAT_FIELDS, "outputs")
+        # views sliced once: measure() runs once per control period
+        self._q_in, self._v_in = inputs[:nq], inputs[nq:nq + nv]
+        self._sensors_in = inputs[nq + nv:nq + nv + 12]
+        self._params = inputs[nq + nv + 12:]
+        views: dict[str, NDArray[np.float64]] = {"q": out[:nq], "v": out[nq:nq + nv]}
+        o = nq + nv
+        for name, size in OUTPUT_SIZES:
+            views[name] = out[o:o + size]
+            o += size
+        self._views = views
+        self._rotations = views["rotations"].reshape(FRAMES, 3, 3)
+        self._positions = views["positions"].reshape(FRAMES, 3)
+        self._turn = views["turn"].reshape(3, 3)
+        self._cop = views["cop"].reshape(2, 2)
+        self._moment = views["moment"].reshape(2, 3)
+        self._kernel = compiled_entry_point(measure_step, "int64(float64[::1], int64[::1])")
+
+    def measure(self, q: NDArray[np.float64], v: NDArray[np.float64], sensors: NDArray[np.float64], *,
+                mujoco: bool, stance_frame: bool, stance: int, planned: tuple[float, float, float], ground: float,
+                min_force: float = 20.0) -> Measurement | None:
+        """Measure a state; None for a non-finite input or a zero base quaternion (nothing to read then).
+
+        Args:
+            q, v: the configuration and velocity, MuJoCo's ``qpos``, ``qvel`` (``mujoco``) or pinocchio's; float64
+                arrays of the model's sizes (not checked here).
+            sensors: the ankle wrenches [N, N m] in the sensor frames: 12 floats, ``(F_r, T_r, F_l, T_l)`` (the
+                observation's order).
+            mujoco: the state is MuJoCo's.
+            stance_frame: move the measurement into the stance foot's planned pose.
+            stance: the stance foot (0 right, 1 left).
+            planned: the stance sole's planned position (x, y) [m] and heading [rad].
+            ground: ground height [m].
+            min_force: vertical force [N] below which a foot counts as unloaded.
+        """
+        self._q_in[:] = q
+        self._v_in[:] = v
+        self._sensors_in[:] = sensors
+        self._params[:] = (1.0 if mujoco else 0.0, 1.0 if stance_frame else 0.0, float(stance), *planned, ground,
+                           min_force)
+        if self._kernel(self._f, self._i) != OK:
+            return None
+        views = self._views
+        zmp = views["zmp"]
+        return Measurement(views["q"], views["v"], views["com"], views["com_velocity"], self._rotations,
+                           self._positions, self._turn, views["shift"], zmp[:2] if zmp[2] != 0.0 else None, self._cop,
+                           views["normal_force"], self._moment)
