@@ -595,7 +595,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.bench_walk import format_walk_bench, run_walk_bench
 
                 kwargs = {"duration": 1.0, "repeats": 1} if args.quick else {}
-                report = run_walk_bench(seed=args.seed, progress=not args.no_progress, **kwargs)
+                report = run_walk_bench(seed=args.seed, progress=not args.no_progress, **kwargs, **_rounds(args))
                 print(format_walk_bench(report))
                 print(f"wrote {write_walk_bench(report, json_path)}")
             else:

@@ -9,15 +9,20 @@ inputs at every period (the kinematic configuration and the start and end refere
 - **python**: :class:`~redundancy_gym.controllers.walking.WholeBodyIk` (pinocchio kinematics and Jacobians,
   the same objectives and solve),
 
-are timed and compared: ``ik_compiled_vs_python`` is the ratio of the medians, ``ik_max_difference`` the
-largest difference of their configurations [rad or m]. ``controller_vs_lola`` relates our controller step to
-the 548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not
-measured here).
+are timed and compared in alternating rounds (:func:`~redundancy_gym.eval.bench_timing.alternating_rounds`: a
+warm-up round, then ``rounds`` rounds of compiled, python / python, compiled / ..., each sample one pass over the
+recorded states): ``ik_compiled_vs_python`` is the median over the rounds of the ratio of the two passes' medians
+(``ik_compiled_vs_python_rounds``: median, min, max and spread ``(max - min) / median``), ``ik_max_difference`` the
+largest difference of their configurations [rad or m].
 
 ``ikd``: the controller step with the joint trajectory from Inverse Kineto-Dynamics (the policy's ``ik="ikd"``,
 :class:`~redundancy_gym.controllers.ikd.WalkingIkd`) on the same walk, timed in alternating rounds with the CLIK
-controller (CLIK, IKD, CLIK, IKD, ...): ``ikd_vs_clik`` is the median over rounds of the ratio of the two medians
-(Lola: 823 / 548 us = 1.50 on a Core2 Duo; published). ``zmp_rms_mm``: in those walks, the rms distance of the
+controller (one walk each per round, the order reversed every other round, after a warm-up round):
+``ikd_vs_clik`` is the median over rounds of the ratio of the two walks' median steps (``ikd_vs_clik_rounds``; Lola:
+823 / 548 us = 1.50 on a Core2 Duo; published). The CLIK walks of these rounds also give the controller step
+(``controller``: median and p99 over their steps, and the start); ``controller_vs_lola`` relates its median to the
+548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not measured here;
+``controller_vs_lola_rounds``: the same per round). ``zmp_rms_mm``: in those walks, the rms distance of the
 measured ZMP (the env's contact pressure, in the plan's frame) from the pattern's reference ZMP, per controller.
 
 ``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
@@ -28,7 +33,6 @@ distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_c
 
 from __future__ import annotations
 
-import platform
 import time
 from typing import Any
 
@@ -39,6 +43,7 @@ from tqdm.auto import tqdm
 from ..controllers import CollisionObjective
 from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
 from ..policies.walking_policy import WalkingPolicy
+from .bench_timing import RatioStats, TimedPasses, alternating_rounds, finish_machine_info, machine_info
 from .evaluate import make_env
 from .exceptions import EvalError
 
@@ -132,60 +137,86 @@ def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", z
     return times, recorder.calls if recorder is not None else [], policy, fell
 
 
-def _time_calls(solver: Any, calls: list[_Call], repeats: int, label: str,
-                progress: bool) -> tuple[list[float], list[NDArray[np.float64]]]:
-    times, results = [], []
-    for q, start, end, dt in tqdm(calls, desc=f"bench walk {label}", disable=not progress):
-        runs = []
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            result = solver.step(q, start, end, dt)
-            runs.append((time.perf_counter() - t0) * 1e6)
-        times.append(float(np.median(runs)))
-        results.append(result.q)
-    return times, results
+class _Walks:
+    """A sampler: one walk of the walking policy (``ik`` "clik" or "ikd") per call; keeps each walk's predict times
+    [us], ZMP distances [m] and whether it fell, and returns the walk's median step after the first (which plans
+    the walk) [s]."""
+
+    def __init__(self, speed: float, steps: int, seed: int, ik: str) -> None:
+        self.speed, self.steps, self.seed, self.ik = speed, steps, seed, ik
+        self.times: list[list[float]] = []
+        self.zmp: list[list[float]] = []
+        self.fell: list[bool] = []
+
+    def __call__(self) -> float:
+        zmp: list[float] = []
+        times, _, _, fell = _walk(self.speed, self.steps, self.seed, record=False, ik=self.ik, zmp=zmp)
+        self.times.append(times)
+        self.zmp.append(zmp)
+        self.fell.append(fell)
+        return float(np.median(times[1:])) * 1e-6
 
 
-def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 3,
-                   rounds: int = 3, progress: bool = True) -> dict[str, Any]:
-    """Time the walking controller step, then its compiled IK against the pinocchio IK; returns the report.
+def _timed_solve(solver: Any) -> Any:
+    """``call -> seconds`` of one ``solver.step`` on a recorded IK call."""
+    def timed(call: _Call) -> float:
+        q, start, end, dt = call
+        t0 = time.perf_counter()
+        solver.step(q, start, end, dt)
+        return time.perf_counter() - t0
+
+    return timed
+
+
+def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 1,
+                   rounds: int = 7, progress: bool = True) -> dict[str, Any]:
+    """Time the walking controller step (CLIK and IKD walks in alternating rounds), then its compiled IK against the
+    pinocchio IK (alternating passes over the recorded states), then the obstacle courses; returns the report.
 
     Args:
         speed: commanded walking speed [m/s].
         duration: walk length [s].
         seed: reset seed.
-        repeats: timed repetitions per IK state (the median is kept).
-        rounds: alternating rounds of the CLIK and the IKD controller walks.
+        repeats: timed repetitions per IK state within a pass (the median is kept).
+        rounds: alternating rounds of the CLIK and IKD walks and of the compiled and python IK passes (after a
+            warm-up round each).
         progress: show progress bars.
+
+    Raises:
+        EvalError: ``repeats < 1``, ``rounds < 1``, a duration not finite and > 0, or a policy without the compiled IK.
     """
     if repeats < 1:
         raise EvalError(f"repeats must be >= 1, got {repeats}")
-    if rounds < 1:
-        raise EvalError(f"rounds must be >= 1, got {rounds}")
+    if int(rounds) != rounds or rounds < 1:
+        raise EvalError(f"rounds must be an integer >= 1, got {rounds!r}")
     if not np.isfinite(duration) or duration <= 0.0:
         raise EvalError(f"duration must be finite and > 0, got {duration!r}")
+    machine = machine_info()
     steps = int(round(duration / 0.004))
-    _walk(speed, min(steps, 50), seed, record=False)  # warm up compiled kernels and the per-speed start cache
-    controller_times, _, _, fell = _walk(speed, steps, seed, record=False)
+    walks = {"clik": _Walks(speed, steps, seed, "clik"), "ikd": _Walks(speed, steps, seed, "ikd")}
+    walk_rounds = alternating_rounds(walks, rounds=rounds, progress=progress, desc="bench walk clik/ikd rounds")
+    skip = walk_rounds.warmup
+    clik, ikd = walks["clik"], walks["ikd"]
+    controller = [t for times in clik.times[skip:] for t in times[1:]]  # the first call of a walk plans it
+    ikd_times = [t for times in ikd.times[skip:] for t in times[1:]]
+    zmp = {name: [d for walk in w.zmp[skip:] for d in walk] for name, w in walks.items()}
+    fell, ikd_fell = any(clik.fell[skip:]), any(ikd.fell[skip:])
+    ikd_stats = walk_rounds.ratio("ikd", "clik")
+    lola_stats = RatioStats.of([t * 1e6 / LOLA_CYCLE_US for t in walk_rounds.samples["clik"]])
+
     _, calls, policy, _ = _walk(speed, steps, seed, record=True)
     ik = policy.controller.ik
     compiled = policy.controller.solver
     if not isinstance(compiled, CompiledWholeBodyIk) or ik is None:
         raise EvalError("bench walk needs the compiled IK backend (the policy default)")
-    compiled_times, compiled_q = _time_calls(compiled, calls, repeats, "compiled", progress)
-    python_times, python_q = _time_calls(ik, calls, repeats, "python", progress)
-    difference = max(float(np.max(np.abs(a - b))) for a, b in zip(compiled_q, python_q))
-    _walk(speed, min(steps, 50), seed, record=False, ik="ikd")  # warm up the IKD's start
-    ikd_times: list[float] = []
-    ratios, ikd_fell = [], False
-    zmp: dict[str, list[float]] = {"clik": [], "ikd": []}
-    for _ in tqdm(range(rounds), desc="bench walk clik/ikd rounds", disable=not progress):
-        clik_round = _walk(speed, steps, seed, record=False, zmp=zmp["clik"])[0][1:]
-        ikd_round, _, _, fell_round = _walk(speed, steps, seed, record=False, ik="ikd", zmp=zmp["ikd"])
-        ikd_round = ikd_round[1:]
-        ikd_fell = ikd_fell or fell_round
-        ikd_times += ikd_round
-        ratios.append(float(np.median(ikd_round) / np.median(clik_round)))
+    difference = max(float(np.max(np.abs(compiled.step(*c).q - ik.step(*c).q))) for c in calls)
+    passes = {"compiled": TimedPasses(_timed_solve(compiled), calls, repeats),
+              "python": TimedPasses(_timed_solve(ik), calls, repeats)}
+    ik_rounds = alternating_rounds(passes, rounds=rounds, progress=progress, desc="bench walk IK rounds")
+    compiled_median, compiled_p90 = passes["compiled"].summary_us(ik_rounds.warmup)
+    python_median, python_p90 = passes["python"].summary_us(ik_rounds.warmup)
+    ik_stats = ik_rounds.ratio("compiled", "python")
+
     obstacles: dict[str, Any] = {}
     all_times: list[float] = []
     for course in tqdm(OBSTACLE_COURSES, desc="bench walk obstacles", disable=not progress):
@@ -198,26 +229,30 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
                              "steps": len(times), "success": success, "obstacle_contacts": contacts}
         all_times += times
     obstacle_median = float(np.median(all_times))
-    controller = controller_times[1:]  # the first call plans the walk
-    compiled_median, python_median = float(np.median(compiled_times)), float(np.median(python_times))
-    controller_median = float(np.median(controller))
+    controller_median = walk_rounds.median("clik") * 1e6
+    ikd_median = walk_rounds.median("ikd") * 1e6
     return {
         "benchmark": "walk", "env": ENV_ID, "target_speed": speed, "duration": duration, "seed": seed,
         "states": len(calls), "repeats": repeats, "fell": fell,
-        "machine": {"processor": platform.processor() or platform.machine(), "python": platform.python_version()},
+        "timing": {"rounds": rounds, "warmup": skip, "walk_orders": walk_rounds.orders, "ik_orders": ik_rounds.orders,
+                   "sample": "clik/ikd: one walk's median step; compiled/python: one pass over the recorded states"},
+        "machine": finish_machine_info(machine),
         "controller": {"step_us_median": controller_median, "step_us_p99": float(np.percentile(controller, 99)),
-                       "start_ms": controller_times[0] * 1e-3},
-        "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": float(np.percentile(compiled_times, 90))},
-        "ik_python": {"step_us_median": python_median, "step_us_p90": float(np.percentile(python_times, 90))},
-        "ik_compiled_vs_python": compiled_median / python_median,
-        "ikd": {"step_us_median": float(np.median(ikd_times)), "step_us_p99": float(np.percentile(ikd_times, 99)),
+                       "start_ms": float(np.median([w[0] for w in clik.times[skip:]])) * 1e-3},
+        "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": compiled_p90},
+        "ik_python": {"step_us_median": python_median, "step_us_p90": python_p90},
+        "ik_compiled_vs_python": ik_stats.median,
+        "ik_compiled_vs_python_rounds": ik_stats.to_json(),
+        "ikd": {"step_us_median": ikd_median, "step_us_p99": float(np.percentile(ikd_times, 99)),
                 "fell": ikd_fell, "rounds": rounds},
-        "ikd_vs_clik": float(np.median(ratios)),
-        "zmp_rms_mm": {ik: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for ik, d in zmp.items()},
-        "ikd_vs_clik_spread": [float(min(ratios)), float(max(ratios))],
-        "ikd_vs_lola_ikd": float(np.median(ikd_times)) / LOLA_IKD_CYCLE_US,
+        "ikd_vs_clik": ikd_stats.median,
+        "ikd_vs_clik_rounds": ikd_stats.to_json(),
+        "zmp_rms_mm": {name: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for name, d in zmp.items()},
+        "ikd_vs_clik_spread": [ikd_stats.min, ikd_stats.max],
+        "ikd_vs_lola_ikd": ikd_median / LOLA_IKD_CYCLE_US,
         "ik_max_difference": difference,
         "controller_vs_lola": controller_median / LOLA_CYCLE_US,
+        "controller_vs_lola_rounds": lola_stats.to_json(),
         "obstacles": {"env": OBSTACLE_ENV_ID, "target_speed": 0.4, "courses": obstacles,
                       "step_us_median": obstacle_median, "step_us_p99": float(np.percentile(all_times, 99))},
         "obstacles_vs_lola_cycle": obstacle_median / LOLA_OBSTACLE_CYCLE_US,
@@ -237,8 +272,9 @@ def format_walk_bench(report: dict[str, Any]) -> str:
         f"IK compiled      median {k['step_us_median']:.1f} us  p90 {k['step_us_p90']:.1f} us",
         f"IK python        median {p['step_us_median']:.1f} us  p90 {p['step_us_p90']:.1f} us",
         f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
-        f"(largest difference {report['ik_max_difference']:.1e})",
-        f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)",
+        f"(largest difference {report['ik_max_difference']:.1e})" + _rounds_text(report.get("ik_compiled_vs_python_rounds")),
+        f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)"
+        + _rounds_text(report.get("controller_vs_lola_rounds")),
         f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
         + ("  (fell)" if report["ikd"]["fell"] else ""),
         "measured ZMP from the reference, rms: " + ", ".join(
@@ -255,3 +291,10 @@ def format_walk_bench(report: dict[str, Any]) -> str:
         f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
         "collision avoidance)",
     ])
+
+
+def _rounds_text(stats: dict[str, Any] | None) -> str:
+    """``  rounds MIN-MAX, spread S %`` of a ratio's round statistics, or nothing."""
+    if not stats:
+        return ""
+    return f"  rounds {stats['min']:.3f}-{stats['max']:.3f}, spread {100 * stats['spread']:.1f} %"
