@@ -519,7 +519,7 @@ def main(argv: Sequence[str] | None = None) -> int:
                 from .eval.bench_ssv import write_ssv_bench as write_pik_bench
 
                 report = run_pik_bench(seed=args.seed, episodes=2 if args.quick else 10, quick=args.quick,
-                                       progress=not args.no_progress)
+                                       progress=not args.no_progress, **_rounds(args))
                 print(format_pik_bench(report))
                 print(f"wrote {write_pik_bench(report, json_path)}")
             elif args.name == "soak":

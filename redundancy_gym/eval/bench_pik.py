@@ -6,7 +6,12 @@
 - **AgriReach, self-collision scenario** (fig. 5.35): the point-to-point move of fig. 5.10 (it self-collides
   without avoidance) in a kinematic rollout, by the local grasp CLIK with collision avoidance, MPC with 0.15 s
   and 2 s horizons and the global optimum: pseudoenergy of the revolute joints, peak joint speed, task error,
-  smallest self-clearance and the median time per MPC update (``agri_horizon2s_update_ms_median``).
+  smallest self-clearance and the median time per MPC update (``agri_horizon2s_update_ms_median``). The update
+  times are measured apart, in alternating rounds (:func:`~redundancy_gym.eval.bench_timing.alternating_rounds`:
+  a warm-up round, then ``rounds`` rounds of local CLIK, MPC 0.15 s, MPC 2 s, reversed every other round, each
+  sample one timed rollout of the move and its median step): the update medians are over the rounds, and
+  ``agri_horizon2s_vs_local`` / ``agri_horizon015s_vs_local`` are the medians over the rounds of the MPC update over
+  the local CLIK step in the same round (``*_rounds``: median, min, max and spread ``(max - min) / median``).
 - **Conjugate gradient against steepest descent** (fig. 5.32): the global PlanarReach problem from the
   minimum-norm solution; iterations until the cost is within ``1e-4`` of the decrease both reach.
 - **Velocity jumps** (figs. 5.33/5.34): PlanarReach MPC (1 s horizon, control at 100 Hz) in kinematic rollouts
@@ -20,7 +25,6 @@
 
 from __future__ import annotations
 
-import platform
 import time
 from collections.abc import Callable
 from typing import Any, NamedTuple
@@ -38,13 +42,14 @@ from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
 from ..policies import make_policy  # noqa: E402
 from ..policies.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
 from ..controllers.receding_horizon import RecedingHorizon  # noqa: E402
+from .bench_timing import alternating_rounds, finish_machine_info, machine_info  # noqa: E402
 from .evaluate import evaluate  # noqa: E402
 from .exceptions import EvalError  # noqa: E402
 from .plots import save_figure  # noqa: E402
 from .point_to_point import FIG_5_10, PointToPointScenario, prepare_point_to_point  # noqa: E402
 
-__all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "format_pik_bench",
-           "planar_kinematic_traces", "plot_joint_velocity", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
+__all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "agri_update_rounds",
+           "format_pik_bench", "planar_kinematic_traces", "plot_joint_velocity", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -258,17 +263,26 @@ def velocity_jumps(*, seed: int = 0, sample_times: tuple[float, ...] = JUMP_SAMP
     return rows
 
 
-def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
-                               iterations: int = 2, global_iterations: int = 300) -> dict[str, KinematicTrace]:
-    """The fig. 5.10 move of the 9-DoF arm (fig. 5.35 analogue): local grasp CLIK with self-collision
-    avoidance, MPC for each horizon (augmented) and the global optimum, in kinematic rollouts."""
+class _AgriMove(NamedTuple):
+    """The fig. 5.10 move set up for kinematic rollouts (:func:`_agri_move`)."""
+
+    setup: Any
+    dt: float
+    target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]]
+    wdot: Callable[[int, int], NDArray[np.float64]]
+    clearance: Callable[[NDArray[np.float64]], float]
+    problem: Callable[[bool], PredictiveIk]
+    gain: float
+
+
+def _agri_move(scenario: PointToPointScenario, longest_horizon: float) -> _AgriMove:
+    """The grasp policy, path table, targets, clearance and predictive problems of ``scenario``'s move."""
     setup = prepare_point_to_point(scenario)
-    grasp, controller, monitor, path, q0, steps = (setup.policy, setup.controller, setup.monitor, setup.path,
-                                                   setup.q_start, setup.steps)
+    grasp, monitor, path, steps = setup.policy, setup.monitor, setup.path, setup.steps
     model = grasp.model
     assert grasp.collision is not None
     dt = scenario.dt
-    longest = int(round(max(horizons, default=0.0) / dt))
+    longest = int(round(longest_horizon / dt))
     table = np.array([np.concatenate(path(k * dt)) for k in range(steps + longest + 2)])
 
     def target(k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -286,19 +300,64 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
         config = PredictivePolicyConfig().for_task("grasp")
         return predictive_problem(model, grasp.task, grasp.joint_limits, grasp.collision, config, augmented=augmented)
 
-    gain = float(grasp.config.gain)
-    velocity_level = problem(False)
+    return _AgriMove(setup, dt, target, wdot, clearance, problem, float(grasp.config.gain))
+
+
+def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
+                               iterations: int = 2, global_iterations: int = 300) -> dict[str, KinematicTrace]:
+    """The fig. 5.10 move of the 9-DoF arm (fig. 5.35 analogue): local grasp CLIK with self-collision
+    avoidance, MPC for each horizon (augmented) and the global optimum, in kinematic rollouts."""
+    move = _agri_move(scenario, max(horizons, default=0.0))
+    setup, dt, target, wdot, gain = move.setup, move.dt, move.target, move.wdot, move.gain
+    q0, steps = setup.q_start, setup.steps
+    velocity_level = move.problem(False)
     task_part = _task_part(velocity_level, target, gain)
-    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(controller, target), task_part, clearance)}
+    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(setup.controller, target), task_part,
+                                     move.clearance)}
     for horizon in horizons:
-        pik = problem(True)
+        pik = move.problem(True)
         mpc = RecedingHorizon(pik, max(1, int(round(horizon / dt))), dt, iterations=iterations)
         traces[f"MPC {horizon:g} s"] = _rollout(q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), task_part,
-                                                clearance)
+                                                move.clearance)
     plan = velocity_level.optimize(q0, wdot(0, steps), dt, np.zeros((steps, velocity_level.n)),
                                    max_iterations=global_iterations, tolerance=1e-9).rollout
-    traces["global"] = _rollout(q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part, clearance)
+    traces["global"] = _rollout(q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part,
+                                move.clearance)
     return traces
+
+
+def _timed_rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command) -> float:
+    """Median time [s] of ``command`` over a kinematic rollout (only the command is timed)."""
+    q = np.array(q0, dtype=np.float64)
+    seconds = []
+    for k in range(steps):
+        start = time.perf_counter()
+        qdot, _ = command(k, q)
+        seconds.append(time.perf_counter() - start)
+        q = q + dt * qdot
+    return float(np.median(seconds))
+
+
+def agri_update_rounds(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
+                       iterations: int = 2, rounds: int = 5, progress: bool = False) -> Any:
+    """Alternating rounds of timed rollouts of the fig. 5.10 move: ``"local CLIK"`` (the grasp CLIK step) and
+    ``"MPC <h> s"`` per horizon (a fresh receding horizon per rollout, so every sample starts cold alike); each
+    sample is the rollout's median step [s]. Returns the :class:`~redundancy_gym.eval.bench_timing.Rounds`."""
+    move = _agri_move(scenario, max(horizons, default=0.0))
+    setup, dt = move.setup, move.dt
+    q0, steps = setup.q_start, setup.steps
+    local = _local_command(setup.controller, move.target)
+    samplers = {"local CLIK": lambda: _timed_rollout(q0, steps, dt, local)}
+    for horizon in horizons:
+        pik = move.problem(True)
+        samples = max(1, int(round(horizon / dt)))
+
+        def sample(pik: PredictiveIk = pik, samples: int = samples) -> float:
+            mpc = RecedingHorizon(pik, samples, dt, iterations=iterations)
+            return _timed_rollout(q0, steps, dt, _mpc_command(pik, mpc, move.wdot, move.target, move.gain))
+
+        samplers[f"MPC {horizon:g} s"] = sample
+    return alternating_rounds(samplers, rounds=rounds, progress=progress, desc="bench pik update rounds")
 
 
 def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[str, Any]:
@@ -332,13 +391,26 @@ def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[st
             "cg_costs": costs["fletcher_reeves"].tolist(), "sd_costs": costs["steepest_descent"].tolist()}
 
 
-def run_pik_bench(*, seed: int = 0, episodes: int = 10, progress: bool = True, quick: bool = False) -> dict[str, Any]:
-    """All parts of the bench; returns the report (``quick``: fewer episodes and iterations, for tests)."""
+def run_pik_bench(*, seed: int = 0, episodes: int = 10, rounds: int = 5, progress: bool = True,
+                  quick: bool = False) -> dict[str, Any]:
+    """All parts of the bench; returns the report (``quick``: fewer episodes and iterations, for tests).
+
+    Args:
+        seed: reset seed.
+        episodes: PlanarReach episodes per policy.
+        rounds: alternating rounds of the AgriReach update timing (after a warm-up round).
+        progress: show progress bars.
+        quick: fewer iterations and sample times.
+
+    Raises:
+        EvalError: ``episodes < 1`` or ``rounds < 1``.
+    """
     if episodes < 1:
         raise EvalError(f"episodes must be >= 1, got {episodes}")
-    report: dict[str, Any] = {"benchmark": "pik", "seed": seed,
-                              "machine": {"processor": platform.processor() or platform.machine(),
-                                          "python": platform.python_version()}}
+    if int(rounds) != rounds or rounds < 1:
+        raise EvalError(f"rounds must be an integer >= 1, got {rounds!r}")
+    machine = machine_info()
+    report: dict[str, Any] = {"benchmark": "pik", "seed": seed, "machine": None}  # the machine is filled in last
     planar = {}
     for name in tqdm(("clik", "predictive", "global"), desc="bench pik PlanarReach", disable=not progress):
         r = evaluate(PLANAR, name, episodes=episodes, seed=seed, progress=False).to_json()
@@ -350,7 +422,16 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, progress: bool = True, q
     iterations = 40 if quick else 300
     agri = agri_self_collision_traces(global_iterations=iterations)
     report["agri_self_collision"] = {label: trace.summary(slice(1, None)) for label, trace in agri.items()}
+    timed = agri_update_rounds(rounds=rounds, progress=progress)
+    for label in timed.names:  # the update times of the rounds replace those of the single traced rollout
+        report["agri_self_collision"][label]["update_ms_median"] = timed.median(label) * 1e3
     report["agri_horizon2s_update_ms_median"] = report["agri_self_collision"]["MPC 2 s"]["update_ms_median"]
+    for label, name in (("MPC 2 s", "agri_horizon2s_vs_local"), ("MPC 0.15 s", "agri_horizon015s_vs_local")):
+        stats = timed.ratio(label, "local CLIK")
+        report[name] = stats.median
+        report[f"{name}_rounds"] = stats.to_json()
+    report["timing"] = {"rounds": rounds, "warmup": timed.warmup, "orders": timed.orders,
+                        "sample": "one kinematic rollout of the fig. 5.10 move, its median step"}
     report["descent"] = _descent_comparison(seed, 60 if quick else 200, 1e-4)
     kinematic = planar_kinematic_traces(seed=seed, global_iterations=iterations)
     report["planar_kinematic"] = {label: trace.summary() for label, trace in kinematic.items()}
@@ -358,6 +439,7 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, progress: bool = True, q
     report["velocity_jumps"] = rows
     headline = next(r for r in rows if r["sample_time"] == JUMP_SAMPLE_TIME)
     report["nullspace_jump_ratio"] = headline["nullspace_jump_ratio"]
+    report["machine"] = finish_machine_info(machine)
     return report
 
 
@@ -374,6 +456,11 @@ def format_pik_bench(report: dict[str, Any]) -> str:
         lines.append(f"  {name} | {r['pseudoenergy']:.4f} | {r['peak_joint_speed']:.3f} | "
                      f"{1e3 * r['min_clearance']:.1f} | {r['update_ms_median']:.3f}")
     lines.append(f"agri_horizon2s_update_ms_median = {report['agri_horizon2s_update_ms_median']:.2f}")
+    for name in ("agri_horizon2s_vs_local", "agri_horizon015s_vs_local"):
+        if name in report:
+            r = report[f"{name}_rounds"]
+            lines.append(f"{name} = {report[name]:.1f}  (MPC update / local CLIK step; rounds {r['min']:.1f}-"
+                         f"{r['max']:.1f}, spread {100 * r['spread']:.1f} %)")
     d = report["descent"]
     lines.append(f"descent to {d['tolerance']:g} of the decrease: CG {d['cg_iterations']} iterations, steepest "
                  f"descent {d['sd_iterations']} (of {d['max_iterations']})")

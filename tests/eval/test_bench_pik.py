@@ -14,7 +14,7 @@ from redundancy_gym.eval.exceptions import EvalError
 
 
 def test_pik_bench_report(tmp_path) -> None:
-    report = run_pik_bench(episodes=1, quick=True, progress=False)
+    report = run_pik_bench(episodes=1, rounds=2, quick=True, progress=False)
     planar = report["planar"]
     assert set(planar) == {"clik", "predictive", "global"}
     assert report["planar_mpc_vs_local_pseudoenergy"] == pytest.approx(
@@ -22,6 +22,16 @@ def test_pik_bench_report(tmp_path) -> None:
     agri = report["agri_self_collision"]
     assert set(agri) == {"local CLIK", "MPC 0.15 s", "MPC 2 s", "global"}
     assert report["agri_horizon2s_update_ms_median"] == agri["MPC 2 s"]["update_ms_median"] > 0.0
+    # the update times come from alternating rounds of timed rollouts: MPC against the local CLIK step
+    assert report["timing"]["orders"] == [["local CLIK", "MPC 0.15 s", "MPC 2 s"], ["MPC 2 s", "MPC 0.15 s", "local CLIK"]]
+    for name in ("agri_horizon2s_vs_local", "agri_horizon015s_vs_local"):
+        stats = report[f"{name}_rounds"]
+        assert report[name] == stats["median"] and stats["rounds"] == 2
+        assert 1.0 < stats["min"] <= stats["median"] <= stats["max"]  # an MPC update costs more than a CLIK step
+    assert report["agri_horizon2s_vs_local"] > report["agri_horizon015s_vs_local"]
+    assert report["agri_horizon2s_vs_local"] == pytest.approx(
+        agri["MPC 2 s"]["update_ms_median"] / agri["local CLIK"]["update_ms_median"], rel=0.5)
+    assert len(report["machine"]["load_average_end"]) == 3
     descent = report["descent"]
     assert descent["cg_costs"][0] == descent["sd_costs"][0] > descent["best_cost"]
     # figs. 5.33/5.34: with a coarse prediction sample the velocity-level inputs are a staircase, the augmented
@@ -39,6 +49,8 @@ def test_pik_bench_report(tmp_path) -> None:
     assert written["agri_horizon2s_update_ms_median"] == report["agri_horizon2s_update_ms_median"]
     with pytest.raises(EvalError, match="episodes"):
         run_pik_bench(episodes=0, progress=False)
+    with pytest.raises(EvalError, match="rounds"):
+        run_pik_bench(rounds=0, progress=False)
 
 
 def test_kinematic_traces_track_the_line_and_plot(tmp_path) -> None:
