@@ -224,10 +224,11 @@ def test_pair_batch_matches_single_queries_in_the_original_order(rng: np.random.
 
 
 def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: np.random.Generator) -> None:
-    """The branch-free PSS-PSS and LSS-LSS loops must agree with the general closest-point code on every pair,
-    with hard cases (parallel, nearly parallel, collapsed, intersecting, concentric, inactive) mixed in."""
+    """The branch-free PSS-PSS, PSS-LSS and LSS-LSS loops must agree with the general closest-point code on every
+    pair, with hard cases (parallel, nearly parallel, collapsed, intersecting, concentric, touching, tiny, huge,
+    inactive) mixed in."""
     from redundancy_gym.geometry import PairBatch
-    from redundancy_gym.geometry.ssv_kernels import segment_segment
+    from redundancy_gym.geometry.ssv_kernels import point_segment, segment_segment
 
     def lss(p0: list[float], p1: list[float]) -> LSS:
         return LSS(p0, p1, 0.05)
@@ -243,6 +244,17 @@ def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: 
     pairs = [(random_volume(rng, "LSS"), random_volume(rng, "LSS")) for _ in range(40)] + hard
     pairs += [(random_volume(rng, "PSS"), random_volume(rng, "PSS")) for _ in range(20)]
     pairs += [(PSS([0.1, 0.2, 0.3], 0.1), PSS([0.1, 0.2, 0.3], 0.2))]  # concentric
+    # sphere/capsule pairs in both orders (the kernel swaps the capsule-first ones), with their hard cases
+    pairs += [(random_volume(rng, "PSS"), random_volume(rng, "LSS")) for _ in range(20)]
+    pairs += [(random_volume(rng, "LSS"), random_volume(rng, "PSS")) for _ in range(20)]
+    pairs += [
+        (PSS([0.5, 0.0, 0.0], 0.1), lss([0, 0, 0], [1, 0, 0])),  # centre on the segment: touching primitives
+        (lss([0, 0, 0], [1, 0, 0]), PSS([1.0, 0.0, 0.0], 0.1)),  # centre on an end point, capsule first
+        (PSS([0.3, 0.4, 0.0], 0.1), lss([0.2, 0.2, 0.2], [0.2, 0.2, 0.2])),  # collapsed segment
+        (PSS([-1.0, 0.5, 0.0], 0.1), lss([0, 0, 0], [1, 0, 0])),  # beyond the first end: s clamped to 0
+        (PSS([1e-40, 0.0, 0.0], 1e-41), lss([0, 1e-40, 0], [1e-40, 1e-40, 0])),  # tiny: rescaled general path
+        (PSS([1e40, 0.0, 0.0], 1.0), lss([1e40, 1e39, 0], [2e40, 1e39, 0])),  # huge
+    ]
     order = rng.permutation(len(pairs))
     volumes = [v for k in order for v in pairs[k]]
     ia = np.arange(0, len(volumes), 2)
@@ -258,7 +270,15 @@ def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: 
             continue
         assert np.all(np.isfinite(res.normal[k])) and np.linalg.norm(res.normal[k]) == pytest.approx(1.0)
         assert res.distance[k] == pytest.approx(ssv_distance(a, b), abs=TOL)
-        if isinstance(a, LSS):
+        if isinstance(a, PSS) != isinstance(b, PSS):  # the flat sphere/capsule loop against point_segment
+            sphere, capsule = (a, b) if isinstance(a, PSS) else (b, a)
+            c = tuple(sphere.points[0])
+            d2, q = point_segment(c, *[tuple(x) for x in capsule.points])
+            scale = max(1.0, float(np.abs(c).max()))
+            assert res.distance[k] == pytest.approx(np.sqrt(d2) - a.radius - b.radius, abs=1e-12 * scale)
+            np.testing.assert_allclose(res.point_a[k], c if a is sphere else q, atol=1e-12 * scale)
+            np.testing.assert_allclose(res.point_b[k], q if a is sphere else c, atol=1e-12 * scale)
+        if isinstance(a, LSS) and isinstance(b, LSS):
             p = [tuple(x) for x in (*a.points, *b.points)]
             d2, pa, pb = segment_segment(*p)
             assert res.distance[k] == pytest.approx(np.sqrt(d2) - a.radius - b.radius, abs=1e-12)
