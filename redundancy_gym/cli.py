@@ -586,7 +586,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                     ray_workers = ()
                     print("Ray is not installed: the Ray rows are left out (pip install -e '.[ray]')")
                 report = run_scale_bench(workers=(args.workers or 2,), episodes=episodes, ray_workers=ray_workers,
-                                         rounds=1 if args.quick else 3, vec_steps=30 if args.quick else 300,
+                                         rounds=args.rounds or (1 if args.quick else 3),
+                                         vec_steps=30 if args.quick else 300,
                                          seed=args.seed, progress=not args.no_progress)
                 print(format_scale_bench(report))
                 print(f"wrote {write_scale_bench(report, json_path)}")

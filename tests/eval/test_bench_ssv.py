@@ -44,3 +44,10 @@ def test_bench_ssv_rejects_bad_options() -> None:
         run_ssv_bench(min_time=0.0, progress=False)
     with pytest.raises(EvalError, match="100"):
         run_ssv_bench(batch_sizes=(1, 10), progress=False)
+
+
+@pytest.mark.parametrize("argv", [["bench", "soak", "--rounds", "3"], ["bench", "ssv", "--rounds", "0"]])
+def test_cli_rounds_option_is_checked(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2 and "--rounds" in capsys.readouterr().err
