@@ -101,6 +101,12 @@ class DcmPlan:
 
     def sample(self, t: float) -> ComState:
         """The LIPM state at time ``t`` [s]; before the first knot the first, after the last the resting state."""
+        px, py, vx, vy, ax, ay, xx, xy, rx, ry = self.values(t)
+        return ComState(np.array((px, py)), np.array((vx, vy)), np.array((ax, ay)), np.array((xx, xy)),
+                        np.array((rx, ry)))
+
+    def values(self, t: float) -> tuple[float, float, float, float, float, float, float, float, float, float]:
+        """:meth:`sample` as Python floats: CoM position, velocity, acceleration, DCM and ZMP, (x, y) each."""
         # Scalar math on x and y, with bisect on a list of knot times: on 2-vectors numpy's per-call overhead cost
         # several times the arithmetic, in the walking controller's per-period budget. The operations are those of
         # the vector form in the same order (the results agree to round-off; only exp may differ in the last bit).
@@ -113,7 +119,9 @@ class DcmPlan:
         else:
             k = min(max(bisect.bisect_right(knots, t) - 1, 0), len(knots) - 2)
             s = max(t - knots[k], 0.0)
-        zx, zy, mx, my, hcx, hcy, dx, dy = self._segment(k)
+        segments = self._segments  # type: ignore[attr-defined]
+        segment = segments.get(k)
+        zx, zy, mx, my, hcx, hcy, dx, dy = segment if segment is not None else self._segment(k)
         # r = r_k + m s; at rest r = r_k as it is (0 * s would be NaN for an infinite pause)
         rx, ry = (zx + mx * s, zy + my * s) if k >= 0 else (zx, zy)
         w = self.omega
@@ -125,8 +133,7 @@ class DcmPlan:
         px, py = rx + gx + ex, ry + gy + ey
         vx, vy = mx + w * (gx - ex), my + w * (gy - ey)
         w2 = w**2
-        return ComState(np.array((px, py)), np.array((vx, vy)), np.array((w2 * (px - rx), w2 * (py - ry))),
-                        np.array((px + vx / w, py + vy / w)), np.array((rx, ry)))
+        return px, py, vx, vy, w2 * (px - rx), w2 * (py - ry), px + vx / w, py + vy / w, rx, ry
 
     def _segment(self, k: int) -> tuple[float, float, float, float, float, float, float, float]:
         """Coefficients of segment ``k`` (-1: the rest after the last knot) as Python floats, cached:

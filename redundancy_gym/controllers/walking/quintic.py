@@ -28,6 +28,12 @@ class Quintic:
     duration: float
     coefficients: NDArray[np.float64]
 
+    def __post_init__(self) -> None:
+        # evaluate() runs several times per control period of the walking controller; on scalar or 2-vector values
+        # it evaluates the polynomials on Python floats (the coefficients read once, on first use: the arrays are not
+        # written after construction). numpy's per-call overhead on 2-vectors cost several times the arithmetic.
+        object.__setattr__(self, "_rows", None)
+
     @classmethod
     def from_boundary(cls, duration: float, start: ArrayLike, end: ArrayLike, start_velocity: ArrayLike = 0.0,
                       end_velocity: ArrayLike = 0.0, start_acceleration: ArrayLike = 0.0,
@@ -52,6 +58,26 @@ class Quintic:
     def evaluate(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Position, velocity and acceleration at ``s`` [s], clamped into ``[0, duration]``."""
         s = min(max(float(s), 0.0), self.duration)
+        rows: list[list[float]] | None = self._rows  # type: ignore[attr-defined]
+        if rows is None:
+            c = self.coefficients
+            # per value component, its six coefficients; other shapes (matrices of values) keep the array form
+            rows = [c.tolist()] if c.ndim == 1 else c.T.tolist() if c.ndim == 2 and c.shape[1] <= 3 else []
+            object.__setattr__(self, "_rows", rows)
+        if not rows:
+            return self._evaluate_array(s)
+        # the array form's operations in its order, per component (elementwise IEEE arithmetic: the same floats)
+        p, v, a = [], [], []
+        for c0, c1, c2, c3, c4, c5 in rows:
+            p.append(c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5)))))
+            v.append(c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5))))
+            a.append(2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5)))
+        if self.coefficients.ndim == 1:  # scalar values: NumPy scalars, as the array form gives
+            return np.float64(p[0]), np.float64(v[0]), np.float64(a[0])  # type: ignore[return-value]
+        return np.array(p), np.array(v), np.array(a)
+
+    def _evaluate_array(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`evaluate` on the coefficient array (values of any shape), ``s`` already clamped."""
         c = self.coefficients
         position = c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * (c[4] + s * c[5]))))
         velocity = c[1] + s * (2.0 * c[2] + s * (3.0 * c[3] + s * (4.0 * c[4] + s * 5.0 * c[5])))

@@ -51,6 +51,8 @@ since SSTA last planned for SSTA to plan again (at a step start)."""
 _Measured = tuple[NDArray[np.float64], NDArray[np.float64], ZmpEstimate]
 """The measurement of one period: CoM [m], its velocity [m/s] (in the plan's frame) and the ZMP estimate."""
 _FLOAT64 = np.dtype(np.float64)
+_ReferenceBase = tuple[NDArray[np.float64], float, float, float, float]
+"""A packed IK reference without the stabilizer's offset, and its CoM (x, y) [m] and CoM velocity (x, y) [m/s]."""
 
 
 def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
@@ -230,6 +232,7 @@ class WalkingController:
         self.ikd_config = ikd
         self.ikd: WalkingIkd | None = None
         self._ikd_com = (np.zeros(3), np.zeros(3))
+        self._base: tuple[PatternSample, _ReferenceBase] | None = None  # the last packed reference (its sample)
 
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
@@ -303,6 +306,7 @@ class WalkingController:
         self.time = 0.0
         self._command_replan = -np.inf
         self._next: PatternSample | None = None
+        self._base = None
 
     def set_command(self, forward: float, lateral: float = 0.0, yaw_rate: float = 0.0) -> None:
         """Walk at ``forward`` and ``lateral`` [m/s] (in the frame of the walker's heading), turning at ``yaw_rate``
@@ -446,33 +450,59 @@ class WalkingController:
         """The IK reference of a pattern sample, packed (:meth:`WholeBodyReference.to_array`): the CoM moved by the
         stabilizer's ``offset`` [m] at ``rate`` [m/s], soles ``R_z(yaw) R_y(pitch)`` (angular velocity
         ``R_z(yaw) (0, pitch rate, 0) + (0, 0, yaw rate)``), torso upright along the mean heading of the feet."""
+        return WalkingController._with_offset(WalkingController._reference_base(sample), offset, rate)
+
+    @staticmethod
+    def _with_offset(base: _ReferenceBase, offset: NDArray[np.float64], rate: NDArray[np.float64]
+                     ) -> NDArray[np.float64]:
+        """A copy of the packed reference ``base`` with the CoM moved by ``offset`` [m] at ``rate`` [m/s] (x, y)."""
+        packed, com_x, com_y, velocity_x, velocity_y = base
+        a = packed.copy()
+        a[0], a[1] = com_x + float(offset[0]), com_y + float(offset[1])
+        a[3], a[4] = velocity_x + float(rate[0]), velocity_y + float(rate[1])
+        return a
+
+    @staticmethod
+    def _reference_base(sample: PatternSample) -> _ReferenceBase:
+        """:meth:`_reference_array` without the stabilizer's offset: the packed reference with the horizontal CoM and
+        its velocity left at zero, and those four [m, m/s] (the end of one period is the start of the next: its
+        reference is packed once, then offset twice)."""
         a = np.zeros(REFERENCE_SIZE)
-        com, velocity = sample.com, sample.com_velocity
-        a[0:3] = com[0] + offset[0], com[1] + offset[1], com[2]
-        a[3:6] = velocity[0] + rate[0], velocity[1] + rate[1], velocity[2]
+        com, velocity = sample.com.tolist(), sample.com_velocity.tolist()
+        a[2], a[5] = com[2], velocity[2]
         a[6:12] = sample.feet.ravel()
-        yaws, yaw_rates = sample.feet_yaw, sample.feet_yaw_rate
+        pitches, pitch_rates = sample.feet_pitch.tolist(), sample.feet_pitch_rate.tolist()
+        yaws, yaw_rates = sample.feet_yaw.tolist(), sample.feet_yaw_rate.tolist()
+        a[30:33], a[36:39] = sample.feet_velocity
         for i in range(2):
-            pitch = float(sample.feet_pitch[i])
+            pitch = pitches[i]
             c, s = math.cos(pitch), math.sin(pitch)
-            a[30 + 6 * i:33 + 6 * i] = sample.feet_velocity[i]
-            yaw, yaw_rate = float(yaws[i]), float(yaw_rates[i])
+            yaw, yaw_rate = yaws[i], yaw_rates[i]
             if yaw == 0.0 and yaw_rate == 0.0:
                 a[12 + 9 * i:21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
-                a[34 + 6 * i] = sample.feet_pitch_rate[i]
+                a[34 + 6 * i] = pitch_rates[i]
                 continue
             cz, sz = math.cos(yaw), math.sin(yaw)
             a[12 + 9 * i:21 + 9 * i] = cz * c, -sz, cz * s, sz * c, cz, sz * s, -s, 0.0, c
-            pitch_rate = float(sample.feet_pitch_rate[i])
+            pitch_rate = pitch_rates[i]
             a[33 + 6 * i:36 + 6 * i] = -sz * pitch_rate, cz * pitch_rate, yaw_rate
-        torso, torso_rate = 0.5 * (float(yaws[0]) + float(yaws[1])), 0.5 * (float(yaw_rates[0]) + float(yaw_rates[1]))
+        torso, torso_rate = 0.5 * (yaws[0] + yaws[1]), 0.5 * (yaw_rates[0] + yaw_rates[1])
         if torso == 0.0 and torso_rate == 0.0:
             a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
         else:
             cz, sz = math.cos(torso), math.sin(torso)
             a[42:51] = cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0
             a[53] = torso_rate
-        return a
+        return a, com[0], com[1], velocity[0], velocity[1]
+
+    def _packed_base(self, sample: PatternSample) -> _ReferenceBase:
+        """:meth:`_reference_base` of ``sample``, kept from the last period where it is that sample."""
+        cached = self._base
+        if cached is not None and cached[0] is sample:
+            return cached[1]
+        base = self._reference_base(sample)
+        self._base = (sample, base)
+        return base
 
     def _in_stance_frame(self, sample: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
                          rotations: NDArray[np.float64], positions: NDArray[np.float64]
@@ -617,8 +647,8 @@ class WalkingController:
         else:
             feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         offset_end = feedback.offset + feedback.rate * self.dt
-        start_ref = self._reference_array(start, feedback.offset, feedback.rate)
-        end_ref = self._reference_array(end, offset_end, feedback.rate)
+        start_ref = self._with_offset(self._packed_base(start), feedback.offset, feedback.rate)
+        end_ref = self._with_offset(self._packed_base(end), offset_end, feedback.rate)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)

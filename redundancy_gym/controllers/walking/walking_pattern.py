@@ -577,13 +577,18 @@ class WalkingPattern:
         k = self.step_at(t)
         if k > self._plan_step:
             self._replan(k)
-        state = self._plan.sample(t)
-        feet = np.array([self.foothold(0), self.foothold(1)])
+        # the plan's values and the swing as Python floats, the arrays built once each: this runs every control
+        # period, where numpy's per-call overhead on 2- and 3-vectors cost several times the arithmetic (the
+        # operations are the array form's, elementwise: the same floats)
+        px, py, vx, vy, _, _, dcm_x, dcm_y, rx, ry = self._plan.values(t)
         feet_velocity = np.zeros((2, 3))
         pitch, pitch_rate = np.zeros(2), np.zeros(2)
         yaw, yaw_rate = np.zeros(2), np.zeros(2)
         contact = [True, True]
-        if k >= 0:
+        if k < 0:
+            feet = np.array([self.foothold(0), self.foothold(1)])
+        else:
+            feet = np.empty((2, 3))  # both rows set here
             swing_side = RIGHT if k % 2 == 0 else LEFT
             feet[swing_side] = self.foothold(k + 2)
             feet[1 - swing_side] = self.foothold(k + 1)
@@ -591,7 +596,7 @@ class WalkingPattern:
                 yaw[swing_side], yaw[1 - swing_side] = self.heading(k + 2), self.heading(k + 1)
             s = t - self.step_start(k)
             if s < self.step_single(k):
-                position, velocity = self._swing(k, s)
+                x, y, z, x_rate, y_rate, z_rate = self._swing_values(k, s)
                 nominal, scale = self._nominal_swing_time(k, s)
                 angle, rate, _ = self._swing_pitch.evaluate(nominal)
                 angle, rate = float(angle), float(rate) * scale
@@ -600,8 +605,8 @@ class WalkingPattern:
                     # high over a box the knee bends so far that the ankle meets its dorsiflexion limit and the
                     # real foot pitches toes-down anyway; planned, its toe tip still follows the path
                     gain = self._ssta.config.raise_pitch
-                    angle += gain * (float(position[2]) - self.ground)
-                    rate += gain * float(velocity[2])
+                    angle += gain * (z - self.ground)
+                    rate += gain * z_rate
                 # the pitched foot turns about its toe tip, which follows the swing path: no toe scuffing
                 toe = self.config.toe_length
                 if self._turned:  # the toe tip ahead along the foot's heading, which turns over the single support
@@ -610,22 +615,26 @@ class WalkingPattern:
                     c, s_ = math.cos(heading), math.sin(heading)
                     ahead = toe * (1.0 - math.cos(angle))
                     ahead_rate = toe * rate * math.sin(angle)
-                    position += np.array([c * ahead, s_ * ahead, toe * math.sin(angle)])
-                    velocity += np.array([c * ahead_rate - s_ * ahead * heading_rate,
-                                          s_ * ahead_rate + c * ahead * heading_rate, toe * rate * math.cos(angle)])
+                    feet[swing_side] = (x + c * ahead, y + s_ * ahead, z + toe * math.sin(angle))
+                    feet_velocity[swing_side] = (x_rate + (c * ahead_rate - s_ * ahead * heading_rate),
+                                                 y_rate + (s_ * ahead_rate + c * ahead * heading_rate),
+                                                 z_rate + toe * rate * math.cos(angle))
                     yaw[swing_side], yaw_rate[swing_side] = heading, heading_rate
                 else:
-                    position += toe * np.array([1.0 - np.cos(angle), 0.0, np.sin(angle)])
-                    velocity += toe * rate * np.array([np.sin(angle), 0.0, np.cos(angle)])
-                feet[swing_side], feet_velocity[swing_side] = position, velocity
+                    # np.cos and np.sin as before (their last bit may differ from math's)
+                    cos, sin = float(np.cos(angle)), float(np.sin(angle))
+                    feet[swing_side] = (x + toe * (1.0 - cos), y + toe * 0.0, z + toe * sin)
+                    toe_rate = toe * rate
+                    feet_velocity[swing_side] = (x_rate + toe_rate * sin, y_rate + toe_rate * 0.0, z_rate + toe_rate * cos)
                 pitch[swing_side], pitch_rate[swing_side] = angle, rate
                 contact[swing_side] = False
+        zmp = np.array((rx, ry))
         return PatternSample(
-            time=float(t), com=np.array([*state.position, self.ground + self.config.com_height]),
-            com_velocity=np.array([*state.velocity, 0.0]), zmp=state.zmp, dcm=state.dcm, feet=feet,
+            time=float(t), com=np.array((px, py, self.ground + self.config.com_height)),
+            com_velocity=np.array((vx, vy, 0.0)), zmp=zmp, dcm=np.array((dcm_x, dcm_y)), feet=feet,
             feet_velocity=feet_velocity, feet_pitch=pitch, feet_pitch_rate=pitch_rate, feet_yaw=yaw,
             feet_yaw_rate=yaw_rate, contact=(contact[0], contact[1]),
-            right_load=self._right_load(state.zmp, feet, contact), step=k)
+            right_load=self._right_load(zmp, feet, contact), step=k)
 
     def reference_zmp(self, t: float) -> NDArray[np.float64]:
         """The ZMP [m] (x, y) the whole body should have at ``t`` [s]: the piecewise-linear reference under the
@@ -669,7 +678,8 @@ class WalkingPattern:
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i >= k}
         self._retimed = {i: v for i, v in self._retimed.items() if i >= k}
 
-    def _swing(self, k: int, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def _swing_values(self, k: int, s: float) -> tuple[float, float, float, float, float, float]:
+        """Step ``k``'s swing path at swing time ``s`` [s]: position (x, y, z) [m] and velocity [m/s] as floats."""
         retimed = self._retimed.get(k)
         if retimed is None:
             vertical, horizontal = self._nominal_swing(k)
@@ -678,7 +688,8 @@ class WalkingPattern:
         else:
             z, vz, _ = retimed.vertical.evaluate(s - retimed.since)
             xy, vxy, _ = retimed.horizontal.evaluate(s - retimed.since)
-        return np.array([xy[0], xy[1], float(z)]), np.array([vxy[0], vxy[1], float(vz)])
+        (x, y), (vx, vy) = xy.tolist(), vxy.tolist()
+        return x, y, float(z), vx, vy, float(vz)
 
     def _swing_kinematics(self, k: int, s: float) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
         """Horizontal and vertical (position, velocity, acceleration) of step ``k``'s swing at ``s`` [s]."""
