@@ -22,6 +22,7 @@ one wanted (against flip-flopping between timings from one period to the next).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -151,15 +152,33 @@ class StepAdjuster:
             # re-timed swing would take the plain path through it
             return None
         dcm = np.asarray(dcm, dtype=np.float64)[:2]
-        if not np.all(np.isfinite(dcm)):
+        point = dcm.tolist() if dcm.shape == (2,) else None
+        if not (math.isfinite(point[0]) and math.isfinite(point[1]) if point is not None else np.all(np.isfinite(dcm))):
             raise ControllerError(f"the measured DCM must be finite, got {dcm!r}")
         planned = pattern.dcm(t) if planned is None else planned[:2]
-        raw = dcm - planned
-        if self._error is None or c.error_filter <= 0.0:
-            self._error = raw
-        else:  # the swing leg's lift-off and landing shake the measured DCM for a few periods
-            self._error = self._error + min(1.0, (t - self._time) / c.error_filter) * (raw - self._error)
-        self._time = t
+        if point is not None and planned.shape == (2,) and (self._error is None or self._error.shape == (2,)):
+            # Scalar math on the controller's 2-vectors: this runs every period and mostly ends at the margin test
+            # below, where numpy's per-call overhead cost several times the arithmetic (the array form's
+            # operations, elementwise: the same floats)
+            (mx, my), (px, py) = point, planned.tolist()
+            rx, ry = mx - px, my - py
+            if self._error is None or c.error_filter <= 0.0:
+                ex, ey = rx, ry
+            else:  # the swing leg's lift-off and landing shake the measured DCM for a few periods
+                fx, fy = self._error.tolist()
+                w = min(1.0, (t - self._time) / c.error_filter)
+                ex, ey = fx + w * (rx - fx), fy + w * (ry - fy)
+            self._error = np.array((ex, ey))
+            self._time = t
+            if pattern.heading(k + 1) == 0.0 and abs(ex) <= c.ankle_margin[0] and abs(ey) <= c.ankle_margin[1]:
+                return None  # within the ankle's margin (the stance frame is the world's: not turned)
+        else:
+            raw = dcm - planned
+            if self._error is None or c.error_filter <= 0.0:
+                self._error = raw
+            else:  # the swing leg's lift-off and landing shake the measured DCM for a few periods
+                self._error = self._error + min(1.0, (t - self._time) / c.error_filter) * (raw - self._error)
+            self._time = t
         error = self._error
         dcm = planned + error
         # the margin and the step box lie in the stance foot's frame (turned by its heading about its sole point)
