@@ -31,6 +31,14 @@ from .whole_body_kernels import (
 
 __all__ = ["CompiledWholeBodyIk"]
 
+_FLOAT64 = np.dtype(np.float64)
+_REFERENCE_SHAPE = (REFERENCE_SIZE,)
+
+
+def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
+    """Whether ``value`` is a float64 array of ``shape`` (copied into the kernel's buffer as it is)."""
+    return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
+
 _EMPTY_COLLISION_FLOATS = ("segment_rotation", "segment_translation", "segment_center", "segment_radius",
                            "segment_world_center", "local", "vertices", "radii", "collision_parameters")
 _EMPTY_COLLISION_INTS = ("segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a",
@@ -80,6 +88,7 @@ class CompiledWholeBodyIk:
         self.ik = ik
         self.model = model
         self._nq, self._nv = nq, nv
+        self._q_shape = (nq,)
         frames = [model.frame_attachment(f) for f in (*ik.feet_frames, ik.torso_frame)]
         floats: dict[str, NDArray[np.float64]] = {
             "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
@@ -145,6 +154,25 @@ class CompiledWholeBodyIk:
     def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
         """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call; the references
         may be given packed (:meth:`WholeBodyReference.to_array`), which saves their conversion."""
+        if type(dt) is float and 0.0 < dt < math.inf and _is_float_array(q, self._q_shape) \
+                and _is_float_array(start, _REFERENCE_SHAPE) and _is_float_array(end, _REFERENCE_SHAPE):
+            # the walking controller's inputs (float64 arrays of the right shapes): copied in without conversions
+            self._q_input[...] = q
+            self._reference_inputs[0][...] = start
+            self._reference_inputs[1][...] = end
+        else:
+            q = self._checked_inputs(q, start, end, dt)
+        self._scalars[-1] = dt
+        if self._kernel(self._f, self._i) == BAD_INPUT:
+            if not np.all(np.isfinite(q)):
+                raise ModelError("configuration contains non-finite values")
+            raise ControllerError("the references must be finite")
+        error, lz, sigma, success, _, _, limited = self._extra_output.tolist()
+        return WholeBodyIkResult(self._q_output.copy(), self._qdot_output.copy(), error, lz, sigma, bool(success),
+                                 bool(limited))
+
+    def _checked_inputs(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> NDArray[np.float64]:
+        """Check and copy :meth:`step`'s inputs of any type into the kernel's buffer; returns ``q`` as an array."""
         if not (isinstance(dt, float) and 0.0 < dt < math.inf):  # the usual float dt passes without numpy
             if not np.isfinite(dt) or dt <= 0.0:
                 raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
@@ -159,14 +187,7 @@ class CompiledWholeBodyIk:
             if shape != (REFERENCE_SIZE,):
                 raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {shape}")
             view[...] = packed
-        self._scalars[-1] = dt
-        if self._kernel(self._f, self._i) == BAD_INPUT:
-            if not np.all(np.isfinite(q)):
-                raise ModelError("configuration contains non-finite values")
-            raise ControllerError("the references must be finite")
-        error, lz, sigma, success, _, _, limited = self._extra_output.tolist()
-        return WholeBodyIkResult(self._q_output.copy(), self._qdot_output.copy(), error, lz, sigma, bool(success),
-                                 bool(limited))
+        return q
 
     @property
     def last_min_distance(self) -> float:

@@ -453,13 +453,19 @@ class WalkingController:
         return WalkingController._with_offset(WalkingController._reference_base(sample), offset, rate)
 
     @staticmethod
-    def _with_offset(base: _ReferenceBase, offset: NDArray[np.float64], rate: NDArray[np.float64]
-                     ) -> NDArray[np.float64]:
+    def _with_offset(base: _ReferenceBase, offset: ArrayLike, rate: ArrayLike) -> NDArray[np.float64]:
         """A copy of the packed reference ``base`` with the CoM moved by ``offset`` [m] at ``rate`` [m/s] (x, y)."""
+        return WalkingController._offset_reference(base, float(offset[0]), float(offset[1]),  # type: ignore[index]
+                                                   float(rate[0]), float(rate[1]))  # type: ignore[index]
+
+    @staticmethod
+    def _offset_reference(base: _ReferenceBase, offset_x: float, offset_y: float, rate_x: float,
+                          rate_y: float) -> NDArray[np.float64]:
+        """:meth:`_with_offset` on floats: the CoM offset [m] and its rate [m/s]."""
         packed, com_x, com_y, velocity_x, velocity_y = base
         a = packed.copy()
-        a[0], a[1] = com_x + float(offset[0]), com_y + float(offset[1])
-        a[3], a[4] = velocity_x + float(rate[0]), velocity_y + float(rate[1])
+        a[0], a[1] = com_x + offset_x, com_y + offset_y
+        a[3], a[4] = velocity_x + rate_x, velocity_y + rate_y
         return a
 
     @staticmethod
@@ -634,7 +640,11 @@ class WalkingController:
             self._map_obstacles()
             if self._next is None:
                 start = self.pattern.sample(self.time)
-        adjustment = self.step_adjuster.update(self.pattern, self.time, com[:2] + com_velocity[:2] / self.stabilizer.omega,
+        # the measured DCM, c + c_dot / omega (x, y), in floats
+        (com_x, com_y, _), (velocity_x, velocity_y, _) = com.tolist(), com_velocity.tolist()
+        omega = self.stabilizer.omega
+        adjustment = self.step_adjuster.update(self.pattern, self.time,
+                                               np.array((com_x + velocity_x / omega, com_y + velocity_y / omega)),
                                                planned=start.dcm)
         if adjustment is not None:
             start = self.pattern.sample(self.time)  # the plan changed from now on
@@ -646,9 +656,11 @@ class WalkingController:
                                               start.zmp, com, com_velocity, contact.zmp)
         else:
             feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
-        offset_end = feedback.offset + feedback.rate * self.dt
-        start_ref = self._with_offset(self._packed_base(start), feedback.offset, feedback.rate)
-        end_ref = self._with_offset(self._packed_base(end), offset_end, feedback.rate)
+        # the offset at the period's end, offset + rate dt, in floats (the same operations on x and y)
+        (offset_x, offset_y), (rate_x, rate_y) = feedback.offset.tolist(), feedback.rate.tolist()
+        start_ref = self._offset_reference(self._packed_base(start), offset_x, offset_y, rate_x, rate_y)
+        end_ref = self._offset_reference(self._packed_base(end), offset_x + rate_x * self.dt,
+                                         offset_y + rate_y * self.dt, rate_x, rate_y)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)

@@ -229,16 +229,20 @@ class WalkingPattern:
                     h[:2] += shift
             h[1] += self._line.get(j, 0.0)
             return h
-        y = self._center[1] + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
-        h = np.array([self._center[0] + (j - 1) * self.step_length, y, self.ground])
+        # in Python floats, one array at the end (runs several times per control period): the array form's
+        # elementwise additions in the same order, the same floats
+        center_x, center_y = self._center.tolist()
+        x = center_x + (j - 1) * self.step_length
+        y = center_y + (-0.5 if side == RIGHT else 0.5) * self.config.step_width
         for first, shift in self._shifts:
             if j >= first:
-                h[:2] += shift
+                dx, dy = shift.tolist()
+                x, y = x + dx, y + dy
         for first, delta in self._velocity_changes.items():
             if j >= first:
-                h[:2] += (j - first + 1) * delta
-        h[1] += self._line.get(j, 0.0)
-        return h
+                dx, dy = ((j - first + 1) * delta).tolist()
+                x, y = x + dx, y + dy
+        return np.array((x, y + self._line.get(j, 0.0), self.ground))
 
     def heading(self, j: int) -> float:
         """Heading [rad] of foothold ``h_j`` about the vertical (0: the starting heading, +x; positive: to the
@@ -954,4 +958,6 @@ class WalkingPattern:
             return 0.0
         axis = feet[LEFT, :2] - feet[RIGHT, :2]
         share = float(np.dot(zmp - feet[RIGHT, :2], axis) / np.dot(axis, axis))
-        return float(np.clip(1.0 - share, 0.0, 1.0))
+        load = 1.0 - share
+        # np.clip(load, 0, 1) without its dispatch: NaN and -0.0 pass as there
+        return load if load != load else 0.0 if load < 0.0 else 1.0 if load > 1.0 else load
