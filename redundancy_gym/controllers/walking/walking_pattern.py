@@ -523,14 +523,14 @@ class WalkingPattern:
         return k
 
     def _zmp_point(self, j: int, along: float) -> NDArray[np.float64]:
-        h = self.foothold(j)
+        x, y, _ = self.foothold(j).tolist()
         inward = 1.0 if j % 2 == 0 else -1.0  # right feet (even) shift towards +y
         if self._turned:  # along and across the foot's heading
             heading = self.heading(j)
             c, s = math.cos(heading), math.sin(heading)
             across = inward * self.config.zmp_inset
-            return np.array([h[0] + c * along - s * across, h[1] + s * along + c * across])
-        return np.array([h[0] + along, h[1] + inward * self.config.zmp_inset])
+            return np.array((x + c * along - s * across, y + s * along + c * across))
+        return np.array((x + along, y + inward * self.config.zmp_inset))
 
     def _knots(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """ZMP knots from the start of ``first_step`` (-1: the standing start) to ``preview_steps`` steps ahead."""
@@ -650,12 +650,15 @@ class WalkingPattern:
             return self._plan.sample(t).zmp
         a = self.config.heel_toe_shift
         start, single, end = self.step_start(k), self.step_single(k), self.step_start(k + 1)
-        stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
+        # in Python floats (the IKD reads it every period): the array form's elementwise operations, the same floats
+        (stance_x, stance_y), (to_x, to_y) = self._zmp_point(k + 1, -a).tolist(), self._zmp_point(k + 1, a).tolist()
         s = t - start
         if s < single:
-            return stance + (swing_to - stance) * (s / single)
-        landing = self._zmp_point(k + 2, -a)
-        return swing_to + (landing - swing_to) * ((s - single) / (end - start - single))
+            w = s / single
+            return np.array((stance_x + (to_x - stance_x) * w, stance_y + (to_y - stance_y) * w))
+        landing_x, landing_y = self._zmp_point(k + 2, -a).tolist()
+        w = (s - single) / (end - start - single)
+        return np.array((to_x + (landing_x - to_x) * w, to_y + (landing_y - to_y) * w))
 
     def _swing_yaw(self, k: int, nominal: float) -> tuple[float, float]:
         """Heading [rad] and its rate [rad/s] of step ``k``'s swing foot at nominal swing time ``nominal`` [s]: a
