@@ -37,7 +37,7 @@ from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..geometry import LSS, PSS, Segment, distance
 from ..sb3_import import install_hint
 from .bench_ssv import write_ssv_bench as write_ik_bench
-from .bench_timing import TimedPasses, alternating_rounds, finish_machine_info, machine_info
+from .bench_timing import CLOCK, TimedPasses, alternating_rounds, finish_machine_info, machine_info, timed_call
 from .exceptions import EvalError
 
 __all__ = ["format_ik_bench", "run_ik_bench", "write_ik_bench"]
@@ -111,21 +111,21 @@ class _MinkSolver:
         mink, lay = self.mink, self.layout
         q = obs[lay["q"]]
         target, _ = self.policy.path(float(obs[lay["time"]][0]))
-        start = time.perf_counter()
-        self.configuration.update(q)
-        current = self.configuration.get_transform_frame_to_world(self.tcp, "site")
-        rotation = _turn_x_onto(current.rotation().as_matrix(), target[3:])
-        self.frame.set_target(mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), target[:3]))
-        mink.solve_ik(self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6,
-                      limits=self.limits)
-        return time.perf_counter() - start
+
+        def solve() -> None:
+            self.configuration.update(q)
+            current = self.configuration.get_transform_frame_to_world(self.tcp, "site")
+            rotation = _turn_x_onto(current.rotation().as_matrix(), target[3:])
+            self.frame.set_target(mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), target[:3]))
+            mink.solve_ik(self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6,
+                          limits=self.limits)
+
+        return timed_call(solve)[1]
 
 
 def _ours_step(policy: GraspClikPolicy) -> Any:
     def step(obs: NDArray[np.float64]) -> float:
-        start = time.perf_counter()
-        policy.predict(obs)
-        return time.perf_counter() - start
+        return timed_call(lambda: policy.predict(obs))[1]
 
     return step
 
@@ -164,9 +164,7 @@ def _scaling(policy: GraspClikPolicy, observations: list[NDArray[np.float64]], l
         for obs in observations:
             target, velocity = policy.path(float(obs[layout["time"]][0]))
             q = obs[layout["q"]]
-            start = time.perf_counter()
-            controller.step(q, target, velocity)
-            times.append((time.perf_counter() - start) * 1e6)
+            times.append(timed_call(lambda: controller.step(q, target, velocity))[1] * 1e6)
         out.append({"primitives": int(n), "step_us_median": float(np.median(times)),
                     "step_us_p90": float(np.percentile(times, 90))})
     return out
@@ -222,7 +220,7 @@ def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3,
     return {
         "benchmark": "ik", "env": ENV_ID, "difficulty": difficulty, "seed": seed, "states": len(observations),
         "repeats": repeats,
-        "timing": {"rounds": rounds, "warmup": timed.warmup, "sample": "one pass over the states",
+        "timing": {"rounds": rounds, "warmup": timed.warmup, "sample": "one pass over the states", "clock": CLOCK,
                    "order": "ours, mink; reversed every other round"},
         "machine": finish_machine_info(machine),
         "ours": {"step_us_median": ours_median, "step_us_p90": ours_p90,

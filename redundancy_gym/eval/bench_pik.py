@@ -42,7 +42,7 @@ from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
 from ..policies import make_policy  # noqa: E402
 from ..policies.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
 from ..controllers.receding_horizon import RecedingHorizon  # noqa: E402
-from .bench_timing import alternating_rounds, finish_machine_info, machine_info  # noqa: E402
+from .bench_timing import CLOCK, alternating_rounds, finish_machine_info, machine_info, timed_call  # noqa: E402
 from .evaluate import evaluate  # noqa: E402
 from .exceptions import EvalError  # noqa: E402
 from .plots import save_figure  # noqa: E402
@@ -327,13 +327,13 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
 
 
 def _timed_rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command) -> float:
-    """Median time [s] of ``command`` over a kinematic rollout (only the command is timed)."""
+    """Median time [s] of ``command`` over a kinematic rollout (only the command is timed, by
+    :func:`~redundancy_gym.eval.bench_timing.timed_call`)."""
     q = np.array(q0, dtype=np.float64)
     seconds = []
     for k in range(steps):
-        start = time.perf_counter()
-        qdot, _ = command(k, q)
-        seconds.append(time.perf_counter() - start)
+        (qdot, _), elapsed = timed_call(lambda: command(k, q))
+        seconds.append(elapsed)
         q = q + dt * qdot
     return float(np.median(seconds))
 
@@ -430,7 +430,7 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, rounds: int = 5, progres
         stats = timed.ratio(label, "local CLIK")
         report[name] = stats.median
         report[f"{name}_rounds"] = stats.to_json()
-    report["timing"] = {"rounds": rounds, "warmup": timed.warmup, "orders": timed.orders,
+    report["timing"] = {"rounds": rounds, "warmup": timed.warmup, "clock": CLOCK, "orders": timed.orders,
                         "sample": "one kinematic rollout of the fig. 5.10 move, its median step"}
     report["descent"] = _descent_comparison(seed, 60 if quick else 200, 1e-4)
     kinematic = planar_kinematic_traces(seed=seed, global_iterations=iterations)

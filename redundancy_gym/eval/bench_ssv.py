@@ -30,7 +30,7 @@ import pinocchio as pin
 from tqdm.auto import tqdm
 
 from ..geometry import LSS, PSS, SSV, TSS, PairBatch, distance
-from .bench_timing import alternating_rounds, finish_machine_info, machine_info, timed_calls
+from .bench_timing import CLOCK, alternating_rounds, finish_machine_info, machine_info, timed_calls
 from .coal_shapes import to_coal
 from .exceptions import EvalError
 
@@ -152,7 +152,7 @@ def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, mi
                  "ours_rel": per_type[t][largest]["ours_us_per_pair"] / base} for t in PAIR_TYPES}
     return {"benchmark": "ssv", "seed": seed, "batch_sizes": sizes,
             "peer": "coal %s (coal.distance loop and pinocchio.computeDistances)" % coal.__version__,
-            "timing": {"rounds": rounds, "warmup": 1, "min_time_s": min_time,
+            "timing": {"rounds": rounds, "warmup": 1, "min_time_s": min_time, "clock": CLOCK,
                        "order": "ours, coal, coal_pinocchio; reversed every other round"},
             "machine": finish_machine_info(machine),
             "per_pair_us": per_type, "ratio_vs_coal_batch100": ratios,

@@ -33,7 +33,6 @@ distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_c
 
 from __future__ import annotations
 
-import time
 from typing import Any
 
 import numpy as np
@@ -43,7 +42,8 @@ from tqdm.auto import tqdm
 from ..controllers import CollisionObjective
 from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
 from ..policies.walking_policy import WalkingPolicy
-from .bench_timing import RatioStats, TimedPasses, alternating_rounds, finish_machine_info, machine_info
+from .bench_timing import (CLOCK, RatioStats, TimedPasses, alternating_rounds, finish_machine_info, machine_info,
+                           timed_call)
 from .evaluate import make_env
 from .exceptions import EvalError
 
@@ -86,9 +86,8 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     try:
         obs, _ = env.reset(seed=seed)
         while True:
-            t0 = time.perf_counter()
-            action, _ = policy.predict(obs, episode_start=np.array([not times]))
-            times.append((time.perf_counter() - t0) * 1e6)
+            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([not times])))
+            times.append(seconds * 1e6)
             avoidance = policy.last_command.avoidance if policy.last_command is not None else None
             active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
             obs, _, terminated, truncated, info = env.step(action)
@@ -117,9 +116,8 @@ def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", z
             if k == 1 and record:  # after start(), which builds the IK
                 recorder = _Recorder(policy.controller.solver)
                 policy.controller.solver = recorder  # type: ignore[assignment]
-            t0 = time.perf_counter()
-            action, _ = policy.predict(obs, episode_start=np.array([k == 0]))
-            times.append((time.perf_counter() - t0) * 1e6)
+            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([k == 0])))
+            times.append(seconds * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
             controller = policy.controller
             if zmp is not None and info["zmp_valid"] and controller.pattern is not None \
@@ -161,9 +159,7 @@ def _timed_solve(solver: Any) -> Any:
     """``call -> seconds`` of one ``solver.step`` on a recorded IK call."""
     def timed(call: _Call) -> float:
         q, start, end, dt = call
-        t0 = time.perf_counter()
-        solver.step(q, start, end, dt)
-        return time.perf_counter() - t0
+        return timed_call(lambda: solver.step(q, start, end, dt))[1]
 
     return timed
 
@@ -234,7 +230,7 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
     return {
         "benchmark": "walk", "env": ENV_ID, "target_speed": speed, "duration": duration, "seed": seed,
         "states": len(calls), "repeats": repeats, "fell": fell,
-        "timing": {"rounds": rounds, "warmup": skip, "walk_orders": walk_rounds.orders, "ik_orders": ik_rounds.orders,
+        "timing": {"rounds": rounds, "warmup": skip, "clock": CLOCK, "walk_orders": walk_rounds.orders, "ik_orders": ik_rounds.orders,
                    "sample": "clik/ikd: one walk's median step; compiled/python: one pass over the recorded states"},
         "machine": finish_machine_info(machine),
         "controller": {"step_us_median": controller_median, "step_us_p99": float(np.percentile(controller, 99)),

