@@ -20,15 +20,14 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ...model import RobotModel
-from ...model.chain_kernels import FREE, chain_centroidal, chain_forward, place_frame
+from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, place_frame
 from ..kernel_buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
 
 __all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "Measurement"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation", "placement_translation", "axis", "body_mass", "body_com", "body_inertia",
-    "rotation", "position", "world_axis", "composite", "frame_rotation", "frame_translation",
-    "jacobian_com", "jacobian_angular", "inputs", "outputs",
+    "placement_rotation", "placement_translation", "axis", "body_mass", "body_com", "rotation", "position",
+    "world_axis", "velocities", "frame_rotation", "frame_translation", "inputs", "outputs",
 )
 INT_FIELDS: tuple[str, ...] = ("dims", "parent", "joint_type", "q_index", "v_index", "frame_joint")
 FRAMES = 4
@@ -44,9 +43,8 @@ y and 1.0 where valid)."""
 OK, BAD_INPUT = 0, 1
 
 _NF = len(FLOAT_FIELDS)
-(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_BODY_MASS, _F_BODY_COM, _F_BODY_INERTIA, _F_ROTATION,
- _F_POSITION, _F_WORLD_AXIS, _F_COMPOSITE, _F_FRAME_ROTATION, _F_FRAME_TRANSLATION, _F_JACOBIAN_COM,
- _F_JACOBIAN_ANGULAR, _F_INPUTS, _F_OUTPUTS) = range(_NF)
+(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_BODY_MASS, _F_BODY_COM, _F_ROTATION, _F_POSITION,
+ _F_WORLD_AXIS, _F_VELOCITIES, _F_FRAME_ROTATION, _F_FRAME_TRANSLATION, _F_INPUTS, _F_OUTPUTS) = range(_NF)
 (_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT) = range(_NF, _NF + len(INT_FIELDS))
 
 # the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
@@ -126,17 +124,9 @@ def measure_step(f, i):
     cop = outputs[o + 15:o + 19].reshape((2, 2))
     normal_force = outputs[o + 19:o + 21]
     moment = outputs[o + 21:o + 27].reshape((2, 3))
-    jac_com = float_field(f, i, _F_JACOBIAN_COM).reshape((3, nv))
-    chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis, float_field(f, i, _F_BODY_MASS),
-                     float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
-                     float_field(f, i, _F_BODY_INERTIA).reshape((nj, 3, 3)),
-                     float_field(f, i, _F_COMPOSITE).reshape((nj, 13)), com,
-                     jac_com, float_field(f, i, _F_JACOBIAN_ANGULAR).reshape((3, nv)))
-    for r in range(3):
-        acc = 0.0
-        for k in range(nv):
-            acc += jac_com[r, k] * v[k]
-        com_velocity[r] = acc
+    _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axis, float_field(f, i, _F_BODY_MASS),
+                      float_field(f, i, _F_BODY_COM).reshape((nj, 3)), v,
+                      float_field(f, i, _F_VELOCITIES).reshape((nj, 6)), com, com_velocity)
     frame_joint = int_field(i, _I_FRAME_JOINT)
     frame_rotation = float_field(f, i, _F_FRAME_ROTATION).reshape((FRAMES, 3, 3))
     frame_translation = float_field(f, i, _F_FRAME_TRANSLATION).reshape((FRAMES, 3))
@@ -196,6 +186,70 @@ def measure_step(f, i):
 
 
 @njit(**_JIT)
+def _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com, v, scratch,
+                      com, com_velocity):
+    """The CoM [m] and its velocity [m/s] (world frame) after :func:`chain_forward`, as ``pinocchio.centerOfMass(q,
+    v)``: each joint's angular velocity and its origin's velocity propagated from the root (``scratch[j, :6]``), then
+    the mass-weighted mean of the bodies' CoMs and their velocities (no Jacobians, no composite inertias: cheaper
+    than ``chain_centroidal``)."""
+    mass = 0.0
+    cx = cy = cz = 0.0
+    vx = vy = vz = 0.0
+    for j in range(parent.shape[0]):
+        p = parent[j]
+        b = v_index[j]
+        if joint_type[j] == FREE:
+            # pinocchio's free flyer (the root: SerialChain's): v = [v_body; omega_body] of the joint frame, turned
+            # into the world
+            for r in range(3):
+                scratch[j, r] = (rotation[j, r, 0] * v[b + 3] + rotation[j, r, 1] * v[b + 4]
+                                 + rotation[j, r, 2] * v[b + 5])
+                scratch[j, 3 + r] = rotation[j, r, 0] * v[b] + rotation[j, r, 1] * v[b + 1] + rotation[j, r, 2] * v[b + 2]
+        else:
+            if p >= 0:
+                _carry(scratch, position, p, j)
+            else:
+                for r in range(6):
+                    scratch[j, r] = 0.0
+            rate = v[b]
+            if joint_type[j] == PRISMATIC:
+                for r in range(3):
+                    scratch[j, 3 + r] += world_axis[j, r] * rate
+            else:
+                for r in range(3):
+                    scratch[j, r] += world_axis[j, r] * rate
+        m = body_mass[j]
+        if m == 0.0:
+            continue
+        # the body's CoM c and its velocity v_o + omega x (c - o)
+        lx = rotation[j, 0, 0] * body_com[j, 0] + rotation[j, 0, 1] * body_com[j, 1] + rotation[j, 0, 2] * body_com[j, 2]
+        ly = rotation[j, 1, 0] * body_com[j, 0] + rotation[j, 1, 1] * body_com[j, 1] + rotation[j, 1, 2] * body_com[j, 2]
+        lz = rotation[j, 2, 0] * body_com[j, 0] + rotation[j, 2, 1] * body_com[j, 1] + rotation[j, 2, 2] * body_com[j, 2]
+        wx, wy, wz = scratch[j, 0], scratch[j, 1], scratch[j, 2]
+        mass += m
+        cx += m * (position[j, 0] + lx)
+        cy += m * (position[j, 1] + ly)
+        cz += m * (position[j, 2] + lz)
+        vx += m * (scratch[j, 3] + wy * lz - wz * ly)
+        vy += m * (scratch[j, 4] + wz * lx - wx * lz)
+        vz += m * (scratch[j, 5] + wx * ly - wy * lx)
+    com[0], com[1], com[2] = cx / mass, cy / mass, cz / mass
+    com_velocity[0], com_velocity[1], com_velocity[2] = vx / mass, vy / mass, vz / mass
+
+
+@njit(**_JIT)
+def _carry(scratch, position, p, j):
+    """Joint ``j``'s frame carried by its parent ``p`` (``scratch[k] = (omega, v_origin)``, world frame): the
+    parent's angular velocity, and its origin's velocity plus ``omega_p x (o_j - o_p)``."""
+    wx, wy, wz = scratch[p, 0], scratch[p, 1], scratch[p, 2]
+    dx, dy, dz = position[j, 0] - position[p, 0], position[j, 1] - position[p, 1], position[j, 2] - position[p, 2]
+    scratch[j, 0], scratch[j, 1], scratch[j, 2] = wx, wy, wz
+    scratch[j, 3] = scratch[p, 3] + wy * dz - wz * dy
+    scratch[j, 4] = scratch[p, 4] + wz * dx - wx * dz
+    scratch[j, 5] = scratch[p, 5] + wx * dy - wy * dx
+
+
+@njit(**_JIT)
 def _turn_point(turn, point, shift):
     """``point = turn @ point + shift`` in place for a yaw ``turn``; ``shift`` empty: no shift."""
     x, y = point[0], point[1]
@@ -252,11 +306,9 @@ class CompiledMeasurement:
         floats: dict[str, NDArray[np.float64]] = {
             "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
             "axis": chain.axis, "body_mass": chain.body_mass, "body_com": chain.body_com,
-            "body_inertia": chain.body_inertia, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)), "composite": np.zeros((nj, 13)),
-            "frame_rotation": np.array([r for _, r, _ in attachments]),
+            "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)), "world_axis": np.zeros((nj, 3)),
+            "velocities": np.zeros((nj, 6)), "frame_rotation": np.array([r for _, r, _ in attachments]),
             "frame_translation": np.array([p for _, _, p in attachments]),
-            "jacobian_com": np.zeros((3, nv)), "jacobian_angular": np.zeros((3, nv)),
             "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)), "outputs": np.zeros(outputs),
         }
         ints: dict[str, NDArray[np.int64]] = {
