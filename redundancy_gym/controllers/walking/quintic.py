@@ -57,6 +57,17 @@ class Quintic:
 
     def evaluate(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Position, velocity and acceleration at ``s`` [s], clamped into ``[0, duration]``."""
+        values = self.values(s)
+        if values is None:
+            return self._evaluate_array(min(max(float(s), 0.0), self.duration))
+        p, v, a = values
+        if self.coefficients.ndim == 1:  # scalar values: NumPy scalars, as the array form gives
+            return np.float64(p[0]), np.float64(v[0]), np.float64(a[0])  # type: ignore[return-value]
+        return np.array(p), np.array(v), np.array(a)
+
+    def values(self, s: float) -> tuple[list[float], list[float], list[float]] | None:
+        """:meth:`evaluate` as lists of Python floats, one per value component (scalar values: one), for values that
+        are scalars or vectors of up to three; None for other shapes (use :meth:`evaluate`)."""
         s = min(max(float(s), 0.0), self.duration)
         rows: list[list[float]] | None = self._rows  # type: ignore[attr-defined]
         if rows is None:
@@ -65,16 +76,14 @@ class Quintic:
             rows = [c.tolist()] if c.ndim == 1 else c.T.tolist() if c.ndim == 2 and c.shape[1] <= 3 else []
             object.__setattr__(self, "_rows", rows)
         if not rows:
-            return self._evaluate_array(s)
+            return None
         # the array form's operations in its order, per component (elementwise IEEE arithmetic: the same floats)
         p, v, a = [], [], []
         for c0, c1, c2, c3, c4, c5 in rows:
             p.append(c0 + s * (c1 + s * (c2 + s * (c3 + s * (c4 + s * c5)))))
             v.append(c1 + s * (2.0 * c2 + s * (3.0 * c3 + s * (4.0 * c4 + s * 5.0 * c5))))
             a.append(2.0 * c2 + s * (6.0 * c3 + s * (12.0 * c4 + s * 20.0 * c5)))
-        if self.coefficients.ndim == 1:  # scalar values: NumPy scalars, as the array form gives
-            return np.float64(p[0]), np.float64(v[0]), np.float64(a[0])  # type: ignore[return-value]
-        return np.array(p), np.array(v), np.array(a)
+        return p, v, a
 
     def _evaluate_array(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """:meth:`evaluate` on the coefficient array (values of any shape), ``s`` already clamped."""
@@ -98,6 +107,7 @@ class PiecewiseQuintic:
         self.pieces = tuple(pieces)
         self.breaks = np.concatenate([[0.0], np.cumsum([p.duration for p in self.pieces])])
         self._inner = self.breaks[1:-1].tolist()
+        self._starts = self.breaks[:-1].tolist()  # each piece's start [s] as a float, read per evaluation
 
     @property
     def duration(self) -> float:
@@ -107,4 +117,9 @@ class PiecewiseQuintic:
     def evaluate(self, s: float) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Position, velocity and acceleration at ``s`` [s] (clamped into the whole interval)."""
         index = bisect_right(self._inner, s)
-        return self.pieces[index].evaluate(s - float(self.breaks[index]))
+        return self.pieces[index].evaluate(s - self._starts[index])
+
+    def values(self, s: float) -> tuple[list[float], list[float], list[float]] | None:
+        """:meth:`evaluate` as lists of Python floats (:meth:`Quintic.values`)."""
+        index = bisect_right(self._inner, s)
+        return self.pieces[index].values(s - self._starts[index])

@@ -602,8 +602,10 @@ class WalkingPattern:
             if s < self.step_single(k):
                 x, y, z, x_rate, y_rate, z_rate = self._swing_values(k, s)
                 nominal, scale = self._nominal_swing_time(k, s)
-                angle, rate, _ = self._swing_pitch.evaluate(nominal)
-                angle, rate = float(angle), float(rate) * scale
+                pitch_values = self._swing_pitch.values(nominal)
+                assert pitch_values is not None  # a scalar profile
+                (angle,), (rate,), _ = pitch_values
+                rate = rate * scale
                 modification = self._modifications.get(k)
                 if modification is not None and modification.kind == "over" and self._ssta is not None:
                     # high over a box the knee bends so far that the ankle meets its dorsiflexion limit and the
@@ -690,13 +692,16 @@ class WalkingPattern:
         retimed = self._retimed.get(k)
         if retimed is None:
             vertical, horizontal = self._nominal_swing(k)
+        else:
+            vertical, horizontal, s = retimed.vertical, retimed.horizontal, s - retimed.since
+        height, path = vertical.values(s), horizontal.values(s)
+        if height is None or path is None:  # not the scalar height and 2-D path of the pattern's swings
             z, vz, _ = vertical.evaluate(s)
             xy, vxy, _ = horizontal.evaluate(s)
-        else:
-            z, vz, _ = retimed.vertical.evaluate(s - retimed.since)
-            xy, vxy, _ = retimed.horizontal.evaluate(s - retimed.since)
-        (x, y), (vx, vy) = xy.tolist(), vxy.tolist()
-        return x, y, float(z), vx, vy, float(vz)
+            (x, y), (vx, vy) = xy.tolist(), vxy.tolist()
+            return x, y, float(z), vx, vy, float(vz)
+        ((z,), (vz,), _), ((x, y), (vx, vy), _) = height, path
+        return x, y, z, vx, vy, vz
 
     def _swing_kinematics(self, k: int, s: float) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
         """Horizontal and vertical (position, velocity, acceleration) of step ``k``'s swing at ``s`` [s]."""

@@ -44,3 +44,24 @@ def test_bad_pieces_raise() -> None:
         Quintic.from_boundary(0.0, 0.0, 1.0)
     with pytest.raises(ControllerError, match="at least one"):
         PiecewiseQuintic([])
+
+
+@pytest.mark.parametrize("shape", [(), (2,), (3,), (2, 2)])
+def test_scalar_evaluation_is_the_array_form_bit_for_bit(shape: tuple[int, ...]) -> None:
+    """evaluate() on Python floats per component (scalars, vectors up to 3) gives the array form's floats and types;
+    values() the same floats as lists, None for matrix values."""
+    rng = np.random.default_rng(4)
+    for _ in range(100):
+        q = Quintic.from_boundary(rng.uniform(0.1, 1.0), *(rng.normal(size=shape) for _ in range(6)))
+        s = rng.uniform(-0.1, 1.1)
+        fast, array = q.evaluate(s), q._evaluate_array(min(max(s, 0.0), q.duration))
+        for a, b in zip(fast, array):
+            assert type(a) is type(b) and np.shape(a) == np.shape(b)
+            np.testing.assert_array_equal(a, b)
+        values = q.values(s)
+        if len(shape) == 2:
+            assert values is None
+        else:
+            assert values is not None
+            for a, b in zip(values, array):
+                np.testing.assert_array_equal(a, np.reshape(b, -1))
