@@ -652,8 +652,9 @@ class WalkingController:
         self._next = end
         if self.ikd is not None:  # the feedback acts about the CoM the IKD's joint trajectory has
             ikd_com, ikd_velocity = self._ikd_com
-            feedback = self.stabilizer.update(self.dt, ikd_com, ikd_com[:2] + ikd_velocity[:2] / self.stabilizer.omega,
-                                              start.zmp, com, com_velocity, contact.zmp)
+            (ikd_x, ikd_y, _), (ikd_vx, ikd_vy, _) = ikd_com.tolist(), ikd_velocity.tolist()
+            ikd_dcm = np.array((ikd_x + ikd_vx / omega, ikd_y + ikd_vy / omega))  # its DCM, in floats
+            feedback = self.stabilizer.update(self.dt, ikd_com, ikd_dcm, start.zmp, com, com_velocity, contact.zmp)
         else:
             feedback = self.stabilizer.update(self.dt, start.com, start.dcm, start.zmp, com, com_velocity, contact.zmp)
         # the offset at the period's end, offset + rate dt, in floats (the same operations on x and y)
