@@ -26,7 +26,7 @@ from .kernel_buffers import float_field, int_field, pack_fields
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
 __all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_close_pairs",
-           "clik_step", "pack_buffers"]
+           "clik_fields", "clik_step", "clik_step_arrays", "pack_buffers"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
     "placement_rotation", "placement_translation", "axis", "rotation", "position", "world_axis",
@@ -49,7 +49,9 @@ METHOD_CODES: dict[str, int] = {"pseudoinverse": 0, "dls": 1, "transpose": 2}
 STATUS_NAMES: tuple[str, ...] = ("ok", "damped", "singular")
 SCRATCH_SIZE = 160
 # result entries after qdot (nv) and the task error (task_dim) in "outputs"
-OUTPUT_EXTRA = 7  # |e|, sigma_min, damping, H, status code, smallest collision distance seen [m], limited (0/1)
+OUTPUT_EXTRA = 8  # |e|, sigma_min, damping, H, status code, smallest collision distance seen [m], limited (0/1),
+# stepped (1: the last call succeeded, so the buffers hold its kinematics and placed volumes)
+STEPPED = 7  # index of the stepped flag among the extra outputs
 # entries of the "scalars" field
 SCALARS: tuple[str, ...] = ("nullspace_gain", "singular_threshold", "dls_threshold", "dls_max_damping", "period")
 
@@ -280,11 +282,52 @@ def _bound(f, i, nv, nb, q, x):
 
 
 @njit(**_JIT)
+def clik_fields(f, i):
+    """``(inputs, outputs, nq, nv, task_dim)`` of the buffers: the views and sizes that a compiled caller of
+    :func:`clik_step` fills and reads (``inputs``: q, target (6), target velocity (6), nullspace input (nv);
+    ``outputs``: qdot, task error, :data:`OUTPUT_EXTRA` diagnostics)."""
+    dims = _iv(i, _I_DIMS)
+    return _fv(f, i, _F_INPUTS), _fv(f, i, _F_OUTPUTS), dims[2], dims[1], dims[3]
+
+
+@njit(**_JIT)
 def clik_step(f, i, has_velocity, has_input):
     """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
-    (6), nullspace input ``u`` of (5.100) (nv), used where ``has_input``) and writes ``outputs`` (qdot, bounded by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics);
+    (6), nullspace input ``u`` of (5.100) (nv), used where ``has_input``) and writes ``outputs`` (qdot, bounded
+    by :func:`_bound`, error, then :data:`OUTPUT_EXTRA` diagnostics, the last of them :data:`STEPPED`);
     returns a code (0 ok, 1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target
     velocity, 5 non-finite nullspace input)."""
+    dims = _iv(i, _I_DIMS)
+    flag = dims[1] + dims[3] + STEPPED
+    outputs = _fv(f, i, _F_OUTPUTS)
+    outputs[flag] = 0.0  # a failed step leaves the kinematics half done: close pairs must not read them
+    code = _step(f, i, has_velocity, has_input)
+    if code == OK:
+        outputs[flag] = 1.0
+    return code
+
+
+@njit(**_JIT)
+def clik_step_arrays(f, i, q, target, velocity, has_velocity):
+    """:func:`clik_step` (no nullspace input) on ``q`` (nq), ``target`` and ``velocity`` (the task's target
+    width: 6 for a :class:`FrameAxisTask`, else its rows; ``velocity`` read where ``has_velocity``), copied into
+    ``inputs`` here: one call instead of three NumPy slice assignments and the step."""
+    dims = _iv(i, _I_DIMS)
+    nq = dims[2]
+    inputs = _fv(f, i, _F_INPUTS)
+    for k in range(nq):
+        inputs[k] = q[k]
+    for k in range(target.shape[0]):
+        inputs[nq + k] = target[k]
+    if has_velocity:
+        for k in range(velocity.shape[0]):
+            inputs[nq + 6 + k] = velocity[k]
+    return clik_step(f, i, has_velocity, False)
+
+
+@njit(**_JIT)
+def _step(f, i, has_velocity, has_input):
+    """The body of :func:`clik_step` (which records whether it succeeded)."""
     dims = _iv(i, _I_DIMS)
     nj, nv, nq, m = dims[0], dims[1], dims[2], dims[3]
     n_limits, n_postures, method, collision, objectives = dims[4], dims[5], dims[13], dims[14], dims[15]

@@ -20,9 +20,11 @@ from .clik_kernels import (
     OUTPUT_EXTRA,
     SCRATCH_SIZE,
     STATUS_NAMES,
+    STEPPED,
     ZERO_AXIS,
     clik_close_pairs,
     clik_step,
+    clik_step_arrays,
     pack_buffers,
 )
 from .collision_kernels import bounding_spheres, collision_fields
@@ -148,10 +150,13 @@ class CompiledClik:
         self._version = -1
         self._refresh_environment()
         self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
+        # q, target and velocity in any layout (a strided view of an observation is read as it is)
+        self._array_kernel = compiled_entry_point(
+            clik_step_arrays, "int64(float64[::1], int64[::1], float64[:], float64[:], float64[:], boolean)")
         self._close_pairs = clik_close_pairs
         self._pair_distances = np.zeros(8)
         self._pair_rows = np.zeros((8, nv))
-        self._stepped = False
+        self._no_velocity = np.zeros(self._width)  # passed (unread) when a step has no target velocity
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
@@ -205,45 +210,71 @@ class CompiledClik:
             world[s] = rotation @ centers[s] + translation
         self._version = model.version
 
+    def kernel_buffers(self) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+        """The float and int buffers that :func:`~.clik_kernels.clik_step` reads and writes, with the collision
+        model's environment brought up to date: for a caller that runs ``clik_step`` inside its own compiled
+        function (call it before every such step, since the environment may have moved; build the result of a
+        step with :meth:`result`)."""
+        if self.collision is not None and self.collision.collision_model.version != self._version:
+            self._refresh_environment()
+        return self._f, self._i
+
+    @property
+    def output_size(self) -> int:
+        """Entries of the kernel's ``outputs`` field (qdot, task error, diagnostics), as :meth:`result` reads
+        them."""
+        return int(self._outputs.size)
+
+    def result(self, outputs: NDArray[np.float64] | None = None) -> ClikResult:
+        """The :class:`ClikResult` of the last step's ``outputs`` (or of a copy of them, ``outputs``)."""
+        out = self._outputs if outputs is None else outputs
+        nv, m = self._nv, self._m
+        norm, sigma, damping, value, status, _, limited, _ = out[nv + m:].tolist()
+        name = STATUS_NAMES[int(status)]
+        return ClikResult(out[:nv].copy(), out[nv:nv + m].copy(), norm, sigma, damping, value, name != "singular",
+                          name, limited != 0.0)
+
     def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None,
              nullspace_input: ArrayLike | None = None) -> ClikResult:
         """:meth:`Clik.step` (same arguments, same result to round-off) in one kernel call."""
         if self.collision is not None and self.collision.collision_model.version != self._version:
             self._refresh_environment()
-        nq = self._nq
-        inputs = self._inputs
         width = self._width
-        q = _vector(q, "q", nq, ModelError)
+        q = _vector(q, "q", self._nq, ModelError)
         target = _vector(target, "target", width, ControllerError)
-        inputs[:nq] = q
-        inputs[nq:nq + width] = target
         has_velocity = target_velocity is not None
-        if has_velocity:
-            inputs[nq + 6:nq + 6 + width] = _vector(target_velocity, "target_velocity", width, ControllerError)
-        has_input = nullspace_input is not None
-        if has_input:  # the kernel checks finiteness (BAD_INPUT)
-            if getattr(nullspace_input, "shape", None) != (self._nv,):  # an array of nv is the fast path
-                try:
-                    nullspace_input = np.asarray(nullspace_input, dtype=np.float64)
-                except (TypeError, ValueError):
-                    nullspace_input = np.zeros(0)
-                if nullspace_input.shape != (self._nv,):
-                    raise ControllerError(f"nullspace_input must be finite with shape ({self._nv},), got "
-                                          f"{nullspace_input.shape}")
-            try:
-                inputs[nq + 12:nq + 12 + self._nv] = nullspace_input
-            except (TypeError, ValueError) as exc:  # an array of strings or objects
-                raise ControllerError("nullspace_input must be an array of finite numbers") from exc
-        code = self._kernel(self._f, self._i, has_velocity, has_input)
-        self._stepped = code == OK
+        velocity = _vector(target_velocity, "target_velocity", width, ControllerError) if has_velocity else \
+            self._no_velocity
+        if nullspace_input is None:  # the common step: the arrays go straight to the kernel
+            code = self._array_kernel(self._f, self._i, q, target, velocity, has_velocity)
+        else:
+            code = self._step_with_input(q, target, velocity, has_velocity, nullspace_input)
         if code != OK:
             self._raise(code, q, target, target_velocity)
-        out = self._outputs
-        nv, m = self._nv, self._m
-        norm, sigma, damping, value, status, _, limited = out[nv + m:].tolist()
-        name = STATUS_NAMES[int(status)]
-        return ClikResult(out[:nv].copy(), out[nv:nv + m].copy(), norm, sigma, damping, value, name != "singular",
-                          name, limited != 0.0)
+        return self.result()
+
+    def _step_with_input(self, q: NDArray[np.float64], target: NDArray[np.float64],
+                         velocity: NDArray[np.float64], has_velocity: bool, nullspace_input: ArrayLike) -> int:
+        """The kernel call of a step with a nullspace input ``u`` (5.100); returns its code."""
+        nq, width, nv = self._nq, self._width, self._nv
+        inputs = self._inputs
+        inputs[:nq] = q
+        inputs[nq:nq + width] = target
+        if has_velocity:
+            inputs[nq + 6:nq + 6 + width] = velocity
+        if getattr(nullspace_input, "shape", None) != (nv,):  # an array of nv is the fast path
+            try:
+                nullspace_input = np.asarray(nullspace_input, dtype=np.float64)
+            except (TypeError, ValueError):
+                nullspace_input = np.zeros(0)
+            if nullspace_input.shape != (nv,):
+                raise ControllerError(f"nullspace_input must be finite with shape ({nv},), got "
+                                      f"{nullspace_input.shape}")
+        try:  # the kernel checks finiteness (BAD_INPUT)
+            inputs[nq + 12:nq + 12 + nv] = nullspace_input
+        except (TypeError, ValueError) as exc:  # an array of strings or objects
+            raise ControllerError("nullspace_input must be an array of finite numbers") from exc
+        return int(self._kernel(self._f, self._i, has_velocity, True))
 
     @staticmethod
     def _raise(code: int, q: NDArray[np.float64], target: NDArray[np.float64],
@@ -272,7 +303,7 @@ class CompiledClik:
         distances [m] (k) and gradients ``dd/dq`` (5.61) (k x nv), at most ``capacity`` of them (the nearest).
         Empty when the controller has no collision objective (or no step was made yet)."""
         nv = self._nv
-        if self.collision is None or not self._stepped:
+        if self.collision is None or self._outputs[nv + self._m + STEPPED] != 1.0:  # no step, or a failed one
             return np.zeros(0), np.zeros((0, nv))
         if self._pair_rows.shape[0] != capacity:
             self._pair_distances = np.zeros(capacity)

@@ -16,18 +16,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..controllers.clik import Clik, ClikResult
+from ..controllers.clik_kernels import OK
 from ..controllers.collision_objective import CollisionObjective
 from ..controllers.compiled_clik import CompiledClik
+from ..controllers.kernel_buffers import compiled_entry_point
 from ..controllers.frame_axis_task import FrameAxisTask
 from ..controllers.joint_limit_objective import JointLimitObjective
 from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf
 from .exceptions import PolicyError
+from .grasp_clik_kernels import grasp_clik_action
 from .options import config_from_options, control_period, env_with_attributes
 from .per_env_policy import PerEnvPolicy
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
+
+# grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, result); obs in any layout (a row of a
+# batch, a strided view), the others are the policy's own contiguous arrays
+_FUSED_SIGNATURE = ("int64(float64[::1], int64[::1], float64[:], int64, int64, float64[::1], float64[::1], "
+                    "float32[::1], float64[::1])")
 
 
 @dataclass(frozen=True)
@@ -97,7 +105,9 @@ class GraspClikPolicy(PerEnvPolicy):
     plans the path from the observed TCP pose and builds its collision model: the robot's own segments from the
     robot MJCF (non-adjacent links, the lift column) and one segment per observed obstacle. A batch of observations
     gets one such state per env index (:class:`~redundancy_gym.policies.PerEnvPolicy`).
-    :attr:`last_result` keeps the last :class:`ClikResult`.
+    :attr:`last_result` keeps the last :class:`ClikResult`. With the compiled backend a step is one kernel call
+    (:func:`~.grasp_clik_kernels.grasp_clik_action`: observation to action, the same numbers as the separate
+    calls of the Python backend's path).
 
     Args:
         env: an env exposing ``observation_layout`` (``q``, ``tcp_position``, ``tcp_quaternion``,
@@ -113,7 +123,7 @@ class GraspClikPolicy(PerEnvPolicy):
         base = env_with_attributes(env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"),
                                    "grasp clik")
         self._layout = dict(base.observation_layout)
-        self._speeds = np.asarray(base.max_joint_speeds, dtype=np.float64)
+        self._speeds = np.array(base.max_joint_speeds, dtype=np.float64)  # own contiguous copy: the kernel reads it
         self._period = control_period(base)  # the command keeps every joint inside its range over one period
         env_timing = getattr(base, "reference_timing", None)
         env_timing = env_timing if isinstance(env_timing, GraspPathTiming) else GraspPathTiming()
@@ -129,8 +139,17 @@ class GraspClikPolicy(PerEnvPolicy):
         self.collision: CollisionObjective | None = None
         self.path: GraspPath | None = None
         self.controller: Clik | CompiledClik | None = None  # built by the first observation (observed obstacles)
-        self.last_result: ClikResult | None = None
+        self._last_result: ClikResult | None = None
         self._time = self._layout["time"].start if "time" in self._layout else None  # predict needs it
+        # the one-call step (compiled backend): its entry point, the path's constants, the configuration's start in
+        # the observation and the copy of the last step's outputs that last_result is built from when asked for
+        self._fused: Any = None
+        self._path_params = np.zeros(0)
+        q_slice = self._layout["q"]
+        self._q_start = q_slice.start if q_slice.step in (None, 1) and q_slice.start is not None else None
+        self._outputs = np.zeros(0)
+        self._result_pending = False
+        self._nv = self.model.nv
         self._init_per_env(env, kwargs, self._layout)
 
     def build_controller(self, environment: list[Segment]) -> Clik | CompiledClik:
@@ -161,7 +180,25 @@ class GraspClikPolicy(PerEnvPolicy):
             if hard or c.avoid_leaves:
                 environment.append(Segment(f"obstacle_{k}", (volume,)))
         if self.controller is None or self.config.collision_avoidance == "on":
+            _ = self.last_result  # a pending result is read from the buffers of the controller being replaced
             self.controller = self.build_controller(environment)
+        self._path_params = self.path._params  # noqa: SLF001 - the constants of GraspPath's compiled sampler
+        self._fused = None
+        if isinstance(self.controller, CompiledClik) and self._q_start is not None and self._time is not None \
+                and self._speeds.shape == (self._nv,):
+            self._fused = compiled_entry_point(grasp_clik_action, _FUSED_SIGNATURE)
+            if self._outputs.size != self.controller.output_size:
+                self._outputs = np.zeros(self.controller.output_size)
+
+    @property
+    def last_result(self) -> ClikResult | None:
+        """The :class:`ClikResult` of the last step (None before the first); built when asked for, since most
+        callers never read it."""
+        if self._result_pending:
+            self._result_pending = False
+            assert isinstance(self.controller, CompiledClik)
+            self._last_result = self.controller.result(self._outputs)
+        return self._last_result
 
     @property
     def max_joint_speeds(self) -> NDArray[np.float64]:
@@ -181,10 +218,22 @@ class GraspClikPolicy(PerEnvPolicy):
 
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
-        q, target, velocity = self.task_reference(obs, starting)
-        assert self.controller is not None
-        result = self.controller.step(q, target, velocity)
-        self.last_result = result
+        if self._new_episode(obs, starting) or self.path is None:
+            self.plan(obs)
+        fused = self._fused
+        if fused is not None:  # the compiled backend: one kernel call from observation to action
+            f, i = self.controller.kernel_buffers()  # type: ignore[union-attr]
+            action = np.empty(self._nv, dtype=np.float32)
+            if fused(f, i, obs, self._q_start, self._time, self._path_params, self._speeds, action,
+                     self._outputs) == OK:
+                self._result_pending = True
+                return action
+        # the Python backend, or an input the kernel rejects: the separate calls raise the controller's error
+        assert self.path is not None and self.controller is not None and self._time is not None
+        target, velocity = self.path(obs.item(self._time))
+        result = self.controller.step(obs[self._layout["q"]], target, velocity)
+        self._result_pending = False
+        self._last_result = result
         return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
