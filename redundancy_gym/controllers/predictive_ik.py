@@ -29,13 +29,14 @@ from .exceptions import ControllerError
 from .frame_axis_task import FrameAxisTask
 from .frame_position_task import FramePositionTask
 from .joint_limit_objective import JointLimitObjective
-from .predictive_kernels import pik_command, pik_gradient, pik_rollout
+from .predictive_kernels import (METHODS, OVERFLOW, SINGULAR, SLOTS, STATUS, pik_command, pik_gradient,
+                                 pik_optimize, pik_rollout, slot_size)
 from .redundancy_resolution import as_float_array
 
 __all__ = ["DESCENT_METHODS", "PredictiveIk", "PredictiveResult", "PredictiveRollout"]
 
-DESCENT_METHODS = ("fletcher_reeves", "polak_ribiere", "steepest_descent")
-"""Descent directions of :meth:`PredictiveIk.optimize`."""
+DESCENT_METHODS = METHODS
+"""Descent directions of :meth:`PredictiveIk.optimize` ("fletcher_reeves", "polak_ribiere", "steepest_descent")."""
 
 
 class PredictiveRollout(NamedTuple):
@@ -89,6 +90,10 @@ class PredictiveResult(NamedTuple):
         status: why it stopped: ``"converged"`` (relative decrease below the tolerance), ``"max_iterations"``
             or ``"no_decrease"`` (the line search found no lower cost: a minimum to the step size's resolution).
         success: False only when the kinematics failed (singular ``J J^T + rho I``).
+        step: the step size the next line search would start from (twice the last accepted one), for a warm
+            start of the next optimization.
+        rollouts: forward integrations (5.112) run, each line-search trial counted (also those the compiled loop
+            stopped early above the Armijo threshold).
     """
 
     params: NDArray[np.float64]
@@ -97,6 +102,8 @@ class PredictiveResult(NamedTuple):
     iterations: int
     status: str
     success: bool
+    step: float = float("nan")
+    rollouts: int = 0
 
 
 class PredictiveIk:
@@ -132,6 +139,7 @@ class PredictiveIk:
         self.velocity_weight, self.input_weight = float(velocity_weight), float(input_weight)
         self.augmented, self.damping = bool(augmented), float(damping)
         self.joint_limits, self.collision = joint_limits, collision
+        self._work: NDArray[np.float64] = np.empty(0)  # pik_optimize's rollout slots, sized at the first call
         joint, rotation, translation = model.frame_attachment(task.frame)
         if isinstance(task, FramePositionTask):
             header = [0, joint, 0, *task.rows.tolist()]
@@ -205,13 +213,18 @@ class PredictiveIk:
         params = as_float_array(params, "the inputs")
         if not self.augmented:
             return params
-        start = np.zeros(self.n) if u_b is None else as_float_array(u_b, "u_b")
-        if start.shape != (self.n,) or not np.all(np.isfinite(start)):
-            raise ControllerError(f"u_b must be finite with shape ({self.n},), got {np.array2string(start)}")
+        start = self._start(u_b)
         u = np.empty_like(params)
         u[0] = start
         u[1:] = start + dt * np.cumsum(params[:-1], axis=0)
         return u
+
+    def _start(self, u_b: ArrayLike | None) -> NDArray[np.float64]:
+        """The checked input ``u_b`` at the start of the horizon (5.127) [rad/s or m/s], zeros when None."""
+        start = np.zeros(self.n) if u_b is None else as_float_array(u_b, "u_b")
+        if start.shape != (self.n,) or not np.all(np.isfinite(start)):
+            raise ControllerError(f"u_b must be finite with shape ({self.n},), got {np.array2string(start)}")
+        return np.ascontiguousarray(start)
 
     def _check(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -324,7 +337,7 @@ class PredictiveIk:
     # ------------------------------------------------------------------ algorithm 11
     def optimize(self, q0: ArrayLike, wdot: ArrayLike, dt: float, initial: ArrayLike, *, u_b: ArrayLike | None = None,
                  max_iterations: int = 20, tolerance: float = 1e-4, method: str = "fletcher_reeves",
-                 step: float = 1.0) -> PredictiveResult:
+                 step: float = 1.0, compiled: bool = False) -> PredictiveResult:
         """Algorithm 11 from the initial decision variables ``initial`` (N, n).
 
         Args:
@@ -338,6 +351,13 @@ class PredictiveIk:
             method: ``"fletcher_reeves"`` (conjugate gradient) or ``"steepest_descent"``.
             step: first trial step size ``alpha`` of the backtracking line search (in the function-space
                 gradient's units: the input changes by ``alpha`` times the gradient of the Hamiltonian).
+            compiled: run the whole loop in one compiled call (:func:`.predictive_kernels.pik_optimize`, what
+                :class:`~redundancy_gym.controllers.receding_horizon.RecedingHorizon` uses: the same steps to
+                round-off, about twice as fast); False (the default) runs it in Python on the separate rollout
+                and adjoint kernels, the reference. Round-off grows along the conjugate directions (through the
+                parabolic step's curvature, a difference of nearly equal costs), so over hundreds of iterations
+                the two may stop at different iterates of about the same cost: the global plans, the bench's
+                and the tests' hard cases, stay on the reference.
         """
         if method not in DESCENT_METHODS:
             raise ControllerError(f"unknown method {method!r}; valid: {', '.join(DESCENT_METHODS)}")
@@ -345,6 +365,9 @@ class PredictiveIk:
             raise ControllerError(f"max_iterations must be an int >= 0, got {max_iterations!r}")
         if not np.isfinite(step) or step <= 0.0 or not np.isfinite(tolerance) or tolerance < 0.0:
             raise ControllerError(f"step must be > 0 and tolerance >= 0, got {step!r}, {tolerance!r}")
+        if compiled:
+            return self._optimize_compiled(q0, wdot, dt, initial, u_b, int(max_iterations), float(tolerance), method,
+                                           float(step))
         roll, grad = self.gradient(q0, initial, wdot, dt, u_b)
         q0, params, wdot = self._check(q0, initial, wdot, dt)
         params = params.copy()
@@ -354,6 +377,7 @@ class PredictiveIk:
         previous_norm = float(dt * np.sum(hamiltonian * hamiltonian))  # <g, g> as the integral of algorithm 11
         alpha = float(step)
         status = "max_iterations"
+        rollouts = 1
         for j in range(max_iterations):
             slope = float(np.sum(grad * direction))
             if not slope < 0.0:  # not a descent direction (round-off): restart along the gradient
@@ -366,6 +390,7 @@ class PredictiveIk:
             for _ in range(30):  # backtracking with the Armijo condition
                 candidate = params + alpha * direction
                 trial = self._rollout(q0, candidate, wdot, dt, u_b)
+                rollouts += 1
                 trial_cost = trial.cost
                 if trial_cost <= roll.cost + 1e-4 * alpha * slope:
                     break
@@ -379,6 +404,7 @@ class PredictiveIk:
                 best = -slope * alpha * alpha / (2.0 * curvature)
                 if 0.0 < best < 4.0 * alpha and abs(best - alpha) > 1e-3 * alpha:
                     other = self._rollout(q0, params + best * direction, wdot, dt, u_b)
+                    rollouts += 1
                     if other.cost < trial_cost:
                         candidate, trial, trial_cost, alpha = params + best * direction, other, other.cost, best
             decrease = (roll.cost - trial_cost) / max(abs(roll.cost), 1e-300)
@@ -399,4 +425,33 @@ class PredictiveIk:
                 beta = max(0.0, float(dt * np.sum(hamiltonian * (hamiltonian - previous))) / previous_norm)
             direction = -hamiltonian + beta * direction
             previous_norm = norm
-        return PredictiveResult(params, roll, tuple(costs), len(costs) - 1, status, True)
+        return PredictiveResult(params, roll, tuple(costs), len(costs) - 1, status, True, alpha, rollouts)
+
+    def _optimize_compiled(self, q0: ArrayLike, wdot: ArrayLike, dt: float, initial: ArrayLike,
+                           u_b: ArrayLike | None, max_iterations: int, tolerance: float, method: str,
+                           step: float) -> PredictiveResult:
+        """:meth:`optimize` (its options checked already) in one call of :func:`.predictive_kernels.pik_optimize`."""
+        q0, params, wdot = self._check(q0, initial, wdot, dt)
+        start = self._start(u_b) if self.augmented else np.zeros(self.n)
+        self._refresh_environment()
+        steps, n = params.shape
+        nj, m = self._chain_i[0].shape[0], (self._task_i.shape[0] - 3 if self._task_i[0] == 0 else 5)
+        size = SLOTS * int(slot_size(steps, n, nj, m))
+        if self._work.shape[0] != size:
+            self._work = np.empty(size)  # kept between calls: a receding horizon has the same N every update
+        costs = np.empty(max_iterations + 1)
+        out = (np.empty((steps, n)), np.empty((steps, n)), np.empty((steps + 1, n)), np.empty((steps, n)), np.empty(4))
+        code, iterations, alpha, rollouts = pik_optimize(
+            self._chain_f, self._chain_i, self._task_i, self._task_f, self._objective_f, self._coll_i, self._coll_f,
+            self._coll_p, self.collision is not None, q0, wdot, float(dt), self.augmented, start, self.input_weight,
+            params, max_iterations, tolerance, METHODS.index(method), step, self._work, costs, *out)
+        if code == SINGULAR:
+            raise ControllerError("J J^T + rho I is singular along the rollout; raise damping")
+        if code == OVERFLOW:
+            raise ControllerError("the rollout overflowed (cost inf): the inputs, u_b or wdot are too large")
+        params_out, u, q, qdot, terms = out
+        parts = {"velocity": float(terms[0]), "joint_limits": float(terms[1]), "collision": float(terms[2]),
+                 "input_rate": float(terms[3])}
+        rollout = PredictiveRollout(q, qdot, u, float(costs[iterations]), parts)
+        return PredictiveResult(params_out, rollout, tuple(costs[:iterations + 1].tolist()), int(iterations),
+                                STATUS[code], True, float(alpha), int(rollouts))

@@ -17,6 +17,11 @@ with ``(df/dq)^T v`` formed without the derivative of the pseudoinverse as a mat
 and ``(dJ/dq_i) a`` = the derivative of the task velocity ``J a`` along joint ``i``, in closed form along the
 kinematic path (O(n) per joint).
 
+:func:`pik_optimize` runs the whole of algorithm 11 (the loop of ``PredictiveIk.optimize``) in one call for the
+receding horizon: the adjoint pass reads what the accepted forward pass kept (kinematics, task Jacobian, Cholesky
+factor, potential gradient of every sample), line-search trials stop once their partial cost exceeds the Armijo
+threshold, and no gradient is formed at the last iterate, where no direction uses it.
+
 Tasks: selected rows of a frame's position (``kind`` 0, :class:`~redundancy_gym.controllers.FramePositionTask`)
 or a frame's position plus the direction of one of its axes (``kind`` 1,
 :class:`~redundancy_gym.controllers.FrameAxisTask`: rows ``u^T J_R``, ``v^T J_R`` and feedforward
@@ -32,7 +37,8 @@ from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian
 from .collision_kernels import collision_potential
 
-__all__ = ["pik_command", "pik_gradient", "pik_rollout"]
+__all__ = ["CONVERGED", "MAX_ITERATIONS", "METHODS", "NO_DECREASE", "OVERFLOW", "SINGULAR", "SLOTS", "STATUS",
+           "pik_command", "pik_gradient", "pik_optimize", "pik_rollout", "slot_size"]
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
@@ -385,3 +391,333 @@ def pik_command(chain_f, chain_i, task_i, task_f, rho, q, u, wdot, target, gain,
     for r in range(m):
         b[r] += gain * error_out[r]
     return _velocity(jac, b, u, rho, a, low, y, qdot_out)
+
+
+# ---------------------------------------------------------------------------------------------- algorithm 11, fused
+CONVERGED, MAX_ITERATIONS, NO_DECREASE = 0, 1, 2
+"""Status codes of :func:`pik_optimize` (the order of ``PredictiveResult.status``'s names in :data:`STATUS`)."""
+SINGULAR, OVERFLOW = -1, -2
+"""Failure codes of :func:`pik_optimize`: ``J J^T + rho I`` singular along a rollout; the first rollout overflowed."""
+STATUS = ("converged", "max_iterations", "no_decrease")
+"""``PredictiveResult.status`` of each status code."""
+METHODS = ("fletcher_reeves", "polak_ribiere", "steepest_descent")
+"""Descent direction codes of :func:`pik_optimize` (their index)."""
+_OK, _ABOVE = 0, 2
+"""Codes of :func:`_rollout_slot` besides ``SINGULAR`` and ``OVERFLOW``: done; stopped above the limit."""
+SLOTS = 3
+"""Rollouts the workspace of :func:`pik_optimize` holds at once: the current iterate, the Armijo trial and the
+parabolic step's trial."""
+
+
+@njit(**_JIT)
+def slot_size(steps, n, nj, m):
+    """Floats of one rollout slot of the workspace (see :func:`_slot`) for ``steps`` samples, ``n`` joints, ``nj``
+    chain joints and a task of ``m`` rows."""
+    return steps * (5 * n + 6 * nj + 12 + m * n + m + m * m) + n
+
+
+@njit(**_JIT)
+def _slot(work, index, steps, n, nj, m):
+    """Views of rollout slot ``index`` of the flat workspace ``work``: the decision variables ``params`` (N, n), the
+    inputs ``u`` (N, n), ``q`` (N + 1, n), ``qdot`` (N, n), and what the adjoint pass needs of each sample, kept by
+    the forward pass so that it is not recomputed: the potentials' gradient ``dH_jl/dq + dH_c/dq`` (N, n), the
+    joint origins and world axes (N, nj, 3), the task frame (N, 12), the task Jacobian (N, m, n), ``y`` (N, m) and
+    the Cholesky factor of ``J J^T + rho I`` (N, m, m)."""
+    size = slot_size(steps, n, nj, m)
+    w = work[index * size:(index + 1) * size]
+    o = 0
+    params = w[o:o + steps * n].reshape((steps, n))
+    o += steps * n
+    u = w[o:o + steps * n].reshape((steps, n))
+    o += steps * n
+    q = w[o:o + (steps + 1) * n].reshape((steps + 1, n))
+    o += (steps + 1) * n
+    qdot = w[o:o + steps * n].reshape((steps, n))
+    o += steps * n
+    grad_h = w[o:o + steps * n].reshape((steps, n))
+    o += steps * n
+    position = w[o:o + steps * nj * 3].reshape((steps, nj, 3))
+    o += steps * nj * 3
+    world_axis = w[o:o + steps * nj * 3].reshape((steps, nj, 3))
+    o += steps * nj * 3
+    frame = w[o:o + steps * 12].reshape((steps, 12))
+    o += steps * 12
+    jac = w[o:o + steps * m * n].reshape((steps, m, n))
+    o += steps * m * n
+    y = w[o:o + steps * m].reshape((steps, m))
+    o += steps * m
+    low = w[o:o + steps * m * m].reshape((steps, m, m))
+    return params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low
+
+
+@njit(**_JIT)
+def _total(terms):
+    """The cost of a slot's terms (velocity, joint limits, collision, input rate), summed in the order of
+    ``PredictiveIk._rollout``."""
+    return terms[0] + terms[1] + terms[2] + terms[3]
+
+
+@njit(**_JIT)
+def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot, dt,
+                  augmented, u_b, input_weight, slot, limit, terms, rotation, jac6, b, a, scratch, running):
+    """:func:`pik_rollout` of the slot's ``params`` (the inputs ``u`` formed from them when ``augmented``:
+    ``u_k = u_b + dt sum_{l<k} udot_l`` (5.121)), keeping each sample's kinematics and potential gradient in the
+    slot for :func:`_adjoint_slot`; the cost terms into ``terms`` (4).
+
+    Returns ``_OK``, ``SINGULAR``, ``OVERFLOW`` (a joint velocity or configuration, or the cost, is not finite:
+    the cost is infinite) or ``_ABOVE``: the cost so far exceeds ``limit`` and the rest is not integrated. Every
+    term is >= 0 (squares and potentials (5.58), (5.49) with weights >= 0), so the partial sum only grows: a trial
+    stopped above the line search's threshold would have been rejected with its whole cost too.
+    """
+    params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low = slot
+    steps, n = params.shape
+    rho, wv = objective_f[0], objective_f[1]
+    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    may_stop = lp[3] >= 0.0 and (not collision or coll_p[3] >= 0.0)
+    rate = 0.0
+    if augmented:
+        for k in range(steps):
+            for i in range(n):
+                rate += params[k, i] * params[k, i]
+        rate = dt * input_weight * rate
+        for i in range(n):
+            running[i] = 0.0
+            u[0, i] = u_b[i]
+        for k in range(1, steps):
+            for i in range(n):
+                running[i] += params[k - 1, i]
+                u[k, i] = u_b[i] + dt * running[i]
+    else:
+        for k in range(steps):
+            for i in range(n):
+                u[k, i] = params[k, i]
+    terms[0] = terms[1] = terms[2] = 0.0
+    terms[3] = rate
+    for i in range(n):
+        q[0, i] = q0[i]
+    for k in range(steps):
+        qk = q[k]
+        _task(chain_f, chain_i, task_i, task_f, qk, wdot[k], rotation, position[k], world_axis[k], jac6, jac[k], b,
+              frame[k])
+        if not _velocity(jac[k], b, u[k], rho, a, low[k], y[k], qdot[k]):
+            return SINGULAR
+        speed = 0.0
+        finite = True
+        for i in range(n):
+            speed += qdot[k, i] * qdot[k, i]
+            q[k + 1, i] = qk[i] + dt * qdot[k, i]
+            finite = finite and np.isfinite(q[k + 1, i])
+        if not (finite and np.isfinite(speed)):
+            return OVERFLOW
+        g = grad_h[k]
+        for i in range(n):
+            g[i] = 0.0
+        terms[0] += dt * wv * speed
+        terms[1] += dt * _limits(qk, lower, upper, lp, g)
+        if collision:
+            terms[2] += dt * _collision(coll_i, coll_f, coll_p, chain_i, rotation, position[k], world_axis[k], g,
+                                        scratch)
+        if may_stop and _total(terms) > limit:
+            return _ABOVE
+    if not np.isfinite(_total(terms)):
+        return OVERFLOW
+    return _OK
+
+
+@njit(**_JIT)
+def _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q,
+                  vjp_scratch):
+    """:func:`pik_gradient` from the kinematics a :func:`_rollout_slot` kept: the adjoint recursion (5.113),
+    (5.115) backward, the gradient with respect to the slot's ``params`` into ``grad`` (N, n). When ``augmented``
+    it is the gradient with respect to ``udot``: ``u_k`` depends on ``udot_l`` for ``l < k`` (5.121), so the
+    adjoint of ``u`` (5.126) is the reverse cumulative sum, plus ``2 dt w_a udot_k`` (A.62)."""
+    params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low = slot
+    steps, n = params.shape
+    m = y.shape[1]
+    for i in range(n):
+        lam[i] = 0.0
+    for k in range(steps - 1, -1, -1):
+        jk = jac[k]
+        for i in range(n):
+            v[i] = lam[i] + 2.0 * wv * qdot[k, i]
+        for r in range(m):
+            acc = 0.0
+            for i in range(n):
+                acc += jk[r, i] * v[i]
+            mu[r] = acc
+        _solve(low[k], m, mu)
+        for i in range(n):
+            acc = v[i]
+            for r in range(m):
+                acc -= jk[r, i] * mu[r]
+            nv[i] = acc
+            grad[k, i] = dt * acc
+            grad_q[i] = grad_h[k, i]
+        _vjp(chain_i, task_i, position[k], world_axis[k], frame[k], wdot[k], y[k], nv, mu, qdot[k], grad_q,
+             vjp_scratch)
+        for i in range(n):
+            lam[i] += dt * grad_q[i]
+    if not augmented:
+        return
+    rate = 2.0 * dt * input_weight
+    for i in range(n):
+        v[i] = 0.0  # sum_{l > k} dPhi/du_l
+    for k in range(steps - 1, -1, -1):
+        for i in range(n):
+            later = v[i]
+            v[i] += grad[k, i]
+            grad[k, i] = dt * later + rate * params[k, i]
+
+
+@njit(**_JIT)
+def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot, dt,
+                 augmented, u_b, input_weight, initial, max_iterations, tolerance, method, step, work, costs,
+                 params_out, u_out, q_out, qdot_out, terms_out):
+    """Algorithm 11 in one call: ``PredictiveIk.optimize``'s Python loop (the same descent directions, Armijo
+    backtracking, parabolic step and stopping rules) on the compiled rollout and adjoint.
+
+    What the Python loop repeats per call, this does once per update: the adjoint pass reads the kinematics, task
+    Jacobians, Cholesky factors and potential gradients the accepted rollout kept (``work``: :data:`SLOTS` slots
+    of :func:`slot_size`) instead of recomputing them; a line-search trial stops integrating once its cost exceeds
+    the threshold it has to meet; and the gradient at the last iterate, which no direction uses, is not formed.
+
+    Args:
+        initial: the first decision variables (N, n); method: index into :data:`METHODS`; step: first trial
+            step size; costs: (max_iterations + 1) the cost after each iteration, the initial cost first.
+        params_out, u_out, q_out, qdot_out: the final iterate (N, n), its inputs, configurations (N + 1, n) and
+            joint velocities; terms_out: its cost terms (velocity, joint limits, collision, input rate).
+
+    Returns:
+        ``(code, iterations, step, rollouts)``: a status code (``CONVERGED``, ``MAX_ITERATIONS``, ``NO_DECREASE``)
+        or a failure code (``SINGULAR``, ``OVERFLOW``), the descent steps taken, the step size the next line
+        search would try first, and the forward integrations started (those stopped early included).
+    """
+    steps, n = initial.shape
+    nj = chain_i[0].shape[0]
+    m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
+    wv = objective_f[1]
+    rotation, jac6, b, a, scratch = np.empty((nj, 3, 3)), np.empty((6, n)), np.empty(m), np.empty((m, m)), np.empty(16)
+    grad, ham, direction = np.empty((steps, n)), np.empty((steps, n)), np.empty((steps, n))
+    lam, v, nv, mu, grad_q, running = np.empty(n), np.empty(n), np.empty(n), np.empty(m), np.empty(n), np.empty(n)
+    vjp_scratch = _vjp_scratch(nj)
+    terms = np.zeros((SLOTS, 4))
+    cur, trial, other = 0, 1, 2
+    slot = _slot(work, cur, steps, n, nj, m)
+    slot[0][:, :] = initial
+    code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot,
+                         dt, augmented, u_b, input_weight, slot, np.inf, terms[cur], rotation, jac6, b, a, scratch,
+                         running)
+    rollouts = 1
+    if code != _OK:
+        return code, 0, step, rollouts
+    cost = _total(terms[cur])
+    _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q,
+                  vjp_scratch)
+    costs[0] = cost
+    previous_norm = 0.0
+    for k in range(steps):
+        for i in range(n):
+            h = grad[k, i] / dt  # dH/du: the function-space gradient (5.119)
+            ham[k, i] = h
+            direction[k, i] = -h
+            previous_norm += h * h
+    previous_norm = dt * previous_norm  # <g, g> as the integral of algorithm 11
+    alpha = step
+    status = MAX_ITERATIONS
+    iterations = 0
+    for j in range(max_iterations):
+        slope = 0.0
+        for k in range(steps):
+            for i in range(n):
+                slope += grad[k, i] * direction[k, i]
+        if not slope < 0.0:  # not a descent direction (round-off): restart along the gradient
+            slope = 0.0
+            for k in range(steps):
+                for i in range(n):
+                    direction[k, i] = -ham[k, i]
+                    slope += grad[k, i] * direction[k, i]
+            if not slope < 0.0:
+                status = CONVERGED
+                break
+        current = _slot(work, cur, steps, n, nj, m)[0]
+        trial_cost = np.inf
+        accepted = False
+        for _ in range(30):  # backtracking with the Armijo condition
+            slot = _slot(work, trial, steps, n, nj, m)
+            candidate = slot[0]
+            for k in range(steps):
+                for i in range(n):
+                    candidate[k, i] = current[k, i] + alpha * direction[k, i]
+            threshold = cost + 1e-4 * alpha * slope
+            code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0,
+                                 wdot, dt, augmented, u_b, input_weight, slot, threshold, terms[trial], rotation, jac6,
+                                 b, a, scratch, running)
+            rollouts += 1
+            if code == SINGULAR:
+                return SINGULAR, iterations, alpha, rollouts
+            if code == _OK:
+                trial_cost = _total(terms[trial])
+                if trial_cost <= threshold:
+                    accepted = True
+                    break
+            alpha *= 0.5
+        if not accepted:
+            status = NO_DECREASE
+            break
+        # the minimum of the parabola through the cost at 0 and alpha with the slope at 0
+        curvature = trial_cost - cost - slope * alpha
+        if curvature > 0.0:
+            best = -slope * alpha * alpha / (2.0 * curvature)
+            if 0.0 < best < 4.0 * alpha and abs(best - alpha) > 1e-3 * alpha:
+                slot = _slot(work, other, steps, n, nj, m)
+                candidate = slot[0]
+                for k in range(steps):
+                    for i in range(n):
+                        candidate[k, i] = current[k, i] + best * direction[k, i]
+                code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision,
+                                     q0, wdot, dt, augmented, u_b, input_weight, slot, trial_cost, terms[other],
+                                     rotation, jac6, b, a, scratch, running)
+                rollouts += 1
+                if code == SINGULAR:
+                    return SINGULAR, iterations, alpha, rollouts
+                if code == _OK and _total(terms[other]) < trial_cost:
+                    trial, other = other, trial
+                    trial_cost, alpha = _total(terms[trial]), best
+        decrease = (cost - trial_cost) / max(abs(cost), 1e-300)
+        cur, trial = trial, cur
+        cost = trial_cost
+        iterations = j + 1
+        costs[iterations] = cost
+        alpha *= 2.0  # start the next search a little further out
+        if decrease < tolerance:
+            status = CONVERGED
+            break
+        if j == max_iterations - 1:
+            break  # the next direction would be the only use of this gradient
+        _adjoint_slot(chain_i, task_i, _slot(work, cur, steps, n, nj, m), wdot, dt, wv, augmented, input_weight, grad,
+                      lam, v, nv, mu, grad_q, vjp_scratch)
+        norm = 0.0
+        change = 0.0
+        for k in range(steps):
+            for i in range(n):
+                h = grad[k, i] / dt
+                change += h * (h - ham[k, i])
+                norm += h * h
+                ham[k, i] = h
+        norm = dt * norm
+        beta = 0.0
+        if method == 0 and previous_norm > 0.0:
+            beta = norm / previous_norm
+        elif method == 1 and previous_norm > 0.0:  # PR+, restarts by itself
+            beta = max(0.0, dt * change / previous_norm)
+        for k in range(steps):
+            for i in range(n):
+                direction[k, i] = -ham[k, i] + beta * direction[k, i]
+        previous_norm = norm
+    params, u, q, qdot = _slot(work, cur, steps, n, nj, m)[:4]
+    params_out[:, :] = params
+    u_out[:, :] = u
+    q_out[:, :] = q
+    qdot_out[:, :] = qdot
+    terms_out[:] = terms[cur]
+    return status, iterations, alpha, rollouts

@@ -185,3 +185,103 @@ def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -
     gain = float(grasp.config.gain)
     assert deviation[gain] < 0.1 < 1.0 < deviation[0.0]
     assert speed[gain] < 1.5 * np.max(np.abs(plan.qdot)) < speed[0.0]
+
+
+def _agri_axis(augmented: bool = False) -> tuple[PredictiveIk, np.ndarray, np.ndarray]:
+    """The 9-DoF arm with the tool-axis task, self-collision (active) and joint limits; 60 samples of a smooth
+    reference."""
+    model = RobotModel.from_mjcf(AGRI_ARM_XML)
+    collision = CollisionObjective(collision_model_from_mjcf(model), activation_distance=0.1, slope=5.0)
+    limits = JointLimitObjective.from_model(model, activation_distance=0.3, weight=0.6)
+    pik = PredictiveIk(model, FrameAxisTask(AGRI_ARM_TCP, 0), joint_limits=limits, collision=collision,
+                       augmented=augmented, input_weight=0.01)
+    rng = np.random.default_rng(3)
+    q0 = rng.uniform(model.lower_limits, model.upper_limits) * 0.5
+    wdot = np.zeros((60, 6))
+    wdot[:, 0] = 0.2 * np.sin(np.linspace(0.0, np.pi, 60))
+    wdot[:, 4] = 0.3
+    return pik, q0, wdot
+
+
+@pytest.mark.parametrize("augmented", [False, True], ids=("velocity_level", "augmented"))
+@pytest.mark.parametrize("method", ["fletcher_reeves", "polak_ribiere", "steepest_descent"])
+@pytest.mark.parametrize("problem", ["planar", "agri"])
+def test_compiled_optimize_takes_the_python_loops_iterates(problem: str, method: str, augmented: bool) -> None:
+    """The fused kernel (the adjoint pass on the rollout's kept kinematics, line-search trials stopped above the
+    Armijo threshold, no gradient at the last iterate) takes the same steps as the Python loop on the separate
+    rollout and adjoint kernels: equal to round-off (the sums run in another order; the conjugate directions
+    grow the difference to ~1e-8 in six iterations), the same status, iterations and forward integrations."""
+    if problem == "planar":
+        pik, q0, wdot = _planar(augmented=augmented, input_weight=0.01)
+        wdot, n = wdot[:120], 4
+    else:
+        pik, q0, wdot = _agri_axis(augmented)
+        n = 9
+    rng = np.random.default_rng(7)
+    initial = rng.normal(size=(wdot.shape[0], n)) * 0.1
+    u_b = rng.normal(size=n) * 0.1 if augmented else None
+    for iterations in (0, 1, 6):
+        a = pik.optimize(q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method,
+                         compiled=False)
+        b = pik.optimize(q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method,
+                         compiled=True)
+        assert (a.status, a.iterations, a.rollouts) == (b.status, b.iterations, b.rollouts)
+        np.testing.assert_allclose(b.costs, a.costs, rtol=1e-11)
+        scale = max(1.0, float(np.max(np.abs(a.params))))
+        assert np.max(np.abs(b.params - a.params)) < 1e-6 * scale
+        for name in ("q", "qdot", "u"):
+            np.testing.assert_allclose(getattr(b.rollout, name), getattr(a.rollout, name), atol=1e-6)
+        # the step comes from the parabola's curvature, a difference of nearly equal costs: ill-conditioned
+        assert b.rollout.cost == b.costs[-1] and b.step == pytest.approx(a.step, rel=1e-2)
+        for term, value in a.rollout.terms.items():
+            assert b.rollout.terms[term] == pytest.approx(value, rel=1e-10, abs=1e-14)
+    if problem == "planar":
+        assert a.rollout.terms["collision"] > 0.0  # the obstacle shapes the steps compared
+
+
+def test_compiled_optimize_stops_and_fails_like_the_python_loop() -> None:
+    pik, q0, wdot = _planar()
+    for tolerance in (1e-3, 0.0):
+        a = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance)
+        b = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance,
+                         compiled=True)
+        assert a.status == b.status and (a.status == "converged") == (tolerance > 0.0)
+        if tolerance > 0.0:
+            assert a.iterations == b.iterations
+        # 200 iterations: round-off has grown along the conjugate directions; both end at the optimum
+        assert b.costs[-1] == pytest.approx(a.costs[-1], rel=1e-5)
+    # a first guess that leaves the arm's reach: the kinematics fail on both paths
+    with pytest.raises(ControllerError):
+        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2)
+    with pytest.raises(ControllerError, match="overflowed"):
+        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2, compiled=True)
+    with pytest.raises(ControllerError, match="u_b"):
+        _planar(augmented=True)[0].optimize(q0, wdot[:80], DT, np.zeros((80, 4)), u_b=np.full(4, np.nan),
+                                            compiled=True)
+
+
+def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum() -> None:
+    """Algorithm 12 on the planar arm: the compiled updates apply the Python loop's inputs (to round-off) with as
+    many forward integrations. With ``warm_step`` each line search starts from the last update's step; from one
+    state it reaches the same optimum as a cold start."""
+    from redundancy_gym.controllers.receding_horizon import RecedingHorizon  # noqa: PLC0415
+
+    pik, q0, wdot = _planar(augmented=True, input_weight=0.01)
+    horizons = {name: RecedingHorizon(pik, 100, DT, iterations=2, **kwargs) for name, kwargs in
+                (("python", {"compiled": False}), ("compiled", {}), ("warm", {"warm_step": True}))}
+    q = {name: q0.copy() for name in horizons}
+    rollouts = {name: 0 for name in horizons}
+    for k in range(30):
+        for name, horizon in horizons.items():
+            update = horizon.update(q[name], wdot[k:k + 100])
+            rollouts[name] += update.result.rollouts
+            q[name] = q[name] + DT * update.result.rollout.qdot[0]
+        np.testing.assert_allclose(horizons["compiled"].last.u, horizons["python"].last.u, atol=1e-9)
+    assert rollouts["compiled"] == rollouts["python"]
+    # from one state, the warm-started step reaches the same optimum as a cold start (many iterations)
+    warm, cold = horizons["warm"], horizons["compiled"]
+    params, u_b = warm._params, warm._u_b
+    best = [pik.optimize(q["warm"], wdot[30:130], DT, params, u_b=u_b, max_iterations=150, tolerance=1e-12, step=step,
+                         compiled=True) for step in (warm._step, 1.0)]
+    assert best[0].costs[-1] == pytest.approx(best[1].costs[-1], rel=1e-4)
+    assert cold._step == 1.0 and warm._step != 1.0
