@@ -96,7 +96,7 @@ def test_walking_action_is_the_clipped_normalized_joint_targets() -> None:
     np.testing.assert_array_equal(action, np.clip((command.joint_targets - nominal) / scale, -1, 1).astype(np.float32))
     targets = nominal + scale * np.linspace(-3.0, 3.0, nominal.size)
     targets[0] = np.nan
-    policy.controller.step = lambda *args: command._replace(joint_targets=targets.copy())
+    policy.controller.step_mujoco = lambda *args: command._replace(joint_targets=targets.copy())
     action = policy.command(obs)
     expected = np.clip((targets - nominal) / scale, -1.0, 1.0).astype(np.float32)
     assert action.dtype == np.float32 and np.isnan(action[0])
