@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import chain_forward, chain_jacobian, place_frame
 from .collision_kernels import close_pair_rows, collision_potential
-from .kernel_buffers import float_field, int_field, pack_fields
+from .kernel_buffers import BORROW, borrowed_float_field, borrowed_int_field, pack_fields
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
 __all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_close_pairs",
@@ -69,7 +69,8 @@ _NF = len(FLOAT_FIELDS)
 # return codes of clik_step
 OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
 
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+# every kernel here only borrows the buffers' arrays: no reference counting (see kernel_buffers.BORROW)
+_JIT = BORROW
 
 
 def pack_buffers(floats: Mapping[str, NDArray[np.float64]],
@@ -78,8 +79,8 @@ def pack_buffers(floats: Mapping[str, NDArray[np.float64]],
     return pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
 
 
-_fv = float_field
-_iv = int_field
+_fv = borrowed_float_field
+_iv = borrowed_int_field
 
 
 @njit(**_JIT)
@@ -281,7 +282,7 @@ def _bound(f, i, nv, nb, q, x):
     return limited
 
 
-@njit(**_JIT)
+@njit(inline="always", **_JIT)  # inlined: it returns views (see kernel_buffers.borrowed_float_field)
 def clik_fields(f, i):
     """``(inputs, outputs, nq, nv, task_dim)`` of the buffers: the views and sizes that a compiled caller of
     :func:`clik_step` fills and reads (``inputs``: q, target (6), target velocity (6), nullspace input (nv);

@@ -18,10 +18,13 @@ from ..geometry.ssv_kernels import volume_pair_distance
 from ..model import RobotModel
 from ..model.chain_kernels import chain_jacobian_transpose_times, place_frame
 from .collision_objective import CollisionObjective
+from .kernel_buffers import BORROW
 
 __all__ = ["CollisionFields", "bounding_spheres", "collision_fields", "collision_potential", "close_pair_rows"]
 
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+# the kernels only borrow their arrays (the callers' buffers): no reference counting (kernel_buffers.BORROW);
+# callers that count references may call them too, since nothing borrowed is returned
+_JIT = BORROW
 
 
 @njit(**_JIT)

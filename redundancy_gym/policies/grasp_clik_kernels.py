@@ -24,8 +24,9 @@ BAD_OBSERVATION = -1
 
 
 # no fast-math here: the action must be the NumPy ``clip(qdot / speeds, -1, 1)`` to the last bit (a reciprocal
-# multiplication could differ by one unit in the last place); the CLIK step keeps its own flags
-@njit(cache=True, error_model="numpy")
+# multiplication could differ by one unit in the last place); the CLIK step keeps its own flags. It only borrows
+# arrays: no reference counting (controllers.kernel_buffers.BORROW)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, result):  # pragma: no cover - compiled
     """One step of the grasp CLIK policy on the :class:`~redundancy_gym.controllers.CompiledClik` buffers
     ``f``, ``i`` (a :class:`FrameAxisTask`, so the target is ``[p, a]`` and its velocity ``[v, omega]``).
