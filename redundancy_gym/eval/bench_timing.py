@@ -13,6 +13,8 @@ time and the process's CPU time over the call. On a busy machine the scheduler m
 middle of a call; the wall clock then counts the other process's turn, the CPU clock does not. The CPU clock costs
 a system call (about 2.5 us here), so a call that runs undisturbed reads a little longer on it than on the wall
 clock, whose time is then kept; multi-threaded work (CPU time above wall time) is timed by the wall clock too.
+Waiting (I/O, sleep, another process's result) is not counted either: it suits the benches' compute-bound calls,
+not a call that blocks.
 
 A sample is whatever a candidate's sampler returns, in seconds: :func:`timed_calls` makes a sampler that times
 enough calls of a function to last at least ``min_time`` (above the timer's resolution) and returns the time per
