@@ -335,6 +335,9 @@ class RobotModel:
         # the frames' classical accelerations at zero joint acceleration (data.a); the centroidal pass below runs
         # the forward kinematics with (q, qdot) again, which leaves data.a as it is, and fills the joint Jacobians
         pin.forwardKinematics(model, data, q, qdot, np.zeros(self._nv))
+        # pinocchio 4.1's computeCentroidalMapTimeVariation reads data.vcom[0] without computing it: without this
+        # line Adot_G qdot used whatever CoM velocity an earlier call left (off by ~200 after another state's pass)
+        pin.centerOfMass(model, data, pin.KinematicLevel.VELOCITY, False)
         centroidal_drift = np.asarray(pin.computeCentroidalMapTimeVariation(model, data, q, qdot)) @ qdot
         centroidal = np.array(data.Ag, dtype=np.float64)
         pin.updateFramePlacements(model, data)
@@ -421,6 +424,8 @@ class RobotModel:
         ``hdot_G = A_G qddot + Adot_G qdot``. Updates the model at ``q``; the kinematic cache stays valid there."""
         q = self.update(q)
         qdot = self._check_velocity(qdot)
+        # the CoM velocity at (q, qdot) first: pinocchio 4.1's computeCentroidalMapTimeVariation reads data.vcom[0]
+        pin.centerOfMass(self._model, self._data, q, qdot, False)
         rate = pin.computeCentroidalMapTimeVariation(self._model, self._data, q, qdot)
         return np.array(rate, dtype=np.float64) @ qdot
 

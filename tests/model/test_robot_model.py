@@ -306,6 +306,32 @@ def test_centroidal_momentum_drift_is_the_rate_of_the_momentum_at_zero_accelerat
     np.testing.assert_allclose(drift, (momentum(h) - momentum(-h)) / (2 * h), atol=1e-6)
 
 
+def test_centroidal_drift_does_not_depend_on_what_ran_before(rng) -> None:
+    """pinocchio 4.1's computeCentroidalMapTimeVariation reads the CoM velocity left in its data by earlier calls:
+    Adot_G qdot from both queries must be the same after a query at another state as on a fresh model, and the
+    rate of A_G qdot along q(t) = q + v t (central differences)."""
+    q, v = _random_biped_state(RobotModel.from_mjcf(BIPED_XML), rng)
+    v *= 0.3
+    fresh = RobotModel.from_mjcf(BIPED_XML)
+    reference = fresh.acceleration_terms(q, v, ("r_sole",)).centroidal_drift
+    h = 1e-6
+
+    def momentum(t: float) -> np.ndarray:
+        fresh.update(fresh.integrate(q, v, t))
+        return fresh.com_and_centroidal_matrix()[1] @ v
+
+    np.testing.assert_allclose(reference, (momentum(h) - momentum(-h)) / (2 * h), atol=1e-5)
+    for query in ("acceleration_terms", "centroidal_momentum_drift"):
+        model = RobotModel.from_mjcf(BIPED_XML)
+        q_other, v_other = _random_biped_state(model, rng)
+        model.measure(q_other, 5.0 * v_other)  # leaves another state's CoM velocity in pinocchio's data
+        if query == "acceleration_terms":
+            drift = model.acceleration_terms(q, v, ("r_sole",)).centroidal_drift
+        else:
+            drift = model.centroidal_momentum_drift(q, v)
+        np.testing.assert_allclose(drift, reference, rtol=0.0, atol=1e-10 * np.abs(reference).max())
+
+
 def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
     """acceleration_terms() gives what update() and the frame, Jdot qdot, CoM, A_G and Adot_G qdot queries give, and
     leaves the kinematic cache at q as update() does; the frames' drift is the rate of J qdot (finite differences

@@ -603,12 +603,6 @@ class WalkingController:
                                       ground=self.pattern.ground)
         if m is None:
             return None
-        if self.ikd is not None:
-            # The IKD's RobotModel.acceleration_terms reads the CoM velocity that the last pinocchio pass left in the
-            # model's data (pinocchio 4.1's computeCentroidalMapTimeVariation uses data.vcom without computing it):
-            # its Adot_G qdot has been the one with the measured CoM velocity, which RobotModel.measure left there.
-            # The pass is kept so that IKD walks stay as they were, until acceleration_terms sets it itself.
-            self.model.measure(m.q, m.v)
         if self.stance_frame:
             self._world_to_plan = (m.turn.copy(), m.shift.copy())
         # copies: the estimate outlives the period (WalkingCommand.contact), the kernel's buffers do not
