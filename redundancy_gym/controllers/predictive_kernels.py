@@ -36,14 +36,18 @@ from numba import njit
 from ..geometry.potentials import piecewise_potential_kernel
 from ..model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian
 from .collision_kernels import collision_potential
+from .kernel_buffers import BORROW
 
 __all__ = ["CONVERGED", "MAX_ITERATIONS", "METHODS", "NO_DECREASE", "OVERFLOW", "SINGULAR", "SLOTS", "STATUS",
            "pik_command", "pik_gradient", "pik_optimize", "pik_rollout", "slot_size"]
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+# The per-sample functions (and the forward and adjoint passes over a slot) only borrow their arrays: compiled
+# without reference counting (kernel_buffers.BORROW), they skip an atomic incref/decref per array argument and per
+# view, hundreds per sample. The entry points allocate, so they keep it.
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_axis, jac6, jac, b, frame):
     """Kinematics at ``q``; the task Jacobian ``jac`` (m x n), task velocity ``b`` (m) from the reference
     ``wdot`` and the task frame's rotation and origin ``frame`` (12: R row-major, p).
@@ -89,7 +93,7 @@ def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_a
         b[3 + s] = ux * wdot[3] + uy * wdot[4] + uz * wdot[5]
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _cholesky(a, m, low):
     """Lower Cholesky factor of the m x m ``a`` into ``low``; False when not positive definite."""
     for j in range(m):
@@ -107,7 +111,7 @@ def _cholesky(a, m, low):
     return True
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _solve(low, m, x):
     """``x <- A^-1 x`` with the factor of :func:`_cholesky`."""
     for i in range(m):
@@ -122,7 +126,7 @@ def _solve(low, m, x):
         x[i] = t / low[i, i]
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _velocity(jac, b, u, rho, a, low, y, qdot):
     """``qdot = u + J^T y`` with ``y = (J J^T + rho I)^-1 (b - J u)``; the factor stays in ``low``."""
     m, n = jac.shape
@@ -150,7 +154,7 @@ def _velocity(jac, b, u, rho, a, low, y, qdot):
     return True
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _limits(q, lower, upper, lp, gradient):
     """(5.58) on the distance to each limit; adds the gradient (when given) and returns the value."""
     da, slope, ratio, weight = lp[0], lp[1], lp[2], lp[3]
@@ -165,7 +169,7 @@ def _limits(q, lower, upper, lp, gradient):
     return value
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, gradient, scratch):
     """(5.49) over the collision pairs, gradient added (the arrays of :func:`collision_fields`)."""
     seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
@@ -184,7 +188,7 @@ def _vjp_scratch(nj):
             np.empty(3))
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _vjp(chain_i, task_i, position, world_axis, frame, wdot, y, a1, mu, a2, out, scratch):
     """``out[i] += y^T (dJ/dq_i) a1 - mu^T (dJ/dq_i) a2 + mu^T d wdot/dq_i`` along the task frame's path.
     ``scratch`` is :func:`_vjp_scratch` (allocated once per kernel call: this runs once per sample)."""
@@ -450,14 +454,14 @@ def _slot(work, index, steps, n, nj, m):
     return params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _total(terms):
     """The cost of a slot's terms (velocity, joint limits, collision, input rate), summed in the order of
     ``PredictiveIk._rollout``."""
     return terms[0] + terms[1] + terms[2] + terms[3]
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot, dt,
                   augmented, u_b, input_weight, slot, limit, terms, rotation, jac6, b, a, scratch, running):
     """:func:`pik_rollout` of the slot's ``params`` (the inputs ``u`` formed from them when ``augmented``:
@@ -524,7 +528,7 @@ def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
     return _OK
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q,
                   vjp_scratch):
     """:func:`pik_gradient` from the kinematics a :func:`_rollout_slot` kept: the adjoint recursion (5.113),
