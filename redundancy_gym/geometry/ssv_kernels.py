@@ -415,6 +415,31 @@ for _g, (_ka, _kb) in enumerate(GROUPS):
     GROUP_OF[_ka, _kb] = _g
 
 
+# both inlined: every pair loop calls them, and a call passing the arrays is what made the loops slow (see
+# _closest_relative)
+@njit(inline="always", **_BORROW)
+def _vertex(v, i, c):
+    return (v[i, c, 0], v[i, c, 1], v[i, c, 2])
+
+
+@njit(inline="always", **_BORROW)
+def _write(r, swap, dist, pa, pb, n, out_d, out_pa, out_pb, out_n):
+    """Row ``r`` of the outputs, with the witnesses swapped and the normal reversed where ``swap``."""
+    if swap:
+        pa, pb = pb, pa
+        n = (-n[0], -n[1], -n[2])
+    out_d[r] = dist
+    out_pa[r, 0] = pa[0]
+    out_pa[r, 1] = pa[1]
+    out_pa[r, 2] = pa[2]
+    out_pb[r, 0] = pb[0]
+    out_pb[r, 1] = pb[1]
+    out_pb[r, 2] = pb[2]
+    out_n[r, 0] = n[0]
+    out_n[r, 1] = n[1]
+    out_n[r, 2] = n[2]
+
+
 @njit(inline="always", **_BORROW)
 def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo):
     """Sphere/sphere pairs ``lo..hi`` as one flat loop; concentric and inactive pairs are left in ``todo``."""
@@ -422,27 +447,14 @@ def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, 
     for k in range(lo, hi):
         i = index_a[k]
         j = index_b[k]
-        ax = v[i, 0, 0]
-        ay = v[i, 0, 1]
-        az = v[i, 0, 2]
-        dx = v[j, 0, 0] - ax
-        dy = v[j, 0, 1] - ay
-        dz = v[j, 0, 2] - az
-        q = dx * dx + dy * dy + dz * dz
+        a = _vertex(v, i, 0)
+        b = _vertex(v, j, 0)
+        d = _sub(b, a)
+        q = _dot(d, d)
         apart = q > _CONTACT_GAP2
         dist = np.sqrt(q)
         inv = 1.0 / (dist if apart else 1.0)  # square roots and divisions bound these loops: one of each
-        r = slot[k]
-        out_d[r] = dist - radii[i] - radii[j]
-        out_pa[r, 0] = ax
-        out_pa[r, 1] = ay
-        out_pa[r, 2] = az
-        out_pb[r, 0] = v[j, 0, 0]
-        out_pb[r, 1] = v[j, 0, 1]
-        out_pb[r, 2] = v[j, 0, 2]
-        out_n[r, 0] = dx * inv
-        out_n[r, 1] = dy * inv
-        out_n[r, 2] = dz * inv
+        _write(slot[k], False, dist - radii[i] - radii[j], a, b, _times(d, inv), out_d, out_pa, out_pb, out_n)
         todo[nt] = k
         nt += 0 if (apart and active[k] != 0) else 1
     return nt
@@ -462,45 +474,22 @@ def _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo
     for k in range(lo, hi):
         i = index_a[k]
         j = index_b[k]
-        ox = v[i, 0, 0]
-        oy = v[i, 0, 1]
-        oz = v[i, 0, 2]
-        ax = v[j, 0, 0] - ox
-        ay = v[j, 0, 1] - oy
-        az = v[j, 0, 2] - oz
-        bx = v[j, 1, 0] - ox
-        by = v[j, 1, 1] - oy
-        bz = v[j, 1, 2] - oz
-        extent = max(abs(ax), abs(ay), abs(az), abs(bx), abs(by), abs(bz))
-        ex = bx - ax
-        ey = by - ay
-        ez = bz - az
-        dd = ex * ex + ey * ey + ez * ez
-        s = min(max(((0.0 - ax) * ex + (0.0 - ay) * ey + (0.0 - az) * ez) / (dd if dd > 0.0 else 1.0), 0.0), 1.0)
+        o = _vertex(v, i, 0)
+        a = _sub(_vertex(v, j, 0), o)
+        b = _sub(_vertex(v, j, 1), o)
+        extent = _extent(a, b, b)
+        e = _sub(b, a)
+        dd = _dot(e, e)
+        s = min(max(_dot(_sub((0.0, 0.0, 0.0), a), e) / (dd if dd > 0.0 else 1.0), 0.0), 1.0)
         s = s if dd > 0.0 else 0.0
-        qx = ax + s * ex
-        qy = ay + s * ey
-        qz = az + s * ez
-        q = qx * qx + qy * qy + qz * qz
+        p = _add_scaled(a, s, e)  # the closest point on the segment, relative to the centre
+        q = _dot(p, p)
         apart = q > _CONTACT_GAP2
         dist = np.sqrt(q)
         inv = 1.0 / (dist if apart else 1.0)
-        sign = -1.0 if swap[k] != 0 else 1.0
-        r = slot[k]
-        out_d[r] = dist - radii[i] - radii[j]
         # witnesses: the centre and the point on the segment, exchanged where the pair was given capsule first
-        px = qx + ox
-        py = qy + oy
-        pz = qz + oz
-        out_pa[r, 0] = px if swap[k] != 0 else ox
-        out_pa[r, 1] = py if swap[k] != 0 else oy
-        out_pa[r, 2] = pz if swap[k] != 0 else oz
-        out_pb[r, 0] = ox if swap[k] != 0 else px
-        out_pb[r, 1] = oy if swap[k] != 0 else py
-        out_pb[r, 2] = oz if swap[k] != 0 else pz
-        out_n[r, 0] = sign * qx * inv
-        out_n[r, 1] = sign * qy * inv
-        out_n[r, 2] = sign * qz * inv
+        _write(slot[k], swap[k] != 0, dist - radii[i] - radii[j], o, _add_scaled(o, 1.0, p), _times(p, inv), out_d,
+               out_pa, out_pb, out_n)
         todo[nt] = k
         nt += 0 if (apart and active[k] != 0 and _SCALE_LOW <= extent <= _SCALE_HIGH) else 1
     return nt
@@ -520,23 +509,15 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
     for k in range(lo, hi):
         i = index_a[k]
         j = index_b[k]
-        ox = v[i, 0, 0]
-        oy = v[i, 0, 1]
-        oz = v[i, 0, 2]
-        d1x = v[i, 1, 0] - ox
-        d1y = v[i, 1, 1] - oy
-        d1z = v[i, 1, 2] - oz
-        b0x = v[j, 0, 0] - ox
-        b0y = v[j, 0, 1] - oy
-        b0z = v[j, 0, 2] - oz
-        d2x = v[j, 1, 0] - v[j, 0, 0]
-        d2y = v[j, 1, 1] - v[j, 0, 1]
-        d2z = v[j, 1, 2] - v[j, 0, 2]
-        aa = d1x * d1x + d1y * d1y + d1z * d1z
-        ee = d2x * d2x + d2y * d2y + d2z * d2z
-        bb = d1x * d2x + d1y * d2y + d1z * d2z
-        cc = -(d1x * b0x + d1y * b0y + d1z * b0z)
-        ff = -(d2x * b0x + d2y * b0y + d2z * b0z)
+        o = _vertex(v, i, 0)
+        d1 = _sub(_vertex(v, i, 1), o)
+        b0 = _sub(_vertex(v, j, 0), o)
+        d2 = _sub(_vertex(v, j, 1), _vertex(v, j, 0))
+        aa = _dot(d1, d1)
+        ee = _dot(d2, d2)
+        bb = _dot(d1, d2)
+        cc = -_dot(d1, b0)
+        ff = -_dot(d2, b0)
         det = aa * ee - bb * bb
         regular = det > _WELL_CONDITIONED * aa * ee  # false for collapsed segments too (0 > 0)
         inv_det = 1.0 / (det if regular else 1.0)
@@ -545,27 +526,14 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
         s = min(max((bb * ff - cc * ee) * inv_det, 0.0), 1.0)
         t = min(max((bb * s + ff) * inv_ee, 0.0), 1.0)
         s = min(max((bb * t - cc) * inv_aa, 0.0), 1.0)
-        pax = s * d1x
-        pay = s * d1y
-        paz = s * d1z
-        dx = b0x + t * d2x - pax
-        dy = b0y + t * d2y - pay
-        dz = b0z + t * d2z - paz
-        q = dx * dx + dy * dy + dz * dz
+        pa = _times(d1, s)
+        d = _sub(_add_scaled(b0, t, d2), pa)
+        q = _dot(d, d)
         apart = q > _CONTACT_GAP2
         dist = np.sqrt(q)
-        inv = 1.0 / (dist if apart else 1.0)  # square roots and divisions bound these loops: one of each
-        r = slot[k]
-        out_d[r] = dist - radii[i] - radii[j]
-        out_pa[r, 0] = pax + ox
-        out_pa[r, 1] = pay + oy
-        out_pa[r, 2] = paz + oz
-        out_pb[r, 0] = pax + dx + ox
-        out_pb[r, 1] = pay + dy + oy
-        out_pb[r, 2] = paz + dz + oz
-        out_n[r, 0] = dx * inv
-        out_n[r, 1] = dy * inv
-        out_n[r, 2] = dz * inv
+        inv = 1.0 / (dist if apart else 1.0)
+        _write(slot[k], False, dist - radii[i] - radii[j], _add_scaled(o, 1.0, pa),
+               _add_scaled(o, 1.0, _add_scaled(pa, 1.0, d)), _times(d, inv), out_d, out_pa, out_pb, out_n)
         todo[nt] = k
         nt += 0 if (regular and apart and active[k] != 0) else 1
     return nt
@@ -686,29 +654,6 @@ def _pair_result(a0, a1, a2, ka, ra, b0, b1, b2, kb, rb, g):
     else:
         n = _fallback_normal((0.0, 0.0, 0.0), r1, r2, ka, s0, s1, s2, kb)
     return dist - ra - rb, _add_scaled(o, 1.0, pa), _add_scaled(o, 1.0, pb), n
-
-
-@njit(**_BORROW)
-def _vertex(v, i, c):
-    return (v[i, c, 0], v[i, c, 1], v[i, c, 2])
-
-
-@njit(**_BORROW)
-def _write(r, swap, dist, pa, pb, n, out_d, out_pa, out_pb, out_n):
-    """Row ``r`` of the outputs, with the witnesses swapped and the normal reversed where ``swap``."""
-    if swap:
-        pa, pb = pb, pa
-        n = (-n[0], -n[1], -n[2])
-    out_d[r] = dist
-    out_pa[r, 0] = pa[0]
-    out_pa[r, 1] = pa[1]
-    out_pa[r, 2] = pa[2]
-    out_pb[r, 0] = pb[0]
-    out_pb[r, 1] = pb[1]
-    out_pb[r, 2] = pb[2]
-    out_n[r, 0] = n[0]
-    out_n[r, 1] = n[1]
-    out_n[r, 2] = n[2]
 
 
 @njit(**_BORROW)
