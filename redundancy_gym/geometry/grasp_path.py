@@ -13,7 +13,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["GraspPath", "GraspPathTiming", "grasp_path_durations"]
+__all__ = ["GraspPath", "GraspPathTiming", "grasp_path_durations", "sample_grasp_path"]
 
 
 class GraspPathTiming(NamedTuple):
@@ -79,9 +79,9 @@ class GraspPath:
                                        k * (k @ a0), k, [self.move_duration, self.approach_duration,
                                                          self.turn_angle]])
         self._out = np.empty(12)
-        if not _sample_path.signatures:
-            _sample_path.compile("void(float64[::1], float64, float64[::1])")
-        self._sampler = _sample_path.overloads[_sample_path.signatures[0]].entry_point
+        if not sample_grasp_path.signatures:
+            sample_grasp_path.compile("void(float64[::1], float64, float64[::1])")
+        self._sampler = sample_grasp_path.overloads[sample_grasp_path.signatures[0]].entry_point
 
     @classmethod
     def plan(cls, start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
@@ -90,6 +90,14 @@ class GraspPath:
         """The path with durations from :func:`grasp_path_durations`."""
         return cls(start, start_axis, pregrasp, grasp, approach,
                    *grasp_path_durations(start, start_axis, pregrasp, grasp, approach, timing))
+
+    @property
+    def params(self) -> NDArray[np.float64]:
+        """The path's constants as :func:`sample_grasp_path` reads them (27; read-only), for a compiled caller that
+        samples the path inside its own kernel."""
+        view = self._params.view()
+        view.flags.writeable = False
+        return view
 
     @property
     def duration(self) -> float:
@@ -118,8 +126,9 @@ def _law(t: float, duration: float) -> tuple[float, float]:
 
 
 @njit(cache=True)
-def _sample_path(params: NDArray[np.float64], t: float, out: NDArray[np.float64]) -> None:
-    """:meth:`GraspPath.__call__` on the path's constant buffer: ``[p, a, v, omega]`` into ``out`` (12)."""
+def sample_grasp_path(params: NDArray[np.float64], t: float, out: NDArray[np.float64]) -> None:
+    """:meth:`GraspPath.__call__` on the path's constants (:attr:`GraspPath.params`): the target ``[p, a]`` and its
+    velocity ``[v, omega]`` at time ``t`` [s] into ``out`` (12). Compiled: callable from other kernels."""
     start, pregrasp, grasp, approach = params[0:3], params[3:6], params[6:9], params[9:12]
     a0, k_cross_a0, k_k_a0, k = params[12:15], params[15:18], params[18:21], params[21:24]
     move, approach_time, turn = params[24], params[25], params[26]

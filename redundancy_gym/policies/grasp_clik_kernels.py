@@ -15,7 +15,7 @@ from __future__ import annotations
 from numba import njit
 
 from ..controllers.clik_kernels import OK, clik_fields, clik_step
-from ..geometry.grasp_path import _sample_path
+from ..geometry.grasp_path import sample_grasp_path
 
 __all__ = ["BAD_OBSERVATION", "grasp_clik_action"]
 
@@ -32,7 +32,7 @@ def grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, resu
     ``f``, ``i`` (a :class:`FrameAxisTask`, so the target is ``[p, a]`` and its velocity ``[v, omega]``).
 
     Reads the configuration ``obs[q_start:q_start + nq]`` and the time ``obs[time_index]`` [s], samples the
-    path (the constants ``path`` of :class:`~redundancy_gym.geometry.grasp_path.GraspPath`) into the step's
+    path (its constants ``path``: :attr:`GraspPath.params <redundancy_gym.geometry.grasp_path.GraspPath.params>`) into the step's
     target and target velocity, runs :func:`clik_step` and, when it succeeds, writes ``clip(qdot / speeds, -1,
     1)`` (``speeds`` [rad/s or m/s]) into the float32 ``action`` (nv) and a copy of the step's outputs into
     ``result`` (for the :class:`~redundancy_gym.controllers.ClikResult`). Returns ``clik_step``'s code, or
@@ -42,7 +42,7 @@ def grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, resu
         return BAD_OBSERVATION
     for k in range(nq):
         inputs[k] = obs[q_start + k]
-    _sample_path(path, obs[time_index], inputs[nq:nq + 12])  # [p, a, v, omega]: the target, then its velocity
+    sample_grasp_path(path, obs[time_index], inputs[nq:nq + 12])  # [p, a, v, omega]: the target, then its velocity
     code = clik_step(f, i, True, False)
     if code != OK:
         return code

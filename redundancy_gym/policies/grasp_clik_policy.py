@@ -182,7 +182,8 @@ class GraspClikPolicy(PerEnvPolicy):
         if self.controller is None or self.config.collision_avoidance == "on":
             _ = self.last_result  # a pending result is read from the buffers of the controller being replaced
             self.controller = self.build_controller(environment)
-        self._path_params = self.path._params  # noqa: SLF001 - the constants of GraspPath's compiled sampler
+        self._path_params = self.path.params.copy()  # the constants the one-call step samples the path from (a
+        # writable copy: the entry point is compiled for writable arrays)
         self._fused = None
         if isinstance(self.controller, CompiledClik) and self._q_start is not None and self._time is not None \
                 and self._speeds.shape == (self._nv,):

@@ -270,3 +270,22 @@ def test_close_pairs_give_the_distances_and_their_finite_difference_gradients(rn
         if checked == 8:
             break
     assert checked == 8
+
+
+def test_grasp_path_params_are_what_the_compiled_sampler_reads() -> None:
+    """GraspPath.params (read-only) sampled by sample_grasp_path inside another kernel gives the path's own
+    target and target velocity."""
+    from redundancy_gym.geometry.grasp_path import GraspPath, sample_grasp_path
+
+    path = GraspPath.plan(np.array([0.4, 0.1, 0.9]), np.array([1.0, 0.0, 0.0]), np.array([0.7, 0.2, 1.0]),
+                          np.array([0.8, 0.2, 1.0]), np.array([1.0, 0.0, 0.0]))
+    params = path.params
+    assert not params.flags.writeable
+    with pytest.raises(ValueError):
+        params[0] = 1.0
+    out = np.empty(12)
+    for t in (0.0, 0.3 * path.duration, 0.9 * path.duration, 2.0 * path.duration):
+        sample_grasp_path(params.copy(), t, out)
+        target, velocity = path(t)
+        np.testing.assert_array_equal(out[:6], target)
+        np.testing.assert_array_equal(out[6:], velocity)
