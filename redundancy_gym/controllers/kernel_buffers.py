@@ -16,15 +16,17 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from ..geometry.ssv_kernels import BORROW as _GEOMETRY_BORROW
+
 __all__ = ["BORROW", "borrowed_float_field", "borrowed_int_field", "buffer_view", "compiled_entry_point", "float_field",
            "int_field", "pack_fields"]
 
-BORROW: dict[str, Any] = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"},
-                          "_nrt": False}
+BORROW: dict[str, Any] = _GEOMETRY_BORROW
 """numba options of a fused kernel that only borrows arrays (never allocates, keeps or returns one to a caller
-that counts references): no reference counting. With it, every call between compiled functions paid an atomic
-NRT_incref and NRT_decref per array argument and per view taken, a few hundred per CLIK step: the AgriReach
-CLIK kernel took 9.1 us with them and 4.5 us without (2-core machine shared with other processes)."""
+that counts references): no reference counting; the SSV kernels' flags, defined once in the lowest layer. With
+it, every call between compiled functions paid an atomic NRT_incref and NRT_decref per array argument and per
+view taken, a few hundred per CLIK step: the AgriReach CLIK kernel took 9.1 us with them and 4.5 us without
+(2-core machine shared with other processes)."""
 
 
 def pack_fields(floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, NDArray[np.int64]],

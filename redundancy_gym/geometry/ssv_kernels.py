@@ -22,7 +22,7 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-__all__ = ["GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at",
+__all__ = ["BORROW", "GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at",
            "ssv_pairs_grouped", "volume_pair_distance"]
 
 KIND_PSS = 0
@@ -55,7 +55,7 @@ _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", 
 # Kernels that only borrow arrays (they never allocate, keep or return one) are compiled without numba's
 # reference counting: with it, every call paid an NRT_incref and an NRT_decref per array argument, 26 calls for
 # a pair loop's 13 arrays, about 200 ns per batch on AMD Zen 5 whatever its size (as much as 40 sphere pairs).
-_BORROW = {**_JIT, "_nrt": False}
+BORROW = {**_JIT, "_nrt": False}
 
 
 @njit(**_JIT)
@@ -417,12 +417,12 @@ for _g, (_ka, _kb) in enumerate(GROUPS):
 
 # both inlined: every pair loop calls them, and a call passing the arrays is what made the loops slow (see
 # _closest_relative)
-@njit(inline="always", **_BORROW)
+@njit(inline="always", **BORROW)
 def _vertex(v, i, c):
     return (v[i, c, 0], v[i, c, 1], v[i, c, 2])
 
 
-@njit(inline="always", **_BORROW)
+@njit(inline="always", **BORROW)
 def _write(r, swap, dist, pa, pb, n, out_d, out_pa, out_pb, out_n):
     """Row ``r`` of the outputs, with the witnesses swapped and the normal reversed where ``swap``."""
     if swap:
@@ -440,7 +440,7 @@ def _write(r, swap, dist, pa, pb, n, out_d, out_pa, out_pb, out_n):
     out_n[r, 2] = n[2]
 
 
-@njit(inline="always", **_BORROW)
+@njit(inline="always", **BORROW)
 def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo):
     """Sphere/sphere pairs ``lo..hi`` as one flat loop; concentric and inactive pairs are left in ``todo``."""
     nt = 0
@@ -460,7 +460,7 @@ def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, 
     return nt
 
 
-@njit(inline="always", **_BORROW)
+@njit(inline="always", **BORROW)
 def _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo, hi, out_d, out_pa, out_pb, out_n,
                               todo):
     """Sphere/capsule pairs ``lo..hi`` as one flat loop (the arithmetic of :func:`point_segment` relative to the
@@ -495,7 +495,7 @@ def _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo
     return nt
 
 
-@njit(inline="always", **_BORROW)
+@njit(inline="always", **BORROW)
 def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo):
     """Segment/segment pairs ``lo..hi`` in the common case; returns how many pairs it left in ``todo``.
 
@@ -539,7 +539,7 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
     return nt
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb,
                       out_n, todo):
     """SSV distances of pairs of one volume array, pre-sorted into the six :data:`GROUPS`.
@@ -656,7 +656,7 @@ def _pair_result(a0, a1, a2, ka, ra, b0, b1, b2, kb, rb, g):
     return dist - ra - rb, _add_scaled(o, 1.0, pa), _add_scaled(o, 1.0, pb), n
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def volume_pair_distance(v, radii, kinds, i, j):
     """SSV distance of volumes ``i`` and ``j`` of ``(v, radii, kinds)``, for use inside other kernels:
     ``(distance, point on i, point on j, unit normal from i to j)`` as float and 3-tuples (world) [m].
@@ -705,7 +705,7 @@ def _header_buffers(h):
             carray(_int64_pointer(h[13]), (n,)))
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def _bounding_spheres(vertices, radii, kinds, lo, hi, centers, bounds):
     """Bounding spheres of volumes ``lo..hi``: centred on the mean vertex, radius the farthest vertex plus the
     SSV radius (so a sphere distance is a lower bound of the SSV distance)."""
@@ -733,7 +733,7 @@ def _bounding_spheres(vertices, radii, kinds, lo, hi, centers, bounds):
         bounds[i] = np.sqrt(far) + radii[i]
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def _near(centers, bounds, i, j, margin):
     dx = centers[i, 0] - centers[j, 0]
     dy = centers[i, 1] - centers[j, 1]
@@ -742,7 +742,7 @@ def _near(centers, bounds, i, j, margin):
     return reach >= 0.0 and dx * dx + dy * dy + dz * dz <= reach * reach
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers, bounds):
     """Activate exactly the pairs whose bounding spheres are at most ``margin`` apart; returns how many.
 
@@ -758,7 +758,7 @@ def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers
     return count
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def near_pairs(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb, out_n,
                todo, centers, bounds, margin, moving):
     """Broad and narrow phase in one pass: the pairs whose bounding spheres are at most ``margin`` apart get
@@ -801,7 +801,7 @@ def cull_pairs_at(header, margin):
                       carray(_float64_pointer(h[16]), (m, 3)), carray(_float64_pointer(h[17]), (m,)))
 
 
-@njit(**_BORROW)
+@njit(**BORROW)
 def frames_to_volumes(positions, rotations, half_lengths, vertices):
     """Volumes ``0..n`` from frames: a segment ``p -/+ h z`` (z: third column of the row-major rotation) where
     ``h > 0``, else the point ``p``; the unused vertex rows repeat the last vertex."""
