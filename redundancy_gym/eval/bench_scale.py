@@ -59,6 +59,22 @@ def _eval_rate(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: i
     return episodes / (time.perf_counter() - start)
 
 
+def _speedup_rounds(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: int, seed: int, workers: int,
+                    ray_address: str | None, rounds: int, bar: Any) -> dict[str, float]:
+    """The serial loop and ``workers`` (local processes, or Ray actors at ``ray_address``) in ``rounds``
+    alternating rounds, so that a load change hits both alike: their episodes/s and the speedup (medians over
+    the rounds; the speedup's smallest and largest round)."""
+    serial, parallel = [], []
+    for _ in range(rounds):
+        serial.append(_eval_rate(env_id, policy, env_kwargs, episodes, seed, 1))
+        parallel.append(_eval_rate(env_id, policy, env_kwargs, episodes, seed, workers, ray_address))
+        bar.update(1)
+    speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
+    return {"serial_episodes_per_second": float(np.median(serial)), "episodes_per_second": float(np.median(parallel)),
+            "speedup": float(np.median(speedups)), "speedup_min": float(min(speedups)),
+            "speedup_max": float(max(speedups))}
+
+
 def _vec_rate(env_id: str, num_envs: int, mode: str, steps: int, seed: int) -> float:
     envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode=mode)
     try:
@@ -104,16 +120,7 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
             n_episodes = episodes or own_episodes
             rows = {}
             for n in workers:
-                serial, parallel = [], []
-                for _ in range(rounds):  # alternating, so that a load change hits both alike
-                    serial.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, 1))
-                    parallel.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, n))
-                    bar.update(1)
-                speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
-                rows[str(n)] = {"serial_episodes_per_second": float(np.median(serial)),
-                                "episodes_per_second": float(np.median(parallel)),
-                                "speedup": float(np.median(speedups)), "speedup_min": float(min(speedups)),
-                                "speedup_max": float(max(speedups))}
+                rows[str(n)] = _speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n, None, rounds, bar)
             largest = max(workers)
             f = amdahl_serial_fraction(rows[str(largest)]["speedup"], largest)
             on_ray = {}
@@ -122,19 +129,11 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
                 ray.shutdown()
                 ray.init(num_cpus=n, include_dashboard=False, log_to_driver=False)
                 try:
-                    serial, parallel = [], []
-                    for _ in range(rounds):
-                        serial.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, 1))
-                        parallel.append(_eval_rate(env_id, policy, kwargs, n_episodes, seed, n, LOCAL_RAY))
-                        bar.update(1)
+                    on_ray[str(n)] = {"num_cpus": n, **_speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n,
+                                                                       LOCAL_RAY, rounds, bar)}
                 finally:
                     ray.shutdown()
-                speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
-                on_ray[str(n)] = {"num_cpus": n, "serial_episodes_per_second": float(np.median(serial)),
-                                  "episodes_per_second": float(np.median(parallel)),
-                                  "speedup": float(np.median(speedups)), "speedup_min": float(min(speedups)),
-                                  "speedup_max": float(max(speedups))}
-            report["eval"][case] = {"ray": on_ray,"env": env_id, "policy": policy, "episodes": n_episodes, "workers": rows,
+            report["eval"][case] = {"ray": on_ray, "env": env_id, "policy": policy, "episodes": n_episodes, "workers": rows,
                                     "serial_fraction": f,
                                     "predicted_speedup_64": amdahl_speedup(f, 64)}
         for mode in ("sync", "async"):
