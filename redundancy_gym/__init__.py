@@ -11,10 +11,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from . import _moved
 from .rendering_backend import configure_rendering, guard_triton
 
 configure_rendering()
 guard_triton()
+_moved.install()
 
 from .registration import ENV_IDS, register_envs  # noqa: E402
 

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import Any
 
 from . import __version__
+from .bench.table import BENCHES, BenchArgs, run_bench
 
 __all__ = ["main"]
 
@@ -158,24 +159,7 @@ def _parser() -> argparse.ArgumentParser:
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
-    be.add_argument("name", choices=("ssv", "envs", "ik", "walk", "pik", "soak", "push", "ikd", "learned", "scale"),
-                    help="ssv: swept-sphere distances against coal; envs: steps/s against Gymnasium's Pusher/Humanoid, and "
-                         "every wrapped id against its raw env; "
-                         "ik: the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra); "
-                         "walk: the BipedWalk controller step, and its compiled whole-body IK against pinocchio's; "
-                         "pik: predictive IK against local CLIK and the global optimum; "
-                         "soak: random, bang-bang and reference-policy actions on every env, counting exceptions "
-                         "and non-finite values (exit status 1 when any); "
-                         "push: the largest torso push the walking reference recovers from, with and without step "
-                         "adjustment (also writes a PNG beside the JSON); "
-                         "ikd: the kinematic IKD study of monograph 5.5.3 (figs. 5.21, 5.23, 5.24, 5.27 analogues: "
-                         "unstabilized drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON); "
-                         "learned: every analytic reference and shipped learned baseline per env on held-out seeds "
-                         "(success, failures, errors, pseudoenergy, step time, training cost; markdown and one "
-                         "time-vs-error PNG per env beside the JSON); "
-                         "scale: eval's episodes/s with --workers against the serial loop (alternating rounds, "
-                         "Amdahl's serial fraction and its 64-core prediction) and make_vec's steps/s by num_envs, "
-                         "sync and async")
+    be.add_argument("name", choices=tuple(BENCHES), help="; ".join(f"{b.name}: {b.summary}" for b in BENCHES.values()))
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
     be.add_argument("--seed", type=int, metavar="N",
                     help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)")
@@ -323,7 +307,7 @@ def _apply_wrapper(args: argparse.Namespace) -> None:
 
 def _train(args: argparse.Namespace) -> None:
     from .eval.exceptions import EvalError
-    from .eval.training import TrainingConfig, load_config, train
+    from .learning.training import TrainingConfig, load_config, train
 
     config = load_config(args.config, args.env_id) if args.config else TrainingConfig(hyperparameters={})
     if args.algo == "bc":
@@ -338,7 +322,7 @@ def _train(args: argparse.Namespace) -> None:
     if (args.ray is None) != (args.seeds is None):
         raise EvalError("--ray and --seeds go together: a seed sweep on Ray")
     if args.ray is not None:
-        from .eval.sweep import train_seed_sweep
+        from .learning.sweep import train_seed_sweep
 
         out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
         sweep = train_seed_sweep(args.env_id, args.algo, steps, out, args.seeds, ray_address=args.ray,
@@ -373,7 +357,7 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _baselines(args: argparse.Namespace) -> None:
-    from .eval.baselines import baselines, train_baseline
+    from .learning.baselines import baselines, train_baseline
 
     chosen = baselines(args.names)
     if args.list:
@@ -384,7 +368,7 @@ def _baselines(args: argparse.Namespace) -> None:
             print(f"{b.name:32s} {b.learner:4s} {b.env_id:45s} {trained}")
         return
     if args.ray is not None:
-        from .eval.sweep import train_baselines_on_ray
+        from .learning.sweep import train_baselines_on_ray
         from .policies.shipped_models import SHIPPED_MODELS_DIR
 
         for path in train_baselines_on_ray([b.name for b in chosen], args.models or SHIPPED_MODELS_DIR,
@@ -404,7 +388,7 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
     """``train --algo bc``: the config section's keys are :func:`train_behaviour_cloning`'s options."""
     import inspect
 
-    from .eval.behaviour_cloning import train_behaviour_cloning
+    from .learning.behaviour_cloning import train_behaviour_cloning
     from .eval.exceptions import EvalError
 
     if args.steps is not None or args.n_envs is not None:
@@ -431,36 +415,10 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
     print(f"wrote {summary.path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {summary.path}")
 
 
-_ROUNDS_BENCHES = ("ssv", "envs", "ik", "walk", "pik", "scale")
-"""Benches timed in alternating rounds (``--rounds``)."""
-
-
-def _rounds(args: argparse.Namespace) -> dict[str, int]:
-    """``{"rounds": N}`` from ``--rounds``, or 3 with ``--quick``; empty: the bench's default."""
-    if args.rounds is not None:
-        return {"rounds": args.rounds}
-    return {"rounds": 3} if args.quick else {}
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = _parser()
     args = parser.parse_args(argv)
-    if args.command == "bench" and args.name != "soak" and (args.seconds is not None or args.steps is not None):
-        parser.error("--seconds and --steps apply to bench soak only")
-    if args.command == "bench" and args.name != "push" and args.trials is not None:
-        parser.error("--trials applies to bench push only")
-    if args.command == "bench" and args.name not in ("learned", "scale") and (
-            args.episodes is not None or args.envs is not None or args.workers is not None):
-        parser.error("--episodes, --envs and --workers apply to bench learned and scale only")
-    if args.command == "bench" and args.name != "learned" and (args.envs is not None or args.ray is not None):
-        parser.error("--envs and --ray apply to bench learned only")
-    if args.command == "bench" and args.rounds is not None and args.name not in _ROUNDS_BENCHES:
-        parser.error(f"--rounds applies to bench {', '.join(_ROUNDS_BENCHES)} only")
-    if args.command == "bench" and args.rounds is not None and args.rounds < 1:
-        parser.error(f"--rounds must be >= 1, got {args.rounds}")
-    if args.command == "bench" and args.seed is None and args.name != "learned":
-        args.seed = 0
     from .policies import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
@@ -488,7 +446,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "baselines":
             _baselines(args)
         elif args.command == "demo":
-            from .eval.demo import run_demo
+            from .demo import run_demo
 
             run_demo(args.out, episodes=args.episodes, seed=args.seed, workers=args.workers)
         elif args.command == "render":
@@ -499,113 +457,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                                            progress=not args.no_progress)
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
-            json_path = args.json_path or f"results/bench_{args.name}.json"
-            if args.name == "ssv":
-                from .eval.bench_ssv import format_ssv_bench, run_ssv_bench, write_ssv_bench
-
-                timing = {"min_time": 0.002} if args.quick else {}
-                report = run_ssv_bench(seed=args.seed, progress=not args.no_progress, **timing, **_rounds(args))
-                print(format_ssv_bench(report))
-                print(f"wrote {write_ssv_bench(report, json_path)}")
-            elif args.name == "ik":
-                from .eval.bench_ik import format_ik_bench, run_ik_bench, write_ik_bench
-
-                kwargs = {"repeats": 1, "scaling": (10, 100)} if args.quick else {}
-                report = run_ik_bench(seed=args.seed, progress=not args.no_progress, **kwargs, **_rounds(args))
-                print(format_ik_bench(report))
-                print(f"wrote {write_ik_bench(report, json_path)}")
-            elif args.name == "pik":
-                from .eval.bench_pik import format_pik_bench, run_pik_bench
-                from .eval.bench_ssv import write_ssv_bench as write_pik_bench
-
-                report = run_pik_bench(seed=args.seed, episodes=2 if args.quick else 10, quick=args.quick,
-                                       progress=not args.no_progress, **_rounds(args))
-                print(format_pik_bench(report))
-                print(f"wrote {write_pik_bench(report, json_path)}")
-            elif args.name == "soak":
-                from .eval.bench_soak import format_soak_bench, run_soak_bench, write_soak_bench
-
-                seconds = args.seconds if args.seconds is not None else (1.0 if args.quick else 10.0)
-                report = run_soak_bench(seconds=None if args.steps is not None else seconds, steps=args.steps,
-                                        seed=args.seed, progress=not args.no_progress)
-                print(format_soak_bench(report))
-                print(f"wrote {write_soak_bench(report, json_path)}")
-                if not report["ok"]:
-                    return 1
-            elif args.name == "push":
-                from .eval.bench_push import format_push_bench, plot_push_bench, run_push_bench
-                from .eval.bench_ssv import write_ssv_bench as write_push_bench
-
-                trials = args.trials if args.trials is not None else (5 if args.quick else 20)
-                report = run_push_bench(seed=args.seed, trials=trials, progress=not args.no_progress)
-                print(format_push_bench(report))
-                print(f"wrote {write_push_bench(report, json_path)}")
-                print(f"wrote {plot_push_bench(report, str(Path(json_path).with_suffix('.png')))}")
-            elif args.name == "ikd":
-                from .eval.ikd_study import (IkdStudyConfig, format_ikd_study, plot_ikd_study, run_ikd_study,
-                                             write_ikd_study)
-
-                # the plain LIPM plan, then the walking controller's plan with its multi-body ZMP correction
-                for correction, suffix in ((False, ""), (True, "_corrected")):
-                    config = IkdStudyConfig(steps=2 if args.quick else 6, correction=correction)
-                    study = run_ikd_study(config, progress=not args.no_progress)
-                    print(f"\n{config.plan_name}:")
-                    print(format_ikd_study(study.to_json()))
-                    path = Path(json_path)
-                    print(f"wrote {write_ikd_study(study, path.with_name(path.stem + suffix + path.suffix))}")
-                    for written in plot_ikd_study(study, path.parent, suffix):
-                        print(f"wrote {written}")
-            elif args.name == "learned":
-                from .eval.bench_learned import (HELD_OUT_SEED, learned_markdown, plot_learned_bench,
-                                                 run_learned_bench, write_learned_bench)
-
-                episodes = args.episodes if args.episodes is not None else (2 if args.quick else 20)
-                seed = args.seed if args.seed is not None else HELD_OUT_SEED
-                workers = _workers(args)
-                table = run_learned_bench(episodes=episodes, seed=seed, envs=args.envs,
-                                          progress=not args.no_progress, workers=workers, ray_address=args.ray)
-                markdown = learned_markdown(table)
-                print(markdown)
-                path = write_learned_bench(table, json_path)
-                print(f"wrote {path}")
-                md = path.with_suffix(".md")
-                md.write_text("# Learned baselines against the analytic references\n\n" + markdown)
-                print(f"wrote {md}")
-                for written in plot_learned_bench(table, path.parent, prefix=path.stem + "_"):
-                    print(f"wrote {written}")
-            elif args.name == "scale":
-                from .eval.bench_scale import format_scale_bench, run_scale_bench
-                from .eval.bench_ssv import write_ssv_bench as write_scale_bench
-
-                episodes = args.episodes if args.episodes is not None else (4 if args.quick else None)
-                try:
-                    import ray  # noqa: F401  (the Ray rows need the ray extra)
-
-                    ray_workers: tuple[int, ...] = () if args.quick else (4, 8)
-                except ImportError:
-                    ray_workers = ()
-                    print("Ray is not installed: the Ray rows are left out (pip install -e '.[ray]')")
-                report = run_scale_bench(workers=(args.workers or 2,), episodes=episodes, ray_workers=ray_workers,
-                                         rounds=args.rounds or (1 if args.quick else 3),
-                                         vec_steps=30 if args.quick else 300,
-                                         seed=args.seed, progress=not args.no_progress)
-                print(format_scale_bench(report))
-                print(f"wrote {write_scale_bench(report, json_path)}")
-            elif args.name == "walk":
-                from .eval.bench_ssv import write_ssv_bench as write_walk_bench
-                from .eval.bench_walk import format_walk_bench, run_walk_bench
-
-                kwargs = {"duration": 1.0, "repeats": 1} if args.quick else {}
-                report = run_walk_bench(seed=args.seed, progress=not args.no_progress, **kwargs, **_rounds(args))
-                print(format_walk_bench(report))
-                print(f"wrote {write_walk_bench(report, json_path)}")
-            else:
-                from .eval.bench_envs import format_envs_bench, run_envs_bench, write_envs_bench
-
-                report = run_envs_bench(seconds=0.3 if args.quick else 3.0, seed=args.seed,
-                                        progress=not args.no_progress, **_rounds(args))
-                print(format_envs_bench(report))
-                print(f"wrote {write_envs_bench(report, json_path)}")
+            return run_bench(args.name, BenchArgs(
+                json_path=args.json_path or f"results/bench_{args.name}.json", seed=args.seed, quick=args.quick,
+                progress=not args.no_progress, rounds=args.rounds, seconds=args.seconds, steps=args.steps,
+                trials=args.trials, episodes=args.episodes, workers=args.workers, ray=args.ray,
+                envs=None if args.envs is None else tuple(args.envs)))
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,8 +1,10 @@
-"""DESIGN.md: geometry <- model <- controllers <- policies/wrappers <- eval <- cli; assets <- envs <- wrappers, eval.
+"""docs/architecture.md: geometry <- model <- controllers <- policies/wrappers <- eval <- learning <- studies <- bench
+<- demo <- cli; assets <- envs <- policies, wrappers, eval.
 
 The core (geometry, model, controllers) never imports gymnasium, mujoco, dm_control, envs, policies, wrappers or
-eval; envs never import controllers, policies or wrappers; policies never import wrappers (a wrapper may build a
-policy); and the package has no import circle between its modules.
+anything above them; envs never import controllers, policies or wrappers; policies never import wrappers (a wrapper
+may build a policy); eval never imports learning, studies, bench, demo or cli, and so on up the floors; no two
+sibling packages of ``controllers/`` import each other; and the package has no import circle between its modules.
 """
 
 from __future__ import annotations
@@ -36,14 +38,21 @@ def _imports(path: Path) -> set[str]:
     return names
 
 
+FLOORS = ("eval", "learning", "studies", "bench", "demo", "cli")
+"""The floors above policies and wrappers, lowest first: each may import those below it, never those above."""
+
+
 def _forbidden(layer: str) -> set[str]:
-    core = {"envs", "policies", "wrappers", "eval", "cli"}
-    ours = {"geometry": {"model", "controllers"} | core,
-            "model": {"controllers"} | core,
-            "controllers": core,
-            "envs": {"controllers", "policies", "wrappers", "eval", "cli"},
-            "policies": {"envs", "wrappers", "eval", "cli"},
-            "wrappers": {"eval", "cli"}}[layer]
+    core = {"envs", "policies", "wrappers", *FLOORS}
+    if layer in FLOORS:
+        ours = set(FLOORS[FLOORS.index(layer) + 1:])
+    else:
+        ours = {"geometry": {"model", "controllers"} | core,
+                "model": {"controllers"} | core,
+                "controllers": core,
+                "envs": {"controllers", "policies", "wrappers", *FLOORS},
+                "policies": {"envs", "wrappers", *FLOORS},
+                "wrappers": set(FLOORS)}[layer]
     return {f"redundancy_gym.{name}" for name in ours}
 
 
@@ -52,14 +61,22 @@ def _forbidden(layer: str) -> set[str]:
 SIMULATION_ALLOWED = {"envs", "wrappers", "policies/registry.py", "policies/sb3_policy.py"}
 
 
-@pytest.mark.parametrize("layer", ["geometry", "model", "controllers", "envs", "policies", "wrappers"])
+def _files(layer: str) -> list[Path]:
+    """The files of a layer: a package's, or the one module ``demo.py`` / ``cli.py``."""
+    module = PACKAGE / f"{layer}.py"
+    return [module] if module.is_file() else sorted((PACKAGE / layer).rglob("*.py"))
+
+
+@pytest.mark.parametrize("layer", ["geometry", "model", "controllers", "envs", "policies", "wrappers", *FLOORS[:-1]])
 def test_layer_imports(layer: str) -> None:
-    files = sorted((PACKAGE / layer).rglob("*.py"))
+    files = _files(layer)
     assert files
     for path in files:
         imported = _imports(path)
         bad = {name for name in imported for f in _forbidden(layer) if name == f or name.startswith(f + ".")}
         assert not bad, f"{path.name} imports {bad}"
+        if layer in FLOORS:
+            continue  # the floors above wrappers run the simulation
         if layer not in SIMULATION_ALLOWED and f"{layer}/{path.name}" not in SIMULATION_ALLOWED:
             sim = {name for name in imported if name.split(".")[0] in SIMULATION}
             assert not sim, f"{path.relative_to(PACKAGE)} imports {sim}"
@@ -90,6 +107,37 @@ def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+CONTROLLER_PACKAGES = ("tasks", "objectives", "clik", "predictive", "kernels", "walking", "ikd")
+
+
+def _package_imports(graph: dict[str, set[str]], package: str) -> set[str]:
+    """The sibling controller packages that the modules of ``controllers/<package>/`` import."""
+    prefix = f"redundancy_gym.controllers.{package}"
+    out = set()
+    for module, imported in graph.items():
+        if module == prefix or module.startswith(prefix + "."):
+            for name in imported:
+                parts = name.split(".")
+                if len(parts) > 2 and parts[1] == "controllers" and parts[2] in CONTROLLER_PACKAGES:
+                    out.add(parts[2])
+    return out - {package}
+
+
+def test_controller_packages_exist() -> None:
+    for package in CONTROLLER_PACKAGES:
+        assert (PACKAGE / "controllers" / package / "__init__.py").is_file(), package
+    flat = sorted(p.name for p in (PACKAGE / "controllers").glob("*.py"))
+    assert flat == ["__init__.py", "exceptions.py"], flat
+
+
+def test_no_sibling_controller_packages_import_each_other() -> None:
+    graph = _module_graph()
+    uses = {package: _package_imports(graph, package) for package in CONTROLLER_PACKAGES}
+    both = {tuple(sorted((a, b))) for a, used in uses.items() for b in used if a in uses.get(b, set())}
+    assert not both, f"sibling controller packages importing each other: {sorted(both)}"
+    assert "ikd" in uses["walking"]  # the check sees the walking IKD's use of the IKD package
+
+
 def test_no_import_circles() -> None:
     assert not _circles(_module_graph())
 
@@ -101,6 +149,12 @@ def test_the_circle_check_sees_a_circle() -> None:
 
 def test_the_check_sees_imports() -> None:
     """The parser resolves relative imports, so the test above can fail."""
-    names = _imports(PACKAGE / "controllers" / "clik.py")
+    names = _imports(PACKAGE / "controllers" / "clik" / "clik.py")
     assert "redundancy_gym.model" in names and "numpy" in names
     assert "redundancy_gym.assets.planar_arm_scene" in _imports(PACKAGE / "envs" / "planar_reach.py")
+    assert "redundancy_gym.eval.json_writer" in _imports(PACKAGE / "bench" / "table.py")
+
+
+def test_a_floor_may_not_import_one_above() -> None:
+    assert "redundancy_gym.learning" in _forbidden("eval") and "redundancy_gym.cli" in _forbidden("demo")
+    assert "redundancy_gym.eval" not in _forbidden("learning")

@@ -4,19 +4,19 @@ The core never imports gymnasium, mujoco, envs, policies, wrappers or eval: :mod
 :mod:`redundancy_gym.wrappers` join controllers and envs.
 """
 
-from .acceleration_clik import AccelerationClik, AccelerationClikResult
-from .clik import Clik, ClikProblem, ClikResult
-from .collision_objective import CollisionObjective
-from .compiled_clik import CompiledClik
+from .clik.acceleration_clik import AccelerationClik, AccelerationClikResult
+from .clik.clik import Clik, ClikProblem, ClikResult
+from .objectives.collision_objective import CollisionObjective
+from .clik.compiled_clik import CompiledClik
 from .exceptions import ControllerError
-from .frame_axis_task import FrameAxisTask
-from .frame_position_task import FramePositionTask
-from .joint_limit_objective import JointLimitObjective
-from .objective import Objective, ObjectiveValue, sum_objectives
-from .posture_objective import PostureObjective
-from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
-from .redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
-from .task import Task
+from .tasks.frame_axis_task import FrameAxisTask
+from .tasks.frame_position_task import FramePositionTask
+from .objectives.joint_limit_objective import JointLimitObjective
+from .objectives.objective import Objective, ObjectiveValue, sum_objectives
+from .objectives.posture_objective import PostureObjective
+from .predictive.predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
+from .clik.redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
+from .tasks.task import Task
 
 __all__ = [
     "DESCENT_METHODS",

@@ -18,6 +18,7 @@ from tqdm.auto import tqdm
 from .. import ENV_IDS, make_policy
 from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
 from .exceptions import EvalError
+from .json_writer import write_json
 from .parallel import run_parallel
 
 __all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env", "run_episode"]
@@ -188,10 +189,7 @@ class EvalReport:
 
     def write_json(self, path: str | Path) -> Path:
         """Write :meth:`to_json` to ``path`` (parents created)."""
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(self.to_json(), indent=2) + "\n")
-        return path
+        return write_json(self.to_json(), path)
 
 
 def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **make_kwargs: Any) -> gym.Env:

@@ -12,9 +12,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .evaluate import EpisodeTrace  # noqa: E402
-from .point_to_point import PointToPointTrace  # noqa: E402
 
-__all__ = ["plot_clearance", "plot_point_to_point", "plot_traces", "save_figure"]
+__all__ = ["plot_clearance", "plot_traces", "save_figure"]
 
 
 def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "",
@@ -70,25 +69,4 @@ def plot_clearance(traces: dict[str, EpisodeTrace], path: str | Path, title: str
     ax.set_title(title)
     ax.grid(alpha=0.3)
     ax.legend(loc="best", fontsize=8)
-    return save_figure(fig, path)
-
-
-def plot_point_to_point(traces: Mapping[str, PointToPointTrace], path: str | Path, title: str) -> Path:
-    """Fig. 5.10 analogue: self-clearance (top) and task error (bottom) over time, one line per rollout; the
-    closest pair at each run's minimum is named in the legend."""
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True, height_ratios=(2, 1))
-    for label, trace in traces.items():
-        k = int(np.argmin(trace.self_clearance))
-        (line,) = top.plot(trace.time, 1e3 * trace.self_clearance,
-                           label=f"{label}: min {1e3 * trace.self_clearance[k]:.1f} mm ({trace.closest_pair[k]})")
-        top.plot(trace.time[k], 1e3 * trace.self_clearance[k], "o", color=line.get_color())
-        bottom.plot(trace.time, 1e3 * trace.task_error, color=line.get_color())
-    top.axhline(0.0, color="k", lw=0.8, ls="--", label="self-collision")
-    top.set_ylabel("min self-clearance [mm]")
-    top.set_title(title)
-    top.grid(alpha=0.3)
-    top.legend(loc="best", fontsize=8)
-    bottom.set_xlabel("time [s]")
-    bottom.set_ylabel("task error [mm, mrad]")
-    bottom.grid(alpha=0.3)
     return save_figure(fig, path)

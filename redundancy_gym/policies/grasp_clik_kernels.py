@@ -1,6 +1,6 @@
 """The control step of :class:`~redundancy_gym.policies.grasp_clik_policy.GraspClikPolicy` with the compiled
 backend as one kernel call: the configuration and time read from the observation, the :class:`GraspPath`
-sampled, the fused CLIK step (:func:`~redundancy_gym.controllers.clik_kernels.clik_step`) and the normalized
+sampled, the fused CLIK step (:func:`~redundancy_gym.controllers.clik.clik_kernels.clik_step`) and the normalized
 action, with no Python in between (what ``bench ik`` times; the separate NumPy and Python calls cost more than
 the CLIK itself).
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..controllers.clik_kernels import OK, clik_fields, clik_step
+from ..controllers.clik.clik_kernels import OK, clik_fields, clik_step
 from ..geometry.grasp_path import sample_grasp_path
 
 __all__ = ["BAD_OBSERVATION", "grasp_clik_action"]

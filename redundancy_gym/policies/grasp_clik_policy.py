@@ -15,13 +15,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers.clik import Clik, ClikResult
-from ..controllers.clik_kernels import OK
-from ..controllers.collision_objective import CollisionObjective
-from ..controllers.compiled_clik import CompiledClik
-from ..controllers.kernel_buffers import compiled_entry_point
-from ..controllers.frame_axis_task import FrameAxisTask
-from ..controllers.joint_limit_objective import JointLimitObjective
+from ..controllers.clik.clik import Clik, ClikResult
+from ..controllers.clik.clik_kernels import OK
+from ..controllers.objectives.collision_objective import CollisionObjective
+from ..controllers.clik.compiled_clik import CompiledClik
+from ..controllers.kernels.buffers import compiled_entry_point
+from ..controllers.tasks.frame_axis_task import FrameAxisTask
+from ..controllers.objectives.joint_limit_objective import JointLimitObjective
 from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf

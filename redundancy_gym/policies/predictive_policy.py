@@ -16,18 +16,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers.collision_objective import CollisionObjective
-from ..controllers.compiled_clik import CompiledClik
-from ..controllers.frame_axis_task import FrameAxisTask
-from ..controllers.frame_position_task import FramePositionTask
-from ..controllers.joint_limit_objective import JointLimitObjective
-from ..controllers.predictive_ik import (
+from ..controllers.objectives.collision_objective import CollisionObjective
+from ..controllers.clik.compiled_clik import CompiledClik
+from ..controllers.tasks.frame_axis_task import FrameAxisTask
+from ..controllers.tasks.frame_position_task import FramePositionTask
+from ..controllers.objectives.joint_limit_objective import JointLimitObjective
+from ..controllers.predictive.predictive_ik import (
     DESCENT_METHODS,
     PredictiveIk,
     PredictiveResult,
     PredictiveRollout,
 )
-from ..controllers.receding_horizon import HorizonUpdate, RecedingHorizon
+from ..controllers.predictive.receding_horizon import HorizonUpdate, RecedingHorizon
 from ..model import RobotModel
 from .clik_policy import ClikPolicy
 from .exceptions import PolicyError

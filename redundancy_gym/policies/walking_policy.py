@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers.ikd import WalkingIkdConfig
+from ..controllers.walking import WalkingIkdConfig
 from ..controllers.walking import (
     GaitConfig,
     RcaConfig,

@@ -98,7 +98,7 @@ def test_seed_sweep_on_ray_trains_each_seed_as_a_serial_run_would(tmp_path: Path
     import numpy as np
     from stable_baselines3 import PPO
 
-    from redundancy_gym.eval.training import train
+    from redundancy_gym.learning.training import train
 
     config = tmp_path / "ppo.yaml"
     config.write_text("redundancy_gym/PlanarReach-v0:\n  n_timesteps: 128\n  n_envs: 1\n  n_steps: 128\n"
@@ -118,7 +118,7 @@ def test_seed_sweep_on_ray_trains_each_seed_as_a_serial_run_would(tmp_path: Path
 
 
 def test_baselines_on_ray_write_models_and_records(tmp_path: Path, capsys) -> None:
-    from redundancy_gym.eval.training_record import read_training_record
+    from redundancy_gym.learning.training_record import read_training_record
 
     # one rollout instead of the file's budget (a smoke run)
     assert main(["baselines", "ppo-residual-planar_reach", "--ray", "--steps", "1", "--models", str(tmp_path)]) == 0
@@ -129,7 +129,7 @@ def test_baselines_on_ray_write_models_and_records(tmp_path: Path, capsys) -> No
 
 
 def test_bench_learned_on_ray_gives_the_local_table(tmp_path: Path) -> None:
-    from redundancy_gym.eval.bench_learned import run_learned_bench
+    from redundancy_gym.bench.learned import run_learned_bench
 
     local = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None)
     remote = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None, workers=2,

@@ -21,7 +21,7 @@ from redundancy_gym.controllers import (
 from redundancy_gym.geometry import PSS, Segment
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
 
-from ..controllers.test_compiled_clik import agri_clik
+from ..controllers.clik.test_compiled_clik import agri_clik
 from .strategies import hostile_vectors, vectors
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from redundancy_gym.eval.coal_shapes import coal_distance
+from redundancy_gym.bench.coal_shapes import coal_distance
 from redundancy_gym.geometry import LSS, PSS, SSV, TSS, GeometryError, distance, distances
 
 from .qp_oracle import point_to_primitive, ssv_distance

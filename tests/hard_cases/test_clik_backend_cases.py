@@ -27,7 +27,7 @@ from redundancy_gym.controllers import (
     PostureObjective,
     resolve,
 )
-from redundancy_gym.controllers.redundancy_resolution import MAX_COORDINATE
+from redundancy_gym.controllers.clik.redundancy_resolution import MAX_COORDINATE
 from redundancy_gym.model import RobotModel
 
 METHODS = ("pseudoinverse", "dls", "transpose")

@@ -15,11 +15,11 @@ from redundancy_gym.controllers import (
     JointLimitObjective,
     PredictiveIk,
 )
-from redundancy_gym.controllers.receding_horizon import RecedingHorizon
+from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon
 from redundancy_gym.model import RobotModel
 from redundancy_gym.policies import PolicyError
 
-from ..controllers.test_predictive_ik import _planar
+from ..controllers.predictive.test_predictive_ik import _planar
 
 DT = 0.01
 

@@ -12,7 +12,7 @@ from redundancy_gym.controllers import ControllerError
 from redundancy_gym.policies import PolicyError
 from redundancy_gym.policies import make_policy
 from redundancy_gym.policies.predictive_policy import TASK_DEFAULTS, PredictivePolicyConfig
-from redundancy_gym.controllers.receding_horizon import RecedingHorizon
+from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon
 from redundancy_gym.eval.evaluate import evaluate
 
 PLANAR = "redundancy_gym/PlanarReach-v0"

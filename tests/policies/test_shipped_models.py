@@ -10,7 +10,7 @@ import gymnasium as gym
 import pytest
 
 import redundancy_gym
-from redundancy_gym.eval.baselines import baselines
+from redundancy_gym.learning.baselines import baselines
 from redundancy_gym.eval.evaluate import evaluate
 from redundancy_gym.policies import PolicyError
 from redundancy_gym.policies.shipped_models import (

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import redundancy_gym
-from redundancy_gym.controllers.ikd import WalkingIkdStep
+from redundancy_gym.controllers.walking import WalkingIkdStep
 from redundancy_gym.policies import PolicyError
 
 

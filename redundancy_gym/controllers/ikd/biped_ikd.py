@@ -12,12 +12,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry.potentials import PiecewisePotential, piecewise_potential_kernel
 from ...model import AccelerationTerms, RobotModel
-from ..actuated_objective import ActuatedObjective
+from ..objectives.actuated_objective import ActuatedObjective
 from ..exceptions import ControllerError
-from ..joint_limit_objective import JointLimitObjective
-from ..objective import Objective, sum_objectives
-from ..redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
-from ..walking.ik_kernels import rotation_error_into
+from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.objective import Objective, sum_objectives
+from ..clik.redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
+from ..kernels.linalg import rotation_error_into
 
 __all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
 
@@ -372,7 +372,7 @@ def _solve(qdot, rotation, position, jacobian, drift, com, centroidal, centroida
 
     ``R`` (18 x nv) and ``r`` of (5.91) are the known rows (both soles, the torso's orientation, the CoM's height)
     and the CoM's x, y from the angular momentum theorem; ``qddot = W^-1 (R^T lambda - z)``, ``(R W^-1 R^T) lambda =
-    -r + R W^-1 z``, ``z = -W qddot_pref`` (:func:`~redundancy_gym.controllers.redundancy_resolution.resolve`):
+    -r + R W^-1 z``, ``z = -W qddot_pref`` (:func:`~redundancy_gym.controllers.clik.redundancy_resolution.resolve`):
     ``weights`` the diagonal of ``W`` if ``diagonal``, else ``inverse_weights`` is ``W^-1``. ``offset`` is the
     posture's difference from q (``has_posture``). Not ok (zeros) when ``sigma_min`` of ``R W^-1/2`` is below
     ``singular_threshold`` or the Cholesky factorization or the solution fails. ``stabilize``: apply (5.97) with

@@ -23,9 +23,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
-from ..acceleration_clik import DriftTask
+from ..clik.acceleration_clik import DriftTask
 from ..exceptions import ControllerError
-from ..redundancy_resolution import METHODS, WeightMatrix, check_configuration, check_finite, resolve
+from ..clik.redundancy_resolution import METHODS, WeightMatrix, check_configuration, check_finite, resolve
 
 __all__ = ["WEIGHTINGS", "GeneralIkd", "GeneralIkdResult"]
 

@@ -1,5 +1,6 @@
 """Biped walking (monograph chapter 4 and 5.1-5.3): step planner, LIPM/DCM CoM planner, swing quintics,
-stabilizer and whole-body IK with angular-momentum minimization (5.62), each a separate layer."""
+stabilizer and whole-body IK with angular-momentum minimization (5.62), or the walking IKD (5.5.4) in its place,
+each a separate layer."""
 
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
@@ -21,6 +22,7 @@ from .ssta import (
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
+from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_LAYOUT, REFERENCE_SIZE, TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
@@ -62,6 +64,9 @@ __all__ = [
     "WalkingCommand",
     "WalkingController",
     "WalkingIkConfig",
+    "WalkingIkd",
+    "WalkingIkdConfig",
+    "WalkingIkdStep",
     "WalkingPattern",
     "WholeBodyIk",
     "WholeBodyIkResult",

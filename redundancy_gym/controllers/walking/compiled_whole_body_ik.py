@@ -9,13 +9,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import ModelError
-from ..actuated_objective import ActuatedObjective
-from ..collision_kernels import bounding_spheres, collision_fields
-from ..collision_objective import CollisionObjective
+from ..objectives.actuated_objective import ActuatedObjective
+from ..objectives.collision_kernels import bounding_spheres, collision_fields
+from ..objectives.collision_objective import CollisionObjective
 from ..exceptions import ControllerError
-from ..joint_limit_objective import JointLimitObjective
-from ..kernel_buffers import buffer_view, compiled_entry_point, pack_fields
-from ..posture_objective import PostureObjective
+from ..objectives.joint_limit_objective import JointLimitObjective
+from ..kernels.buffers import buffer_view, compiled_entry_point, pack_fields
+from ..objectives.posture_objective import PostureObjective
 from .whole_body_ik import Reference, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .whole_body_kernels import (
     BAD_INPUT,

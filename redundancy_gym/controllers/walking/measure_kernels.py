@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ...model import RobotModel
 from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, place_frame
-from ..kernel_buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
+from ..kernels.buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
 
 __all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "Measurement"]
 

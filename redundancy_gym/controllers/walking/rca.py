@@ -27,11 +27,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel, Segment
 from ...model import RobotModel, collision_geometry_from_mjcf
-from ..actuated_objective import ActuatedObjective
-from ..collision_objective import CollisionObjective
+from ..objectives.actuated_objective import ActuatedObjective
+from ..objectives.collision_objective import CollisionObjective
 from ...validation import check_real
 from ..exceptions import ControllerError
-from ..joint_limit_objective import JointLimitObjective
+from ..objectives.joint_limit_objective import JointLimitObjective
 
 __all__ = ["LEG_SEGMENTS", "Rca", "RcaConfig", "RcaState", "return_quintic_no_overshoot_time"]
 

@@ -19,11 +19,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel
 from ...model import ModelError, RobotModel, collision_model_from_mjcf
-from ..actuated_objective import ActuatedObjective
-from ..collision_objective import CollisionObjective
+from ..objectives.actuated_objective import ActuatedObjective
+from ..objectives.collision_objective import CollisionObjective
 from ..exceptions import ControllerError
-from ..joint_limit_objective import JointLimitObjective
-from ..posture_objective import PostureObjective
+from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
@@ -31,12 +31,11 @@ from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .rca import Rca, RcaConfig, RcaState
 from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
+from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
-if TYPE_CHECKING:  # imported where used: the IKD package imports the walking package's kernels
-    from ..ikd.walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 
 __all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
 
@@ -264,8 +263,6 @@ class WalkingController:
         self.ik, self.solver, q_ref, start = self._stand(q)
         self.q_ref = q_ref
         if self.ikd_config is not None:
-            from ..ikd.walking_ikd import WalkingIkd  # here: the ikd package imports this one's kernels
-
             # the CLIK's joint-limit objective (without it the IKD stretched a knee at 0.7 m/s); neither its posture
             # (the IKD has its own posture stiffness) nor its self-collision objective (evaluated in Python it took
             # some 230 us a period, and the IKD walks on BipedWalk kept 19 mm between the links without it)

@@ -27,8 +27,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..objective import Objective
-from .ik_kernels import rotation_error, weighted_solve
+from ..objectives.objective import Objective
+from ..kernels.linalg import rotation_error
+from .ik_kernels import weighted_solve
 from .whole_body_kernels import REFERENCE_LAYOUT, REFERENCE_SIZE
 
 __all__ = ["REFERENCE_LAYOUT", "REFERENCE_SIZE", "TASK_ROWS", "Reference", "WholeBodyIk", "WholeBodyIkResult",

@@ -17,9 +17,10 @@ from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...model.chain_kernels import chain_centroidal, chain_forward, chain_integrate, chain_jacobian, place_frame
-from ..collision_kernels import collision_potential
-from ..kernel_buffers import float_field, int_field
-from .ik_kernels import rotation_error_into, weighted_solve
+from ..objectives.collision_kernels import collision_potential
+from ..kernels.buffers import float_field, int_field
+from ..kernels.linalg import rotation_error_into
+from .ik_kernels import weighted_solve
 
 __all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "OUTPUT_EXTRA", "REFERENCE_LAYOUT", "REFERENCE_SIZE", "BAD_INPUT",
            "OK", "whole_body_step"]

@@ -11,8 +11,8 @@ from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import ControllerError
 from redundancy_gym.controllers.ikd import BipedIkd, BipedIkdReference, BipedIkdResult
 from redundancy_gym.controllers.ikd.biped_ikd import GRAVITY
-from redundancy_gym.controllers.redundancy_resolution import resolve
-from redundancy_gym.controllers.walking.ik_kernels import rotation_error
+from redundancy_gym.controllers.clik.redundancy_resolution import resolve
+from redundancy_gym.controllers.kernels.linalg import rotation_error
 from redundancy_gym.model import RobotModel
 from tests.controllers.walking.biped_helpers import standing
 
@@ -390,7 +390,7 @@ def test_the_compiled_joint_limit_gradient_equals_the_objectives_evaluation(bipe
     # counts; non-finite distances (an unbounded limit) raise the objective's own error; other objectives and
     # limits of another length take sum_objectives
     from redundancy_gym.controllers import JointLimitObjective
-    from redundancy_gym.controllers.actuated_objective import ActuatedObjective
+    from redundancy_gym.controllers.objectives.actuated_objective import ActuatedObjective
     from redundancy_gym.geometry import GeometryError
 
     states = _walk_states(biped, 0.6)

@@ -11,7 +11,7 @@ import pytest
 from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import CollisionObjective, ControllerError, PostureObjective
 from redundancy_gym.controllers.walking import CompiledWholeBodyIk, WalkingIkConfig, WholeBodyIk, WholeBodyReference
-from redundancy_gym.controllers.walking.ik_kernels import rotation_error
+from redundancy_gym.controllers.kernels.linalg import rotation_error
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
 
 from .biped_helpers import standing, walking_controller

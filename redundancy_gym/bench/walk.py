@@ -1,0 +1,296 @@
+"""``redundancy-gym bench walk``: the walking reference's control step on BipedWalk-v0, and its whole-body IK
+compiled against the same IK on pinocchio, on the same states.
+
+One walk of the ``walking`` policy (``target_speed`` 0.7 m/s by default) is timed per ``predict`` call (the
+whole controller: pattern sample, contact ZMP, stabilizer, IK). A second, identical walk records the IK's
+inputs at every period (the kinematic configuration and the start and end references); on those inputs
+
+- **compiled**: :class:`~redundancy_gym.controllers.walking.CompiledWholeBodyIk` (one kernel call),
+- **python**: :class:`~redundancy_gym.controllers.walking.WholeBodyIk` (pinocchio kinematics and Jacobians,
+  the same objectives and solve),
+
+are timed and compared in alternating rounds (:func:`~redundancy_gym.bench.timing.alternating_rounds`: a
+warm-up round, then ``rounds`` rounds of compiled, python / python, compiled / ..., each sample one pass over the
+recorded states): ``ik_compiled_vs_python`` is the median over the rounds of the ratio of the two passes' medians
+(``ik_compiled_vs_python_rounds``: median, min, max and spread ``(max - min) / median``), ``ik_max_difference`` the
+largest difference of their configurations [rad or m].
+
+``ikd``: the controller step with the joint trajectory from Inverse Kineto-Dynamics (the policy's ``ik="ikd"``,
+:class:`~redundancy_gym.controllers.ikd.WalkingIkd`) on the same walk, timed in alternating rounds with the CLIK
+controller (one walk each per round, the order reversed every other round, after a warm-up round):
+``ikd_vs_clik`` is the median over rounds of the ratio of the two walks' median steps (``ikd_vs_clik_rounds``; Lola:
+823 / 548 us = 1.50 on a Core2 Duo; published). The CLIK walks of these rounds also give the controller step
+(``controller``: median and p99 over their steps, and the start); ``controller_vs_lola`` relates its median to the
+548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not measured here;
+``controller_vs_lola_rounds``: the same per round). ``zmp_rms_mm``: in those walks, the rms distance of the
+measured ZMP (the env's contact pressure, in the plan's frame) from the pattern's reference ZMP, per controller.
+
+``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
+0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
+distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_cycle`` relates its median to the
+2 ms cycle in which Lola ran its whole controller with collision avoidance (a Xeon at 2.3 GHz; published).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
+
+from ..controllers import CollisionObjective
+from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
+from ..policies.walking_policy import WalkingPolicy
+from ..eval.machine import finish_machine_info, machine_info
+from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, timed_call
+from ..eval.evaluate import make_env
+from .exceptions import BenchError
+
+__all__ = ["LOLA_CYCLE_US", "LOLA_IKD_CYCLE_US", "LOLA_OBSTACLE_CYCLE_US", "OBSTACLE_COURSES", "format_walk_bench", "run_walk_bench"]
+
+ENV_ID = "redundancy_gym/BipedWalk-v0"
+LOLA_CYCLE_US = 548.0
+"""Lola's whole controller per cycle [us] on a 2.33 GHz Core2 Duo (the issue's reference figure)."""
+LOLA_IKD_CYCLE_US = 823.0
+"""Lola's IKD-based walking controller per cycle [us] on the same Core2 Duo (monograph 5.5.3; published)."""
+LOLA_OBSTACLE_CYCLE_US = 2000.0
+"""Lola's control cycle with obstacle avoidance [us] (monograph 5.4.2: all planning, collision avoidance,
+redundancy resolution, force and position control in one 2 ms cycle)."""
+OBSTACLE_ENV_ID = "redundancy_gym/BipedObstacles-v0"
+OBSTACLE_COURSES = ("beam", "triangle")
+
+_Call = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]
+
+
+class _Recorder:
+    """Stands in for the controller's IK and keeps each call's inputs."""
+
+    def __init__(self, solver: Any) -> None:
+        self.solver = solver
+        self.calls: list[_Call] = []
+
+    def step(self, q: NDArray[np.float64], start: Any, end: Any, dt: float) -> WholeBodyIkResult:
+        self.calls.append((np.array(q), np.array(start), np.array(end), float(dt)))
+        return self.solver.step(q, start, end, dt)
+
+
+def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], bool, int]:
+    """One walk over an obstacle course to its end; returns the predict times [us], whether RCA evaluated
+    distances in each period, whether it succeeded, and its obstacle contacts."""
+    env = make_env(OBSTACLE_ENV_ID, {"course": course})
+    policy = WalkingPolicy(env)
+    times: list[float] = []
+    active: list[bool] = []
+    contacts, success = 0, False
+    try:
+        obs, _ = env.reset(seed=seed)
+        while True:
+            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([not times])))
+            times.append(seconds * 1e6)
+            avoidance = policy.last_command.avoidance if policy.last_command is not None else None
+            active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
+            obs, _, terminated, truncated, info = env.step(action)
+            contacts += int(info["obstacle_contact"])
+            if terminated or truncated:
+                success = bool(info["is_success"])
+                break
+    finally:
+        env.close()
+    return times, active, success, contacts
+
+
+def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[float] | None = None
+          ) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
+    """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell.
+    With a list ``zmp``, appends per period the distance [m] of the measured ZMP (the env's contact pressure, mapped
+    into the plan's frame) from the pattern's reference ZMP, once the first step has begun."""
+    env = make_env(ENV_ID, {"target_speed": speed})
+    policy = WalkingPolicy(env, ik=ik)
+    times: list[float] = []
+    recorder: _Recorder | None = None
+    fell = False
+    try:
+        obs, _ = env.reset(seed=seed)
+        for k in range(steps):
+            if k == 1 and record:  # after start(), which builds the IK
+                recorder = _Recorder(policy.controller.solver)
+                policy.controller.solver = recorder  # type: ignore[assignment]
+            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([k == 0])))
+            times.append(seconds * 1e6)
+            obs, _, terminated, truncated, info = env.step(action)
+            controller = policy.controller
+            if zmp is not None and info["zmp_valid"] and controller.pattern is not None \
+                    and controller.pattern.step_at(controller.time) >= 0:
+                rotation, translation = controller._world_to_plan
+                measured = (rotation @ np.array([*info["zmp"], 0.0]) + translation)[:2]
+                zmp.append(float(np.linalg.norm(measured - controller.pattern.reference_zmp(controller.time))))
+            if terminated or truncated:
+                fell = bool(info["fell"])
+                break
+    finally:
+        env.close()
+    if recorder is not None:
+        policy.controller.solver = recorder.solver  # type: ignore[assignment]
+    return times, recorder.calls if recorder is not None else [], policy, fell
+
+
+class _Walks:
+    """A sampler: one walk of the walking policy (``ik`` "clik" or "ikd") per call; keeps each walk's predict times
+    [us], ZMP distances [m] and whether it fell, and returns the walk's median step after the first (which plans
+    the walk) [s]."""
+
+    def __init__(self, speed: float, steps: int, seed: int, ik: str) -> None:
+        self.speed, self.steps, self.seed, self.ik = speed, steps, seed, ik
+        self.times: list[list[float]] = []
+        self.zmp: list[list[float]] = []
+        self.fell: list[bool] = []
+
+    def __call__(self) -> float:
+        zmp: list[float] = []
+        times, _, _, fell = _walk(self.speed, self.steps, self.seed, record=False, ik=self.ik, zmp=zmp)
+        self.times.append(times)
+        self.zmp.append(zmp)
+        self.fell.append(fell)
+        return float(np.median(times[1:])) * 1e-6
+
+
+def _timed_solve(solver: Any) -> Any:
+    """``call -> seconds`` of one ``solver.step`` on a recorded IK call."""
+    def timed(call: _Call) -> float:
+        q, start, end, dt = call
+        return timed_call(lambda: solver.step(q, start, end, dt))[1]
+
+    return timed
+
+
+def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 1,
+                   rounds: int = 7, progress: bool = True) -> dict[str, Any]:
+    """Time the walking controller step (CLIK and IKD walks in alternating rounds), then its compiled IK against the
+    pinocchio IK (alternating passes over the recorded states), then the obstacle courses; returns the report.
+
+    Args:
+        speed: commanded walking speed [m/s].
+        duration: walk length [s].
+        seed: reset seed.
+        repeats: timed repetitions per IK state within a pass (the median is kept).
+        rounds: alternating rounds of the CLIK and IKD walks and of the compiled and python IK passes (after a
+            warm-up round each).
+        progress: show progress bars.
+
+    Raises:
+        BenchError: ``repeats < 1``, ``rounds < 1``, a duration not finite and > 0, or a policy without the compiled IK.
+    """
+    if repeats < 1:
+        raise BenchError(f"repeats must be >= 1, got {repeats}")
+    if int(rounds) != rounds or rounds < 1:
+        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    if not np.isfinite(duration) or duration <= 0.0:
+        raise BenchError(f"duration must be finite and > 0, got {duration!r}")
+    machine = machine_info()
+    steps = int(round(duration / 0.004))
+    walks = {"clik": _Walks(speed, steps, seed, "clik"), "ikd": _Walks(speed, steps, seed, "ikd")}
+    walk_rounds = alternating_rounds(walks, rounds=rounds, progress=progress, desc="bench walk clik/ikd rounds")
+    skip = walk_rounds.warmup
+    clik, ikd = walks["clik"], walks["ikd"]
+    controller = [t for times in clik.times[skip:] for t in times[1:]]  # the first call of a walk plans it
+    ikd_times = [t for times in ikd.times[skip:] for t in times[1:]]
+    zmp = {name: [d for walk in w.zmp[skip:] for d in walk] for name, w in walks.items()}
+    fell, ikd_fell = any(clik.fell[skip:]), any(ikd.fell[skip:])
+    ikd_stats = walk_rounds.ratio("ikd", "clik")
+    lola_stats = RatioStats.of([t * 1e6 / LOLA_CYCLE_US for t in walk_rounds.samples["clik"]])
+
+    _, calls, policy, _ = _walk(speed, steps, seed, record=True)
+    ik = policy.controller.ik
+    compiled = policy.controller.solver
+    if not isinstance(compiled, CompiledWholeBodyIk) or ik is None:
+        raise BenchError("bench walk needs the compiled IK backend (the policy default)")
+    difference = max(float(np.max(np.abs(compiled.step(*c).q - ik.step(*c).q))) for c in calls)
+    passes = {"compiled": TimedPasses(_timed_solve(compiled), calls, repeats),
+              "python": TimedPasses(_timed_solve(ik), calls, repeats)}
+    ik_rounds = alternating_rounds(passes, rounds=rounds, progress=progress, desc="bench walk IK rounds")
+    compiled_median, compiled_p90 = passes["compiled"].summary_us(ik_rounds.warmup)
+    python_median, python_p90 = passes["python"].summary_us(ik_rounds.warmup)
+    ik_stats = ik_rounds.ratio("compiled", "python")
+
+    obstacles: dict[str, Any] = {}
+    all_times: list[float] = []
+    for course in tqdm(OBSTACLE_COURSES, desc="bench walk obstacles", disable=not progress):
+        times, active, success, contacts = _obstacle_walk(course, seed)
+        times, active = times[1:], active[1:]  # the first call plans the walk
+        near = [t for t, a in zip(times, active) if a]
+        obstacles[course] = {"step_us_median": float(np.median(times)), "step_us_p99": float(np.percentile(times, 99)),
+                             "rca_share": float(np.mean(active)),
+                             "step_us_median_rca": float(np.median(near)) if near else float("nan"),
+                             "steps": len(times), "success": success, "obstacle_contacts": contacts}
+        all_times += times
+    obstacle_median = float(np.median(all_times))
+    controller_median = walk_rounds.median("clik") * 1e6
+    ikd_median = walk_rounds.median("ikd") * 1e6
+    return {
+        "benchmark": "walk", "env": ENV_ID, "target_speed": speed, "duration": duration, "seed": seed,
+        "states": len(calls), "repeats": repeats, "fell": fell,
+        "timing": {"rounds": rounds, "warmup": skip, "clock": CLOCK, "walk_orders": walk_rounds.orders, "ik_orders": ik_rounds.orders,
+                   "sample": "clik/ikd: one walk's median step; compiled/python: one pass over the recorded states"},
+        "machine": finish_machine_info(machine),
+        "controller": {"step_us_median": controller_median, "step_us_p99": float(np.percentile(controller, 99)),
+                       "start_ms": float(np.median([w[0] for w in clik.times[skip:]])) * 1e-3},
+        "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": compiled_p90},
+        "ik_python": {"step_us_median": python_median, "step_us_p90": python_p90},
+        "ik_compiled_vs_python": ik_stats.median,
+        "ik_compiled_vs_python_rounds": ik_stats.to_json(),
+        "ikd": {"step_us_median": ikd_median, "step_us_p99": float(np.percentile(ikd_times, 99)),
+                "fell": ikd_fell, "rounds": rounds},
+        "ikd_vs_clik": ikd_stats.median,
+        "ikd_vs_clik_rounds": ikd_stats.to_json(),
+        "zmp_rms_mm": {name: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for name, d in zmp.items()},
+        "ikd_vs_clik_spread": [ikd_stats.min, ikd_stats.max],
+        "ikd_vs_lola_ikd": ikd_median / LOLA_IKD_CYCLE_US,
+        "ik_max_difference": difference,
+        "controller_vs_lola": controller_median / LOLA_CYCLE_US,
+        "controller_vs_lola_rounds": lola_stats.to_json(),
+        "obstacles": {"env": OBSTACLE_ENV_ID, "target_speed": 0.4, "courses": obstacles,
+                      "step_us_median": obstacle_median, "step_us_p99": float(np.percentile(all_times, 99))},
+        "obstacles_vs_lola_cycle": obstacle_median / LOLA_OBSTACLE_CYCLE_US,
+        "self_collision_pairs": sum(len(o.collision_model.layout().segment_pairs) for o in ik.objectives
+                                    if isinstance(o, CollisionObjective)),
+    }
+
+
+def format_walk_bench(report: dict[str, Any]) -> str:
+    """A plain-text summary."""
+    c, k, p = report["controller"], report["ik_compiled"], report["ik_python"]
+    return "\n".join([
+        f"{report['env']} at {report['target_speed']} m/s, {report['duration']} s, seed {report['seed']}: "
+        f"{report['states']} IK states" + (" (fell)" if report["fell"] else ""),
+        f"controller step  median {c['step_us_median']:.1f} us  p99 {c['step_us_p99']:.1f} us  "
+        f"(start {c['start_ms']:.1f} ms)",
+        f"IK compiled      median {k['step_us_median']:.1f} us  p90 {k['step_us_p90']:.1f} us",
+        f"IK python        median {p['step_us_median']:.1f} us  p90 {p['step_us_p90']:.1f} us",
+        f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
+        f"(largest difference {report['ik_max_difference']:.1e})" + _rounds_text(report.get("ik_compiled_vs_python_rounds")),
+        f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)"
+        + _rounds_text(report.get("controller_vs_lola_rounds")),
+        f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
+        + ("  (fell)" if report["ikd"]["fell"] else ""),
+        "measured ZMP from the reference, rms: " + ", ".join(
+            f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")
+            for ik, v in report["zmp_rms_mm"].items()),
+        f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
+        f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
+        f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
+        *[f"with obstacles ({course}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us  "
+          f"RCA evaluating {100 * r['rca_share']:.0f} % of periods (median then {r['step_us_median_rca']:.1f} us)"
+          f"{'' if r['success'] else '  (course not passed)'}"
+          for course, r in report["obstacles"]["courses"].items()],
+        f"obstacles_vs_lola_cycle = {report['obstacles_vs_lola_cycle']:.3f}  (median "
+        f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
+        "collision avoidance)",
+    ])
+
+
+def _rounds_text(stats: dict[str, Any] | None) -> str:
+    """``  rounds MIN-MAX, spread S %`` of a ratio's round statistics, or nothing."""
+    if not stats:
+        return ""
+    return f"  rounds {stats['min']:.3f}-{stats['max']:.3f}, spread {100 * stats['spread']:.1f} %"
