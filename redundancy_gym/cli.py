@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
 from collections.abc import Sequence
 from typing import Any
 
@@ -26,10 +25,14 @@ EPILOG = """examples:
   redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy runs/ppo_PlanarReach-v0.zip
 """
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
-POLICY_HELP = ("clik | walking | predictive | global | zero | random | path to an SB3 .zip | a shipped learned "
-               "baseline <learner>-<action>, e.g. ppo-nullspace (redundancy-gym list shows which envs each accepts)")
-WRAPPER_HELP = ("task_space | nullspace | residual | walking_command: the env in that action wrapper (the same as "
-                "its id <Env>-<Wrapper>-v0; redundancy-gym list shows which env takes which)")
+POLICY_HELP = (
+    "clik | walking | predictive | global | zero | random | path to an SB3 .zip | a shipped learned "
+    "baseline <learner>-<action>, e.g. ppo-nullspace (redundancy-gym list shows which envs each accepts)"
+)
+WRAPPER_HELP = (
+    "task_space | nullspace | residual | walking_command: the env in that action wrapper (the same as "
+    "its id <Env>-<Wrapper>-v0; redundancy-gym list shows which env takes which)"
+)
 
 
 def _json_object(text: str) -> dict[str, Any]:
@@ -60,8 +63,9 @@ def _add_parser(sub: Any, name: str, help_text: str, **kwargs: Any) -> argparse.
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="redundancy-gym", description=__doc__, epilog=EPILOG,
-                                     formatter_class=_RawHelpFormatter)
+    parser = argparse.ArgumentParser(
+        prog="redundancy-gym", description=__doc__, epilog=EPILOG, formatter_class=_RawHelpFormatter
+    )
     parser.add_argument("--version", action="version", version=f"redundancy-gym {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="{list,eval,train,baselines,render,bench,demo}")
 
@@ -71,142 +75,291 @@ def _parser() -> argparse.ArgumentParser:
     ev = _add_parser(sub, "eval", "evaluate a policy; prints a table and writes the evaluation-contract JSON")
     ev.add_argument("env_id", help=ENV_HELP)
     ev.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
-    ev.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object of the wrapper's options (with --wrapper)")
+    ev.add_argument(
+        "--wrapper-kwargs",
+        type=_json_object,
+        default={},
+        metavar="JSON",
+        help="JSON object of the wrapper's options (with --wrapper)",
+    )
     ev.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
     ev.add_argument("--episodes", type=int, default=10, metavar="N", help="number of episodes")
     ev.add_argument("--seed", type=int, default=0, metavar="N", help="episode i is reset with seed + i")
-    ev.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object passed to gym.make")
-    ev.add_argument("--policy-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object of policy options")
-    ev.add_argument("--json", dest="json_path", metavar="PATH",
-                    help="write the report to this file (default: no file)")
-    ev.add_argument("--warmup", type=int, default=0, metavar="N",
-                    help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
-                         "counted in the step times")
-    ev.add_argument("--workers", type=int, default=None, metavar="N",
-                    help="split the episodes across N processes; each keeps its seed, so the JSON is the serial "
-                         "run's (timings excepted) (default: 1; with --ray the Ray cluster's CPUs)")
-    ev.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                    help="run the episodes on Ray actors: on the cluster at ADDRESS, or without one on a local Ray "
-                         "instance (the ray extra); --workers defaults to the cluster's CPUs")
-    ev.add_argument("--retries", type=int, default=0, metavar="K",
-                    help="with --workers: run episodes whose worker raised or died again, up to K times (a run "
-                         "with failed episodes left names their seeds and exits with status 2)")
+    ev.add_argument(
+        "--env-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object passed to gym.make"
+    )
+    ev.add_argument(
+        "--policy-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object of policy options"
+    )
+    ev.add_argument("--json", dest="json_path", metavar="PATH", help="write the report to this file (default: no file)")
+    ev.add_argument(
+        "--warmup",
+        type=int,
+        default=0,
+        metavar="N",
+        help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
+        "counted in the step times",
+    )
+    ev.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        metavar="N",
+        help="split the episodes across N processes; each keeps its seed, so the JSON is the serial "
+        "run's (timings excepted) (default: 1; with --ray the Ray cluster's CPUs)",
+    )
+    ev.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="run the episodes on Ray actors: on the cluster at ADDRESS, or without one on a local Ray "
+        "instance (the ray extra); --workers defaults to the cluster's CPUs",
+    )
+    ev.add_argument(
+        "--retries",
+        type=int,
+        default=0,
+        metavar="K",
+        help="with --workers: run episodes whose worker raised or died again, up to K times (a run "
+        "with failed episodes left names their seeds and exits with status 2)",
+    )
     ev.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
-    tr = _add_parser(sub, "train", "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
-                                   "return, success rate and length of recent episodes as it goes")
+    tr = _add_parser(
+        sub,
+        "train",
+        "train a stable-baselines3 agent and save a .zip that eval loads; prints the "
+        "return, success rate and length of recent episodes as it goes",
+    )
     tr.add_argument("env_id", help=ENV_HELP)
     tr.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
-    tr.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object of the wrapper's options (with --wrapper)")
-    tr.add_argument("--algo", choices=("ppo", "sac", "bc"), default="ppo",
-                    help="stable-baselines3 algorithm, or bc: behaviour cloning with DAgger from --expert (its "
-                         "budget is the config's episodes and dagger_rounds, not --steps)")
-    tr.add_argument("--expert", metavar="NAME",
-                    help="with --algo bc: the policy to clone (default: the env's reference, clik or walking)")
-    tr.add_argument("--config", metavar="YAML",
-                    help="rl-zoo3 style YAML keyed by env id (see configs/); its n_timesteps and n_envs are the "
-                         "defaults of --steps and --n-envs (default: none, SB3's own defaults)")
-    tr.add_argument("--steps", type=int, metavar="N",
-                    help="total environment steps (default: n_timesteps of --config)")
-    tr.add_argument("--n-envs", type=int, metavar="N",
-                    help="envs stepped together (default: n_envs of --config, else 1)")
-    tr.add_argument("--vec-env", "--vec", choices=("dummy", "subproc", "sync", "async"), default="dummy",
-                    help="dummy (= sync): all envs in this process; subproc (= async): one process per env")
+    tr.add_argument(
+        "--wrapper-kwargs",
+        type=_json_object,
+        default={},
+        metavar="JSON",
+        help="JSON object of the wrapper's options (with --wrapper)",
+    )
+    tr.add_argument(
+        "--algo",
+        choices=("ppo", "sac", "bc"),
+        default="ppo",
+        help="stable-baselines3 algorithm, or bc: behaviour cloning with DAgger from --expert (its "
+        "budget is the config's episodes and dagger_rounds, not --steps)",
+    )
+    tr.add_argument(
+        "--expert",
+        metavar="NAME",
+        help="with --algo bc: the policy to clone (default: the env's reference, clik or walking)",
+    )
+    tr.add_argument(
+        "--config",
+        metavar="YAML",
+        help="rl-zoo3 style YAML keyed by env id (see configs/); its n_timesteps and n_envs are the "
+        "defaults of --steps and --n-envs (default: none, SB3's own defaults)",
+    )
+    tr.add_argument("--steps", type=int, metavar="N", help="total environment steps (default: n_timesteps of --config)")
+    tr.add_argument(
+        "--n-envs", type=int, metavar="N", help="envs stepped together (default: n_envs of --config, else 1)"
+    )
+    tr.add_argument(
+        "--vec-env",
+        "--vec",
+        choices=("dummy", "subproc", "sync", "async"),
+        default="dummy",
+        help="dummy (= sync): all envs in this process; subproc (= async): one process per env",
+    )
     tr.add_argument("--out", metavar="ZIP", help="output .zip path (default: runs/<algo>_<env name>.zip)")
-    tr.add_argument("--seed", type=int, default=0, metavar="N",
-                    help="seed of the agent; env i is reset with seed + i first")
-    tr.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object passed to gym.make (over the config's env_kwargs)")
+    tr.add_argument(
+        "--seed", type=int, default=0, metavar="N", help="seed of the agent; env i is reset with seed + i first"
+    )
+    tr.add_argument(
+        "--env-kwargs",
+        type=_json_object,
+        default={},
+        metavar="JSON",
+        help="JSON object passed to gym.make (over the config's env_kwargs)",
+    )
     tr.add_argument("--tensorboard", metavar="DIR", help="write TensorBoard logs here (default: none)")
-    tr.add_argument("--print-every", type=int, metavar="STEPS",
-                    help="steps between printed statistics lines (default: steps / 20, at least 1000)")
-    tr.add_argument("--torch-threads", type=int, default=1, metavar="N",
-                    help="torch CPU threads (more pay off only for networks larger than the default MLP)")
-    tr.add_argument("--eval-freq", type=int, metavar="STEPS",
-                    help="evaluate the deterministic agent every STEPS steps on a separate env (SB3 EvalCallback; "
-                         "TensorBoard, best agent saved as <out>_best.zip) (default: never)")
+    tr.add_argument(
+        "--print-every",
+        type=int,
+        metavar="STEPS",
+        help="steps between printed statistics lines (default: steps / 20, at least 1000)",
+    )
+    tr.add_argument(
+        "--torch-threads",
+        type=int,
+        default=1,
+        metavar="N",
+        help="torch CPU threads (more pay off only for networks larger than the default MLP)",
+    )
+    tr.add_argument(
+        "--eval-freq",
+        type=int,
+        metavar="STEPS",
+        help="evaluate the deterministic agent every STEPS steps on a separate env (SB3 EvalCallback; "
+        "TensorBoard, best agent saved as <out>_best.zip) (default: never)",
+    )
     tr.add_argument("--eval-episodes", type=int, default=5, metavar="N", help="episodes per evaluation")
-    tr.add_argument("--eval-seed", type=int, default=30000, metavar="N",
-                    help="first seed of the evaluation episodes (keep it apart from the seeds you report on)")
-    tr.add_argument("--checkpoint-freq", type=int, metavar="STEPS",
-                    help="save the agent every STEPS steps into <out>_checkpoints/ (default: never)")
-    tr.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                    help="a seed sweep on Ray (the cluster at ADDRESS, or a local instance): one task per --seeds "
-                         "entry, each trained and evaluated on held-out seeds 20000+; writes <out>_seed<S>.zip and "
-                         "<out>_sweep.json")
+    tr.add_argument(
+        "--eval-seed",
+        type=int,
+        default=30000,
+        metavar="N",
+        help="first seed of the evaluation episodes (keep it apart from the seeds you report on)",
+    )
+    tr.add_argument(
+        "--checkpoint-freq",
+        type=int,
+        metavar="STEPS",
+        help="save the agent every STEPS steps into <out>_checkpoints/ (default: never)",
+    )
+    tr.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="a seed sweep on Ray (the cluster at ADDRESS, or a local instance): one task per --seeds "
+        "entry, each trained and evaluated on held-out seeds 20000+; writes <out>_seed<S>.zip and "
+        "<out>_sweep.json",
+    )
     tr.add_argument("--seeds", type=int, nargs="+", metavar="S", help="with --ray: the seeds of the sweep")
-    tr.add_argument("--keep", choices=("last", "best"), default="last",
-                    help="save the last agent to --out, or the evaluation's best (needs --eval-freq; the last then "
-                         "goes to <out>_last.zip)")
+    tr.add_argument(
+        "--keep",
+        choices=("last", "best"),
+        default="last",
+        help="save the last agent to --out, or the evaluation's best (needs --eval-freq; the last then "
+        "goes to <out>_last.zip)",
+    )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     re = _add_parser(sub, "render", "record one episode as .mp4 or .gif")
     re.add_argument("env_id", help=ENV_HELP)
     re.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
-    re.add_argument("--wrapper-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object of the wrapper's options (with --wrapper)")
+    re.add_argument(
+        "--wrapper-kwargs",
+        type=_json_object,
+        default={},
+        metavar="JSON",
+        help="JSON object of the wrapper's options (with --wrapper)",
+    )
     re.add_argument("--policy", required=True, metavar="NAME|ZIP", help=POLICY_HELP)
     re.add_argument("--out", required=True, metavar="PATH", help="output .mp4 or .gif path")
     re.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the episode")
-    re.add_argument("--env-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object passed to gym.make")
-    re.add_argument("--policy-kwargs", type=_json_object, default={}, metavar="JSON",
-                    help="JSON object of policy options")
+    re.add_argument(
+        "--env-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object passed to gym.make"
+    )
+    re.add_argument(
+        "--policy-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object of policy options"
+    )
     re.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     be = _add_parser(sub, "bench", "run a benchmark against its peers and write its figures")
     be.add_argument("name", choices=tuple(BENCHES), help="; ".join(f"{b.name}: {b.summary}" for b in BENCHES.values()))
     be.add_argument("--json", dest="json_path", metavar="PATH", help="output JSON (default: results/bench_<name>.json)")
-    be.add_argument("--seed", type=int, metavar="N",
-                    help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)")
+    be.add_argument(
+        "--seed",
+        type=int,
+        metavar="N",
+        help="seed of the benchmark's scenes (default: 0; learned: 20000, its first held-out seed)",
+    )
     be.add_argument("--quick", action="store_true", help="short timings (a smoke run, not for quoting)")
     be.add_argument("--no-progress", action="store_true", help="hide the progress bar")
-    be.add_argument("--rounds", type=int, metavar="N",
-                    help="ssv, envs, ik, walk, pik, scale: alternating timing rounds of ours and the peer (after a "
-                         "warm-up; ratios are medians over the rounds; default: each bench's, --quick: 3)")
+    be.add_argument(
+        "--rounds",
+        type=int,
+        metavar="N",
+        help="ssv, envs, ik, walk, pik, scale: alternating timing rounds of ours and the peer (after a "
+        "warm-up; ratios are medians over the rounds; default: each bench's, --quick: 3)",
+    )
     budget = be.add_mutually_exclusive_group()
-    budget.add_argument("--seconds", type=float, metavar="S",
-                        help="soak only: wall time per env, split over the action sources (default: 10, "
-                             "--quick: 1)")
-    budget.add_argument("--steps", type=int, metavar="N",
-                        help="soak only: steps per env instead of --seconds, split over the action sources")
-    be.add_argument("--trials", type=int, metavar="N",
-                    help="push only: trials per impulse level (default: 20, --quick: 5)")
-    be.add_argument("--episodes", type=int, metavar="N",
-                    help="learned only: episodes per policy from --seed (default: 20, --quick: 2)")
-    be.add_argument("--workers", type=int, metavar="N",
-                    help="learned: split each evaluation's episodes across N processes (default: 1); scale: the "
-                         "worker count compared with the serial loop (default: 2)")
-    be.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                    help="learned only: evaluate on Ray actors (the cluster at ADDRESS, or a local instance); "
-                         "--workers defaults to the cluster's CPUs")
-    be.add_argument("--envs", nargs="+", metavar="ENV",
-                    help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)")
+    budget.add_argument(
+        "--seconds",
+        type=float,
+        metavar="S",
+        help="soak only: wall time per env, split over the action sources (default: 10, --quick: 1)",
+    )
+    budget.add_argument(
+        "--steps",
+        type=int,
+        metavar="N",
+        help="soak only: steps per env instead of --seconds, split over the action sources",
+    )
+    be.add_argument(
+        "--trials", type=int, metavar="N", help="push only: trials per impulse level (default: 20, --quick: 5)"
+    )
+    be.add_argument(
+        "--episodes",
+        type=int,
+        metavar="N",
+        help="learned only: episodes per policy from --seed (default: 20, --quick: 2)",
+    )
+    be.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="learned: split each evaluation's episodes across N processes (default: 1); scale: the "
+        "worker count compared with the serial loop (default: 2)",
+    )
+    be.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="learned only: evaluate on Ray actors (the cluster at ADDRESS, or a local instance); "
+        "--workers defaults to the cluster's CPUs",
+    )
+    be.add_argument(
+        "--envs",
+        nargs="+",
+        metavar="ENV",
+        help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)",
+    )
 
-    ba = _add_parser(sub, "baselines", "train the learned baselines of baselines/*.yaml (seeded; each into "
-                                       "baselines/models/<name>.zip with its training record <name>.json); "
-                                       "bench learned then evaluates them")
-    ba.add_argument("names", nargs="*", metavar="NAME",
-                    help="baselines to train, e.g. ppo-residual-agri_reach (default: all; --list shows them)")
+    ba = _add_parser(
+        sub,
+        "baselines",
+        "train the learned baselines of baselines/*.yaml (seeded; each into "
+        "baselines/models/<name>.zip with its training record <name>.json); "
+        "bench learned then evaluates them",
+    )
+    ba.add_argument(
+        "names",
+        nargs="*",
+        metavar="NAME",
+        help="baselines to train, e.g. ppo-residual-agri_reach (default: all; --list shows them)",
+    )
     ba.add_argument("--list", action="store_true", help="list the baselines and their shipped models, train nothing")
-    ba.add_argument("--steps", type=int, metavar="N", help="PPO/SAC budget instead of each file's n_timesteps "
-                    "(a smoke run; the shipped models use the files')")
+    ba.add_argument(
+        "--steps",
+        type=int,
+        metavar="N",
+        help="PPO/SAC budget instead of each file's n_timesteps (a smoke run; the shipped models use the files')",
+    )
     ba.add_argument("--models", default=None, metavar="DIR", help="where the models go (default: baselines/models)")
-    ba.add_argument("--ray", nargs="?", const="local", metavar="ADDRESS",
-                    help="train the baselines as Ray tasks, one CPU each (the cluster at ADDRESS, or a local "
-                         "instance); the models come back to this machine")
+    ba.add_argument(
+        "--ray",
+        nargs="?",
+        const="local",
+        metavar="ADDRESS",
+        help="train the baselines as Ray tasks, one CPU each (the cluster at ADDRESS, or a local "
+        "instance); the models come back to this machine",
+    )
 
     de = _add_parser(sub, "demo", "reference controllers on every env: JSON, plots, video into a folder")
     de.add_argument("--out", default="results", metavar="DIR", help="output folder")
     de.add_argument("--episodes", type=int, default=20, metavar="N", help="episodes per evaluation")
     de.add_argument("--seed", type=int, default=0, metavar="N", help="seed of the first episode")
-    de.add_argument("--workers", type=int, default=1, metavar="N",
-                    help="split each evaluation's episodes across N processes (the same results, timings excepted; "
-                         "the step times are then those of a machine with every core busy)")
+    de.add_argument(
+        "--workers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="split each evaluation's episodes across N processes (the same results, timings excepted; "
+        "the step times are then those of a machine with every core busy)",
+    )
     return parser
 
 
@@ -228,17 +381,20 @@ def list_envs() -> list[dict[str, Any]]:
         try:
             dt = getattr(env.unwrapped, "dt", None)
             steps = spec.max_episode_steps
-            rows.append({
-                "id": env_id,
-                "observation_shape": list(env.observation_space.shape or ()),
-                "action_shape": list(env.action_space.shape or ()),
-                "control_period_s": None if dt is None else float(dt),
-                "max_episode_steps": steps,
-                "episode_s": None if dt is None or steps is None else round(float(dt) * steps, 6),
-                "policies": [*supported_policies(env), "SB3 .zip"],
-                "wrappers": [e.name for e in registered("wrapper")
-                             if not missing_capabilities(e.name, env, "wrapper")],
-            })
+            rows.append(
+                {
+                    "id": env_id,
+                    "observation_shape": list(env.observation_space.shape or ()),
+                    "action_shape": list(env.action_space.shape or ()),
+                    "control_period_s": None if dt is None else float(dt),
+                    "max_episode_steps": steps,
+                    "episode_s": None if dt is None or steps is None else round(float(dt) * steps, 6),
+                    "policies": [*supported_policies(env), "SB3 .zip"],
+                    "wrappers": [
+                        e.name for e in registered("wrapper") if not missing_capabilities(e.name, env, "wrapper")
+                    ],
+                }
+            )
         finally:
             env.close()
     return rows
@@ -252,8 +408,7 @@ def format_registry() -> str:
     table = [("name", "kind", "supports", "what it does")]
     for entry in registered("policy") + registered("wrapper"):
         supported = supported_env_ids(entry.name, entry.kind)
-        ids = "every env" if set(supported) == set(ENV_IDS) else \
-            ", ".join(i.split("/")[-1] for i in supported) or "-"
+        ids = "every env" if set(supported) == set(ENV_IDS) else ", ".join(i.split("/")[-1] for i in supported) or "-"
         table.append((entry.name, entry.kind, ids, entry.summary))
     from .policies.shipped_models import shipped_models
 
@@ -261,8 +416,9 @@ def format_registry() -> str:
         learner, action, slug = stem.split("-", 2)
         table.append((f"{learner}-{action}", "model", slug, f"shipped learned baseline baselines/models/{stem}.zip"))
     widths = [max(len(r[i]) for r in table) for i in range(3)]
-    return "\n".join("  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3]
-                     for r in table)
+    return "\n".join(
+        "  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3] for r in table
+    )
 
 
 def format_env_list(rows: list[dict[str, Any]]) -> str:
@@ -273,11 +429,18 @@ def format_env_list(rows: list[dict[str, Any]]) -> str:
         dt = row["control_period_s"]
         steps = row["max_episode_steps"]
         episode = f" ({row['episode_s']:g} s)" if row["episode_s"] is not None else ""
-        table.append((row["id"], _format_shape(row["observation_shape"]), _format_shape(row["action_shape"]),
-                      "-" if dt is None else f"{dt * 1e3:g} ms", "-" if steps is None else f"{steps}{episode}",
-                      ", ".join(row["policies"])))
+        table.append(
+            (
+                row["id"],
+                _format_shape(row["observation_shape"]),
+                _format_shape(row["action_shape"]),
+                "-" if dt is None else f"{dt * 1e3:g} ms",
+                "-" if steps is None else f"{steps}{episode}",
+                ", ".join(row["policies"]),
+            )
+        )
     widths = [max(len(r[i]) for r in table) for i in range(len(header) - 1)]
-    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r[:-1], widths)) + "  " + r[-1] for r in table]
+    lines = ["  ".join(cell.ljust(w) for cell, w in zip(r[:-1], widths, strict=False)) + "  " + r[-1] for r in table]
     return "\n".join(lines)
 
 
@@ -289,8 +452,10 @@ def _apply_wrapper(args: argparse.Namespace) -> None:
 
     if args.wrapper is None:
         if args.wrapper_kwargs:
-            raise EvalError("--wrapper-kwargs needs --wrapper (on a wrapped id, pass the options in --env-kwargs "
-                            "as '{\"wrapper_kwargs\": {...}}')")
+            raise EvalError(
+                "--wrapper-kwargs needs --wrapper (on a wrapped id, pass the options in --env-kwargs "
+                "as '{\"wrapper_kwargs\": {...}}')"
+            )
         return
     wrapped = wrapped_env_id(args.env_id, args.wrapper)
     if wrapped is None:
@@ -298,8 +463,10 @@ def _apply_wrapper(args: argparse.Namespace) -> None:
         if args.wrapper not in names:
             raise EvalError(f"unknown wrapper {args.wrapper!r}; valid: {', '.join(names)}")
         here = [name for name in names if wrapped_env_id(args.env_id, name)]
-        raise EvalError(f"no registered {args.wrapper!r} wrapper for {args.env_id}; its wrappers: "
-                        f"{', '.join(here) or 'none'} (the wrapped ids: {', '.join(WRAPPED_ENV_IDS)})")
+        raise EvalError(
+            f"no registered {args.wrapper!r} wrapper for {args.env_id}; its wrappers: "
+            f"{', '.join(here) or 'none'} (the wrapped ids: {', '.join(WRAPPED_ENV_IDS)})"
+        )
     args.env_id = wrapped
     if args.wrapper_kwargs:
         args.env_kwargs = {**args.env_kwargs, "wrapper_kwargs": args.wrapper_kwargs}
@@ -325,23 +492,53 @@ def _train(args: argparse.Namespace) -> None:
         from .learning.sweep import train_seed_sweep
 
         out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
-        sweep = train_seed_sweep(args.env_id, args.algo, steps, out, args.seeds, ray_address=args.ray,
-                                 train_kwargs={"env_kwargs": {**config.env_kwargs, **args.env_kwargs},
-                                               "hyperparameters": config.hyperparameters, "n_envs": n_envs,
-                                               "vec_env": args.vec_env, "policy": config.policy})
-        print(f"success over seeds {sweep['success_mean']:.2f} +- {sweep['success_std']:.2f}, return "
-              f"{sweep['return_mean']:.1f} +- {sweep['return_std']:.1f}")
+        sweep = train_seed_sweep(
+            args.env_id,
+            args.algo,
+            steps,
+            out,
+            args.seeds,
+            ray_address=args.ray,
+            train_kwargs={
+                "env_kwargs": {**config.env_kwargs, **args.env_kwargs},
+                "hyperparameters": config.hyperparameters,
+                "n_envs": n_envs,
+                "vec_env": args.vec_env,
+                "policy": config.policy,
+            },
+        )
+        print(
+            f"success over seeds {sweep['success_mean']:.2f} +- {sweep['success_std']:.2f}, return "
+            f"{sweep['return_mean']:.1f} +- {sweep['return_std']:.1f}"
+        )
         return
     out = args.out or f"runs/{args.algo}_{args.env_id.split('/')[-1]}.zip"
     source = f" from {args.config}" if args.config else ""
-    print(f"training {args.algo.upper()} ({config.policy}{source}) on {args.env_id}: {steps} steps, {n_envs} "
-          f"env(s) ({args.vec_env}), seed {args.seed}")
-    path = train(args.env_id, args.algo, steps, out, seed=args.seed,
-                 env_kwargs={**config.env_kwargs, **args.env_kwargs}, hyperparameters=config.hyperparameters,
-                 progress_bar=not args.no_progress, tensorboard_log=args.tensorboard, n_envs=n_envs,
-                 vec_env=args.vec_env, policy=config.policy, print_every=args.print_every,
-                 torch_threads=args.torch_threads, eval_freq=args.eval_freq, eval_episodes=args.eval_episodes,
-                 eval_seed=args.eval_seed, checkpoint_freq=args.checkpoint_freq, keep=args.keep)
+    print(
+        f"training {args.algo.upper()} ({config.policy}{source}) on {args.env_id}: {steps} steps, {n_envs} "
+        f"env(s) ({args.vec_env}), seed {args.seed}"
+    )
+    path = train(
+        args.env_id,
+        args.algo,
+        steps,
+        out,
+        seed=args.seed,
+        env_kwargs={**config.env_kwargs, **args.env_kwargs},
+        hyperparameters=config.hyperparameters,
+        progress_bar=not args.no_progress,
+        tensorboard_log=args.tensorboard,
+        n_envs=n_envs,
+        vec_env=args.vec_env,
+        policy=config.policy,
+        print_every=args.print_every,
+        torch_threads=args.torch_threads,
+        eval_freq=args.eval_freq,
+        eval_episodes=args.eval_episodes,
+        eval_seed=args.eval_seed,
+        checkpoint_freq=args.checkpoint_freq,
+        keep=args.keep,
+    )
     print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
 
 
@@ -363,16 +560,16 @@ def _baselines(args: argparse.Namespace) -> None:
     if args.list:
         for b in chosen:
             record = b.record()
-            trained = "not trained" if record is None else \
-                f"{record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min"
+            trained = "not trained" if record is None else f"{record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min"
             print(f"{b.name:32s} {b.learner:4s} {b.env_id:45s} {trained}")
         return
     if args.ray is not None:
         from .learning.sweep import train_baselines_on_ray
         from .policies.shipped_models import SHIPPED_MODELS_DIR
 
-        for path in train_baselines_on_ray([b.name for b in chosen], args.models or SHIPPED_MODELS_DIR,
-                                           ray_address=args.ray, steps=args.steps):
+        for path in train_baselines_on_ray(
+            [b.name for b in chosen], args.models or SHIPPED_MODELS_DIR, ray_address=args.ray, steps=args.steps
+        ):
             print(f"wrote {path}")
         return
     for k, b in enumerate(chosen, 1):
@@ -388,30 +585,48 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
     """``train --algo bc``: the config section's keys are :func:`train_behaviour_cloning`'s options."""
     import inspect
 
-    from .learning.behaviour_cloning import train_behaviour_cloning
     from .eval.exceptions import EvalError
+    from .learning.behaviour_cloning import train_behaviour_cloning
 
     if args.steps is not None or args.n_envs is not None:
-        raise EvalError("--steps and --n-envs do not apply to --algo bc: its budget is the config's episodes, "
-                        "dagger_rounds and dagger_episodes")
+        raise EvalError(
+            "--steps and --n-envs do not apply to --algo bc: its budget is the config's episodes, "
+            "dagger_rounds and dagger_episodes"
+        )
     if args.eval_freq is not None or args.checkpoint_freq is not None or args.keep != "last":
-        raise EvalError("--eval-freq, --checkpoint-freq and --keep apply to ppo and sac, not to --algo bc (it "
-                        "reports its learner's success after every DAgger round)")
+        raise EvalError(
+            "--eval-freq, --checkpoint-freq and --keep apply to ppo and sac, not to --algo bc (it "
+            "reports its learner's success after every DAgger round)"
+        )
     options = dict(config.hyperparameters)
-    valid = set(inspect.signature(train_behaviour_cloning).parameters) - {"env_id", "out", "env_kwargs", "seed",
-                                                                          "progress", "log"}
+    valid = set(inspect.signature(train_behaviour_cloning).parameters) - {
+        "env_id",
+        "out",
+        "env_kwargs",
+        "seed",
+        "progress",
+        "log",
+    }
     unknown = sorted(set(options) - valid)
     if unknown:
-        raise EvalError(f"unknown behaviour-cloning option(s) {', '.join(unknown)} in {args.config}; valid: "
-                        f"{', '.join(sorted(valid))}")
+        raise EvalError(
+            f"unknown behaviour-cloning option(s) {', '.join(unknown)} in {args.config}; valid: "
+            f"{', '.join(sorted(valid))}"
+        )
     if "net_arch" in options:
         options["net_arch"] = tuple(options["net_arch"])
     if args.expert is not None:
         options["expert"] = args.expert
     out = args.out or f"runs/bc_{args.env_id.split('/')[-1]}.zip"
     print(f"behaviour cloning on {args.env_id} from {options.get('expert') or 'the reference'}, seed {args.seed}")
-    summary = train_behaviour_cloning(args.env_id, out, env_kwargs={**config.env_kwargs, **args.env_kwargs},
-                                      seed=args.seed, progress=not args.no_progress, **options)
+    summary = train_behaviour_cloning(
+        args.env_id,
+        out,
+        env_kwargs={**config.env_kwargs, **args.env_kwargs},
+        seed=args.seed,
+        progress=not args.no_progress,
+        **options,
+    )
     print(f"wrote {summary.path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {summary.path}")
 
 
@@ -419,9 +634,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     parser = _parser()
     args = parser.parse_args(argv)
-    from .policies import PolicyError
     from .envs.exceptions import EnvConfigError
     from .eval.exceptions import EvalError
+    from .policies import PolicyError
 
     try:
         if args.command in ("eval", "train", "render"):
@@ -433,10 +648,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             from .eval.evaluate import evaluate, format_report
 
             workers = _workers(args)
-            report = evaluate(args.env_id, args.policy, episodes=args.episodes, seed=args.seed,
-                              env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
-                              progress=not args.no_progress, warmup=args.warmup, workers=workers,
-                              retries=args.retries, ray_address=args.ray)
+            report = evaluate(
+                args.env_id,
+                args.policy,
+                episodes=args.episodes,
+                seed=args.seed,
+                env_kwargs=args.env_kwargs,
+                policy_kwargs=args.policy_kwargs,
+                progress=not args.no_progress,
+                warmup=args.warmup,
+                workers=workers,
+                retries=args.retries,
+                ray_address=args.ray,
+            )
             contract = report.to_json()
             print(format_report(contract))
             if args.json_path:
@@ -452,16 +676,34 @@ def main(argv: Sequence[str] | None = None) -> int:
         elif args.command == "render":
             from .eval.video import record_episode
 
-            path, summary = record_episode(args.env_id, args.policy, args.out, seed=args.seed,
-                                           env_kwargs=args.env_kwargs, policy_kwargs=args.policy_kwargs,
-                                           progress=not args.no_progress)
+            path, summary = record_episode(
+                args.env_id,
+                args.policy,
+                args.out,
+                seed=args.seed,
+                env_kwargs=args.env_kwargs,
+                policy_kwargs=args.policy_kwargs,
+                progress=not args.no_progress,
+            )
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
-            return run_bench(args.name, BenchArgs(
-                json_path=args.json_path or f"results/bench_{args.name}.json", seed=args.seed, quick=args.quick,
-                progress=not args.no_progress, rounds=args.rounds, seconds=args.seconds, steps=args.steps,
-                trials=args.trials, episodes=args.episodes, workers=args.workers, ray=args.ray,
-                envs=None if args.envs is None else tuple(args.envs)))
+            return run_bench(
+                args.name,
+                BenchArgs(
+                    json_path=args.json_path or f"results/bench_{args.name}.json",
+                    seed=args.seed,
+                    quick=args.quick,
+                    progress=not args.no_progress,
+                    rounds=args.rounds,
+                    seconds=args.seconds,
+                    steps=args.steps,
+                    trials=args.trials,
+                    episodes=args.episodes,
+                    workers=args.workers,
+                    ray=args.ray,
+                    envs=None if args.envs is None else tuple(args.envs),
+                ),
+            )
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

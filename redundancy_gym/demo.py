@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
-from .eval.json_writer import write_json
 from .eval.evaluate import evaluate, format_report
-from .studies.obstacle_plots import plot_footholds_top_view, plot_swing_trajectories, record_obstacle_walk
+from .eval.json_writer import write_json
 from .eval.plots import plot_clearance, plot_traces
-from .studies.point_to_point import FIG_5_10, plot_point_to_point, rollout_point_to_point
 from .eval.speed_error import plot_speed_error, speed_error_markdown
 from .eval.video import record_episode
+from .studies.obstacle_plots import plot_footholds_top_view, plot_swing_trajectories, record_obstacle_walk
+from .studies.point_to_point import FIG_5_10, plot_point_to_point, rollout_point_to_point
 from .studies.walking_plots import plot_angular_momentum, plot_com_zmp, record_walk
 
 __all__ = ["run_demo"]
@@ -31,8 +30,9 @@ _OBSTACLE_DEMO_STEPS = 2500
 _OBSTACLE_VIDEO_FPS = 25.0
 
 
-def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True,
-             workers: int = 1) -> list[Path]:
+def run_demo(
+    out_dir: str | Path = "results", *, episodes: int = 20, seed: int = 0, progress: bool = True, workers: int = 1
+) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
     crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), the shipped learned
     baselines against every analytic reference (appended to the speed-vs-error report) and the kinematic IKD study;
@@ -49,19 +49,38 @@ def run_demo(out_dir: str | Path = "results", *, episodes: int = 20, seed: int =
     traces = {}
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
-        report = evaluate(_PLANAR, "clik", episodes=episodes, seed=seed, env_kwargs={"obstacle": obstacle},
-                          keep_traces=True, progress=progress, workers=workers)
+        report = evaluate(
+            _PLANAR,
+            "clik",
+            episodes=episodes,
+            seed=seed,
+            env_kwargs={"obstacle": obstacle},
+            keep_traces=True,
+            progress=progress,
+            workers=workers,
+        )
         contract = report.to_json()
         written.append(report.write_json(out / f"planar_reach_clik_{tag}.json"))
         print(f"\n== PlanarReach-v0, clik, obstacle={obstacle}\n{format_report(contract)}")
         traces[f"clik, obstacle={obstacle} (seed {seed})"] = report.traces[0]
-    written.append(plot_traces(traces, out / "planar_reach_clik.png",
-                               title="PlanarReach-v0: velocity-level CLIK (DLS) with joint-limit objective"))
+    written.append(
+        plot_traces(
+            traces,
+            out / "planar_reach_clik.png",
+            title="PlanarReach-v0: velocity-level CLIK (DLS) with joint-limit objective",
+        )
+    )
     written.append(_clearance(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
     for obstacle in (False, True):
         tag = "obstacle" if obstacle else "free"
-        path, _ = record_episode(_PLANAR, "clik", out / f"planar_reach_clik_{tag}.mp4", seed=seed,
-                                 env_kwargs={"obstacle": obstacle}, progress=progress)
+        path, _ = record_episode(
+            _PLANAR,
+            "clik",
+            out / f"planar_reach_clik_{tag}.mp4",
+            seed=seed,
+            env_kwargs={"obstacle": obstacle},
+            progress=progress,
+        )
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
     written.extend(_learned(out, episodes=min(episodes, 5), progress=progress, workers=workers))
@@ -80,17 +99,37 @@ def _agri(out: Path, *, episodes: int, seed: int, progress: bool, workers: int =
     self-collision plot."""
     written = []
     for difficulty in ("medium", "hard"):
-        report = evaluate(_AGRI, "clik", episodes=episodes, seed=seed, env_kwargs={"difficulty": difficulty},
-                          progress=progress, workers=workers)
+        report = evaluate(
+            _AGRI,
+            "clik",
+            episodes=episodes,
+            seed=seed,
+            env_kwargs={"difficulty": difficulty},
+            progress=progress,
+            workers=workers,
+        )
         written.append(report.write_json(out / f"agri_reach_clik_{difficulty}.json"))
         print(f"\n== AgriReach-v0, clik, difficulty={difficulty}\n{format_report(report.to_json())}")
-    path, _ = record_episode(_AGRI, "clik", out / "agri_reach_clik_medium.mp4", seed=seed,
-                             env_kwargs={"difficulty": "medium"}, progress=progress)
+    path, _ = record_episode(
+        _AGRI,
+        "clik",
+        out / "agri_reach_clik_medium.mp4",
+        seed=seed,
+        env_kwargs={"difficulty": "medium"},
+        progress=progress,
+    )
     written.append(path)
-    traces = {label: rollout_point_to_point(FIG_5_10, collision_avoidance=on)
-              for label, on in (("without collision avoidance", False), ("with nullspace collision avoidance", True))}
-    written.append(plot_point_to_point(traces, out / "agri_self_collision_fig_5_10.png",
-                                       "9-DoF arm, point-to-point move (fig. 5.10 analogue), kinematic CLIK"))
+    traces = {
+        label: rollout_point_to_point(FIG_5_10, collision_avoidance=on)
+        for label, on in (("without collision avoidance", False), ("with nullspace collision avoidance", True))
+    }
+    written.append(
+        plot_point_to_point(
+            traces,
+            out / "agri_self_collision_fig_5_10.png",
+            "9-DoF arm, point-to-point move (fig. 5.10 analogue), kinematic CLIK",
+        )
+    )
     return written
 
 
@@ -99,23 +138,42 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool, workers: int 
     one video."""
     written = []
     for speed in (0.5, 0.7):
-        report = evaluate(_BIPED, "walking", episodes=episodes, seed=seed, env_kwargs={"target_speed": speed},
-                          progress=progress, workers=workers)
+        report = evaluate(
+            _BIPED,
+            "walking",
+            episodes=episodes,
+            seed=seed,
+            env_kwargs={"target_speed": speed},
+            progress=progress,
+            workers=workers,
+        )
         written.append(report.write_json(out / f"biped_walk_walking_{speed:.1f}.json"))
         print(f"\n== BipedWalk-v0, walking, target_speed={speed}\n{format_report(report.to_json())}")
     trace = record_walk(0.7, 6.0, seed)
-    written.append(plot_com_zmp(trace, out / "biped_walk_com_zmp.png",
-                                "BipedWalk-v0 at 0.7 m/s: CoM and ZMP, planned and measured"))
+    written.append(
+        plot_com_zmp(
+            trace, out / "biped_walk_com_zmp.png", "BipedWalk-v0 at 0.7 m/s: CoM and ZMP, planned and measured"
+        )
+    )
     walks = {}
     for on in (False, True):
         walk = trace if on else record_walk(0.7, 6.0, seed, momentum_minimization=False)
         peak = float(np.max(np.abs(walk.lz[walk.time > 1.0])))
         label = "W = gamma I + J_Lz^T J_Lz (5.62)" if on else "W = I (no minimization)"
         walks[f"{label}: peak |L_z| {peak:.2f} kg m^2/s"] = walk
-    written.append(plot_angular_momentum(walks, out / "biped_walk_lz_fig_5_11.png",
-                                         "Vertical angular momentum, 0.7 m/s, MuJoCo (fig. 5.11 analogue)"))
-    path, _ = record_episode(_BIPED, "walking", out / "biped_walk_walking.mp4", seed=seed,
-                             env_kwargs={"target_speed": 0.7}, progress=progress)
+    written.append(
+        plot_angular_momentum(
+            walks, out / "biped_walk_lz_fig_5_11.png", "Vertical angular momentum, 0.7 m/s, MuJoCo (fig. 5.11 analogue)"
+        )
+    )
+    path, _ = record_episode(
+        _BIPED,
+        "walking",
+        out / "biped_walk_walking.mp4",
+        seed=seed,
+        env_kwargs={"target_speed": 0.7},
+        progress=progress,
+    )
     written.append(path)
     return written
 
@@ -128,22 +186,44 @@ def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool, wor
     written = []
     for course in ("beam", "triangle"):
         env_kwargs = {"course": course, "max_episode_steps": _OBSTACLE_DEMO_STEPS}
-        report = evaluate(_OBSTACLES, "walking", episodes=episodes, seed=seed, env_kwargs=env_kwargs,
-                          progress=progress, workers=workers)
+        report = evaluate(
+            _OBSTACLES,
+            "walking",
+            episodes=episodes,
+            seed=seed,
+            env_kwargs=env_kwargs,
+            progress=progress,
+            workers=workers,
+        )
         written.append(report.write_json(out / f"biped_obstacles_walking_{course}.json"))
         print(f"\n== BipedObstacles-v0, walking, course={course}\n{format_report(report.to_json())}")
         trace = record_obstacle_walk(course, seed)
         what = "stepping over the 16.1 cm beam" if course == "beam" else "swinging around the 30 cm triangular prism"
-        written.append(plot_swing_trajectories(
-            trace, out / f"biped_obstacles_{course}_swing.png",
-            f"BipedObstacles-v0, {course} course (seed {seed}): swing feet {what}, nominal vs SSTA vs RCA "
-            "(figs. 5.16 / 5.19 analogue)"))
-        written.append(plot_footholds_top_view(
-            trace, out / f"biped_obstacles_{course}_top.png",
-            f"BipedObstacles-v0, {course} course (seed {seed}): footholds and swing paths from above "
-            "(fig. 5.17 analogue)"))
-        path, _ = record_episode(_OBSTACLES, "walking", out / f"biped_obstacles_{course}.mp4", seed=seed,
-                                 env_kwargs=env_kwargs, max_fps=_OBSTACLE_VIDEO_FPS, progress=progress)
+        written.append(
+            plot_swing_trajectories(
+                trace,
+                out / f"biped_obstacles_{course}_swing.png",
+                f"BipedObstacles-v0, {course} course (seed {seed}): swing feet {what}, nominal vs SSTA vs RCA "
+                "(figs. 5.16 / 5.19 analogue)",
+            )
+        )
+        written.append(
+            plot_footholds_top_view(
+                trace,
+                out / f"biped_obstacles_{course}_top.png",
+                f"BipedObstacles-v0, {course} course (seed {seed}): footholds and swing paths from above "
+                "(fig. 5.17 analogue)",
+            )
+        )
+        path, _ = record_episode(
+            _OBSTACLES,
+            "walking",
+            out / f"biped_obstacles_{course}.mp4",
+            seed=seed,
+            env_kwargs=env_kwargs,
+            max_fps=_OBSTACLE_VIDEO_FPS,
+            progress=progress,
+        )
         written.append(path)
     return written
 
@@ -161,15 +241,30 @@ def _predictive(out: Path, *, seed: int) -> list[Path]:
         plot_pseudoenergy,
     )
 
-    written = [plot_pseudoenergy(planar_kinematic_traces(seed=seed), out / "planar_reach_pseudoenergy_fig_5_31.png",
-                                 "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)")]
-    written.append(plot_pseudoenergy(agri_self_collision_traces(), out / "agri_self_collision_pseudoenergy_fig_5_35.png",
-                                     "9-DoF arm, fig. 5.10 self-collision move: revolute joints (fig. 5.35 analogue)",
-                                     joints=slice(1, None)))
+    written = [
+        plot_pseudoenergy(
+            planar_kinematic_traces(seed=seed),
+            out / "planar_reach_pseudoenergy_fig_5_31.png",
+            "PlanarReach, obstacle: local CLIK vs predictive IK (1 s) vs global (fig. 5.31 analogue)",
+        )
+    ]
+    written.append(
+        plot_pseudoenergy(
+            agri_self_collision_traces(),
+            out / "agri_self_collision_pseudoenergy_fig_5_35.png",
+            "9-DoF arm, fig. 5.10 self-collision move: revolute joints (fig. 5.35 analogue)",
+            joints=slice(1, None),
+        )
+    )
     jumps = planar_kinematic_traces(seed=seed, sample_time=JUMP_SAMPLE_TIME, local=False)
-    written.append(plot_joint_velocity(jumps, 1, out / "planar_reach_velocity_jumps_fig_5_33.png",
-                                       f"PlanarReach, MPC 1 s with {JUMP_SAMPLE_TIME:g} s samples: joint 2 "
-                                       "(figs. 5.33/5.34 analogue)"))
+    written.append(
+        plot_joint_velocity(
+            jumps,
+            1,
+            out / "planar_reach_velocity_jumps_fig_5_33.png",
+            f"PlanarReach, MPC 1 s with {JUMP_SAMPLE_TIME:g} s samples: joint 2 (figs. 5.33/5.34 analogue)",
+        )
+    )
     return written
 
 
@@ -187,8 +282,10 @@ def _ikd_study(out: Path, *, progress: bool) -> list[Path]:
     written: list[Path] = []
     for correction, suffix in ((False, ""), (True, "_corrected")):
         config = IkdStudyConfig(correction=correction)
-        print(f"\n== IKD study ({config.plan_name}): 6 steps at 0.5 m/s, 1 ms, IKD k sweep, CLIK, error compensation",
-              flush=True)
+        print(
+            f"\n== IKD study ({config.plan_name}): 6 steps at 0.5 m/s, 1 ms, IKD k sweep, CLIK, error compensation",
+            flush=True,
+        )
         study = run_ikd_study(config, progress=progress)
         print(format_ikd_study(study.to_json()))
         written += [write_ikd_study(study, out / f"ikd_study{suffix}.json"), *plot_ikd_study(study, out, suffix)]
@@ -199,13 +296,25 @@ def _clearance(out: Path, *, episodes: int, seed: int, progress: bool, workers: 
     """Clearance to the obstacle over time, CLIK with and without the nullspace collision objective."""
     traces = {}
     for mode, label in (("off", "clik without collision objective"), ("auto", "clik with collision objective")):
-        report = evaluate(_PLANAR, "clik", episodes=episodes, seed=seed, policy_kwargs={"collision_avoidance": mode},
-                          keep_traces=True, progress=progress, workers=workers)
+        report = evaluate(
+            _PLANAR,
+            "clik",
+            episodes=episodes,
+            seed=seed,
+            policy_kwargs={"collision_avoidance": mode},
+            keep_traces=True,
+            progress=progress,
+            workers=workers,
+        )
         c = report.to_json()
-        traces[f"{label}: collisions {c['collision_rate']:.0%}, min {1e3 * c['min_clearance']:.1f} mm"] = \
-            report.traces[0]
-    return plot_clearance(traces, out / "planar_reach_clearance.png",
-                          f"PlanarReach-v0 with obstacle (seed {seed}; an episode ends at contact)")
+        traces[f"{label}: collisions {c['collision_rate']:.0%}, min {1e3 * c['min_clearance']:.1f} mm"] = report.traces[
+            0
+        ]
+    return plot_clearance(
+        traces,
+        out / "planar_reach_clearance.png",
+        f"PlanarReach-v0 with obstacle (seed {seed}; an episode ends at contact)",
+    )
 
 
 def _learned(out: Path, *, episodes: int, progress: bool, workers: int = 1) -> list[Path]:
@@ -233,30 +342,56 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers
     from .eval.speed_error import plot_speed_error_panels  # noqa: PLC0415
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:
-        return {label: evaluate(env_id, policy, episodes=n, seed=seed, env_kwargs=env_kwargs, policy_kwargs=kwargs,
-                                progress=progress, warmup=1, workers=workers).to_json()
-                for label, (policy, kwargs) in variants.items()}
+        return {
+            label: evaluate(
+                env_id,
+                policy,
+                episodes=n,
+                seed=seed,
+                env_kwargs=env_kwargs,
+                policy_kwargs=kwargs,
+                progress=progress,
+                warmup=1,
+                workers=workers,
+            ).to_json()
+            for label, (policy, kwargs) in variants.items()
+        }
 
-    free = run(_PLANAR, {
-        "clik (dls)": ("clik", {"method": "dls"}),
-        "clik (pseudoinverse)": ("clik", {"method": "pseudoinverse"}),
-        "clik (transpose)": ("clik", {"method": "transpose"}),
-        "clik (dls, no joint-limit objective)": ("clik", {"method": "dls", "joint_limit_weight": 0.0}),
-        "zero": ("zero", {}),
-        "random": ("random", {}),
-    }, {"obstacle": False}, episodes)
-    obstacle = run(_PLANAR, {
-        "clik (local)": ("clik", {}),
-        "predictive (1 s, augmented)": ("predictive", {"horizon": 1.0}),
-        "predictive (1 s, velocity level)": ("predictive", {"horizon": 1.0, "augmented": False}),
-        "global (one solve at the episode start)": ("global", {}),
-    }, {"obstacle": True}, episodes)
-    agri = run(_AGRI, {
-        "clik (local)": ("clik", {}),
-        "predictive (0.15 s)": ("predictive", {"horizon": 0.15}),
-        "predictive (2 s)": ("predictive", {"horizon": 2.0}),
-        "global (one solve at the episode start)": ("global", {}),
-    }, {"difficulty": "medium"}, episodes)
+    free = run(
+        _PLANAR,
+        {
+            "clik (dls)": ("clik", {"method": "dls"}),
+            "clik (pseudoinverse)": ("clik", {"method": "pseudoinverse"}),
+            "clik (transpose)": ("clik", {"method": "transpose"}),
+            "clik (dls, no joint-limit objective)": ("clik", {"method": "dls", "joint_limit_weight": 0.0}),
+            "zero": ("zero", {}),
+            "random": ("random", {}),
+        },
+        {"obstacle": False},
+        episodes,
+    )
+    obstacle = run(
+        _PLANAR,
+        {
+            "clik (local)": ("clik", {}),
+            "predictive (1 s, augmented)": ("predictive", {"horizon": 1.0}),
+            "predictive (1 s, velocity level)": ("predictive", {"horizon": 1.0, "augmented": False}),
+            "global (one solve at the episode start)": ("global", {}),
+        },
+        {"obstacle": True},
+        episodes,
+    )
+    agri = run(
+        _AGRI,
+        {
+            "clik (local)": ("clik", {}),
+            "predictive (0.15 s)": ("predictive", {"horizon": 0.15}),
+            "predictive (2 s)": ("predictive", {"horizon": 2.0}),
+            "global (one solve at the episode start)": ("global", {}),
+        },
+        {"difficulty": "medium"},
+        episodes,
+    )
     walking = {
         "walking (compiled IK)": ("walking", {}),
         "walking (pinocchio IK, backend python)": ("walking", {"backend": "python"}),
@@ -266,37 +401,69 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers
     }
     biped = run(_BIPED, walking, {"target_speed": 0.7}, 2)  # 10 s walks that barely vary with the seed
     sections = [
-        speed_error_markdown(free, "PlanarReach-v0 without obstacle: CLIK variants and trivial policies",
-                             columns=("tracking_rms", "tracking_max"), rank=("tracking_max",)),
-        speed_error_markdown(obstacle, "PlanarReach-v0 with obstacle: local vs predictive vs global IK",
-                             columns=("tracking_rms", "tracking_max"), rank=("pseudoenergy", "tracking_max")),
-        speed_error_markdown(agri, "AgriReach-v0 (medium): local vs predictive vs global IK",
-                             columns=("tracking_rms", "tracking_max", "goal", "time_to_goal"),
-                             rank=("pseudoenergy", "tracking_rms", "goal")),
-        speed_error_markdown(biped, "BipedWalk-v0 at 0.7 m/s: walking reference variants",
-                             columns=("speed", "speed_rms"), rank=("speed", "pseudoenergy")),
+        speed_error_markdown(
+            free,
+            "PlanarReach-v0 without obstacle: CLIK variants and trivial policies",
+            columns=("tracking_rms", "tracking_max"),
+            rank=("tracking_max",),
+        ),
+        speed_error_markdown(
+            obstacle,
+            "PlanarReach-v0 with obstacle: local vs predictive vs global IK",
+            columns=("tracking_rms", "tracking_max"),
+            rank=("pseudoenergy", "tracking_max"),
+        ),
+        speed_error_markdown(
+            agri,
+            "AgriReach-v0 (medium): local vs predictive vs global IK",
+            columns=("tracking_rms", "tracking_max", "goal", "time_to_goal"),
+            rank=("pseudoenergy", "tracking_rms", "goal"),
+        ),
+        speed_error_markdown(
+            biped,
+            "BipedWalk-v0 at 0.7 m/s: walking reference variants",
+            columns=("speed", "speed_rms"),
+            rank=("speed", "pseudoenergy"),
+        ),
     ]
-    intro = ("Times are each policy's own compute time per step on this machine (the simulator excluded), after "
-             "one untimed warm-up episode per controller, so one-time JIT compilation and set-up are not counted. "
-             "The amortized step time is the mean over all steps and includes a plan-once controller's solve at "
-             "every episode's first step, which the last column shows alone; times vary with the machine's load, "
-             "so amortized times within 20 % count as a tie, errors within 5 % (or the stated absolute amount). "
-             "A policy with success rate 0 is marked failed and left out of the fastest / most accurate "
-             "sentences. Plots: amortized time per step against the section's first error "
-             "(`speed_vs_error*.png`).\n\n")
+    intro = (
+        "Times are each policy's own compute time per step on this machine (the simulator excluded), after "
+        "one untimed warm-up episode per controller, so one-time JIT compilation and set-up are not counted. "
+        "The amortized step time is the mean over all steps and includes a plan-once controller's solve at "
+        "every episode's first step, which the last column shows alone; times vary with the machine's load, "
+        "so amortized times within 20 % count as a tie, errors within 5 % (or the stated absolute amount). "
+        "A policy with success rate 0 is marked failed and left out of the fastest / most accurate "
+        "sentences. Plots: amortized time per step against the section's first error "
+        "(`speed_vs_error*.png`).\n\n"
+    )
     text = "\n".join(sections)
     markdown = out / "speed_vs_error.md"
     markdown.parent.mkdir(parents=True, exist_ok=True)
     markdown.write_text("# Speed vs error\n\n" + intro + text)
     print("\n" + text)
-    return [markdown,
-            plot_speed_error(free, out / "speed_vs_error.png",
-                             "PlanarReach-v0 without obstacle: time vs tracking error", error="tracking_max"),
-            plot_speed_error_panels([(obstacle, "PlanarReach-v0 with obstacle", "pseudoenergy"),
-                                     (agri, "AgriReach-v0 (medium)", "pseudoenergy")],
-                                    out / "speed_vs_error_predictive.png",
-                                    "Local vs predictive vs global IK: time vs pseudoenergy"),
-            plot_speed_error(agri, out / "speed_vs_error_agri_tracking.png",
-                             "AgriReach-v0 (medium): time vs tracking error", error="tracking_rms"),
-            plot_speed_error(biped, out / "speed_vs_error_biped.png", "BipedWalk-v0 at 0.7 m/s: time vs speed error",
-                             error="speed")]
+    return [
+        markdown,
+        plot_speed_error(
+            free,
+            out / "speed_vs_error.png",
+            "PlanarReach-v0 without obstacle: time vs tracking error",
+            error="tracking_max",
+        ),
+        plot_speed_error_panels(
+            [
+                (obstacle, "PlanarReach-v0 with obstacle", "pseudoenergy"),
+                (agri, "AgriReach-v0 (medium)", "pseudoenergy"),
+            ],
+            out / "speed_vs_error_predictive.png",
+            "Local vs predictive vs global IK: time vs pseudoenergy",
+        ),
+        plot_speed_error(
+            agri,
+            out / "speed_vs_error_agri_tracking.png",
+            "AgriReach-v0 (medium): time vs tracking error",
+            error="tracking_rms",
+        ),
+        plot_speed_error(
+            biped, out / "speed_vs_error_biped.png", "BipedWalk-v0 at 0.7 m/s: time vs speed error", error="speed"
+        ),
+    ]

@@ -6,18 +6,30 @@ import gymnasium as gym
 
 __all__ = ["BASE_ENV_IDS", "ENV_IDS", "WRAPPED_ENV_IDS", "register_envs", "wrapped_env_id"]
 
-BASE_ENV_IDS: tuple[str, ...] = ("redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0",
-                                 "redundancy_gym/BipedWalk-v0", "redundancy_gym/BipedObstacles-v0")
+BASE_ENV_IDS: tuple[str, ...] = (
+    "redundancy_gym/PlanarReach-v0",
+    "redundancy_gym/AgriReach-v0",
+    "redundancy_gym/BipedWalk-v0",
+    "redundancy_gym/BipedObstacles-v0",
+)
 
 # (wrapped id, base id, wrapper name of the registry in redundancy_gym.policies)
 _WRAPPED: tuple[tuple[str, str, str], ...] = tuple(
     (f"redundancy_gym/{env}-{suffix}-v0", f"redundancy_gym/{env}-v0", wrapper)
-    for env, wrappers in (("PlanarReach", ("TaskSpace", "Nullspace", "Residual")),
-                          ("AgriReach", ("TaskSpace", "Nullspace", "Residual")),
-                          ("BipedWalk", ("Residual", "WalkingCommand")))
+    for env, wrappers in (
+        ("PlanarReach", ("TaskSpace", "Nullspace", "Residual")),
+        ("AgriReach", ("TaskSpace", "Nullspace", "Residual")),
+        ("BipedWalk", ("Residual", "WalkingCommand")),
+    )
     for suffix in wrappers
-    for wrapper in ({"TaskSpace": "task_space", "Nullspace": "nullspace", "Residual": "residual",
-                     "WalkingCommand": "walking_command"}[suffix],)
+    for wrapper in (
+        {
+            "TaskSpace": "task_space",
+            "Nullspace": "nullspace",
+            "Residual": "residual",
+            "WalkingCommand": "walking_command",
+        }[suffix],
+    )
 )
 WRAPPED_ENV_IDS: tuple[str, ...] = tuple(w for w, _, _ in _WRAPPED)
 """The env ids of an env in an action wrapper (``redundancy_gym.wrappers``): ``<Env>-<Wrapper>-v0``."""
@@ -55,9 +67,12 @@ def register_envs() -> None:
         )
     for wrapped, base, wrapper in _WRAPPED:
         if wrapped not in gym.registry:
-            gym.register(id=wrapped, entry_point="redundancy_gym.wrappers.wrapped_env:make_wrapped_env",
-                         max_episode_steps=gym.spec(base).max_episode_steps,
-                         kwargs={"env_id": base, "wrapper": wrapper})
+            gym.register(
+                id=wrapped,
+                entry_point="redundancy_gym.wrappers.wrapped_env:make_wrapped_env",
+                max_episode_steps=gym.spec(base).max_episode_steps,
+                kwargs={"env_id": base, "wrapper": wrapper},
+            )
 
 
 def wrapped_env_id(env_id: str, wrapper: str) -> str | None:

@@ -28,16 +28,29 @@ import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-__all__ = ["HEADLESS_BACKENDS", "RenderBackendError", "can_open_window", "configure_rendering", "guard_triton",
-           "mesa_loaded", "require_render_backend", "require_window", "select_backend"]
+__all__ = [
+    "HEADLESS_BACKENDS",
+    "RenderBackendError",
+    "can_open_window",
+    "configure_rendering",
+    "guard_triton",
+    "mesa_loaded",
+    "require_render_backend",
+    "require_window",
+    "select_backend",
+]
 
 HEADLESS_BACKENDS: tuple[str, ...] = ("egl", "osmesa")
 """The ``MUJOCO_GL`` values that render without a display."""
 
-_INSTALL_HINT = ("install a headless OpenGL library: 'apt-get install libosmesa6' (Debian/Ubuntu; then "
-                 "MUJOCO_GL=osmesa) or 'apt-get install libegl1 libegl-mesa0' (MUJOCO_GL=egl), or run with a display")
-_NVIDIA_EGL_VENDORS = (Path("/usr/share/glvnd/egl_vendor.d/10_nvidia.json"),
-                       Path("/etc/glvnd/egl_vendor.d/10_nvidia.json"))
+_INSTALL_HINT = (
+    "install a headless OpenGL library: 'apt-get install libosmesa6' (Debian/Ubuntu; then "
+    "MUJOCO_GL=osmesa) or 'apt-get install libegl1 libegl-mesa0' (MUJOCO_GL=egl), or run with a display"
+)
+_NVIDIA_EGL_VENDORS = (
+    Path("/usr/share/glvnd/egl_vendor.d/10_nvidia.json"),
+    Path("/etc/glvnd/egl_vendor.d/10_nvidia.json"),
+)
 _DISABLED = ("disable", "disabled", "off", "false", "0")
 _MESA_MAPPINGS = ("libOSMesa", "libLLVM", "swrast_dri", "libgallium", "llvmpipe")
 
@@ -50,9 +63,11 @@ def _has_display(environ: Mapping[str, str]) -> bool:
     return bool(environ.get("DISPLAY") or environ.get("WAYLAND_DISPLAY"))
 
 
-def select_backend(environ: Mapping[str, str] | None = None,
-                   find_library: Callable[[str], str | None] = ctypes.util.find_library,
-                   nvidia_egl: bool | None = None) -> str | None:
+def select_backend(
+    environ: Mapping[str, str] | None = None,
+    find_library: Callable[[str], str | None] = ctypes.util.find_library,
+    nvidia_egl: bool | None = None,
+) -> str | None:
     """The ``MUJOCO_GL`` value to render with, or ``None`` where MuJoCo's own default (GLFW) is right.
 
     An explicit ``MUJOCO_GL`` wins. On Linux without ``DISPLAY``/``WAYLAND_DISPLAY``: ``"egl"`` on an NVIDIA EGL
@@ -109,9 +124,11 @@ def require_render_backend(find_library: Callable[[str], str | None] = ctypes.ut
     if backend == "none":
         raise RenderBackendError(f"no display and no headless OpenGL library found; {_INSTALL_HINT}")
     if backend in _DISABLED:
-        hint = (f"no display and no headless OpenGL library found; {_INSTALL_HINT}"
-                if not _has_display(os.environ) and select_backend({}, find_library) == "none" else
-                f"MUJOCO_GL={backend} disables rendering; unset it or set MUJOCO_GL=egl or osmesa")
+        hint = (
+            f"no display and no headless OpenGL library found; {_INSTALL_HINT}"
+            if not _has_display(os.environ) and select_backend({}, find_library) == "none"
+            else f"MUJOCO_GL={backend} disables rendering; unset it or set MUJOCO_GL=egl or osmesa"
+        )
         raise RenderBackendError(hint)
     if backend == "osmesa" and find_library("OSMesa") is None:
         raise RenderBackendError(f"MUJOCO_GL=osmesa but libOSMesa is not installed; {_INSTALL_HINT}")
@@ -132,8 +149,10 @@ def require_window() -> None:
     Assertion 'monitor != NULL' failed``), so the check must come first.
     """
     if not can_open_window():
-        raise RenderBackendError("render_mode='human' opens a window and needs a display (DISPLAY or "
-                                 "WAYLAND_DISPLAY); on a machine without one use render_mode='rgb_array'")
+        raise RenderBackendError(
+            "render_mode='human' opens a window and needs a display (DISPLAY or "
+            "WAYLAND_DISPLAY); on a machine without one use render_mode='rgb_array'"
+        )
 
 
 def mesa_loaded() -> bool:

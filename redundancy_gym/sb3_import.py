@@ -11,7 +11,9 @@ __all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint"]
 
 def install_hint(extra: str) -> str:
     """How to install an optional extra, for a clone and for an installed package."""
-    return f"pip install -e '.[{extra}]' (in a clone, from the repository root) or pip install 'redundancy-gym[{extra}]'"
+    return (
+        f"pip install -e '.[{extra}]' (in a clone, from the repository root) or pip install 'redundancy-gym[{extra}]'"
+    )
 
 
 LEARN_EXTRA_HINT = install_hint("learn")

@@ -24,8 +24,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["as_real_array", "check_bool", "check_choice", "check_int", "check_range_pair", "check_real", "check_real_array",
-           "describe_range", "is_real"]
+__all__ = [
+    "as_real_array",
+    "check_bool",
+    "check_choice",
+    "check_int",
+    "check_range_pair",
+    "check_real",
+    "check_real_array",
+    "describe_range",
+    "is_real",
+]
 
 ErrorType = type[Exception]
 
@@ -48,8 +57,13 @@ def _fmt(x: float) -> str:
     return f"{x:g}"
 
 
-def describe_range(low: float | None = None, high: float | None = None, low_open: bool = False,
-                   high_open: bool = False, unit: str | None = None) -> str:
+def describe_range(
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str | None = None,
+) -> str:
     """The range in words: ``"> 0"``, ``">= 0"``, ``"in [0, 1]"``, ``"in (0, 0.92)"``, ``"<= 1"``; empty without
     bounds; ``unit`` appended in brackets (``"> 0 [1/s]"``)."""
     if low is not None and high is not None:
@@ -101,9 +115,19 @@ def check_bool(name: str, value: Any, *, error: ErrorType = ValueError) -> bool:
     raise error(f"{name} must be a bool (True or False), got {_show(value)}")
 
 
-def check_real(name: str, value: Any, *, low: float | None = None, high: float | None = None,
-               low_open: bool = False, high_open: bool = False, unit: str | None = None, optional: bool = False,
-               note: str | None = None, error: ErrorType = ValueError) -> float | None:  # type: ignore[return]
+def check_real(
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str | None = None,
+    optional: bool = False,
+    note: str | None = None,
+    error: ErrorType = ValueError,
+) -> float | None:  # type: ignore[return]
     """``value`` as a float when it is a finite real number inside the range; otherwise ``error``.
 
     Args:
@@ -126,13 +150,24 @@ def check_real(name: str, value: Any, *, low: float | None = None, high: float |
     raise error(f"{name} must be {what}{_suffix(note)}, got {_show(value)}")
 
 
-def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None, optional: bool = False,
-              note: str | None = None, error: ErrorType = ValueError) -> int | None:  # type: ignore[return]
+def check_int(
+    name: str,
+    value: Any,
+    *,
+    low: int | None = None,
+    high: int | None = None,
+    optional: bool = False,
+    note: str | None = None,
+    error: ErrorType = ValueError,
+) -> int | None:  # type: ignore[return]
     """``value`` as an int when it is an int (numpy's too; not a bool, not ``3.0``) inside ``[low, high]``."""
     if value is None and optional:
         return None
-    if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
-            and _within(int(value), low, high, False, False):
+    if (
+        isinstance(value, (int, np.integer))
+        and not isinstance(value, (bool, np.bool_))
+        and _within(int(value), low, high, False, False)
+    ):
         return int(value)
     bounds = describe_range(low, high)
     what = f"{'None or ' if optional else ''}an int{' ' + bounds if bounds else ''}"
@@ -150,10 +185,19 @@ def check_choice(name: str, value: Any, choices: Sequence[Any], *, error: ErrorT
     raise error(f"{name} must be one of {listed}; got {_show(value)}")
 
 
-def check_real_array(name: str, value: Any, *, shape: tuple[int, ...] | None = None, low: float | None = None,
-                     high: float | None = None, low_open: bool = False, high_open: bool = False,
-                     unit: str | None = None, what: str | None = None,
-                     error: ErrorType = ValueError) -> NDArray[np.float64]:
+def check_real_array(
+    name: str,
+    value: Any,
+    *,
+    shape: tuple[int, ...] | None = None,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str | None = None,
+    what: str | None = None,
+    error: ErrorType = ValueError,
+) -> NDArray[np.float64]:
     """``value`` as a new float64 array when all its entries are finite real numbers (not strings or bools) in
     the range, with ``shape`` when given.
 
@@ -165,15 +209,19 @@ def check_real_array(name: str, value: Any, *, shape: tuple[int, ...] | None = N
         arr = np.asarray(value)
     except (TypeError, ValueError):  # a ragged sequence
         arr = None
-    ok = (arr is not None and arr.dtype.kind in "iuf" and (shape is None or arr.shape == shape))
+    ok = arr is not None and arr.dtype.kind in "iuf" and (shape is None or arr.shape == shape)
     if ok:
         out = np.array(arr, dtype=np.float64) + 0.0  # + 0.0: no negative zeros (see _finite_float)
-        if np.all(np.isfinite(out)) and (out.size == 0 or _within(float(out.min()), low, None, low_open, False)
-                                         and _within(float(out.max()), None, high, False, high_open)):
+        if np.all(np.isfinite(out)) and (
+            out.size == 0
+            or _within(float(out.min()), low, None, low_open, False)
+            and _within(float(out.max()), None, high, False, high_open)
+        ):
             return out
     if what is None:
-        count = "" if shape is None else (f"{shape[0]} " if len(shape) == 1 else f"a {'x'.join(map(str, shape))} "
-                                                                                 "array of ")
+        count = (
+            "" if shape is None else (f"{shape[0]} " if len(shape) == 1 else f"a {'x'.join(map(str, shape))} array of ")
+        )
         what = f"{count}finite real numbers"
     bounds = describe_range(low, high, low_open, high_open, unit)
     raise error(f"{name} must be {what}{' ' + bounds if bounds else ''}, got {_show(value)}")
@@ -192,10 +240,19 @@ def as_real_array(name: str, value: Any, *, error: ErrorType = ValueError) -> ND
     return np.asarray(given, dtype=np.float64)
 
 
-def check_range_pair(name: str, value: Any, *, low: float | None = None, high: float | None = None,
-                     low_open: bool = False, high_open: bool = False, integer: bool = False,
-                     unit: str | None = None, note: str | None = None,
-                     error: ErrorType = ValueError) -> tuple[float, float] | tuple[int, int]:
+def check_range_pair(
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    integer: bool = False,
+    unit: str | None = None,
+    note: str | None = None,
+    error: ErrorType = ValueError,
+) -> tuple[float, float] | tuple[int, int]:
     """``(low, high)`` of a range argument: two finite real numbers (ints with ``integer``) with
     ``value[0] <= value[1]``, both inside the bounds ``low``/``high``."""
     pair: Sequence[Any] | None = None
@@ -213,5 +270,6 @@ def check_range_pair(name: str, value: Any, *, low: float | None = None, high: f
     kind = "ints" if integer else "finite real numbers"
     bounds = describe_range(low, high, low_open, high_open, unit)
     both = f", both {bounds}" if bounds else ""
-    raise error(f"{name} must be a (low, high) pair of {kind} with low <= high{both}{_suffix(note)}, "
-                f"got {_show(value)}")
+    raise error(
+        f"{name} must be a (low, high) pair of {kind} with low <= high{both}{_suffix(note)}, got {_show(value)}"
+    )

@@ -30,10 +30,22 @@ try:
 except ImportError:  # hypothesis comes with the `test` extra; only tests/fuzz needs it
     pass
 else:
-    _SUPPRESSED = [HealthCheck.too_slow, HealthCheck.function_scoped_fixture, HealthCheck.data_too_large,
-                   HealthCheck.filter_too_much]
-    settings.register_profile("fast", max_examples=30, deadline=None, derandomize=True, database=None, print_blob=True,
-                              suppress_health_check=_SUPPRESSED)
-    settings.register_profile("nightly", max_examples=1000, deadline=None, print_blob=True,
-                              suppress_health_check=_SUPPRESSED)
+    _SUPPRESSED = [
+        HealthCheck.too_slow,
+        HealthCheck.function_scoped_fixture,
+        HealthCheck.data_too_large,
+        HealthCheck.filter_too_much,
+    ]
+    settings.register_profile(
+        "fast",
+        max_examples=30,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        print_blob=True,
+        suppress_health_check=_SUPPRESSED,
+    )
+    settings.register_profile(
+        "nightly", max_examples=1000, deadline=None, print_blob=True, suppress_health_check=_SUPPRESSED
+    )
     settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fast"))

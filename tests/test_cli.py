@@ -96,21 +96,56 @@ def test_list_shows_the_registry_and_each_envs_wrappers(capsys) -> None:
 
 def test_eval_with_a_wrapper_is_the_wrapped_id(tmp_path, capsys) -> None:
     by_flag, by_id = tmp_path / "flag.json", tmp_path / "id.json"
-    assert main(["eval", PLANAR, "--wrapper", "nullspace", "--wrapper-kwargs", '{"objectives": true}', "--policy",
-                 "zero", "--episodes", "1", "--no-progress", "--json", str(by_flag)]) == 0
-    assert main(["eval", "redundancy_gym/PlanarReach-Nullspace-v0", "--env-kwargs",
-                 '{"wrapper_kwargs": {"objectives": true}}', "--policy", "zero", "--episodes", "1", "--no-progress",
-                 "--json", str(by_id)]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                PLANAR,
+                "--wrapper",
+                "nullspace",
+                "--wrapper-kwargs",
+                '{"objectives": true}',
+                "--policy",
+                "zero",
+                "--episodes",
+                "1",
+                "--no-progress",
+                "--json",
+                str(by_flag),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "eval",
+                "redundancy_gym/PlanarReach-Nullspace-v0",
+                "--env-kwargs",
+                '{"wrapper_kwargs": {"objectives": true}}',
+                "--policy",
+                "zero",
+                "--episodes",
+                "1",
+                "--no-progress",
+                "--json",
+                str(by_id),
+            ]
+        )
+        == 0
+    )
     flag, direct = json.loads(by_flag.read_text()), json.loads(by_id.read_text())
     assert flag["env"] == "redundancy_gym/PlanarReach-Nullspace-v0" and flag["success_rate"] == 1.0
     assert flag["episode_return"] == direct["episode_return"]
     assert main(["eval", BIPED, "--wrapper", "nullspace", "--policy", "zero", "--no-progress"]) == 2
-    assert "no registered 'nullspace' wrapper for redundancy_gym/BipedWalk-v0; its wrappers: residual, " \
-           "walking_command" in capsys.readouterr().err
+    assert (
+        "no registered 'nullspace' wrapper for redundancy_gym/BipedWalk-v0; its wrappers: residual, "
+        "walking_command" in capsys.readouterr().err
+    )
     assert main(["eval", PLANAR, "--wrapper", "nulspace", "--policy", "zero", "--no-progress"]) == 2
-    assert "unknown wrapper 'nulspace'; valid: task_space, nullspace, residual, walking_command" in \
-        capsys.readouterr().err
+    assert (
+        "unknown wrapper 'nulspace'; valid: task_space, nullspace, residual, walking_command" in capsys.readouterr().err
+    )
     assert main(["eval", PLANAR, "--wrapper-kwargs", "{}", "--policy", "zero", "--no-progress"]) == 0
-    assert main(["eval", PLANAR, "--wrapper-kwargs", '{"objectives": true}', "--policy", "zero",
-                 "--no-progress"]) == 2
+    assert main(["eval", PLANAR, "--wrapper-kwargs", '{"objectives": true}', "--policy", "zero", "--no-progress"]) == 2
     assert "--wrapper-kwargs needs --wrapper" in capsys.readouterr().err

@@ -45,14 +45,16 @@ FLOORS = ("eval", "learning", "studies", "bench", "demo", "cli")
 def _forbidden(layer: str) -> set[str]:
     core = {"envs", "policies", "wrappers", *FLOORS}
     if layer in FLOORS:
-        ours = set(FLOORS[FLOORS.index(layer) + 1:])
+        ours = set(FLOORS[FLOORS.index(layer) + 1 :])
     else:
-        ours = {"geometry": {"model", "controllers"} | core,
-                "model": {"controllers"} | core,
-                "controllers": core,
-                "envs": {"controllers", "policies", "wrappers", *FLOORS},
-                "policies": {"envs", "wrappers", *FLOORS},
-                "wrappers": set(FLOORS)}[layer]
+        ours = {
+            "geometry": {"model", "controllers"} | core,
+            "model": {"controllers"} | core,
+            "controllers": core,
+            "envs": {"controllers", "policies", "wrappers", *FLOORS},
+            "policies": {"envs", "wrappers", *FLOORS},
+            "wrappers": set(FLOORS),
+        }[layer]
     return {f"redundancy_gym.{name}" for name in ours}
 
 
@@ -86,10 +88,14 @@ def _module_graph() -> dict[str, set[str]]:
     """Module -> the package modules it imports, at import time or lazily inside a function (a lazy import closes
     a circle as well, only later). A module's own parent packages are left out: Python imports them before the
     module anyway (``from .. import validation`` names the parent only to reach its submodule)."""
-    modules = {".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
-               for p in PACKAGE.rglob("*.py")}
-    return {module: {n for n in _imports(path) if n in modules and n != module and not module.startswith(n + ".")}
-            for module, path in modules.items()}
+    modules = {
+        ".".join(p.relative_to(PACKAGE.parent).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in PACKAGE.rglob("*.py")
+    }
+    return {
+        module: {n for n in _imports(path) if n in modules and n != module and not module.startswith(n + ".")}
+        for module, path in modules.items()
+    }
 
 
 def _circles(graph: dict[str, set[str]]) -> list[list[str]]:

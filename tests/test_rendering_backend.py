@@ -45,8 +45,9 @@ def _run(code: str, gl: str | None, timeout: float = 240.0) -> subprocess.Comple
     env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM", "DISPLAY")}
     if gl is not None:
         env["MUJOCO_GL"] = gl
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env, capture_output=True, text=True,
-                          timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)], env=env, capture_output=True, text=True, timeout=timeout
+    )
 
 
 def _backends() -> list[str | None]:
@@ -66,16 +67,14 @@ def test_ppo_learns_in_any_import_order_and_backend(order: str, gl: str | None) 
 @pytest.mark.parametrize("gl", _backends())
 def test_render_then_train_in_one_process(gl: str | None) -> None:
     """A frame rendered (Mesa mapped) before the first optimizer is built (triton imported)."""
-    result = _run("import redundancy_gym, gymnasium as gym\nfrom stable_baselines3 import PPO\n" + _RENDER + _TRAIN,
-                  gl)
+    result = _run("import redundancy_gym, gymnasium as gym\nfrom stable_baselines3 import PPO\n" + _RENDER + _TRAIN, gl)
     assert result.returncode == 0, (result.returncode, result.stderr[-2000:])
     assert "rendered" in result.stdout and "trained" in result.stdout
 
 
 @pytest.mark.skipif(not (HAS_OSMESA or HAS_EGL), reason="no headless OpenGL library on this machine")
 def test_rgb_array_renders_without_mujoco_gl_and_without_display() -> None:
-    result = _run("import redundancy_gym, gymnasium as gym, os\n" + _RENDER + "print(os.environ['MUJOCO_GL'])\n",
-                  None)
+    result = _run("import redundancy_gym, gymnasium as gym, os\n" + _RENDER + "print(os.environ['MUJOCO_GL'])\n", None)
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.split()[-1] in ("osmesa", "egl")
     assert "DISPLAY" not in result.stderr  # GLFW is never tried on a machine without a display

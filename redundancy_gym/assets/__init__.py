@@ -45,12 +45,30 @@ PLANAR_OBSTACLE_GEOM = "obstacle"
 
 AGRI_ARM_XML = ASSETS_DIR / "agri_arm.xml"
 """The CROPS-like 9-DoF arm (robot and lift column only; scenes add the crop row)."""
-AGRI_ARM_JOINTS = ("lift", "shoulder_yaw", "shoulder_pitch", "elbow_pitch", "forearm_roll", "wrist_pitch", "wrist_yaw",
-                   "wrist_pitch2", "tool_roll")
+AGRI_ARM_JOINTS = (
+    "lift",
+    "shoulder_yaw",
+    "shoulder_pitch",
+    "elbow_pitch",
+    "forearm_roll",
+    "wrist_pitch",
+    "wrist_yaw",
+    "wrist_pitch2",
+    "tool_roll",
+)
 AGRI_ARM_SERVOS = tuple(f"servo_{j}" for j in AGRI_ARM_JOINTS)
 AGRI_ARM_FEEDFORWARDS = tuple(f"feedforward_{j}" for j in AGRI_ARM_JOINTS)
-AGRI_ARM_GEOMS = ("column", "carriage_geom", "shoulder_geom", "upper_arm_geom", "elbow_geom", "forearm_geom",
-                  "wrist_geom", "gripper_geom", "camera_geom")
+AGRI_ARM_GEOMS = (
+    "column",
+    "carriage_geom",
+    "shoulder_geom",
+    "upper_arm_geom",
+    "elbow_geom",
+    "forearm_geom",
+    "wrist_geom",
+    "gripper_geom",
+    "camera_geom",
+)
 """The arm's swept-sphere geoms (sphere -> PSS, capsule -> LSS), the world-fixed lift column first."""
 AGRI_ARM_TCP = "tcp"
 
@@ -58,14 +76,28 @@ BIPED_XML = ASSETS_DIR / "biped.xml"
 """The Lola-like biped (robot only, free-floating base; scenes add the ground)."""
 _LEG = ("hip_yaw", "hip_roll", "hip_pitch", "knee", "ankle_pitch", "ankle_roll", "toe")
 _ARM = ("shoulder_pitch", "shoulder_roll", "elbow")
-BIPED_JOINTS = (tuple(f"r_{j}" for j in _LEG) + tuple(f"l_{j}" for j in _LEG) + ("pelvis_roll", "pelvis_yaw")
-                + tuple(f"r_{j}" for j in _ARM) + tuple(f"l_{j}" for j in _ARM))
+BIPED_JOINTS = (
+    tuple(f"r_{j}" for j in _LEG)
+    + tuple(f"l_{j}" for j in _LEG)
+    + ("pelvis_roll", "pelvis_yaw")
+    + tuple(f"r_{j}" for j in _ARM)
+    + tuple(f"l_{j}" for j in _ARM)
+)
 """The 22 actuated joints in model order: right leg, left leg (7 each), pelvis roll and yaw, right and left arm."""
 BIPED_SERVOS = tuple(f"servo_{j}" for j in BIPED_JOINTS)
 BIPED_HARDWARE_LIMITS_DEG: dict[str, tuple[float, float]] = {
-    "pelvis_yaw": (-19.4, 19.4), "pelvis_roll": (-15.1, 14.7), "hip_yaw": (-26.1, 24.7), "hip_roll": (-34.5, 40.4),
-    "hip_pitch": (-92.0, 44.9), "knee": (-4.5, 120.0), "ankle_roll": (-23.5, 23.9), "ankle_pitch": (-49.0, 43.8),
-    "toe": (-49.5, 14.3), "shoulder_pitch": (-170.0, 60.0), "shoulder_roll": (-120.0, 1.5), "elbow": (-120.0, 5.0),
+    "pelvis_yaw": (-19.4, 19.4),
+    "pelvis_roll": (-15.1, 14.7),
+    "hip_yaw": (-26.1, 24.7),
+    "hip_roll": (-34.5, 40.4),
+    "hip_pitch": (-92.0, 44.9),
+    "knee": (-4.5, 120.0),
+    "ankle_roll": (-23.5, 23.9),
+    "ankle_pitch": (-49.0, 43.8),
+    "toe": (-49.5, 14.3),
+    "shoulder_pitch": (-170.0, 60.0),
+    "shoulder_roll": (-120.0, 1.5),
+    "elbow": (-120.0, 5.0),
 }
 """Lola's measured right-side hardware limits [deg]; the left side mirrors roll and yaw (ranges negated)."""
 BIPED_SOFT_LIMIT_MARGIN = 5.0 * 3.141592653589793 / 180.0

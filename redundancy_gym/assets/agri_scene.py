@@ -61,8 +61,26 @@ def agri_scene_xml(capacity: Mapping[str, int]) -> str:
         world.add("camera", name=name, pos=list(position), xyaxes=look_at_xyaxes(position, target))
     for category in POOL_CATEGORIES:
         for k in range(int(capacity.get(category, 0))):
-            world.add("geom", name=pool_geom_name(category, k), type=_POOL_TYPE[category], size=[0.01, 0.01, 0.01],
-                      pos=[0.0, 0.0, -10.0], rgba=[0, 0, 0, 0], contype=0, conaffinity=0, group=2)
-    world.add("geom", name="approach_line", type="capsule", size=[0.003, 0.075], pos=[0.0, 0.0, -10.0],
-              rgba=[1.0, 0.75, 0.05, 0.6], contype=0, conaffinity=0, group=3)
+            world.add(
+                "geom",
+                name=pool_geom_name(category, k),
+                type=_POOL_TYPE[category],
+                size=[0.01, 0.01, 0.01],
+                pos=[0.0, 0.0, -10.0],
+                rgba=[0, 0, 0, 0],
+                contype=0,
+                conaffinity=0,
+                group=2,
+            )
+    world.add(
+        "geom",
+        name="approach_line",
+        type="capsule",
+        size=[0.003, 0.075],
+        pos=[0.0, 0.0, -10.0],
+        rgba=[1.0, 0.75, 0.05, 0.6],
+        contype=0,
+        conaffinity=0,
+        group=3,
+    )
     return root.to_xml_string()

@@ -35,20 +35,47 @@ def biped_scene_xml(*, floor_friction: float = 1.0, floor_size: float = 60.0) ->
         floor_size: half size of the floor [m].
     """
     root = mjcf.from_path(str(BIPED_XML))
-    add_backdrop(root, floor_size=floor_size, floor_colors=((0.86, 0.87, 0.89), (0.55, 0.6, 0.66)),
-                 floor_repeat=int(2 * floor_size), floor_lines=(0.3, 0.33, 0.38))
+    add_backdrop(
+        root,
+        floor_size=floor_size,
+        floor_colors=((0.86, 0.87, 0.89), (0.55, 0.6, 0.66)),
+        floor_repeat=int(2 * floor_size),
+        floor_lines=(0.3, 0.33, 0.38),
+    )
     world = root.worldbody
-    world.add("geom", name=BIPED_FLOOR_GEOM, type="plane", size=[floor_size, floor_size, 0.1], contype=1,
-              conaffinity=1, friction=[floor_friction, 0.02, 0.001], rgba=[0, 0, 0, 0])
+    world.add(
+        "geom",
+        name=BIPED_FLOOR_GEOM,
+        type="plane",
+        size=[floor_size, floor_size, 0.1],
+        contype=1,
+        conaffinity=1,
+        friction=[floor_friction, 0.02, 0.001],
+        rgba=[0, 0, 0, 0],
+    )
     headlight = root.visual.headlight
     headlight.ambient, headlight.diffuse, headlight.specular = [0.35, 0.35, 0.35], [0.45, 0.45, 0.45], [0.1, 0.1, 0.1]
     # the robot file's spot light lights a fixed patch of floor the robot walks out of
     root.find("light", "key_light").remove()
     pelvis = root.find("body", "pelvis")
-    pelvis.add("light", name="key_light", mode="trackcom", directional="true", castshadow="true",
-               pos=[-1.0, -1.5, 4.0], dir=[0.25, 0.35, -1.0], diffuse=[0.55, 0.55, 0.55], specular=[0.2, 0.2, 0.2])
-    pelvis.add("camera", name=BIPED_CAMERA, mode="trackcom", pos=list(_CAMERA_OFFSET),
-               xyaxes=look_at_xyaxes(_CAMERA_OFFSET, _CAMERA_AIM))
+    pelvis.add(
+        "light",
+        name="key_light",
+        mode="trackcom",
+        directional="true",
+        castshadow="true",
+        pos=[-1.0, -1.5, 4.0],
+        dir=[0.25, 0.35, -1.0],
+        diffuse=[0.55, 0.55, 0.55],
+        specular=[0.2, 0.2, 0.2],
+    )
+    pelvis.add(
+        "camera",
+        name=BIPED_CAMERA,
+        mode="trackcom",
+        pos=list(_CAMERA_OFFSET),
+        xyaxes=look_at_xyaxes(_CAMERA_OFFSET, _CAMERA_AIM),
+    )
     return root.to_xml_string()
 
 

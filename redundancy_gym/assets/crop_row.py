@@ -89,8 +89,18 @@ class CropRow:
         """The parts :meth:`whole_blades` of ``keep`` (a blade stays whole), in their order; stems stay listed
         in ``stem_base``/``stem_top``."""
         k = self.whole_blades(keep)
-        return CropRow(self.category[k], self.kind[k], self.vertices[k], self.radius[k], self.plant[k], self.hard[k],
-                       self.stem_base, self.stem_top, self.near_row, self.blade[k])
+        return CropRow(
+            self.category[k],
+            self.kind[k],
+            self.vertices[k],
+            self.radius[k],
+            self.plant[k],
+            self.hard[k],
+            self.stem_base,
+            self.stem_top,
+            self.near_row,
+            self.blade[k],
+        )
 
     def stem_point(self, plant: int, z: float) -> NDArray[np.float64]:
         """Point of stem ``plant`` at height ``z`` [m]."""
@@ -98,13 +108,23 @@ class CropRow:
         return a + (z - a[2]) / (b[2] - a[2]) * (b - a)
 
 
-def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, row_gap: float = 0.45,
-                      row_length: float = 8.0, stem_spacing: tuple[float, float] = (0.25, 0.35),
-                      stem_diameter: tuple[float, float] = (0.010, 0.015), stem_height: float = STEM_HEIGHT,
-                      fruit_diameter: tuple[float, float] = (0.08, 0.09), fruits_per_stem: tuple[int, int] = (1, 3),
-                      harvest_band: tuple[float, float] = (0.9, 1.3), leaves_per_stem: int = 6,
-                      leaf_length: tuple[float, float] = LEAF_LENGTH, shoot_probability: float = 0.25,
-                      cluster_spread: float = 0.08) -> CropRow:
+def generate_crop_row(
+    rng: np.random.Generator,
+    *,
+    row_distance: float = 1.05,
+    row_gap: float = 0.45,
+    row_length: float = 8.0,
+    stem_spacing: tuple[float, float] = (0.25, 0.35),
+    stem_diameter: tuple[float, float] = (0.010, 0.015),
+    stem_height: float = STEM_HEIGHT,
+    fruit_diameter: tuple[float, float] = (0.08, 0.09),
+    fruits_per_stem: tuple[int, int] = (1, 3),
+    harvest_band: tuple[float, float] = (0.9, 1.3),
+    leaves_per_stem: int = 6,
+    leaf_length: tuple[float, float] = LEAF_LENGTH,
+    shoot_probability: float = 0.25,
+    cluster_spread: float = 0.08,
+) -> CropRow:
     """A seeded double row of pepper plants centred on ``y = 0``.
 
     Vectorized over plants (a reset draws a row every episode, so this is on the training loop's path). Parts
@@ -127,8 +147,11 @@ def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, r
     n_max = int(np.ceil(row_length / stem_spacing[0])) + 2
     ys, near = [], []
     for row in range(2):
-        y = -half + rng.uniform(0.0, stem_spacing[1]) + np.concatenate(
-            [[0.0], np.cumsum(rng.uniform(stem_spacing[0], stem_spacing[1], n_max - 1))])
+        y = (
+            -half
+            + rng.uniform(0.0, stem_spacing[1])
+            + np.concatenate([[0.0], np.cumsum(rng.uniform(stem_spacing[0], stem_spacing[1], n_max - 1))])
+        )
         y = y[y <= half]
         ys.append(y)
         near.append(np.full(y.size, row == 0))
@@ -155,8 +178,10 @@ def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, r
     n_f = f_plant.size
     f_z = np.clip(z_center[f_plant] + rng.uniform(-0.5, 0.5, n_f) * cluster_spread, low, high)
     f_radius = 0.5 * rng.uniform(fruit_diameter[0], fruit_diameter[1], n_f)
-    f_center = (stem_point(f_plant, f_z + f_radius) + (f_radius + 0.012)[:, None] * horizontal(
-        rng.uniform(0.0, 2.0 * np.pi, n_f))) - np.column_stack([np.zeros((n_f, 2)), 0.8 * f_radius])
+    f_center = (
+        stem_point(f_plant, f_z + f_radius)
+        + (f_radius + 0.012)[:, None] * horizontal(rng.uniform(0.0, 2.0 * np.pi, n_f))
+    ) - np.column_stack([np.zeros((n_f, 2)), 0.8 * f_radius])
     # leaves: a petiole out of the stem, then a drooping kite-shaped blade of two triangles
     l_plant = np.repeat(np.arange(n_stems), leaves_per_stem)
     n_l = l_plant.size
@@ -188,13 +213,30 @@ def generate_crop_row(rng: np.random.Generator, *, row_distance: float = 1.05, r
 
     counts = {"stem": n_stems, "fruit": n_f, "petiole": n_l, "leaf": 2 * n_l, "shoot": n_s}
     category = np.repeat(np.array(list(counts)), list(counts.values()))
-    vertices = np.concatenate([segments(base, top), np.repeat(f_center[:, None], 3, axis=1), segments(start, end),
-                               blades, segments(s_start, s_end)])
-    radius = np.concatenate([stem_radius, f_radius, np.full(n_l, PETIOLE_RADIUS), np.full(2 * n_l, LEAF_RADIUS),
-                             s_radius])
+    vertices = np.concatenate(
+        [
+            segments(base, top),
+            np.repeat(f_center[:, None], 3, axis=1),
+            segments(start, end),
+            blades,
+            segments(s_start, s_end),
+        ]
+    )
+    radius = np.concatenate(
+        [stem_radius, f_radius, np.full(n_l, PETIOLE_RADIUS), np.full(2 * n_l, LEAF_RADIUS), s_radius]
+    )
     plant = np.concatenate([np.arange(n_stems), f_plant, l_plant, np.repeat(l_plant, 2), s_plant])
     blade = np.full(category.size, -1, dtype=np.int64)
     blade[category == "leaf"] = np.repeat(np.arange(n_l), 2)
-    return CropRow(category, np.array([_KIND_CODE[c] for c in counts]).repeat(list(counts.values())), vertices,
-                   radius, plant, np.array([_HARD[c] for c in counts]).repeat(list(counts.values())), base, top,
-                   near_row, blade)
+    return CropRow(
+        category,
+        np.array([_KIND_CODE[c] for c in counts]).repeat(list(counts.values())),
+        vertices,
+        radius,
+        plant,
+        np.array([_HARD[c] for c in counts]).repeat(list(counts.values())),
+        base,
+        top,
+        near_row,
+        blade,
+    )

@@ -73,12 +73,18 @@ FOOT_PATH_Y = (FOOT_Y - 0.5 * SOLE_WIDTH, FOOT_Y + 0.5 * SOLE_WIDTH)
 """The band of y [m] the left sole sweeps when walking straight, (0.015, 0.165); the right one's is mirrored."""
 
 STEP_OVER: dict[str, tuple[float, float]] = {
-    "height": (0.04, 0.18), "depth": (0.04, 0.15), "width": (0.30, 0.80), "lateral_offset": (-0.05, 0.05),
+    "height": (0.04, 0.18),
+    "depth": (0.04, 0.15),
+    "width": (0.30, 0.80),
+    "lateral_offset": (-0.05, 0.05),
 }
 """Ranges [m] of a random course's ``step_over`` obstacles: boxes (beams) across the path, centred on y = 0 plus a
 uniform lateral offset; depth along x, width along y."""
 SWING_AROUND: dict[str, tuple[float, float]] = {
-    "height": (0.20, 0.40), "width": (0.05, 0.13), "overlap": (0.0, 0.10), "prism_depth": (0.06, 0.12),
+    "height": (0.20, 0.40),
+    "width": (0.05, 0.13),
+    "overlap": (0.0, 0.10),
+    "prism_depth": (0.06, 0.12),
 }
 """Ranges [m] of a random course's ``swing_around`` obstacles: tall narrow triangular prisms or posts (cylinders,
 ``width`` their diameter), half each, beside one foot (left or right, half each) and reaching into that foot's path
@@ -86,12 +92,16 @@ SWING_AROUND: dict[str, tuple[float, float]] = {
 exactly ``overlap`` (drawn first; the width is then drawn from ``[max(0.05, overlap), 0.13]`` so that it can).
 The prisms' depth along x (the monograph's triangle is 0.09 m deep) is ``prism_depth``."""
 BESIDE: dict[str, tuple[float, float]] = {
-    "height": (0.10, 0.40), "gap": (0.05, 0.30), "depth": (0.10, 0.40), "width": (0.10, 0.30),
+    "height": (0.10, 0.40),
+    "gap": (0.05, 0.30),
+    "depth": (0.10, 0.40),
+    "width": (0.10, 0.30),
 }
 """Ranges [m] of a random course's ``beside`` obstacles: boxes left or right of the path (half each), ``gap``
 outside the outer edge of the sole bands (|y| >= 0.165 + gap: clear of both soles' paths by at least 5 cm)."""
-MAX_OBSTACLE_DEPTH = max(STEP_OVER["depth"][1], SWING_AROUND["prism_depth"][1], SWING_AROUND["width"][1],
-                         BESIDE["depth"][1])
+MAX_OBSTACLE_DEPTH = max(
+    STEP_OVER["depth"][1], SWING_AROUND["prism_depth"][1], SWING_AROUND["width"][1], BESIDE["depth"][1]
+)
 """Largest extent [m] along x of a random course's obstacles (0.4 m, the deepest ``beside`` block)."""
 
 
@@ -143,12 +153,14 @@ class Obstacle:
     def __post_init__(self) -> None:
         check_choice("shape", self.shape, OBSTACLE_SHAPES)
         check_choice("kind", self.kind, OBSTACLE_KINDS)
-        center = check_real_array("center", self.center, shape=(3,), unit="m", what="an (x, y, z) triple of finite "
-                                  "real numbers")
+        center = check_real_array(
+            "center", self.center, shape=(3,), unit="m", what="an (x, y, z) triple of finite real numbers"
+        )
         n = 2 if self.shape == "cylinder" else 3
         what = ("(radius, height)" if n == 2 else "(depth, width, height)") + " of finite real numbers"
-        size = check_real_array("size", self.size, shape=(n,), low=0.0, low_open=True, unit="m",
-                                what=f"a {self.shape}'s {what}")
+        size = check_real_array(
+            "size", self.size, shape=(n,), low=0.0, low_open=True, unit="m", what=f"a {self.shape}'s {what}"
+        )
         # plain tuples of floats: the obstacle stays hashable and two courses compare by value
         object.__setattr__(self, "center", tuple(float(v) for v in center))
         object.__setattr__(self, "size", tuple(float(v) for v in size))
@@ -193,19 +205,30 @@ class Obstacle:
         and never with other world geoms. Coloured by :data:`OBSTACLE_COLORS` of its ``kind``.
         """
         half = math.sin(0.5 * self.yaw), math.cos(0.5 * self.yaw)
-        common = {"name": name, "pos": _text(self.center), "quat": _text((half[1], 0.0, 0.0, half[0])),
-                  "rgba": _text(OBSTACLE_COLORS[self.kind]), "contype": "1", "conaffinity": "1", "condim": "3",
-                  "friction": "1 0.02 0.001"}
+        common = {
+            "name": name,
+            "pos": _text(self.center),
+            "quat": _text((half[1], 0.0, 0.0, half[0])),
+            "rgba": _text(OBSTACLE_COLORS[self.kind]),
+            "contype": "1",
+            "conaffinity": "1",
+            "condim": "3",
+            "friction": "1 0.02 0.001",
+        }
         if self.shape == "box":
-            return MjcfParts((), (MjcfElement("geom", {**common, "type": "box",
-                                                       "size": _text([0.5 * v for v in self.size])}),))
+            return MjcfParts(
+                (), (MjcfElement("geom", {**common, "type": "box", "size": _text([0.5 * v for v in self.size])}),)
+            )
         if self.shape == "cylinder":
             radius, height = self.size
-            return MjcfParts((), (MjcfElement("geom", {**common, "type": "cylinder",
-                                                       "size": _text((radius, 0.5 * height))}),))
+            return MjcfParts(
+                (), (MjcfElement("geom", {**common, "type": "cylinder", "size": _text((radius, 0.5 * height))}),)
+            )
         mesh = f"{name}_prism"
-        return MjcfParts((MjcfElement("mesh", {"name": mesh, "vertex": _text(self._local_vertices().reshape(-1))}),),
-                         (MjcfElement("geom", {**common, "type": "mesh", "mesh": mesh}),))
+        return MjcfParts(
+            (MjcfElement("mesh", {"name": mesh, "vertex": _text(self._local_vertices().reshape(-1))}),),
+            (MjcfElement("geom", {**common, "type": "mesh", "mesh": mesh}),),
+        )
 
     # ------------------------------------------------------------------ (b) swept-sphere model
     def volumes(self) -> tuple[SSV, ...]:
@@ -229,8 +252,9 @@ class Obstacle:
             return (LSS((x, y, z - 0.5 * height), (x, y, z + 0.5 * height), radius),)
         if self.shape == "prism":
             depth, width, height = self.size
-            triangle = np.array([[0.0, -0.5 * width, -0.5 * height], [0.0, 0.5 * width, -0.5 * height],
-                                 [0.0, 0.0, 0.5 * height]])
+            triangle = np.array(
+                [[0.0, -0.5 * width, -0.5 * height], [0.0, 0.5 * width, -0.5 * height], [0.0, 0.0, 0.5 * height]]
+            )
             return (TSS(*self.to_world(triangle), radius=0.5 * depth),)
         extents = np.asarray(self.size)
         thin = int(np.argmin(extents))  # the rectangle is perpendicular to the smallest extent
@@ -274,9 +298,13 @@ def triangle_course() -> tuple[Obstacle, ...]:
     return (Obstacle("prism", (BEAM_POSITION, 0.0, 0.15), (0.09, 0.13, 0.30), 0.0, "swing_around"),)
 
 
-def random_course(rng: np.random.Generator, *, n_obstacles: tuple[int, int] = (3, 6),
-                  spacing: tuple[float, float] = (1.2, 3.0),
-                  first_obstacle_distance: float = 1.5) -> tuple[Obstacle, ...]:
+def random_course(
+    rng: np.random.Generator,
+    *,
+    n_obstacles: tuple[int, int] = (3, 6),
+    spacing: tuple[float, float] = (1.2, 3.0),
+    first_obstacle_distance: float = 1.5,
+) -> tuple[Obstacle, ...]:
     """A seeded random course along +x: obstacles of the three classes of :data:`COURSE_KINDS`, drawn uniformly.
 
     Every draw comes from ``rng`` (the same generator state gives the same course). The ranges of each class are

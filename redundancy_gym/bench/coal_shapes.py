@@ -11,7 +11,7 @@ from typing import Any
 import coal
 import numpy as np
 
-from ..geometry import SSV, LSS, PSS, TSS
+from ..geometry import LSS, PSS, SSV, TSS
 
 __all__ = ["coal_distance", "coal_request", "to_coal"]
 

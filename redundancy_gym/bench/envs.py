@@ -28,20 +28,26 @@ import gymnasium as gym
 import numpy as np
 from tqdm.auto import tqdm
 
-from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS
 from ..eval.machine import finish_machine_info, machine_info
-from .timing import CLOCK, alternating_rounds
+from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS
 from .exceptions import BenchError
+from .timing import CLOCK, alternating_rounds
 
 __all__ = ["PEERS", "VARIANTS", "format_envs_bench", "run_envs_bench"]
 
 PEERS = ("Pusher-v5", "Humanoid-v5")
-VARIANTS = {"redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriReach-v0", {"prune": False},
-                                                           "agri_prune_speedup")}
+VARIANTS = {
+    "redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriReach-v0", {"prune": False}, "agri_prune_speedup")
+}
 """label -> (env id, gym.make kwargs, name of the ratio base rate / variant rate)."""
-_SHORT = {"redundancy_gym/PlanarReach-v0": "planar", "redundancy_gym/AgriReach-v0": "agri",
-          "redundancy_gym/BipedWalk-v0": "biped", "redundancy_gym/BipedObstacles-v0": "biped_obstacles",
-          "Pusher-v5": "pusher", "Humanoid-v5": "humanoid"}
+_SHORT = {
+    "redundancy_gym/PlanarReach-v0": "planar",
+    "redundancy_gym/AgriReach-v0": "agri",
+    "redundancy_gym/BipedWalk-v0": "biped",
+    "redundancy_gym/BipedObstacles-v0": "biped_obstacles",
+    "Pusher-v5": "pusher",
+    "Humanoid-v5": "humanoid",
+}
 
 
 class _Stepper:
@@ -92,8 +98,9 @@ class _Stepper:
         self.env.close()
 
 
-def wrapped_rates(wrapped: Sequence[str], *, seconds: float, rounds: int, seed: int,
-                  progress: bool = False) -> dict[str, dict[str, Any]]:
+def wrapped_rates(
+    wrapped: Sequence[str], *, seconds: float, rounds: int, seed: int, progress: bool = False
+) -> dict[str, dict[str, Any]]:
     """Steps/s of every wrapped id against its raw env, measured in alternating windows (raw, wrapped / wrapped,
     raw / ...; a warm-up pair, then ``rounds`` pairs of ``seconds / rounds`` each): the ratio wrapped / raw per
     round, its median, range and spread, so that a slow moment of the machine hits both alike."""
@@ -102,24 +109,39 @@ def wrapped_rates(wrapped: Sequence[str], *, seconds: float, rounds: int, seed: 
         raw_id = gym.spec(wrapped_id).kwargs["env_id"]
         raw, inner = _Stepper(raw_id, seed), _Stepper(wrapped_id, seed)
         try:
-            timed = alternating_rounds({"raw": lambda: raw.window(seconds / rounds),
-                                        "wrapped": lambda: inner.window(seconds / rounds)}, rounds=rounds)
+            timed = alternating_rounds(
+                {"raw": lambda: raw.window(seconds / rounds), "wrapped": lambda: inner.window(seconds / rounds)},
+                rounds=rounds,
+            )
         finally:
             raw.close()
             inner.close()
         stats = timed.ratio("raw", "wrapped")  # time per step raw / wrapped = rate wrapped / raw
-        out[wrapped_id] = {"raw": raw_id, "raw_steps_per_second": 1.0 / timed.median("raw"),
-                           "steps_per_second": 1.0 / timed.median("wrapped"),
-                           "ratio": stats.median, "ratio_min": stats.min, "ratio_max": stats.max,
-                           "ratio_spread": stats.spread, "rounds": rounds}
+        out[wrapped_id] = {
+            "raw": raw_id,
+            "raw_steps_per_second": 1.0 / timed.median("raw"),
+            "steps_per_second": 1.0 / timed.median("wrapped"),
+            "ratio": stats.median,
+            "ratio_min": stats.min,
+            "ratio_max": stats.max,
+            "ratio_spread": stats.spread,
+            "rounds": rounds,
+        }
     return out
 
 
-def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] = BASE_ENV_IDS,
-                   peers: Sequence[str] = PEERS, env_kwargs: dict[str, dict[str, Any]] | None = None,
-                   variants: dict[str, tuple[str, dict[str, Any], str]] | None = None,
-                   wrapped: Sequence[str] = WRAPPED_ENV_IDS, rounds: int = 7,
-                   progress: bool = True) -> dict[str, Any]:
+def run_envs_bench(
+    *,
+    seconds: float = 3.0,
+    seed: int = 0,
+    envs: Sequence[str] = BASE_ENV_IDS,
+    peers: Sequence[str] = PEERS,
+    env_kwargs: dict[str, dict[str, Any]] | None = None,
+    variants: dict[str, tuple[str, dict[str, Any], str]] | None = None,
+    wrapped: Sequence[str] = WRAPPED_ENV_IDS,
+    rounds: int = 7,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Steps per second of ``envs``, ``peers`` and ``variants`` (zero policy, ``seconds`` each, in ``rounds``
     alternating windows), and of every ``wrapped`` id against its raw env (:func:`wrapped_rates`); returns the report.
 
@@ -151,8 +173,12 @@ def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] =
         for label, env_id, kwargs in runs:
             steppers[label] = _Stepper(env_id, seed, kwargs)
         window = seconds / rounds
-        timed = alternating_rounds({label: (lambda s=stepper: s.window(window)) for label, stepper in steppers.items()},
-                                   rounds=rounds, progress=progress, desc="bench envs rounds")
+        timed = alternating_rounds(
+            {label: (lambda s=stepper: s.window(window)) for label, stepper in steppers.items()},
+            rounds=rounds,
+            progress=progress,
+            desc="bench envs rounds",
+        )
     finally:
         for stepper in steppers.values():
             stepper.close()
@@ -160,8 +186,14 @@ def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] =
     for label, stepper in steppers.items():
         steps, resets, elapsed = stepper.totals(timed.warmup)
         rate = 1.0 / timed.median(label)
-        rates[label] = {"steps_per_second": rate, "steps": steps, "resets": resets, "seconds": elapsed,
-                        "control_period": stepper.dt, "sim_seconds_per_second": rate * stepper.dt}
+        rates[label] = {
+            "steps_per_second": rate,
+            "steps": steps,
+            "resets": resets,
+            "seconds": elapsed,
+            "control_period": stepper.dt,
+            "sim_seconds_per_second": rate * stepper.dt,
+        }
     stats = {}
     for ours in envs:
         for peer in peers:
@@ -170,12 +202,25 @@ def run_envs_bench(*, seconds: float = 3.0, seed: int = 0, envs: Sequence[str] =
         stats[name] = timed.ratio(label, env_id)
     ratios = {name: s.median for name, s in stats.items()}
     wrapped_report = wrapped_rates(wrapped, seconds=seconds, rounds=rounds, seed=seed, progress=progress)
-    return {"benchmark": "envs", "seed": seed, "seconds_per_env": seconds, "policy": "zero",
-            "timing": {"rounds": rounds, "warmup": timed.warmup, "window_s": window, "clock": CLOCK,
-                       "orders": timed.orders},
-            "machine": finish_machine_info(machine),
-            "envs": rates, "ratios": ratios, "ratio_rounds": {name: s.to_json() for name, s in stats.items()},
-            "wrapped": wrapped_report, **ratios}
+    return {
+        "benchmark": "envs",
+        "seed": seed,
+        "seconds_per_env": seconds,
+        "policy": "zero",
+        "timing": {
+            "rounds": rounds,
+            "warmup": timed.warmup,
+            "window_s": window,
+            "clock": CLOCK,
+            "orders": timed.orders,
+        },
+        "machine": finish_machine_info(machine),
+        "envs": rates,
+        "ratios": ratios,
+        "ratio_rounds": {name: s.to_json() for name, s in stats.items()},
+        "wrapped": wrapped_report,
+        **ratios,
+    }
 
 
 def format_envs_bench(report: dict[str, Any]) -> str:
@@ -184,11 +229,16 @@ def format_envs_bench(report: dict[str, Any]) -> str:
     for env_id, r in report["envs"].items():
         lines.append(f"{env_id} | {r['steps_per_second']:.0f} | {r['resets']}")
     spread = report.get("ratio_rounds", {})
-    lines += [f"{name} = {value:.2f}" + (f"  (rounds {spread[name]['min']:.2f}-{spread[name]['max']:.2f})"
-                                         if name in spread else "") for name, value in report["ratios"].items()]
+    lines += [
+        f"{name} = {value:.2f}"
+        + (f"  (rounds {spread[name]['min']:.2f}-{spread[name]['max']:.2f})" if name in spread else "")
+        for name, value in report["ratios"].items()
+    ]
     if report.get("wrapped"):
         lines += ["", "wrapped env | steps/s | raw steps/s | wrapped / raw (median, range over rounds)", "-" * 72]
         for env_id, r in report["wrapped"].items():
-            lines.append(f"{env_id} | {r['steps_per_second']:.0f} | {r['raw_steps_per_second']:.0f} | "
-                         f"{r['ratio']:.2f} ({r['ratio_min']:.2f}-{r['ratio_max']:.2f})")
+            lines.append(
+                f"{env_id} | {r['steps_per_second']:.0f} | {r['raw_steps_per_second']:.0f} | "
+                f"{r['ratio']:.2f} ({r['ratio_min']:.2f}-{r['ratio_max']:.2f})"
+            )
     return "\n".join(lines)

@@ -33,12 +33,12 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
-from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
-from ..geometry import LSS, PSS, Segment, distance
-from ..sb3_import import install_hint
 from ..eval.machine import finish_machine_info, machine_info
-from .timing import CLOCK, TimedPasses, alternating_rounds, timed_call
+from ..geometry import LSS, PSS, Segment, distance
+from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
+from ..sb3_import import install_hint
 from .exceptions import BenchError
+from .timing import CLOCK, TimedPasses, alternating_rounds, timed_call
 
 __all__ = ["format_ik_bench", "run_ik_bench"]
 
@@ -95,9 +95,12 @@ class _MinkSolver:
         self.posture = mink.PostureTask(model, cost=1e-2)
         self.layout = u.observation_layout
         self.posture.set_target(first[self.layout["q"]])
-        self.collision = mink.CollisionAvoidanceLimit(model, [(arm, obstacles), (arm, arm)],
-                                                      collision_detection_distance=policy.config.collision_activation,
-                                                      minimum_distance_from_collisions=0.005)
+        self.collision = mink.CollisionAvoidanceLimit(
+            model,
+            [(arm, obstacles), (arm, arm)],
+            collision_detection_distance=policy.config.collision_activation,
+            minimum_distance_from_collisions=0.005,
+        )
         self.limits = [mink.ConfigurationLimit(model), self.collision]
         self.dt = float(u.dt)
 
@@ -117,8 +120,9 @@ class _MinkSolver:
             current = self.configuration.get_transform_frame_to_world(self.tcp, "site")
             rotation = _turn_x_onto(current.rotation().as_matrix(), target[3:])
             self.frame.set_target(mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), target[:3]))
-            mink.solve_ik(self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6,
-                          limits=self.limits)
+            mink.solve_ik(
+                self.configuration, [self.frame, self.posture], self.dt, "daqp", damping=1e-6, limits=self.limits
+            )
 
         return timed_call(solve)[1]
 
@@ -143,8 +147,14 @@ def _turn_x_onto(rotation: NDArray[np.float64], axis: NDArray[np.float64]) -> ND
     return turn @ rotation
 
 
-def _scaling(policy: GraspClikPolicy, observations: list[NDArray[np.float64]], layout: dict[str, slice],
-             counts: Sequence[int], seed: int, progress: bool) -> list[dict[str, float]]:
+def _scaling(
+    policy: GraspClikPolicy,
+    observations: list[NDArray[np.float64]],
+    layout: dict[str, slice],
+    counts: Sequence[int],
+    seed: int,
+    progress: bool,
+) -> list[dict[str, float]]:
     """Our control step time along ``observations`` with the ``n`` hard parts of a long crop row nearest to
     the arm's workspace as obstacles, for each ``n`` in ``counts``."""
     big = gym.make(ENV_ID, prune=False, row_length=60.0)
@@ -165,8 +175,13 @@ def _scaling(policy: GraspClikPolicy, observations: list[NDArray[np.float64]], l
             target, velocity = policy.path(float(obs[layout["time"]][0]))
             q = obs[layout["q"]]
             times.append(timed_call(lambda: controller.step(q, target, velocity))[1] * 1e6)
-        out.append({"primitives": int(n), "step_us_median": float(np.median(times)),
-                    "step_us_p90": float(np.percentile(times, 90))})
+        out.append(
+            {
+                "primitives": int(n),
+                "step_us_median": float(np.median(times)),
+                "step_us_p90": float(np.percentile(times, 90)),
+            }
+        )
     return out
 
 
@@ -175,8 +190,15 @@ def _volume(row: Any, k: int) -> PSS | LSS:
     return PSS(v[0], r) if row.kind[k] == 0 else LSS(v[0], v[1], r)
 
 
-def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3, rounds: int = 15,
-                 scaling: Sequence[int] = SCALING, progress: bool = True) -> dict[str, Any]:
+def run_ik_bench(
+    *,
+    seed: int = 0,
+    difficulty: str = "medium",
+    repeats: int = 3,
+    rounds: int = 15,
+    scaling: Sequence[int] = SCALING,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Time our CLIK control step against mink's ``solve_ik`` on the same states in alternating rounds; returns the
     report.
 
@@ -207,26 +229,48 @@ def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3,
             solver = _MinkSolver(env, policy, observations[0])
         except ImportError as exc:
             raise BenchError(f"bench ik needs mink and daqp: {install_hint('bench')}") from exc
-        ours, mink = TimedPasses(_ours_step(policy), observations, repeats), TimedPasses(solver.step, observations, repeats)
-        timed = alternating_rounds({"ours": ours, "mink": mink}, rounds=rounds, progress=progress,
-                                   desc="bench ik rounds")
-        scale = _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) \
-            if scaling else []
+        ours, mink = (
+            TimedPasses(_ours_step(policy), observations, repeats),
+            TimedPasses(solver.step, observations, repeats),
+        )
+        timed = alternating_rounds(
+            {"ours": ours, "mink": mink}, rounds=rounds, progress=progress, desc="bench ik rounds"
+        )
+        scale = (
+            _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) if scaling else []
+        )
     finally:
         env.close()
     ours_median, ours_p90 = ours.summary_us(timed.warmup)
     mink_median, mink_p90 = mink.summary_us(timed.warmup)
     stats = timed.ratio("ours", "mink")
     return {
-        "benchmark": "ik", "env": ENV_ID, "difficulty": difficulty, "seed": seed, "states": len(observations),
+        "benchmark": "ik",
+        "env": ENV_ID,
+        "difficulty": difficulty,
+        "seed": seed,
+        "states": len(observations),
         "repeats": repeats,
-        "timing": {"rounds": rounds, "warmup": timed.warmup, "sample": "one pass over the states", "clock": CLOCK,
-                   "order": "ours, mink; reversed every other round"},
+        "timing": {
+            "rounds": rounds,
+            "warmup": timed.warmup,
+            "sample": "one pass over the states",
+            "clock": CLOCK,
+            "order": "ours, mink; reversed every other round",
+        },
         "machine": finish_machine_info(machine),
-        "ours": {"step_us_median": ours_median, "step_us_p90": ours_p90,
-                 "first_step_us": first[0], "volume_pairs": pairs},
-        "mink": {"step_us_median": mink_median, "step_us_p90": mink_p90,
-                 "geom_pairs": solver.geom_pairs, "solver": "daqp"},
+        "ours": {
+            "step_us_median": ours_median,
+            "step_us_p90": ours_p90,
+            "first_step_us": first[0],
+            "volume_pairs": pairs,
+        },
+        "mink": {
+            "step_us_median": mink_median,
+            "step_us_p90": mink_p90,
+            "geom_pairs": solver.geom_pairs,
+            "solver": "daqp",
+        },
         "ratio_vs_mink": stats.median,
         "ratio_vs_mink_rounds": stats.to_json(),
         "scaling": scale,
@@ -236,10 +280,12 @@ def run_ik_bench(*, seed: int = 0, difficulty: str = "medium", repeats: int = 3,
 def format_ik_bench(report: dict[str, Any]) -> str:
     """A plain-text summary."""
     o, m = report["ours"], report["mink"]
-    lines = [f"{report['env']} ({report['difficulty']}, seed {report['seed']}): {report['states']} states",
-             f"ours  median {o['step_us_median']:.1f} us  p90 {o['step_us_p90']:.1f} us  ({o['volume_pairs']} pairs)",
-             f"mink  median {m['step_us_median']:.1f} us  p90 {m['step_us_p90']:.1f} us  ({m['geom_pairs']} pairs)",
-             f"ratio_vs_mink = {report['ratio_vs_mink']:.3f}" + _rounds_text(report.get("ratio_vs_mink_rounds"))]
+    lines = [
+        f"{report['env']} ({report['difficulty']}, seed {report['seed']}): {report['states']} states",
+        f"ours  median {o['step_us_median']:.1f} us  p90 {o['step_us_p90']:.1f} us  ({o['volume_pairs']} pairs)",
+        f"mink  median {m['step_us_median']:.1f} us  p90 {m['step_us_p90']:.1f} us  ({m['geom_pairs']} pairs)",
+        f"ratio_vs_mink = {report['ratio_vs_mink']:.3f}" + _rounds_text(report.get("ratio_vs_mink_rounds")),
+    ]
     if report["scaling"]:
         lines.append("primitives | step median [us] | p90 [us]")
         lines += [f"{s['primitives']} | {s['step_us_median']:.1f} | {s['step_us_p90']:.1f}" for s in report["scaling"]]

@@ -17,15 +17,22 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..sb3_import import import_stable_baselines3
-from ..learning.baselines import Baseline, baselines
 from ..eval.evaluate import evaluate
-from .exceptions import BenchError
 from ..eval.speed_error import METRICS, plot_speed_error
+from ..learning.baselines import Baseline, baselines
 from ..learning.training_record import machine
+from ..sb3_import import import_stable_baselines3
+from .exceptions import BenchError
 
-__all__ = ["HELD_OUT_SEED", "LEARNED_SETTINGS", "LearnedSetting", "format_learned_bench", "learned_markdown",
-           "plot_learned_bench", "run_learned_bench"]
+__all__ = [
+    "HELD_OUT_SEED",
+    "LEARNED_SETTINGS",
+    "LearnedSetting",
+    "format_learned_bench",
+    "learned_markdown",
+    "plot_learned_bench",
+    "run_learned_bench",
+]
 
 HELD_OUT_SEED = 20000
 """First seed of the table's episodes."""
@@ -61,32 +68,52 @@ class LearnedSetting:
 
 
 LEARNED_SETTINGS: tuple[LearnedSetting, ...] = (
-    LearnedSetting("planar_reach", "PlanarReach-v0 with obstacle", "redundancy_gym/PlanarReach-v0", {"obstacle": True},
-                   {"clik": ("clik", {}),
-                    "predictive (1 s)": ("predictive", {"horizon": 1.0}),
-                    "global": ("global", {})},
-                   ("tracking_rms", "tracking_max"),
-                   extra=(("min_clearance", "min clearance [mm]", 1e3),)),
-    LearnedSetting("agri_reach", "AgriReach-v0 (medium)", "redundancy_gym/AgriReach-v0", {"difficulty": "medium"},
-                   {"clik": ("clik", {}),
-                    "predictive (0.15 s)": ("predictive", {"horizon": 0.15}),
-                    "predictive (2 s)": ("predictive", {"horizon": 2.0}),
-                    "global": ("global", {})},
-                   ("tracking_rms", "goal"),
-                   extra=(("min_clearance", "min clearance [mm]", 1e3),
-                          ("leaf_contacts", "leaf contacts [leaf-steps/episode]", 1.0))),
-    LearnedSetting("biped_walk", "BipedWalk-v0 at 0.5 m/s", "redundancy_gym/BipedWalk-v0", {"target_speed": 0.5},
-                   {"walking": ("walking", {}),
-                    "walking (IKD)": ("walking", {"ik": "ikd"})},
-                   ("speed", "speed_rms"), rate="fall_rate",
-                   extra=(("forward_speed", "forward speed [m/s]", 1.0),)),
-    LearnedSetting("biped_obstacles", "BipedObstacles-v0, random courses", "redundancy_gym/BipedObstacles-v0",
-                   {"course": "random"},
-                   {"walking": ("walking", {}),
-                    "walking (IKD)": ("walking", {"ik": "ikd"})},
-                   ("speed",), rate="fall_rate",
-                   extra=(("obstacle_contact_rate", "obstacle contact rate", 1.0),
-                          ("forward_speed", "forward speed [m/s]", 1.0))),
+    LearnedSetting(
+        "planar_reach",
+        "PlanarReach-v0 with obstacle",
+        "redundancy_gym/PlanarReach-v0",
+        {"obstacle": True},
+        {"clik": ("clik", {}), "predictive (1 s)": ("predictive", {"horizon": 1.0}), "global": ("global", {})},
+        ("tracking_rms", "tracking_max"),
+        extra=(("min_clearance", "min clearance [mm]", 1e3),),
+    ),
+    LearnedSetting(
+        "agri_reach",
+        "AgriReach-v0 (medium)",
+        "redundancy_gym/AgriReach-v0",
+        {"difficulty": "medium"},
+        {
+            "clik": ("clik", {}),
+            "predictive (0.15 s)": ("predictive", {"horizon": 0.15}),
+            "predictive (2 s)": ("predictive", {"horizon": 2.0}),
+            "global": ("global", {}),
+        },
+        ("tracking_rms", "goal"),
+        extra=(
+            ("min_clearance", "min clearance [mm]", 1e3),
+            ("leaf_contacts", "leaf contacts [leaf-steps/episode]", 1.0),
+        ),
+    ),
+    LearnedSetting(
+        "biped_walk",
+        "BipedWalk-v0 at 0.5 m/s",
+        "redundancy_gym/BipedWalk-v0",
+        {"target_speed": 0.5},
+        {"walking": ("walking", {}), "walking (IKD)": ("walking", {"ik": "ikd"})},
+        ("speed", "speed_rms"),
+        rate="fall_rate",
+        extra=(("forward_speed", "forward speed [m/s]", 1.0),),
+    ),
+    LearnedSetting(
+        "biped_obstacles",
+        "BipedObstacles-v0, random courses",
+        "redundancy_gym/BipedObstacles-v0",
+        {"course": "random"},
+        {"walking": ("walking", {}), "walking (IKD)": ("walking", {"ik": "ikd"})},
+        ("speed",),
+        rate="fall_rate",
+        extra=(("obstacle_contact_rate", "obstacle contact rate", 1.0), ("forward_speed", "forward speed [m/s]", 1.0)),
+    ),
 )
 """The table's envs, in its order."""
 
@@ -104,9 +131,16 @@ def _models_for(setting: LearnedSetting, found: Sequence[Baseline]) -> list[Base
     return [b for b in found if b.name.split("-", 2)[2] == setting.key]
 
 
-def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Sequence[str] | None = None,
-                      progress: bool = True, log: Callable[[str], None] | None = print,
-                      workers: int = 1, ray_address: str | None = None) -> dict[str, Any]:
+def run_learned_bench(
+    *,
+    episodes: int = 20,
+    seed: int = HELD_OUT_SEED,
+    envs: Sequence[str] | None = None,
+    progress: bool = True,
+    log: Callable[[str], None] | None = print,
+    workers: int = 1,
+    ray_address: str | None = None,
+) -> dict[str, Any]:
     """Evaluate every reference and every shipped model of each env on ``episodes`` episodes from ``seed``.
 
     Each policy runs one untimed warm-up episode first (JIT compilation and model loading are not counted). A
@@ -139,7 +173,8 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
         untrained: list[str] = []
         runs: list[tuple[str, str, str, dict[str, Any], dict[str, Any], Baseline | None]] = [
             (label, setting.env_id, name, kwargs, setting.env_kwargs, None)
-            for label, (name, kwargs) in setting.references.items()]
+            for label, (name, kwargs) in setting.references.items()
+        ]
         for b in _models_for(setting, found):
             if not b.model.is_file():
                 untrained.append(b.name)
@@ -149,20 +184,44 @@ def run_learned_bench(*, episodes: int = 20, seed: int = HELD_OUT_SEED, envs: Se
         for label, env_id, policy, kwargs, env_kwargs, baseline in runs:
             if log is not None:
                 log(f"{setting.title}: {label} on {env_id}")
-            report = evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs,
-                              policy_kwargs=kwargs, progress=progress, warmup=1, workers=workers,
-                              ray_address=ray_address).to_json()
-            row: dict[str, Any] = {"kind": "analytic" if baseline is None else "learned", "report": report,
-                                   "periods_per_step": int(env_kwargs.get("command_period", 1))}
+            report = evaluate(
+                env_id,
+                policy,
+                episodes=episodes,
+                seed=seed,
+                env_kwargs=env_kwargs,
+                policy_kwargs=kwargs,
+                progress=progress,
+                warmup=1,
+                workers=workers,
+                ray_address=ray_address,
+            ).to_json()
+            row: dict[str, Any] = {
+                "kind": "analytic" if baseline is None else "learned",
+                "report": report,
+                "periods_per_step": int(env_kwargs.get("command_period", 1)),
+            }
             if baseline is not None:
                 record = baseline.record()
                 row["model"] = f"baselines/models/{baseline.name}.zip"
-                row["training"] = None if record is None else {
-                    "learner": record.learner, "env_steps": record.env_steps, "wall_s": record.wall_s,
-                    "cpu_s": record.cpu_s}
+                row["training"] = (
+                    None
+                    if record is None
+                    else {
+                        "learner": record.learner,
+                        "env_steps": record.env_steps,
+                        "wall_s": record.wall_s,
+                        "cpu_s": record.cpu_s,
+                    }
+                )
             rows[label] = row
-        table["envs"][setting.key] = {"title": setting.title, "env_id": setting.env_id,
-                                      "env_kwargs": setting.env_kwargs, "rows": rows, "untrained": untrained}
+        table["envs"][setting.key] = {
+            "title": setting.title,
+            "env_id": setting.env_id,
+            "env_kwargs": setting.env_kwargs,
+            "rows": rows,
+            "untrained": untrained,
+        }
     return table
 
 
@@ -185,8 +244,9 @@ def _per_period(rows: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     for label, row in rows.items():
         k = int(row.get("periods_per_step", 1))
         report = dict(row["report"])
-        report["step_time_us"] = {key: (value / k if key != "steps" else value)
-                                  for key, value in report["step_time_us"].items()}
+        report["step_time_us"] = {
+            key: (value / k if key != "steps" else value) for key, value in report["step_time_us"].items()
+        }
         out[label] = report
     return out
 
@@ -199,11 +259,15 @@ def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
     reports = _per_period(rows)
     best_success = max(r["success_rate"] for r in reports.values())
     lowest_rate = min(float(r.get(setting.rate) or 0.0) for r in reports.values())
-    good = {label: r for label, r in reports.items()
-            if r["success_rate"] >= best_success - SUCCESS_SLACK
-            and float(r.get(setting.rate) or 0.0) <= lowest_rate + RATE_SLACK}
+    good = {
+        label: r
+        for label, r in reports.items()
+        if r["success_rate"] >= best_success - SUCCESS_SLACK
+        and float(r.get(setting.rate) or 0.0) <= lowest_rate + RATE_SLACK
+    }
     metric = METRICS[setting.errors[0]]
     rate = _RATE_NAMES[setting.rate]
+
     def median(label: str) -> float:
         return float(reports[label]["step_time_us"]["median"])
 
@@ -216,15 +280,23 @@ def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
         limit = max(best * (1.0 + ERROR_TIE), best + metric.abs_tol)
         tied = sorted((label for label, v in errors.items() if v <= limit), key=median)
         accurate = tied[0]  # of the equally accurate, the fastest
-    text = [f"Candidates (success within {SUCCESS_SLACK:.2f} of the best, {best_success:.2f}, and {rate} rate within "
-            f"{RATE_SLACK:.2f} of the lowest): {', '.join(f'**{label}**' for label in good)}."]
+    text = [
+        f"Candidates (success within {SUCCESS_SLACK:.2f} of the best, {best_success:.2f}, and {rate} rate within "
+        f"{RATE_SLACK:.2f} of the lowest): {', '.join(f'**{label}**' for label in good)}."
+    ]
     t = reports[fastest]["step_time_us"]
     text.append(f"For speed pick **{fastest}** ({_fmt(t['median'])} us median, p99 {_fmt(t['p99'])} us per step).")
     if accurate is not None:
-        others = f"; {', '.join(tied[1:])} {'is' if len(tied) == 2 else 'are'} as accurate (within " \
-                 f"{ERROR_TIE:.0%}) but slower" if len(tied) > 1 else ""
-        text.append(f"For accuracy pick **{accurate}** ({metric.label} {_fmt(metric.value(reports[accurate]))} "
-                    f"{metric.unit}{others}).")
+        others = (
+            f"; {', '.join(tied[1:])} {'is' if len(tied) == 2 else 'are'} as accurate (within "
+            f"{ERROR_TIE:.0%}) but slower"
+            if len(tied) > 1
+            else ""
+        )
+        text.append(
+            f"For accuracy pick **{accurate}** ({metric.label} {_fmt(metric.value(reports[accurate]))} "
+            f"{metric.unit}{others})."
+        )
     learned = [label for label, row in rows.items() if row["kind"] == "learned"]
     if learned:
         kept = [label for label in learned if label in good]
@@ -232,45 +304,77 @@ def _picks(setting: LearnedSetting, rows: Mapping[str, Any]) -> str:
         if kept:
             text.append(f"Learned policies that match the references' success: {', '.join(kept)}.")
         if lost:
-            text.append("Learned policies that do not: " + ", ".join(
-                f"{label} (success {reports[label]['success_rate']:.2f}, {rate} "
-                f"{float(reports[label].get(setting.rate) or 0.0):.2f})" for label in lost) + ".")
+            text.append(
+                "Learned policies that do not: "
+                + ", ".join(
+                    f"{label} (success {reports[label]['success_rate']:.2f}, {rate} "
+                    f"{float(reports[label].get(setting.rate) or 0.0):.2f})"
+                    for label in lost
+                )
+                + "."
+            )
     return " ".join(text)
 
 
 def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym bench learned") -> str:
     """The table as markdown: one section per env with a row per policy and the paragraph of what to pick."""
-    skipped = [f"The learned models are left out: {table['learned_skipped']}.", ""] \
-        if table.get("learned_skipped") else []
-    out = skipped + [f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
-           f"per policy; `{command}`). Step time: the policy's compute per control period (an action wrapper's "
-           "controller included, the simulation excluded; an action held for k periods counts 1/k of its time) after "
-           "one warm-up episode. Training: environment steps and CPU time "
-           "of the run that produced the shipped model (`baselines/models/<name>.json`).", ""]
+    skipped = (
+        [f"The learned models are left out: {table['learned_skipped']}.", ""] if table.get("learned_skipped") else []
+    )
+    out = skipped + [
+        f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
+        f"per policy; `{command}`). Step time: the policy's compute per control period (an action wrapper's "
+        "controller included, the simulation excluded; an action held for k periods counts 1/k of its time) after "
+        "one warm-up episode. Training: environment steps and CPU time "
+        "of the run that produced the shipped model (`baselines/models/<name>.json`).",
+        "",
+    ]
     for key, env in table["envs"].items():
         setting = _setting(key)
         metrics = [METRICS[name] for name in setting.errors]
         rate = _RATE_NAMES[setting.rate]
-        head = (["policy", "kind", "success", rate] + [m.heading for m in metrics]
-                + [label for _, label, _ in setting.extra]
-                + ["pseudoenergy [rad^2/s]", "return", "step time median / p99 [us]", "training steps",
-                   "training CPU [min]"])
-        out += [f"### {env['title']}", "", f"`{env['env_id']}`, env kwargs `{json.dumps(env['env_kwargs'])}`.", "",
-                "| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+        head = (
+            ["policy", "kind", "success", rate]
+            + [m.heading for m in metrics]
+            + [label for _, label, _ in setting.extra]
+            + [
+                "pseudoenergy [rad^2/s]",
+                "return",
+                "step time median / p99 [us]",
+                "training steps",
+                "training CPU [min]",
+            ]
+        )
+        out += [
+            f"### {env['title']}",
+            "",
+            f"`{env['env_id']}`, env kwargs `{json.dumps(env['env_kwargs'])}`.",
+            "",
+            "| " + " | ".join(head) + " |",
+            "|" + " --- |" * len(head),
+        ]
         display = _per_period(env["rows"])
         for label, row in env["rows"].items():
             r = display[label]
             training = row.get("training")
-            cells = ([label, row["kind"], f"{r['success_rate']:.2f}", f"{float(r.get(setting.rate) or 0.0):.2f}"]
-                     + [_fmt(m.value(r)) for m in metrics]
-                     + [_fmt(None if r.get(k) is None else float(r[k]) * scale) for k, _, scale in setting.extra]
-                     + [_fmt(r["pseudoenergy"]), f"{r['episode_return']:.1f}",
-                        f"{_fmt(r['step_time_us']['median'])} / {_fmt(r['step_time_us']['p99'])}",
-                        "-" if training is None else f"{training['env_steps']:,}",
-                        "-" if training is None else f"{training['cpu_s'] / 60.0:.1f}"])
+            cells = (
+                [label, row["kind"], f"{r['success_rate']:.2f}", f"{float(r.get(setting.rate) or 0.0):.2f}"]
+                + [_fmt(m.value(r)) for m in metrics]
+                + [_fmt(None if r.get(k) is None else float(r[k]) * scale) for k, _, scale in setting.extra]
+                + [
+                    _fmt(r["pseudoenergy"]),
+                    f"{r['episode_return']:.1f}",
+                    f"{_fmt(r['step_time_us']['median'])} / {_fmt(r['step_time_us']['p99'])}",
+                    "-" if training is None else f"{training['env_steps']:,}",
+                    "-" if training is None else f"{training['cpu_s'] / 60.0:.1f}",
+                ]
+            )
             out.append("| " + " | ".join(cells) + " |")
-        own = [f"{label} `{json.dumps(row['report']['env_kwargs'])}`" for label, row in env["rows"].items()
-               if row["report"]["env_kwargs"] != env["env_kwargs"]]
+        own = [
+            f"{label} `{json.dumps(row['report']['env_kwargs'])}`"
+            for label, row in env["rows"].items()
+            if row["report"]["env_kwargs"] != env["env_kwargs"]
+        ]
         if own:
             out += ["", f"Run with the env kwargs they were trained with: {', '.join(own)}."]
         if env.get("untrained"):
@@ -293,7 +397,13 @@ def plot_learned_bench(table: Mapping[str, Any], directory: str | Path, prefix: 
         setting = _setting(key)
         reports = _per_period(env["rows"])
         learned = {label for label, row in env["rows"].items() if row["kind"] == "learned"}
-        written.append(plot_speed_error(reports, Path(directory) / f"{prefix}{key}.png",
-                                        f"{env['title']}: time per step vs {METRICS[setting.errors[0]].label}",
-                                        error=setting.errors[0], learned=learned))
+        written.append(
+            plot_speed_error(
+                reports,
+                Path(directory) / f"{prefix}{key}.png",
+                f"{env['title']}: time per step vs {METRICS[setting.errors[0]].label}",
+                error=setting.errors[0],
+                learned=learned,
+            )
+        )
     return written

@@ -39,18 +39,29 @@ from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ..controllers import PredictiveIk, PredictiveRollout  # noqa: E402
+from ..controllers.predictive.receding_horizon import RecedingHorizon  # noqa: E402
+from ..eval.evaluate import evaluate  # noqa: E402
+from ..eval.machine import finish_machine_info, machine_info  # noqa: E402
+from ..eval.plots import save_figure  # noqa: E402
 from ..policies import make_policy  # noqa: E402
 from ..policies.predictive_policy import PredictivePolicy, PredictivePolicyConfig, predictive_problem  # noqa: E402
-from ..controllers.predictive.receding_horizon import RecedingHorizon  # noqa: E402
-from ..eval.machine import finish_machine_info, machine_info  # noqa: E402
-from .timing import CLOCK, alternating_rounds, timed_call  # noqa: E402
-from ..eval.evaluate import evaluate  # noqa: E402
-from .exceptions import BenchError  # noqa: E402
-from ..eval.plots import save_figure  # noqa: E402
 from ..studies.point_to_point import FIG_5_10, PointToPointScenario, prepare_point_to_point  # noqa: E402
+from .exceptions import BenchError  # noqa: E402
+from .timing import CLOCK, alternating_rounds, timed_call  # noqa: E402
 
-__all__ = ["JUMP_SAMPLE_TIME", "JUMP_SAMPLE_TIMES", "KinematicTrace", "agri_self_collision_traces", "agri_update_rounds",
-           "format_pik_bench", "planar_kinematic_traces", "plot_joint_velocity", "plot_pseudoenergy", "run_pik_bench", "velocity_jumps"]
+__all__ = [
+    "JUMP_SAMPLE_TIME",
+    "JUMP_SAMPLE_TIMES",
+    "KinematicTrace",
+    "agri_self_collision_traces",
+    "agri_update_rounds",
+    "format_pik_bench",
+    "planar_kinematic_traces",
+    "plot_joint_velocity",
+    "plot_pseudoenergy",
+    "run_pik_bench",
+    "velocity_jumps",
+]
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -82,12 +93,17 @@ class KinematicTrace(NamedTuple):
 
     def summary(self, joints: slice = slice(None)) -> dict[str, float]:
         """The bench's figures of this trace."""
-        return {"pseudoenergy": self.pseudoenergy(joints), "peak_joint_speed": float(np.max(np.abs(self.qdot[:, joints]))),
-                "task_error_max": float(np.max(self.task_error)), "min_clearance": float(np.min(self.clearance)),
-                "collision": bool(np.min(self.clearance) <= 0.0),
-                "update_ms_median": float(np.median(self.update_seconds) * 1e3),
-                "velocity_jump_max": _largest_jump(self.qdot), "nullspace_jump_max": _largest_jump(self.nullspace_qdot),
-                "velocity_kink_max": _largest_jump(self.qdot, order=2)}
+        return {
+            "pseudoenergy": self.pseudoenergy(joints),
+            "peak_joint_speed": float(np.max(np.abs(self.qdot[:, joints]))),
+            "task_error_max": float(np.max(self.task_error)),
+            "min_clearance": float(np.min(self.clearance)),
+            "collision": bool(np.min(self.clearance) <= 0.0),
+            "update_ms_median": float(np.median(self.update_seconds) * 1e3),
+            "velocity_jump_max": _largest_jump(self.qdot),
+            "nullspace_jump_max": _largest_jump(self.nullspace_qdot),
+            "velocity_kink_max": _largest_jump(self.qdot, order=2),
+        }
 
 
 def _largest_jump(qdot: NDArray[np.float64], order: int = 1) -> float:
@@ -103,8 +119,14 @@ TaskPart = Callable[[int, NDArray[np.float64]], NDArray[np.float64]]
 """``task_part(k, q) -> J# (wdot + K e)``: the joint velocity of the task alone."""
 
 
-def _rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command, task_part: TaskPart,
-             clearance: Callable[[NDArray[np.float64]], float]) -> KinematicTrace:
+def _rollout(
+    q0: NDArray[np.float64],
+    steps: int,
+    dt: float,
+    command: Command,
+    task_part: TaskPart,
+    clearance: Callable[[NDArray[np.float64]], float],
+) -> KinematicTrace:
     """Run ``command`` (only it is timed); the nullspace part is ``qdot - task_part``."""
     q = np.array(q0, dtype=np.float64)
     qs, qdots, errors, nulls, seconds, clear = [q.copy()], [], [], [], [], []
@@ -118,29 +140,48 @@ def _rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Command, t
         qdots.append(qdot)
         errors.append(error)
         clear.append(clearance(q))
-    return KinematicTrace(dt * np.arange(1, steps + 1), np.array(qdots), np.array(qs), np.array(errors),
-                          np.array(clear), np.array(seconds), np.array(nulls))
+    return KinematicTrace(
+        dt * np.arange(1, steps + 1),
+        np.array(qdots),
+        np.array(qs),
+        np.array(errors),
+        np.array(clear),
+        np.array(seconds),
+        np.array(nulls),
+    )
 
 
-def _with_input(pik: PredictiveIk, q: NDArray[np.float64], u: NDArray[np.float64],
-                target: tuple[NDArray[np.float64], NDArray[np.float64]], gain: float) -> tuple[NDArray[np.float64], float]:
+def _with_input(
+    pik: PredictiveIk,
+    q: NDArray[np.float64],
+    u: NDArray[np.float64],
+    target: tuple[NDArray[np.float64], NDArray[np.float64]],
+    gain: float,
+) -> tuple[NDArray[np.float64], float]:
     """The CLIK command with nullspace input ``u`` and its error norm."""
     qdot, error = pik.command(q, u, target[0], target[1], gain)
     return qdot, float(np.linalg.norm(error))
 
 
-def _task_part(pik: PredictiveIk, target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]],
-               gain: float) -> TaskPart:
+def _task_part(
+    pik: PredictiveIk, target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float
+) -> TaskPart:
     """``J# (wdot + K e)`` of ``pik``'s task (the command with ``u = 0``)."""
+
     def part(k: int, q: NDArray[np.float64]) -> NDArray[np.float64]:
         return _with_input(pik, q, np.zeros(pik.n), target(k), gain)[0]
 
     return part
 
 
-def _mpc_command(pik: PredictiveIk, horizon: RecedingHorizon, wdot: Callable[[int, int], NDArray[np.float64]],
-                 target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float,
-                 substeps: int = 1) -> Command:
+def _mpc_command(
+    pik: PredictiveIk,
+    horizon: RecedingHorizon,
+    wdot: Callable[[int, int], NDArray[np.float64]],
+    target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]],
+    gain: float,
+    substeps: int = 1,
+) -> Command:
     """Algorithm 12 every ``substeps`` control steps (``horizon.dt`` = ``substeps`` control periods); the
     input between updates from :meth:`RecedingHorizon.input_at`. ``wdot(first, count)`` is in samples."""
     control_dt = horizon.dt / substeps
@@ -154,19 +195,26 @@ def _mpc_command(pik: PredictiveIk, horizon: RecedingHorizon, wdot: Callable[[in
     return command
 
 
-def _plan_command(pik: PredictiveIk, plan: PredictiveRollout,
-                  target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]], gain: float) -> Command:
+def _plan_command(
+    pik: PredictiveIk,
+    plan: PredictiveRollout,
+    target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]],
+    gain: float,
+) -> Command:
     """Follow a global plan: its nullspace inputs, the task with feedback, the planned joint path with
     feedback in the nullspace (:meth:`~redundancy_gym.controllers.PredictiveRollout.follow`)."""
+
     def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
         return _with_input(pik, q, plan.follow(k, q, gain), target(k), gain)
 
     return command
 
 
-def _local_command(controller: Any,
-                   target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]]) -> Command:
+def _local_command(
+    controller: Any, target: Callable[[int], tuple[NDArray[np.float64], NDArray[np.float64]]]
+) -> Command:
     """Local CLIK (``controller.step``)."""
+
     def command(k: int, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
         position, velocity = target(k)
         result = controller.step(q, position, velocity)
@@ -175,9 +223,16 @@ def _local_command(controller: Any,
     return command
 
 
-def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_iterations: int = 300,
-                            augmented: tuple[bool, ...] = (True, False), sample_time: float | None = None,
-                            local: bool = True, global_plan: bool = True) -> dict[str, KinematicTrace]:
+def planar_kinematic_traces(
+    *,
+    seed: int = 0,
+    horizon: float = 1.0,
+    global_iterations: int = 300,
+    augmented: tuple[bool, ...] = (True, False),
+    sample_time: float | None = None,
+    local: bool = True,
+    global_plan: bool = True,
+) -> dict[str, KinematicTrace]:
     """PlanarReach (default obstacle) in kinematic rollouts at the env's control period from its start at
     ``seed``: local CLIK (the ``clik`` policy's controller), MPC (``horizon``, prediction ``sample_time``,
     with and without the augmented state) and global (each of the three only when asked)."""
@@ -215,8 +270,9 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
         assert task_pik is not None
         task_part = _task_part(task_pik, target, gain)
         if local:
-            traces["local CLIK"] = _rollout(q0, steps, dt, _local_command(clik_policy.controller, target), task_part,
-                                            clearance)
+            traces["local CLIK"] = _rollout(
+                q0, steps, dt, _local_command(clik_policy.controller, target), task_part, clearance
+            )
         for aug, policy in mpc.items():
             assert policy.pik is not None and policy.horizon is not None
             label = f"MPC {horizon:g} s" + (" (augmented)" if aug else " (velocity level)")
@@ -225,8 +281,9 @@ def planar_kinematic_traces(*, seed: int = 0, horizon: float = 1.0, global_itera
         if global_plan:
             reference = started(mode="global", global_iterations=global_iterations)
             assert reference.pik is not None and reference.plan is not None
-            traces["global"] = _rollout(q0, steps, dt, _plan_command(reference.pik, reference.plan, target, gain),
-                                        task_part, clearance)
+            traces["global"] = _rollout(
+                q0, steps, dt, _plan_command(reference.pik, reference.plan, target, gain), task_part, clearance
+            )
     finally:
         env.close()
     return traces
@@ -239,28 +296,35 @@ JUMP_SAMPLE_TIME = 0.2
 ratio grows with the sample time, and at the control period neither variant has jumps (see the README)."""
 
 
-def velocity_jumps(*, seed: int = 0, sample_times: tuple[float, ...] = JUMP_SAMPLE_TIMES,
-                   horizon: float = 1.0) -> list[dict[str, float]]:
+def velocity_jumps(
+    *, seed: int = 0, sample_times: tuple[float, ...] = JUMP_SAMPLE_TIMES, horizon: float = 1.0
+) -> list[dict[str, float]]:
     """Figs. 5.33/5.34: PlanarReach MPC with and without the augmented state for each prediction sample time
     (control at the env's period): the largest jump of the nullspace and of the whole joint velocity between
     control steps, their ratios (velocity level / augmented) and the pseudoenergy."""
     rows = []
     for sample_time in sample_times:
-        traces = planar_kinematic_traces(seed=seed, horizon=horizon, sample_time=sample_time, local=False,
-                                         global_plan=False)
+        traces = planar_kinematic_traces(
+            seed=seed, horizon=horizon, sample_time=sample_time, local=False, global_plan=False
+        )
         aug = traces[f"MPC {horizon:g} s (augmented)"].summary()
         vel = traces[f"MPC {horizon:g} s (velocity level)"].summary()
-        rows.append({"sample_time": sample_time,
-                     "augmented_nullspace_jump": aug["nullspace_jump_max"],
-                     "velocity_level_nullspace_jump": vel["nullspace_jump_max"],
-                     "nullspace_jump_ratio": vel["nullspace_jump_max"] / max(aug["nullspace_jump_max"], 1e-300),
-                     "augmented_velocity_jump": aug["velocity_jump_max"],
-                     "velocity_level_velocity_jump": vel["velocity_jump_max"],
-                     "velocity_jump_ratio": vel["velocity_jump_max"] / max(aug["velocity_jump_max"], 1e-300),
-                     "augmented_velocity_kink": aug["velocity_kink_max"],
-                     "velocity_level_velocity_kink": vel["velocity_kink_max"],
-                     "velocity_kink_ratio": vel["velocity_kink_max"] / max(aug["velocity_kink_max"], 1e-300),
-                     "augmented_pseudoenergy": aug["pseudoenergy"], "velocity_level_pseudoenergy": vel["pseudoenergy"]})
+        rows.append(
+            {
+                "sample_time": sample_time,
+                "augmented_nullspace_jump": aug["nullspace_jump_max"],
+                "velocity_level_nullspace_jump": vel["nullspace_jump_max"],
+                "nullspace_jump_ratio": vel["nullspace_jump_max"] / max(aug["nullspace_jump_max"], 1e-300),
+                "augmented_velocity_jump": aug["velocity_jump_max"],
+                "velocity_level_velocity_jump": vel["velocity_jump_max"],
+                "velocity_jump_ratio": vel["velocity_jump_max"] / max(aug["velocity_jump_max"], 1e-300),
+                "augmented_velocity_kink": aug["velocity_kink_max"],
+                "velocity_level_velocity_kink": vel["velocity_kink_max"],
+                "velocity_kink_ratio": vel["velocity_kink_max"] / max(aug["velocity_kink_max"], 1e-300),
+                "augmented_pseudoenergy": aug["pseudoenergy"],
+                "velocity_level_pseudoenergy": vel["pseudoenergy"],
+            }
+        )
     return rows
 
 
@@ -304,8 +368,13 @@ def _agri_move(scenario: PointToPointScenario, longest_horizon: float) -> _AgriM
     return _AgriMove(setup, dt, target, wdot, clearance, problem, float(grasp.config.gain))
 
 
-def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
-                               iterations: int = 2, global_iterations: int = 300) -> dict[str, KinematicTrace]:
+def agri_self_collision_traces(
+    scenario: PointToPointScenario = FIG_5_10,
+    *,
+    horizons: tuple[float, ...] = (0.15, 2.0),
+    iterations: int = 2,
+    global_iterations: int = 300,
+) -> dict[str, KinematicTrace]:
     """The fig. 5.10 move of the 9-DoF arm (fig. 5.35 analogue): local grasp CLIK with self-collision
     avoidance, MPC for each horizon (augmented) and the global optimum, in kinematic rollouts."""
     move = _agri_move(scenario, max(horizons, default=0.0))
@@ -313,17 +382,21 @@ def agri_self_collision_traces(scenario: PointToPointScenario = FIG_5_10, *, hor
     q0, steps = setup.q_start, setup.steps
     velocity_level = move.problem(False)
     task_part = _task_part(velocity_level, target, gain)
-    traces = {"local CLIK": _rollout(q0, steps, dt, _local_command(setup.controller, target), task_part,
-                                     move.clearance)}
+    traces = {
+        "local CLIK": _rollout(q0, steps, dt, _local_command(setup.controller, target), task_part, move.clearance)
+    }
     for horizon in horizons:
         pik = move.problem(True)
         mpc = RecedingHorizon(pik, max(1, int(round(horizon / dt))), dt, iterations=iterations)
-        traces[f"MPC {horizon:g} s"] = _rollout(q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), task_part,
-                                                move.clearance)
-    plan = velocity_level.optimize(q0, wdot(0, steps), dt, np.zeros((steps, velocity_level.n)),
-                                   max_iterations=global_iterations, tolerance=1e-9).rollout
-    traces["global"] = _rollout(q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part,
-                                move.clearance)
+        traces[f"MPC {horizon:g} s"] = _rollout(
+            q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), task_part, move.clearance
+        )
+    plan = velocity_level.optimize(
+        q0, wdot(0, steps), dt, np.zeros((steps, velocity_level.n)), max_iterations=global_iterations, tolerance=1e-9
+    ).rollout
+    traces["global"] = _rollout(
+        q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part, move.clearance
+    )
     return traces
 
 
@@ -339,8 +412,14 @@ def _timed_rollout(q0: NDArray[np.float64], steps: int, dt: float, command: Comm
     return float(np.median(seconds))
 
 
-def agri_update_rounds(scenario: PointToPointScenario = FIG_5_10, *, horizons: tuple[float, ...] = (0.15, 2.0),
-                       iterations: int = 2, rounds: int = 5, progress: bool = False) -> Any:
+def agri_update_rounds(
+    scenario: PointToPointScenario = FIG_5_10,
+    *,
+    horizons: tuple[float, ...] = (0.15, 2.0),
+    iterations: int = 2,
+    rounds: int = 5,
+    progress: bool = False,
+) -> Any:
     """Alternating rounds of timed rollouts of the fig. 5.10 move: ``"local CLIK"`` (the grasp CLIK step) and
     ``"MPC <h> s"`` per horizon (a fresh receding horizon per rollout, so every sample starts cold alike); each
     sample is the rollout's median step [s]. Returns the :class:`~redundancy_gym.bench.timing.Rounds`."""
@@ -375,8 +454,9 @@ def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[st
         q0 = obs[env.unwrapped.OBSERVATION_LAYOUT["q"]]
         costs = {}
         for method in ("fletcher_reeves", "steepest_descent"):
-            result = pik.optimize(q0, wdot, policy.dt, np.zeros((steps, pik.n)), max_iterations=iterations,
-                                  tolerance=0.0, method=method)
+            result = pik.optimize(
+                q0, wdot, policy.dt, np.zeros((steps, pik.n)), max_iterations=iterations, tolerance=0.0, method=method
+            )
             costs[method] = np.array(result.costs)
     finally:
         env.close()
@@ -387,13 +467,21 @@ def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[st
         hit = np.flatnonzero(c - best <= tolerance * (start - best))
         return int(hit[0]) if hit.size else None
 
-    return {"tolerance": tolerance, "max_iterations": iterations, "initial_cost": start, "best_cost": best,
-            "cg_iterations": reach(costs["fletcher_reeves"]), "sd_iterations": reach(costs["steepest_descent"]),
-            "cg_costs": costs["fletcher_reeves"].tolist(), "sd_costs": costs["steepest_descent"].tolist()}
+    return {
+        "tolerance": tolerance,
+        "max_iterations": iterations,
+        "initial_cost": start,
+        "best_cost": best,
+        "cg_iterations": reach(costs["fletcher_reeves"]),
+        "sd_iterations": reach(costs["steepest_descent"]),
+        "cg_costs": costs["fletcher_reeves"].tolist(),
+        "sd_costs": costs["steepest_descent"].tolist(),
+    }
 
 
-def run_pik_bench(*, seed: int = 0, episodes: int = 10, rounds: int = 5, progress: bool = True,
-                  quick: bool = False) -> dict[str, Any]:
+def run_pik_bench(
+    *, seed: int = 0, episodes: int = 10, rounds: int = 5, progress: bool = True, quick: bool = False
+) -> dict[str, Any]:
     """All parts of the bench; returns the report (``quick``: fewer episodes and iterations, for tests).
 
     Args:
@@ -415,8 +503,17 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, rounds: int = 5, progres
     planar = {}
     for name in tqdm(("clik", "predictive", "global"), desc="bench pik PlanarReach", disable=not progress):
         r = evaluate(PLANAR, name, episodes=episodes, seed=seed, progress=False).to_json()
-        planar[name] = {k: r[k] for k in ("success_rate", "collision_rate", "pseudoenergy", "peak_joint_speed",
-                                          "tracking_error_max", "min_clearance")}
+        planar[name] = {
+            k: r[k]
+            for k in (
+                "success_rate",
+                "collision_rate",
+                "pseudoenergy",
+                "peak_joint_speed",
+                "tracking_error_max",
+                "min_clearance",
+            )
+        }
         planar[name]["step_time_ms_median"] = r["step_time_us"]["median"] * 1e-3
     report["planar"] = planar
     report["planar_mpc_vs_local_pseudoenergy"] = planar["predictive"]["pseudoenergy"] / planar["clik"]["pseudoenergy"]
@@ -431,8 +528,13 @@ def run_pik_bench(*, seed: int = 0, episodes: int = 10, rounds: int = 5, progres
         stats = timed.ratio(label, "local CLIK")
         report[name] = stats.median
         report[f"{name}_rounds"] = stats.to_json()
-    report["timing"] = {"rounds": rounds, "warmup": timed.warmup, "clock": CLOCK, "orders": timed.orders,
-                        "sample": "one kinematic rollout of the fig. 5.10 move, its median step"}
+    report["timing"] = {
+        "rounds": rounds,
+        "warmup": timed.warmup,
+        "clock": CLOCK,
+        "orders": timed.orders,
+        "sample": "one kinematic rollout of the fig. 5.10 move, its median step",
+    }
     report["descent"] = _descent_comparison(seed, 60 if quick else 200, 1e-4)
     kinematic = planar_kinematic_traces(seed=seed, global_iterations=iterations)
     report["planar_kinematic"] = {label: trace.summary() for label, trace in kinematic.items()}
@@ -448,35 +550,52 @@ def format_pik_bench(report: dict[str, Any]) -> str:
     """A plain-text summary."""
     lines = ["PlanarReach (MuJoCo): policy | success | collision | pseudoenergy | peak speed | step median [ms]"]
     for name, r in report["planar"].items():
-        lines.append(f"  {name} | {r['success_rate']:.2f} | {r['collision_rate']:.2f} | {r['pseudoenergy']:.4f} | "
-                     f"{r['peak_joint_speed']:.3f} | {r['step_time_ms_median']:.3f}")
+        lines.append(
+            f"  {name} | {r['success_rate']:.2f} | {r['collision_rate']:.2f} | {r['pseudoenergy']:.4f} | "
+            f"{r['peak_joint_speed']:.3f} | {r['step_time_ms_median']:.3f}"
+        )
     lines.append(f"  MPC / local pseudoenergy = {report['planar_mpc_vs_local_pseudoenergy']:.3f}")
-    lines.append("AgriReach fig. 5.10 move (kinematic): controller | pseudoenergy (revolute) | peak speed | "
-                 "min clearance [mm] | update median [ms]")
+    lines.append(
+        "AgriReach fig. 5.10 move (kinematic): controller | pseudoenergy (revolute) | peak speed | "
+        "min clearance [mm] | update median [ms]"
+    )
     for name, r in report["agri_self_collision"].items():
-        lines.append(f"  {name} | {r['pseudoenergy']:.4f} | {r['peak_joint_speed']:.3f} | "
-                     f"{1e3 * r['min_clearance']:.1f} | {r['update_ms_median']:.3f}")
+        lines.append(
+            f"  {name} | {r['pseudoenergy']:.4f} | {r['peak_joint_speed']:.3f} | "
+            f"{1e3 * r['min_clearance']:.1f} | {r['update_ms_median']:.3f}"
+        )
     lines.append(f"agri_horizon2s_update_ms_median = {report['agri_horizon2s_update_ms_median']:.2f}")
     for name in ("agri_horizon2s_vs_local", "agri_horizon015s_vs_local"):
         if name in report:
             r = report[f"{name}_rounds"]
-            lines.append(f"{name} = {report[name]:.1f}  (MPC update / local CLIK step; rounds {r['min']:.1f}-"
-                         f"{r['max']:.1f}, spread {100 * r['spread']:.1f} %)")
+            lines.append(
+                f"{name} = {report[name]:.1f}  (MPC update / local CLIK step; rounds {r['min']:.1f}-"
+                f"{r['max']:.1f}, spread {100 * r['spread']:.1f} %)"
+            )
     d = report["descent"]
-    lines.append(f"descent to {d['tolerance']:g} of the decrease: CG {d['cg_iterations']} iterations, steepest "
-                 f"descent {d['sd_iterations']} (of {d['max_iterations']})")
-    lines.append("PlanarReach kinematic: controller | pseudoenergy | largest jump between control steps of N u | "
-                 "of qdot [rad/s]")
+    lines.append(
+        f"descent to {d['tolerance']:g} of the decrease: CG {d['cg_iterations']} iterations, steepest "
+        f"descent {d['sd_iterations']} (of {d['max_iterations']})"
+    )
+    lines.append(
+        "PlanarReach kinematic: controller | pseudoenergy | largest jump between control steps of N u | of qdot [rad/s]"
+    )
     for name, r in report["planar_kinematic"].items():
-        lines.append(f"  {name} | {r['pseudoenergy']:.4f} | {r['nullspace_jump_max']:.4f} | {r['velocity_jump_max']:.4f}")
-    lines.append("Velocity jumps, MPC 1 s: sample time [s] | N u jump velocity level / augmented (ratio) | "
-                 "qdot jump (ratio) | qdot jump beyond the trend (ratio)")
+        lines.append(
+            f"  {name} | {r['pseudoenergy']:.4f} | {r['nullspace_jump_max']:.4f} | {r['velocity_jump_max']:.4f}"
+        )
+    lines.append(
+        "Velocity jumps, MPC 1 s: sample time [s] | N u jump velocity level / augmented (ratio) | "
+        "qdot jump (ratio) | qdot jump beyond the trend (ratio)"
+    )
     for r in report["velocity_jumps"]:
-        lines.append(f"  {r['sample_time']:g} | {r['velocity_level_nullspace_jump']:.4f} / "
-                     f"{r['augmented_nullspace_jump']:.4f} ({r['nullspace_jump_ratio']:.1f}) | "
-                     f"{r['velocity_level_velocity_jump']:.4f} / {r['augmented_velocity_jump']:.4f} "
-                     f"({r['velocity_jump_ratio']:.1f}) | {r['velocity_level_velocity_kink']:.4f} / "
-                     f"{r['augmented_velocity_kink']:.4f} ({r['velocity_kink_ratio']:.1f})")
+        lines.append(
+            f"  {r['sample_time']:g} | {r['velocity_level_nullspace_jump']:.4f} / "
+            f"{r['augmented_nullspace_jump']:.4f} ({r['nullspace_jump_ratio']:.1f}) | "
+            f"{r['velocity_level_velocity_jump']:.4f} / {r['augmented_velocity_jump']:.4f} "
+            f"({r['velocity_jump_ratio']:.1f}) | {r['velocity_level_velocity_kink']:.4f} / "
+            f"{r['augmented_velocity_kink']:.4f} ({r['velocity_kink_ratio']:.1f})"
+        )
     lines.append(f"nullspace_jump_ratio (sample time {JUMP_SAMPLE_TIME:g} s) = {report['nullspace_jump_ratio']:.3g}")
     return "\n".join(lines)
 
@@ -500,8 +619,12 @@ def plot_joint_velocity(traces: dict[str, KinematicTrace], joint: int, path: Any
     MPC, the continuous augmented MPC)."""
     fig, ax = plt.subplots(figsize=(8.0, 4.0))
     for label, trace in traces.items():
-        ax.step(trace.time - (trace.time[0] if len(trace.time) else 0.0), trace.qdot[:, joint], where="post",
-                label=f"{label}: largest jump {_largest_jump(trace.qdot[:, joint:joint + 1]):.4f} rad/s")
+        ax.step(
+            trace.time - (trace.time[0] if len(trace.time) else 0.0),
+            trace.qdot[:, joint],
+            where="post",
+            label=f"{label}: largest jump {_largest_jump(trace.qdot[:, joint : joint + 1]):.4f} rad/s",
+        )
     ax.set_xlabel("time [s]")
     ax.set_ylabel(f"qdot_{joint + 1} [rad/s]")
     ax.set_title(title)

@@ -29,8 +29,17 @@ from tqdm.auto import tqdm
 from ..eval.machine import machine_info
 from .exceptions import BenchError
 
-__all__ = ["AFTER", "DIRECTIONS", "PHASE_WINDOW", "RECOVERY_TARGET", "WALK_IN", "format_push_bench",
-           "plot_push_bench", "push_trial", "run_push_bench"]
+__all__ = [
+    "AFTER",
+    "DIRECTIONS",
+    "PHASE_WINDOW",
+    "RECOVERY_TARGET",
+    "WALK_IN",
+    "format_push_bench",
+    "plot_push_bench",
+    "push_trial",
+    "run_push_bench",
+]
 
 DIRECTIONS = ("lateral", "forward")
 WALK_IN = 2.0
@@ -45,8 +54,16 @@ ENV_ID = "redundancy_gym/BipedWalk-v0"
 NDArrayLike = Sequence[float] | np.ndarray
 
 
-def push_trial(impulse: float, direction: NDArrayLike, start: float, env_seed: int, *, speed: float = 0.5,
-               duration: float = 0.1, push_recovery: bool = True) -> tuple[bool, float]:
+def push_trial(
+    impulse: float,
+    direction: NDArrayLike,
+    start: float,
+    env_seed: int,
+    *,
+    speed: float = 0.5,
+    duration: float = 0.1,
+    push_recovery: bool = True,
+) -> tuple[bool, float]:
     """One push trial: ``(recovered, time of the fall or of the trial's end [s])``.
 
     Args:
@@ -62,8 +79,12 @@ def push_trial(impulse: float, direction: NDArrayLike, start: float, env_seed: i
 
     unit = np.asarray(direction, dtype=np.float64)
     force = [float(unit[0] * impulse / duration), float(unit[1] * impulse / duration), 0.0]
-    env = gym.make(ENV_ID, target_speed=speed, max_episode_steps=10**7,
-                   push=[{"time": float(start), "force": force, "duration": float(duration), "body": "torso"}])
+    env = gym.make(
+        ENV_ID,
+        target_speed=speed,
+        max_episode_steps=10**7,
+        push=[{"time": float(start), "force": force, "duration": float(duration), "body": "torso"}],
+    )
     try:
         policy = make_policy("walking", env, push_recovery=push_recovery)
         obs, _ = env.reset(seed=int(env_seed))
@@ -95,8 +116,15 @@ def _trials(seed: int, count: int, direction: str) -> list[dict[str, Any]]:
     return trials
 
 
-def run_push_bench(*, seed: int = 0, trials: int = 20, impulses: Sequence[float] = tuple(range(5, 45, 5)),
-                   speed: float = 0.5, duration: float = 0.1, progress: bool = True) -> dict[str, Any]:
+def run_push_bench(
+    *,
+    seed: int = 0,
+    trials: int = 20,
+    impulses: Sequence[float] = tuple(range(5, 45, 5)),
+    speed: float = 0.5,
+    duration: float = 0.1,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Run the push bench (see the module docstring) and return its report (JSON-ready).
 
     Args:
@@ -116,8 +144,12 @@ def run_push_bench(*, seed: int = 0, trials: int = 20, impulses: Sequence[float]
     started = time.perf_counter()
     controllers = {"step_adjustment": True, "baseline": False}
     results: dict[str, Any] = {}
-    bar = tqdm(total=len(controllers) * len(DIRECTIONS) * len(levels) * trials, desc="bench push",
-               disable=not progress, unit="trial")
+    bar = tqdm(
+        total=len(controllers) * len(DIRECTIONS) * len(levels) * trials,
+        desc="bench push",
+        disable=not progress,
+        unit="trial",
+    )
     for name, on in controllers.items():
         results[name] = {}
         for direction in DIRECTIONS:
@@ -126,8 +158,15 @@ def run_push_bench(*, seed: int = 0, trials: int = 20, impulses: Sequence[float]
             for impulse in levels:
                 falls, outcomes = 0, []
                 for case in cases:
-                    ok, when = push_trial(impulse, case["direction"], case["start"], case["env_seed"], speed=speed,
-                                          duration=duration, push_recovery=on)
+                    ok, when = push_trial(
+                        impulse,
+                        case["direction"],
+                        case["start"],
+                        case["env_seed"],
+                        speed=speed,
+                        duration=duration,
+                        push_recovery=on,
+                    )
                     outcomes.append({**case, "recovered": ok, "end": round(when, 3)})
                     falls += not ok
                     bar.update(1)
@@ -135,10 +174,19 @@ def run_push_bench(*, seed: int = 0, trials: int = 20, impulses: Sequence[float]
                         break
                 bar.update(trials - len(outcomes))
                 holds = falls <= allowed_failures
-                rows.append({"impulse": impulse, "trials_run": len(outcomes),
-                             "recovered": sum(o["recovered"] for o in outcomes), "holds": holds,
-                             "falls": [{k: o[k] for k in ("start", "direction", "env_seed", "end")}
-                                       for o in outcomes if not o["recovered"]]})
+                rows.append(
+                    {
+                        "impulse": impulse,
+                        "trials_run": len(outcomes),
+                        "recovered": sum(o["recovered"] for o in outcomes),
+                        "holds": holds,
+                        "falls": [
+                            {k: o[k] for k in ("start", "direction", "env_seed", "end")}
+                            for o in outcomes
+                            if not o["recovered"]
+                        ],
+                    }
+                )
                 if not holds:
                     bar.update((len(levels) - len(rows)) * trials)
                     break
@@ -172,8 +220,10 @@ def run_push_bench(*, seed: int = 0, trials: int = 20, impulses: Sequence[float]
 
 def format_push_bench(report: dict[str, Any]) -> str:
     """A table: per controller and direction, the recovery rate at each impulse run and the largest level held."""
-    lines = [f"bench push: {report['env_id']} at {report['speed']} m/s, {report['push_duration']} s torso pushes, "
-             f"{report['trials_per_level']} trials per level (held: >= {report['recovery_target']:.0%} recovered)"]
+    lines = [
+        f"bench push: {report['env_id']} at {report['speed']} m/s, {report['push_duration']} s torso pushes, "
+        f"{report['trials_per_level']} trials per level (held: >= {report['recovery_target']:.0%} recovered)"
+    ]
     for name, directions in report["results"].items():
         for direction, result in directions.items():
             rates = ", ".join(f"{row['impulse']:g}: {row['recovered']}/{row['trials_run']}" for row in result["levels"])
@@ -190,28 +240,38 @@ def plot_push_bench(report: dict[str, Any], path: str) -> str:
 
     fig, axes = plt.subplots(1, len(DIRECTIONS), figsize=(10, 4), sharey=True)
     labels = {"step_adjustment": "walking (step adjustment)", "baseline": "walking, push_recovery=False"}
-    for ax, direction in zip(axes, DIRECTIONS):
+    for ax, direction in zip(axes, DIRECTIONS, strict=False):
         for name, style in (("step_adjustment", "o-"), ("baseline", "s--")):
             rows = report["results"][name][direction]["levels"]
             x, y = [r["impulse"] for r in rows], [r["recovered"] / r["trials_run"] for r in rows]
-            line, = ax.plot(x, y, style,
-                            label=f"{labels[name]}: {report['results'][name][direction]['impulse_recovered']:g} N s")
-            for xi, yi, r in zip(x, y, rows):  # recovered / run: a stopped level ran fewer trials
-                ax.annotate(f"{r['recovered']}/{r['trials_run']}", (xi, yi), textcoords="offset points",
-                            xytext=(4, -12 if name == "baseline" else 5), fontsize=7, color=line.get_color())
+            (line,) = ax.plot(
+                x, y, style, label=f"{labels[name]}: {report['results'][name][direction]['impulse_recovered']:g} N s"
+            )
+            for xi, yi, r in zip(x, y, rows, strict=False):  # recovered / run: a stopped level ran fewer trials
+                ax.annotate(
+                    f"{r['recovered']}/{r['trials_run']}",
+                    (xi, yi),
+                    textcoords="offset points",
+                    xytext=(4, -12 if name == "baseline" else 5),
+                    fontsize=7,
+                    color=line.get_color(),
+                )
         ax.axhline(report["recovery_target"], color="grey", lw=0.8, ls=":")
-        lowest = min(r["recovered"] / r["trials_run"] for name in labels
-                     for r in report["results"][name][direction]["levels"])
+        lowest = min(
+            r["recovered"] / r["trials_run"] for name in labels for r in report["results"][name][direction]["levels"]
+        )
         ax.set_ylim(min(lowest, report["recovery_target"]) - 0.08, 1.06)  # room for the labels
         ax.set_title(f"{direction} pushes, {report['push_duration']} s on the torso")
         ax.set_xlabel("impulse [N s]")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, loc="lower left")
     axes[0].set_ylabel("share of trials recovered")
-    fig.suptitle(f"BipedWalk-v0 at {report['speed']} m/s, {report['trials_per_level']} trials per impulse: the largest "
-                 f"impulse recovered in >= {report['recovery_target']:.0%} of them\n(a level stops once more than "
-                 f"{1.0 - report['recovery_target']:.0%} of its trials have fallen; labels: recovered / run)",
-                 fontsize=10)
+    fig.suptitle(
+        f"BipedWalk-v0 at {report['speed']} m/s, {report['trials_per_level']} trials per impulse: the largest "
+        f"impulse recovered in >= {report['recovery_target']:.0%} of them\n(a level stops once more than "
+        f"{1.0 - report['recovery_target']:.0%} of its trials have fallen; labels: recovered / run)",
+        fontsize=10,
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -24,9 +24,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from ..eval.evaluate import evaluate
-from .exceptions import BenchError
 from ..eval.parallel import LOCAL_RAY, import_ray
 from ..learning.training_record import machine
+from .exceptions import BenchError
 
 __all__ = ["SCALE_CASES", "amdahl_serial_fraction", "amdahl_speedup", "format_scale_bench", "run_scale_bench"]
 
@@ -51,16 +51,41 @@ def amdahl_speedup(f: float, n: int) -> float:
     return 1.0 / (f + (1.0 - f) / n)
 
 
-def _eval_rate(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: int, seed: int, workers: int,
-               ray_address: str | None = None) -> float:
+def _eval_rate(
+    env_id: str,
+    policy: str,
+    env_kwargs: dict[str, Any],
+    episodes: int,
+    seed: int,
+    workers: int,
+    ray_address: str | None = None,
+) -> float:
     start = time.perf_counter()
-    evaluate(env_id, policy, episodes=episodes, seed=seed, env_kwargs=env_kwargs, progress=False, warmup=1,
-             workers=workers, ray_address=ray_address)
+    evaluate(
+        env_id,
+        policy,
+        episodes=episodes,
+        seed=seed,
+        env_kwargs=env_kwargs,
+        progress=False,
+        warmup=1,
+        workers=workers,
+        ray_address=ray_address,
+    )
     return episodes / (time.perf_counter() - start)
 
 
-def _speedup_rounds(env_id: str, policy: str, env_kwargs: dict[str, Any], episodes: int, seed: int, workers: int,
-                    ray_address: str | None, rounds: int, bar: Any) -> dict[str, float]:
+def _speedup_rounds(
+    env_id: str,
+    policy: str,
+    env_kwargs: dict[str, Any],
+    episodes: int,
+    seed: int,
+    workers: int,
+    ray_address: str | None,
+    rounds: int,
+    bar: Any,
+) -> dict[str, float]:
     """The serial loop and ``workers`` (local processes, or Ray actors at ``ray_address``) in ``rounds``
     alternating rounds, so that a load change hits both alike: their episodes/s and the speedup (medians over
     the rounds; the speedup's smallest and largest round)."""
@@ -70,9 +95,13 @@ def _speedup_rounds(env_id: str, policy: str, env_kwargs: dict[str, Any], episod
         parallel.append(_eval_rate(env_id, policy, env_kwargs, episodes, seed, workers, ray_address))
         bar.update(1)
     speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
-    return {"serial_episodes_per_second": float(np.median(serial)), "episodes_per_second": float(np.median(parallel)),
-            "speedup": float(np.median(speedups)), "speedup_min": float(min(speedups)),
-            "speedup_max": float(max(speedups))}
+    return {
+        "serial_episodes_per_second": float(np.median(serial)),
+        "episodes_per_second": float(np.median(parallel)),
+        "speedup": float(np.median(speedups)),
+        "speedup_min": float(min(speedups)),
+        "speedup_max": float(max(speedups)),
+    }
 
 
 def _vec_rate(env_id: str, num_envs: int, mode: str, steps: int, seed: int) -> float:
@@ -90,10 +119,19 @@ def _vec_rate(env_id: str, num_envs: int, mode: str, steps: int, seed: int) -> f
         envs.close()
 
 
-def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = None, rounds: int = 3, seed: int = 0,
-                    vec_env: str = "redundancy_gym/AgriReach-v0", num_envs: Sequence[int] = (1, 2, 4),
-                    vec_steps: int = 300, cases: Sequence[str] = tuple(SCALE_CASES),
-                    ray_workers: Sequence[int] = (), progress: bool = True) -> dict[str, Any]:
+def run_scale_bench(
+    *,
+    workers: Sequence[int] = (2,),
+    episodes: int | None = None,
+    rounds: int = 3,
+    seed: int = 0,
+    vec_env: str = "redundancy_gym/AgriReach-v0",
+    num_envs: Sequence[int] = (1, 2, 4),
+    vec_steps: int = 300,
+    cases: Sequence[str] = tuple(SCALE_CASES),
+    ray_workers: Sequence[int] = (),
+    progress: bool = True,
+) -> dict[str, Any]:
     """Measure eval's episodes/s against workers and make_vec's steps/s against ``num_envs``; returns the report.
 
     Args:
@@ -111,8 +149,12 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
     for case in cases:
         if case not in SCALE_CASES:
             raise BenchError(f"unknown case {case!r}; valid: {', '.join(SCALE_CASES)}")
-    report: dict[str, Any] = {"machine": {**machine(), "load_average": list(os.getloadavg())},
-                              "rounds": rounds, "eval": {}, "make_vec": {}}
+    report: dict[str, Any] = {
+        "machine": {**machine(), "load_average": list(os.getloadavg())},
+        "rounds": rounds,
+        "eval": {},
+        "make_vec": {},
+    }
     total = len(cases) * (len(workers) + len(ray_workers)) * rounds + len(num_envs) * 2
     with tqdm(total=total, desc="bench scale", disable=not progress) as bar:
         for case in cases:
@@ -129,13 +171,21 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
                 ray.shutdown()
                 ray.init(num_cpus=n, include_dashboard=False, log_to_driver=False)
                 try:
-                    on_ray[str(n)] = {"num_cpus": n, **_speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n,
-                                                                       LOCAL_RAY, rounds, bar)}
+                    on_ray[str(n)] = {
+                        "num_cpus": n,
+                        **_speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n, LOCAL_RAY, rounds, bar),
+                    }
                 finally:
                     ray.shutdown()
-            report["eval"][case] = {"ray": on_ray, "env": env_id, "policy": policy, "episodes": n_episodes, "workers": rows,
-                                    "serial_fraction": f,
-                                    "predicted_speedup_64": amdahl_speedup(f, 64)}
+            report["eval"][case] = {
+                "ray": on_ray,
+                "env": env_id,
+                "policy": policy,
+                "episodes": n_episodes,
+                "workers": rows,
+                "serial_fraction": f,
+                "predicted_speedup_64": amdahl_speedup(f, 64),
+            }
         for mode in ("sync", "async"):
             rates = {}
             for n in num_envs:
@@ -149,17 +199,24 @@ def run_scale_bench(*, workers: Sequence[int] = (2,), episodes: int | None = Non
 def format_scale_bench(report: dict[str, Any]) -> str:
     """The report as text."""
     m = report["machine"]
-    lines = [f"machine: {m.get('cpu_model', m['processor'])}, {m['cores']} cores, load average "
-             f"{', '.join(f'{x:.2f}' for x in m['load_average'])}",
-             f"eval: {report['rounds']} alternating rounds, wall time with worker start and warm-up", ""]
+    lines = [
+        f"machine: {m.get('cpu_model', m['processor'])}, {m['cores']} cores, load average "
+        f"{', '.join(f'{x:.2f}' for x in m['load_average'])}",
+        f"eval: {report['rounds']} alternating rounds, wall time with worker start and warm-up",
+        "",
+    ]
     for case, row in report["eval"].items():
-        lines.append(f"{case} ({row['policy']}, {row['episodes']} episodes per run): serial fraction {row['serial_fraction']:.3f}, predicted speedup "
-                     f"on 64 cores {row['predicted_speedup_64']:.1f}x")
+        lines.append(
+            f"{case} ({row['policy']}, {row['episodes']} episodes per run): serial fraction {row['serial_fraction']:.3f}, predicted speedup "
+            f"on 64 cores {row['predicted_speedup_64']:.1f}x"
+        )
         for kind, rows in (("workers", row["workers"]), ("Ray actors (num_cpus as many)", row.get("ray", {}))):
             for n, r in rows.items():
-                lines.append(f"  {n} {kind}: {r['episodes_per_second']:.2f} episodes/s against "
-                             f"{r['serial_episodes_per_second']:.2f} serial, speedup {r['speedup']:.2f}x "
-                             f"(rounds {r['speedup_min']:.2f}-{r['speedup_max']:.2f})")
+                lines.append(
+                    f"  {n} {kind}: {r['episodes_per_second']:.2f} episodes/s against "
+                    f"{r['serial_episodes_per_second']:.2f} serial, speedup {r['speedup']:.2f}x "
+                    f"(rounds {r['speedup_min']:.2f}-{r['speedup_max']:.2f})"
+                )
     vec = report["make_vec"]
     lines += ["", f"make_vec {vec['env']}: env steps/s (random actions) by num_envs"]
     for mode in ("sync", "async"):

@@ -37,8 +37,15 @@ from .. import ENV_IDS
 from ..eval.machine import machine_info
 from .exceptions import BenchError
 
-__all__ = ["BANG_BANG_SWITCH", "DEFAULT_SHARES", "SOURCES", "format_soak_bench", "machine_info",
-           "run_soak_bench", "soak_ok"]
+__all__ = [
+    "BANG_BANG_SWITCH",
+    "DEFAULT_SHARES",
+    "SOURCES",
+    "format_soak_bench",
+    "machine_info",
+    "run_soak_bench",
+    "soak_ok",
+]
 
 SOURCES = ("random", "bang_bang", "reference")
 BANG_BANG_SWITCH = 0.1
@@ -92,8 +99,9 @@ class _Counter:
     def exception(self, where: str, exc: BaseException) -> None:
         self.exceptions += 1
         if len(self.exception_messages) < MAX_MESSAGES:
-            self.exception_messages.append({"where": where, "type": type(exc).__name__,
-                                            "message": str(exc)[:500], "step": self.steps})
+            self.exception_messages.append(
+                {"where": where, "type": type(exc).__name__, "message": str(exc)[:500], "step": self.steps}
+            )
 
     def bad(self, key: str) -> None:
         self.non_finite += 1
@@ -141,8 +149,9 @@ def _check_mapping(counter: _Counter, values: Mapping[str, Any], prefix: str) ->
                 counter.bad(f"{prefix}{key}")
 
 
-def _action_source(source: str, env: gym.Env, seed: int, policy_name: str | None,
-                   policy_kwargs: dict[str, Any]) -> Callable[[Any, bool], Any]:
+def _action_source(
+    source: str, env: gym.Env, seed: int, policy_name: str | None, policy_kwargs: dict[str, Any]
+) -> Callable[[Any, bool], Any]:
     """A function ``(observation, episode_start) -> action`` for ``source``."""
     space = env.action_space
     if source == "random":
@@ -176,17 +185,26 @@ def _action_source(source: str, env: gym.Env, seed: int, policy_name: str | None
         state: list[Any] = [None]
 
         def reference(obs: Any, start: bool) -> Any:
-            action, state[0] = policy.predict(obs, state[0], flag_true if start else flag_false,
-                                              deterministic=True)
+            action, state[0] = policy.predict(obs, state[0], flag_true if start else flag_false, deterministic=True)
             return action
 
         return reference
     raise BenchError(f"unknown action source {source!r}; expected one of {SOURCES}")
 
 
-def _soak_source(env_id: str, source: str, *, seconds: float | None, steps: int | None, seed: int,
-                 env_kwargs: dict[str, Any], policy_name: str | None, policy_kwargs: dict[str, Any],
-                 nan_ok: Sequence[str], bar: Any) -> dict[str, Any]:
+def _soak_source(
+    env_id: str,
+    source: str,
+    *,
+    seconds: float | None,
+    steps: int | None,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    policy_name: str | None,
+    policy_kwargs: dict[str, Any],
+    nan_ok: Sequence[str],
+    bar: Any,
+) -> dict[str, Any]:
     """One (env, source) run: a fresh env driven for ``seconds`` or ``steps``."""
     counter = _Counter()
     counter.nan_ok = frozenset(nan_ok)
@@ -263,12 +281,16 @@ def _soak_source(env_id: str, source: str, *, seconds: float | None, steps: int 
 
 
 def _source_report(counter: _Counter, source: str, policy_name: str | None, elapsed: float) -> dict[str, Any]:
-    report = {"policy": policy_name if source == "reference" else source, "steps": counter.steps,
-              "episodes": counter.episodes, "seconds": elapsed,
-              "steps_per_second": counter.steps / elapsed if elapsed > 0 else 0.0,
-              "exceptions": {"count": counter.exceptions, "first": counter.exception_messages},
-              "non_finite": {"count": counter.non_finite, "first": counter.non_finite_keys},
-              "documented_nan": counter.documented_nan}
+    report = {
+        "policy": policy_name if source == "reference" else source,
+        "steps": counter.steps,
+        "episodes": counter.episodes,
+        "seconds": elapsed,
+        "steps_per_second": counter.steps / elapsed if elapsed > 0 else 0.0,
+        "exceptions": {"count": counter.exceptions, "first": counter.exception_messages},
+        "non_finite": {"count": counter.non_finite, "first": counter.non_finite_keys},
+        "documented_nan": counter.documented_nan,
+    }
     if counter.stopped:
         report["stopped"] = counter.stopped
     return report
@@ -280,13 +302,19 @@ def _split(total: float, shares: Mapping[str, float], sources: Sequence[str]) ->
     return {s: total * w / norm for s, w in weights.items()}
 
 
-def run_soak_bench(*, seconds: float | None = None, steps: int | None = None, seed: int = 0,
-                   envs: Sequence[str] = ENV_IDS, sources: Sequence[str] = SOURCES,
-                   shares: Mapping[str, Mapping[str, float]] | None = None,
-                   env_kwargs: Mapping[str, dict[str, Any]] | None = None,
-                   policy_kwargs: Mapping[str, dict[str, Any]] | None = None,
-                   documented_nan: Mapping[str, Sequence[str]] | None = None,
-                   progress: bool = True) -> dict[str, Any]:
+def run_soak_bench(
+    *,
+    seconds: float | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    envs: Sequence[str] = ENV_IDS,
+    sources: Sequence[str] = SOURCES,
+    shares: Mapping[str, Mapping[str, float]] | None = None,
+    env_kwargs: Mapping[str, dict[str, Any]] | None = None,
+    policy_kwargs: Mapping[str, dict[str, Any]] | None = None,
+    documented_nan: Mapping[str, Sequence[str]] | None = None,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Soak every env of ``envs`` with every action source; returns the report (see :func:`format_soak_bench`).
 
     Args:
@@ -324,8 +352,13 @@ def run_soak_bench(*, seconds: float | None = None, steps: int | None = None, se
         for source in sources:
             plan.append((env_id, source, split[source]))
     total = sum(p[2] for p in plan)
-    bar = tqdm(total=total, desc="bench soak", unit="step" if steps is not None else "s",
-               disable=not progress, dynamic_ncols=True)
+    bar = tqdm(
+        total=total,
+        desc="bench soak",
+        unit="step" if steps is not None else "s",
+        disable=not progress,
+        dynamic_ncols=True,
+    )
     report_envs: dict[str, Any] = {}
     try:
         for env_id, source, amount in plan:
@@ -343,22 +376,34 @@ def run_soak_bench(*, seconds: float | None = None, steps: int | None = None, se
                 report_envs[env_id] = {"reference_policy": policy_name, "sources": {}}
             bar.set_postfix_str(f"{env_id.split('/')[-1]} {source}")
             report_envs[env_id]["sources"][source] = _soak_source(
-                env_id, source, seconds=None if steps is not None else amount,
-                steps=amount if steps is not None else None, seed=seed, env_kwargs=env_kwargs.get(env_id, {}),
+                env_id,
+                source,
+                seconds=None if steps is not None else amount,
+                steps=amount if steps is not None else None,
+                seed=seed,
+                env_kwargs=env_kwargs.get(env_id, {}),
                 policy_name=report_envs[env_id]["reference_policy"],
-                policy_kwargs=policy_kwargs.get(env_id, {}), nan_ok=documented_nan.get(env_id, ()),
-                bar=bar if progress else None)
+                policy_kwargs=policy_kwargs.get(env_id, {}),
+                nan_ok=documented_nan.get(env_id, ()),
+                bar=bar if progress else None,
+            )
     finally:
         bar.close()
     for entry in report_envs.values():
         entry.update(_totals(entry["sources"].values()))
     totals = _totals([s for e in report_envs.values() for s in e["sources"].values()])
-    report = {"benchmark": "soak", "seed": seed,
-              "budget": {"seconds_per_env": seconds} if seconds is not None else {"steps_per_env": steps},
-              "sources": list(sources), "bang_bang_switch_probability": BANG_BANG_SWITCH,
-              "shares": {e: _split(1.0, shares.get(e, {}), sources) for e in envs},
-              "documented_nan_keys": {e: list(documented_nan.get(e, ())) for e in envs},
-              "machine": machine_info(), "envs": report_envs, "totals": totals}
+    report = {
+        "benchmark": "soak",
+        "seed": seed,
+        "budget": {"seconds_per_env": seconds} if seconds is not None else {"steps_per_env": steps},
+        "sources": list(sources),
+        "bang_bang_switch_probability": BANG_BANG_SWITCH,
+        "shares": {e: _split(1.0, shares.get(e, {}), sources) for e in envs},
+        "documented_nan_keys": {e: list(documented_nan.get(e, ())) for e in envs},
+        "machine": machine_info(),
+        "envs": report_envs,
+        "totals": totals,
+    }
     report["ok"] = soak_ok(report)
     return report
 
@@ -367,12 +412,16 @@ def _totals(runs: Any) -> dict[str, Any]:
     runs = list(runs)
     steps = sum(r["steps"] for r in runs)
     seconds = sum(r["seconds"] for r in runs)
-    return {"steps": steps, "episodes": sum(r["episodes"] for r in runs), "seconds": seconds,
-            "steps_per_second": steps / seconds if seconds > 0 else 0.0,
-            "exceptions": sum(r["exceptions"]["count"] for r in runs),
-            "non_finite": sum(r["non_finite"]["count"] for r in runs),
-            "documented_nan": sum(r["documented_nan"] for r in runs),
-            "stopped": sum(1 for r in runs if "stopped" in r)}
+    return {
+        "steps": steps,
+        "episodes": sum(r["episodes"] for r in runs),
+        "seconds": seconds,
+        "steps_per_second": steps / seconds if seconds > 0 else 0.0,
+        "exceptions": sum(r["exceptions"]["count"] for r in runs),
+        "non_finite": sum(r["non_finite"]["count"] for r in runs),
+        "documented_nan": sum(r["documented_nan"] for r in runs),
+        "stopped": sum(1 for r in runs if "stopped" in r),
+    }
 
 
 def soak_ok(report: Mapping[str, Any]) -> bool:
@@ -390,22 +439,48 @@ def format_soak_bench(report: Mapping[str, Any]) -> str:
         name = env_id.split("/")[-1]
         for source, r in entry["sources"].items():
             label = source if source != "reference" else f"reference ({r['policy']})"
-            rows.append((name, label, f"{r['steps']:,}", f"{r['episodes']:,}", f"{r['steps_per_second']:,.0f}",
-                         str(r["exceptions"]["count"]), str(r["non_finite"]["count"])))
+            rows.append(
+                (
+                    name,
+                    label,
+                    f"{r['steps']:,}",
+                    f"{r['episodes']:,}",
+                    f"{r['steps_per_second']:,.0f}",
+                    str(r["exceptions"]["count"]),
+                    str(r["non_finite"]["count"]),
+                )
+            )
             for e in r["exceptions"]["first"]:
                 notes.append(f"  {name} {source}: {e['where']} at step {e['step']}: {e['type']}: {e['message']}")
             for k in r["non_finite"]["first"]:
                 notes.append(f"  {name} {source}: non-finite {k['key']} at step {k['step']}")
             if "stopped" in r:
                 notes.append(f"  {name} {source}: stopped: {r['stopped']}")
-        rows.append((name, "all", f"{entry['steps']:,}", f"{entry['episodes']:,}",
-                     f"{entry['steps_per_second']:,.0f}", str(entry["exceptions"]), str(entry["non_finite"])))
+        rows.append(
+            (
+                name,
+                "all",
+                f"{entry['steps']:,}",
+                f"{entry['episodes']:,}",
+                f"{entry['steps_per_second']:,.0f}",
+                str(entry["exceptions"]),
+                str(entry["non_finite"]),
+            )
+        )
     t = report["totals"]
-    rows.append(("total", "", f"{t['steps']:,}", f"{t['episodes']:,}", f"{t['steps_per_second']:,.0f}",
-                 str(t["exceptions"]), str(t["non_finite"])))
+    rows.append(
+        (
+            "total",
+            "",
+            f"{t['steps']:,}",
+            f"{t['episodes']:,}",
+            f"{t['steps_per_second']:,.0f}",
+            str(t["exceptions"]),
+            str(t["non_finite"]),
+        )
+    )
     widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
-    lines = ["  ".join(c.rjust(w) if i >= 2 else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths)))
-             for r in rows]
+    lines = ["  ".join(c.rjust(w) if i >= 2 else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=False))) for r in rows]
     lines.insert(1, "-" * len(lines[0]))
     verdict = "OK: no exception, no non-finite value" if report["ok"] else "FAILED: see below"
     if t.get("documented_nan"):

@@ -19,9 +19,7 @@ The monograph's Table 5.1 (C++ on a Core2 Duo) is printed next to our relative c
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Sequence
-from pathlib import Path
 from typing import Any
 
 import coal
@@ -29,18 +27,24 @@ import numpy as np
 import pinocchio as pin
 from tqdm.auto import tqdm
 
-from ..geometry import LSS, PSS, SSV, TSS, PairBatch, distance
 from ..eval.machine import finish_machine_info, machine_info
-from .timing import CLOCK, alternating_rounds, timed_calls
+from ..geometry import LSS, PSS, SSV, TSS, PairBatch, distance
 from .coal_shapes import to_coal
 from .exceptions import BenchError
+from .timing import CLOCK, alternating_rounds, timed_calls
 
 __all__ = ["PAIR_TYPES", "TABLE_5_1", "format_ssv_bench", "run_ssv_bench"]
 
 PAIR_TYPES = ("PSS-PSS", "PSS-LSS", "LSS-LSS", "PSS-TSS", "LSS-TSS", "TSS-TSS")
 # monograph Table 5.1: absolute [us] and relative run-time on Lola's Core2 Duo 2.33 GHz
-TABLE_5_1 = {"PSS-PSS": (0.0538, 1.00), "PSS-LSS": (0.0555, 1.03), "LSS-LSS": (0.0773, 1.44),
-             "PSS-TSS": (0.0909, 1.69), "LSS-TSS": (0.3351, 6.23), "TSS-TSS": (0.9007, 16.74)}
+TABLE_5_1 = {
+    "PSS-PSS": (0.0538, 1.00),
+    "PSS-LSS": (0.0555, 1.03),
+    "LSS-LSS": (0.0773, 1.44),
+    "PSS-TSS": (0.0909, 1.69),
+    "LSS-TSS": (0.3351, 6.23),
+    "TSS-TSS": (0.9007, 16.74),
+}
 BATCH_SIZES = (1, 10, 100, 1000)
 
 
@@ -101,8 +105,14 @@ def _coal_pinocchio(pairs: Sequence[tuple[SSV, SSV]]) -> Callable[[], Any]:
     return run
 
 
-def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, min_time: float = 0.02,
-                  rounds: int = 9, progress: bool = True) -> dict[str, Any]:
+def run_ssv_bench(
+    *,
+    batch_sizes: Sequence[int] = BATCH_SIZES,
+    seed: int = 0,
+    min_time: float = 0.02,
+    rounds: int = 9,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Time ours and coal on the same pairs in alternating rounds; returns the report written by ``bench ssv --json``.
 
     Args:
@@ -135,8 +145,10 @@ def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, mi
         rows = {}
         for size in sizes:
             subset = pairs[:size]
-            samplers = {name: timed_calls(make(subset), min_time=min_time)
-                        for name, make in (("ours", _ours), ("coal", _coal_loop), ("coal_pinocchio", _coal_pinocchio))}
+            samplers = {
+                name: timed_calls(make(subset), min_time=min_time)
+                for name, make in (("ours", _ours), ("coal", _coal_loop), ("coal_pinocchio", _coal_pinocchio))
+            }
             timed = alternating_rounds(samplers, rounds=rounds)
             rows[str(size)] = {f"{name}_us_per_pair": timed.median(name) / size * 1e6 for name in samplers}
             if size == 100:
@@ -148,34 +160,58 @@ def run_ssv_bench(*, batch_sizes: Sequence[int] = BATCH_SIZES, seed: int = 0, mi
     bar.close()
     largest = str(sizes[-1])
     base = per_type["PSS-PSS"][largest]["ours_us_per_pair"]
-    table = {t: {"monograph_abs_us": TABLE_5_1[t][0], "monograph_rel": TABLE_5_1[t][1],
-                 f"ours_abs_us_batch{largest}": per_type[t][largest]["ours_us_per_pair"],
-                 "ours_rel": per_type[t][largest]["ours_us_per_pair"] / base} for t in PAIR_TYPES}
-    return {"benchmark": "ssv", "seed": seed, "batch_sizes": sizes,
-            "peer": "coal %s (coal.distance loop and pinocchio.computeDistances)" % coal.__version__,
-            "timing": {"rounds": rounds, "warmup": 1, "min_time_s": min_time, "clock": CLOCK,
-                       "order": "ours, coal, coal_pinocchio; reversed every other round"},
-            "machine": finish_machine_info(machine),
-            "per_pair_us": per_type, "ratio_vs_coal_batch100": ratios,
-            "ratio_vs_coal_batch100_rounds": ratio_rounds,
-            "ratio_vs_coal_batch100_max": max(ratios.values()), "table_5_1": table}
+    table = {
+        t: {
+            "monograph_abs_us": TABLE_5_1[t][0],
+            "monograph_rel": TABLE_5_1[t][1],
+            f"ours_abs_us_batch{largest}": per_type[t][largest]["ours_us_per_pair"],
+            "ours_rel": per_type[t][largest]["ours_us_per_pair"] / base,
+        }
+        for t in PAIR_TYPES
+    }
+    return {
+        "benchmark": "ssv",
+        "seed": seed,
+        "batch_sizes": sizes,
+        "peer": "coal %s (coal.distance loop and pinocchio.computeDistances)" % coal.__version__,
+        "timing": {
+            "rounds": rounds,
+            "warmup": 1,
+            "min_time_s": min_time,
+            "clock": CLOCK,
+            "order": "ours, coal, coal_pinocchio; reversed every other round",
+        },
+        "machine": finish_machine_info(machine),
+        "per_pair_us": per_type,
+        "ratio_vs_coal_batch100": ratios,
+        "ratio_vs_coal_batch100_rounds": ratio_rounds,
+        "ratio_vs_coal_batch100_max": max(ratios.values()),
+        "table_5_1": table,
+    }
 
 
 def format_ssv_bench(report: dict[str, Any]) -> str:
     """A plain-text table of per-pair times, ratios and Table 5.1."""
     sizes = [str(s) for s in report["batch_sizes"]]
     largest = sizes[-1]
-    head = "pair type | " + " | ".join(f"ours@{s}" for s in sizes) + " | coal@100 | pin@100 | ratio@100 | " \
+    head = (
+        "pair type | " + " | ".join(f"ours@{s}" for s in sizes) + " | coal@100 | pin@100 | ratio@100 | "
         f"Table5.1 [us] | Table5.1 rel | ours rel@{largest}"
+    )
     lines = [head, "-" * len(head)]
     for t, rows in report["per_pair_us"].items():
         tab = report["table_5_1"][t]
-        lines.append(f"{t:9s} | " + " | ".join(f"{rows[s]['ours_us_per_pair']:.3f}" for s in sizes)
-                     + f" | {rows['100']['coal_us_per_pair']:.3f} | {rows['100']['coal_pinocchio_us_per_pair']:.3f}"
-                     + f" | {_ratio_cell(report, t)} | {tab['monograph_abs_us']:.4f}"
-                     + f" | {tab['monograph_rel']:.2f} | {tab['ours_rel']:.2f}")
-    lines.append("times are microseconds per pair (medians over rounds); ratio = ours / faster coal variant on the same "
-                 "100 pairs, median (min-max) over rounds")
+        lines.append(
+            f"{t:9s} | "
+            + " | ".join(f"{rows[s]['ours_us_per_pair']:.3f}" for s in sizes)
+            + f" | {rows['100']['coal_us_per_pair']:.3f} | {rows['100']['coal_pinocchio_us_per_pair']:.3f}"
+            + f" | {_ratio_cell(report, t)} | {tab['monograph_abs_us']:.4f}"
+            + f" | {tab['monograph_rel']:.2f} | {tab['ours_rel']:.2f}"
+        )
+    lines.append(
+        "times are microseconds per pair (medians over rounds); ratio = ours / faster coal variant on the same "
+        "100 pairs, median (min-max) over rounds"
+    )
     lines.append(f"max ratio_vs_coal_batch100 = {report['ratio_vs_coal_batch100_max']:.3f}")
     return "\n".join(lines)
 

@@ -87,8 +87,9 @@ def _ik(a: BenchArgs) -> int:
 def _pik(a: BenchArgs) -> int:
     from .pik import format_pik_bench, run_pik_bench
 
-    report = run_pik_bench(seed=a.seed_or(), episodes=2 if a.quick else 10, quick=a.quick, progress=a.progress,
-                           **a.rounds_kwargs())
+    report = run_pik_bench(
+        seed=a.seed_or(), episodes=2 if a.quick else 10, quick=a.quick, progress=a.progress, **a.rounds_kwargs()
+    )
     print(format_pik_bench(report))
     _wrote(write_json(report, a.json_path))
     return 0
@@ -98,8 +99,9 @@ def _soak(a: BenchArgs) -> int:
     from .soak import format_soak_bench, run_soak_bench
 
     seconds = a.seconds if a.seconds is not None else (1.0 if a.quick else 10.0)
-    report = run_soak_bench(seconds=None if a.steps is not None else seconds, steps=a.steps, seed=a.seed_or(),
-                            progress=a.progress)
+    report = run_soak_bench(
+        seconds=None if a.steps is not None else seconds, steps=a.steps, seed=a.seed_or(), progress=a.progress
+    )
     print(format_soak_bench(report))
     _wrote(write_json(report, a.json_path))
     return 0 if report["ok"] else 1
@@ -138,9 +140,14 @@ def _learned(a: BenchArgs) -> int:
 
     episodes = a.episodes if a.episodes is not None else (2 if a.quick else 20)
     workers = a.workers if a.workers is not None else (1 if a.ray is None else ray_cpus(a.ray))
-    table = run_learned_bench(episodes=episodes, seed=a.seed_or(HELD_OUT_SEED),
-                              envs=None if a.envs is None else list(a.envs), progress=a.progress, workers=workers,
-                              ray_address=a.ray)
+    table = run_learned_bench(
+        episodes=episodes,
+        seed=a.seed_or(HELD_OUT_SEED),
+        envs=None if a.envs is None else list(a.envs),
+        progress=a.progress,
+        workers=workers,
+        ray_address=a.ray,
+    )
     markdown = learned_markdown(table)
     print(markdown)
     path = write_json(table, a.json_path)
@@ -164,9 +171,15 @@ def _scale(a: BenchArgs) -> int:
     except ImportError:
         ray_workers = ()
         print("Ray is not installed: the Ray rows are left out (pip install -e '.[ray]')")
-    report = run_scale_bench(workers=(a.workers or 2,), episodes=episodes, ray_workers=ray_workers,
-                             rounds=a.rounds or (1 if a.quick else 3), vec_steps=30 if a.quick else 300,
-                             seed=a.seed_or(), progress=a.progress)
+    report = run_scale_bench(
+        workers=(a.workers or 2,),
+        episodes=episodes,
+        ray_workers=ray_workers,
+        rounds=a.rounds or (1 if a.quick else 3),
+        vec_steps=30 if a.quick else 300,
+        seed=a.seed_or(),
+        progress=a.progress,
+    )
     print(format_scale_bench(report))
     _wrote(write_json(report, a.json_path))
     return 0
@@ -185,35 +198,66 @@ def _walk(a: BenchArgs) -> int:
 def _envs(a: BenchArgs) -> int:
     from .envs import format_envs_bench, run_envs_bench
 
-    report = run_envs_bench(seconds=0.3 if a.quick else 3.0, seed=a.seed_or(), progress=a.progress,
-                            **a.rounds_kwargs())
+    report = run_envs_bench(seconds=0.3 if a.quick else 3.0, seed=a.seed_or(), progress=a.progress, **a.rounds_kwargs())
     print(format_envs_bench(report))
     _wrote(write_json(report, a.json_path))
     return 0
 
 
 _ROUNDS = frozenset({"rounds"})
-BENCHES: Mapping[str, Bench] = {b.name: b for b in (
-    Bench("ssv", "swept-sphere distances against coal", _ROUNDS, _ssv),
-    Bench("envs", "steps/s against Gymnasium's Pusher/Humanoid, and every wrapped id against its raw env", _ROUNDS,
-          _envs),
-    Bench("ik", "the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra)", _ROUNDS, _ik),
-    Bench("walk", "the BipedWalk controller step, and its compiled whole-body IK against pinocchio's", _ROUNDS,
-          _walk),
-    Bench("pik", "predictive IK against local CLIK and the global optimum", _ROUNDS, _pik),
-    Bench("soak", "random, bang-bang and reference-policy actions on every env, counting exceptions and non-finite "
-          "values (exit status 1 when any)", frozenset({"seconds", "steps"}), _soak),
-    Bench("push", "the largest torso push the walking reference recovers from, with and without step adjustment "
-          "(also writes a PNG beside the JSON)", frozenset({"trials"}), _push),
-    Bench("ikd", "the kinematic IKD study of monograph 5.5.3 (figs. 5.21, 5.23, 5.24, 5.27 analogues: unstabilized "
-          "drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON)", frozenset(), _ikd),
-    Bench("learned", "every analytic reference and shipped learned baseline per env on held-out seeds (success, "
-          "failures, errors, pseudoenergy, step time, training cost; markdown and one time-vs-error PNG per env "
-          "beside the JSON)", frozenset({"episodes", "workers", "ray", "envs"}), _learned),
-    Bench("scale", "eval's episodes/s with --workers against the serial loop (alternating rounds, Amdahl's serial "
-          "fraction and its 64-core prediction) and make_vec's steps/s by num_envs, sync and async",
-          frozenset({"rounds", "episodes", "workers"}), _scale),
-)}
+BENCHES: Mapping[str, Bench] = {
+    b.name: b
+    for b in (
+        Bench("ssv", "swept-sphere distances against coal", _ROUNDS, _ssv),
+        Bench(
+            "envs",
+            "steps/s against Gymnasium's Pusher/Humanoid, and every wrapped id against its raw env",
+            _ROUNDS,
+            _envs,
+        ),
+        Bench("ik", "the AgriReach CLIK control step against mink's solve_ik (needs the 'bench' extra)", _ROUNDS, _ik),
+        Bench(
+            "walk", "the BipedWalk controller step, and its compiled whole-body IK against pinocchio's", _ROUNDS, _walk
+        ),
+        Bench("pik", "predictive IK against local CLIK and the global optimum", _ROUNDS, _pik),
+        Bench(
+            "soak",
+            "random, bang-bang and reference-policy actions on every env, counting exceptions and non-finite "
+            "values (exit status 1 when any)",
+            frozenset({"seconds", "steps"}),
+            _soak,
+        ),
+        Bench(
+            "push",
+            "the largest torso push the walking reference recovers from, with and without step adjustment "
+            "(also writes a PNG beside the JSON)",
+            frozenset({"trials"}),
+            _push,
+        ),
+        Bench(
+            "ikd",
+            "the kinematic IKD study of monograph 5.5.3 (figs. 5.21, 5.23, 5.24, 5.27 analogues: unstabilized "
+            "drift, k sweep, LIPM vs error compensation vs IKD hybrid; PNGs beside the JSON)",
+            frozenset(),
+            _ikd,
+        ),
+        Bench(
+            "learned",
+            "every analytic reference and shipped learned baseline per env on held-out seeds (success, "
+            "failures, errors, pseudoenergy, step time, training cost; markdown and one time-vs-error PNG per env "
+            "beside the JSON)",
+            frozenset({"episodes", "workers", "ray", "envs"}),
+            _learned,
+        ),
+        Bench(
+            "scale",
+            "eval's episodes/s with --workers against the serial loop (alternating rounds, Amdahl's serial "
+            "fraction and its 64-core prediction) and make_vec's steps/s by num_envs, sync and async",
+            frozenset({"rounds", "episodes", "workers"}),
+            _scale,
+        ),
+    )
+}
 """Every benchmark, by name, in the order ``redundancy-gym bench --help`` lists them."""
 
 
@@ -235,8 +279,9 @@ def run_bench(name: str, args: BenchArgs) -> int:
     extra = [option for option in given if option not in entry.options]
     if extra:
         takers = {option: [b.name for b in BENCHES.values() if option in b.options] for option in extra}
-        raise BenchError("; ".join(f"--{option} applies to bench {', '.join(names)} only"
-                                   for option, names in takers.items()))
+        raise BenchError(
+            "; ".join(f"--{option} applies to bench {', '.join(names)} only" for option, names in takers.items())
+        )
     if args.rounds is not None and args.rounds < 1:
         raise BenchError(f"--rounds must be >= 1, got {args.rounds}")
     return entry.run(args)

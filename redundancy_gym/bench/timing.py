@@ -26,9 +26,6 @@ The machine beside the figures is recorded by :mod:`redundancy_gym.eval.machine`
 
 from __future__ import annotations
 
-import os
-import platform
-import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -124,7 +121,7 @@ class Rounds:
         if not names:
             raise BenchError("a ratio needs at least one denominator candidate")
         bottom = np.min([self._samples(n) for n in names], axis=0)
-        return [float(a / b) for a, b in zip(top, bottom)]
+        return [float(a / b) for a, b in zip(top, bottom, strict=False)]
 
     def ratio(self, numerator: str, denominator: str | Sequence[str]) -> RatioStats:
         """:meth:`round_ratios` by their median, min and max."""
@@ -132,8 +129,12 @@ class Rounds:
 
     def to_json(self) -> dict[str, Any]:
         """Rounds, warm-up, order of each round and every sample [s]."""
-        return {"rounds": len(self.orders), "warmup": self.warmup, "orders": self.orders,
-                "samples_s": {n: list(v) for n, v in self.samples.items()}}
+        return {
+            "rounds": len(self.orders),
+            "warmup": self.warmup,
+            "orders": self.orders,
+            "samples_s": {n: list(v) for n, v in self.samples.items()},
+        }
 
     def _samples(self, name: str) -> NDArray[np.float64]:
         if name not in self.samples:
@@ -141,9 +142,9 @@ class Rounds:
         return np.asarray(self.samples[name], dtype=np.float64)
 
 
-
-def alternating_rounds(samplers: Mapping[str, Sampler], *, rounds: int, warmup: int = 1, progress: bool = False,
-                       desc: str = "rounds") -> Rounds:
+def alternating_rounds(
+    samplers: Mapping[str, Sampler], *, rounds: int, warmup: int = 1, progress: bool = False, desc: str = "rounds"
+) -> Rounds:
     """Sample every candidate once per round, alternating the order, after ``warmup`` unrecorded rounds.
 
     Args:

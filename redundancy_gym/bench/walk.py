@@ -41,13 +41,20 @@ from tqdm.auto import tqdm
 
 from ..controllers import CollisionObjective
 from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
-from ..policies.walking_policy import WalkingPolicy
-from ..eval.machine import finish_machine_info, machine_info
-from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, timed_call
 from ..eval.evaluate import make_env
+from ..eval.machine import finish_machine_info, machine_info
+from ..policies.walking_policy import WalkingPolicy
 from .exceptions import BenchError
+from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, timed_call
 
-__all__ = ["LOLA_CYCLE_US", "LOLA_IKD_CYCLE_US", "LOLA_OBSTACLE_CYCLE_US", "OBSTACLE_COURSES", "format_walk_bench", "run_walk_bench"]
+__all__ = [
+    "LOLA_CYCLE_US",
+    "LOLA_IKD_CYCLE_US",
+    "LOLA_OBSTACLE_CYCLE_US",
+    "OBSTACLE_COURSES",
+    "format_walk_bench",
+    "run_walk_bench",
+]
 
 ENV_ID = "redundancy_gym/BipedWalk-v0"
 LOLA_CYCLE_US = 548.0
@@ -100,8 +107,9 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     return times, active, success, contacts
 
 
-def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[float] | None = None
-          ) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
+def _walk(
+    speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[float] | None = None
+) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
     """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell.
     With a list ``zmp``, appends per period the distance [m] of the measured ZMP (the env's contact pressure, mapped
     into the plan's frame) from the pattern's reference ZMP, once the first step has begun."""
@@ -120,8 +128,12 @@ def _walk(speed: float, steps: int, seed: int, record: bool, ik: str = "clik", z
             times.append(seconds * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
             controller = policy.controller
-            if zmp is not None and info["zmp_valid"] and controller.pattern is not None \
-                    and controller.pattern.step_at(controller.time) >= 0:
+            if (
+                zmp is not None
+                and info["zmp_valid"]
+                and controller.pattern is not None
+                and controller.pattern.step_at(controller.time) >= 0
+            ):
                 rotation, translation = controller._world_to_plan
                 measured = (rotation @ np.array([*info["zmp"], 0.0]) + translation)[:2]
                 zmp.append(float(np.linalg.norm(measured - controller.pattern.reference_zmp(controller.time))))
@@ -157,6 +169,7 @@ class _Walks:
 
 def _timed_solve(solver: Any) -> Any:
     """``call -> seconds`` of one ``solver.step`` on a recorded IK call."""
+
     def timed(call: _Call) -> float:
         q, start, end, dt = call
         return timed_call(lambda: solver.step(q, start, end, dt))[1]
@@ -164,8 +177,15 @@ def _timed_solve(solver: Any) -> Any:
     return timed
 
 
-def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, repeats: int = 1,
-                   rounds: int = 7, progress: bool = True) -> dict[str, Any]:
+def run_walk_bench(
+    *,
+    speed: float = 0.7,
+    duration: float = 4.0,
+    seed: int = 0,
+    repeats: int = 1,
+    rounds: int = 7,
+    progress: bool = True,
+) -> dict[str, Any]:
     """Time the walking controller step (CLIK and IKD walks in alternating rounds), then its compiled IK against the
     pinocchio IK (alternating passes over the recorded states), then the obstacle courses; returns the report.
 
@@ -206,8 +226,10 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
     if not isinstance(compiled, CompiledWholeBodyIk) or ik is None:
         raise BenchError("bench walk needs the compiled IK backend (the policy default)")
     difference = max(float(np.max(np.abs(compiled.step(*c).q - ik.step(*c).q))) for c in calls)
-    passes = {"compiled": TimedPasses(_timed_solve(compiled), calls, repeats),
-              "python": TimedPasses(_timed_solve(ik), calls, repeats)}
+    passes = {
+        "compiled": TimedPasses(_timed_solve(compiled), calls, repeats),
+        "python": TimedPasses(_timed_solve(ik), calls, repeats),
+    }
     ik_rounds = alternating_rounds(passes, rounds=rounds, progress=progress, desc="bench walk IK rounds")
     compiled_median, compiled_p90 = passes["compiled"].summary_us(ik_rounds.warmup)
     python_median, python_p90 = passes["python"].summary_us(ik_rounds.warmup)
@@ -218,29 +240,53 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
     for course in tqdm(OBSTACLE_COURSES, desc="bench walk obstacles", disable=not progress):
         times, active, success, contacts = _obstacle_walk(course, seed)
         times, active = times[1:], active[1:]  # the first call plans the walk
-        near = [t for t, a in zip(times, active) if a]
-        obstacles[course] = {"step_us_median": float(np.median(times)), "step_us_p99": float(np.percentile(times, 99)),
-                             "rca_share": float(np.mean(active)),
-                             "step_us_median_rca": float(np.median(near)) if near else float("nan"),
-                             "steps": len(times), "success": success, "obstacle_contacts": contacts}
+        near = [t for t, a in zip(times, active, strict=False) if a]
+        obstacles[course] = {
+            "step_us_median": float(np.median(times)),
+            "step_us_p99": float(np.percentile(times, 99)),
+            "rca_share": float(np.mean(active)),
+            "step_us_median_rca": float(np.median(near)) if near else float("nan"),
+            "steps": len(times),
+            "success": success,
+            "obstacle_contacts": contacts,
+        }
         all_times += times
     obstacle_median = float(np.median(all_times))
     controller_median = walk_rounds.median("clik") * 1e6
     ikd_median = walk_rounds.median("ikd") * 1e6
     return {
-        "benchmark": "walk", "env": ENV_ID, "target_speed": speed, "duration": duration, "seed": seed,
-        "states": len(calls), "repeats": repeats, "fell": fell,
-        "timing": {"rounds": rounds, "warmup": skip, "clock": CLOCK, "walk_orders": walk_rounds.orders, "ik_orders": ik_rounds.orders,
-                   "sample": "clik/ikd: one walk's median step; compiled/python: one pass over the recorded states"},
+        "benchmark": "walk",
+        "env": ENV_ID,
+        "target_speed": speed,
+        "duration": duration,
+        "seed": seed,
+        "states": len(calls),
+        "repeats": repeats,
+        "fell": fell,
+        "timing": {
+            "rounds": rounds,
+            "warmup": skip,
+            "clock": CLOCK,
+            "walk_orders": walk_rounds.orders,
+            "ik_orders": ik_rounds.orders,
+            "sample": "clik/ikd: one walk's median step; compiled/python: one pass over the recorded states",
+        },
         "machine": finish_machine_info(machine),
-        "controller": {"step_us_median": controller_median, "step_us_p99": float(np.percentile(controller, 99)),
-                       "start_ms": float(np.median([w[0] for w in clik.times[skip:]])) * 1e-3},
+        "controller": {
+            "step_us_median": controller_median,
+            "step_us_p99": float(np.percentile(controller, 99)),
+            "start_ms": float(np.median([w[0] for w in clik.times[skip:]])) * 1e-3,
+        },
         "ik_compiled": {"step_us_median": compiled_median, "step_us_p90": compiled_p90},
         "ik_python": {"step_us_median": python_median, "step_us_p90": python_p90},
         "ik_compiled_vs_python": ik_stats.median,
         "ik_compiled_vs_python_rounds": ik_stats.to_json(),
-        "ikd": {"step_us_median": ikd_median, "step_us_p99": float(np.percentile(ikd_times, 99)),
-                "fell": ikd_fell, "rounds": rounds},
+        "ikd": {
+            "step_us_median": ikd_median,
+            "step_us_p99": float(np.percentile(ikd_times, 99)),
+            "fell": ikd_fell,
+            "rounds": rounds,
+        },
         "ikd_vs_clik": ikd_stats.median,
         "ikd_vs_clik_rounds": ikd_stats.to_json(),
         "zmp_rms_mm": {name: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for name, d in zmp.items()},
@@ -249,44 +295,57 @@ def run_walk_bench(*, speed: float = 0.7, duration: float = 4.0, seed: int = 0, 
         "ik_max_difference": difference,
         "controller_vs_lola": controller_median / LOLA_CYCLE_US,
         "controller_vs_lola_rounds": lola_stats.to_json(),
-        "obstacles": {"env": OBSTACLE_ENV_ID, "target_speed": 0.4, "courses": obstacles,
-                      "step_us_median": obstacle_median, "step_us_p99": float(np.percentile(all_times, 99))},
+        "obstacles": {
+            "env": OBSTACLE_ENV_ID,
+            "target_speed": 0.4,
+            "courses": obstacles,
+            "step_us_median": obstacle_median,
+            "step_us_p99": float(np.percentile(all_times, 99)),
+        },
         "obstacles_vs_lola_cycle": obstacle_median / LOLA_OBSTACLE_CYCLE_US,
-        "self_collision_pairs": sum(len(o.collision_model.layout().segment_pairs) for o in ik.objectives
-                                    if isinstance(o, CollisionObjective)),
+        "self_collision_pairs": sum(
+            len(o.collision_model.layout().segment_pairs) for o in ik.objectives if isinstance(o, CollisionObjective)
+        ),
     }
 
 
 def format_walk_bench(report: dict[str, Any]) -> str:
     """A plain-text summary."""
     c, k, p = report["controller"], report["ik_compiled"], report["ik_python"]
-    return "\n".join([
-        f"{report['env']} at {report['target_speed']} m/s, {report['duration']} s, seed {report['seed']}: "
-        f"{report['states']} IK states" + (" (fell)" if report["fell"] else ""),
-        f"controller step  median {c['step_us_median']:.1f} us  p99 {c['step_us_p99']:.1f} us  "
-        f"(start {c['start_ms']:.1f} ms)",
-        f"IK compiled      median {k['step_us_median']:.1f} us  p90 {k['step_us_p90']:.1f} us",
-        f"IK python        median {p['step_us_median']:.1f} us  p90 {p['step_us_p90']:.1f} us",
-        f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
-        f"(largest difference {report['ik_max_difference']:.1e})" + _rounds_text(report.get("ik_compiled_vs_python_rounds")),
-        f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)"
-        + _rounds_text(report.get("controller_vs_lola_rounds")),
-        f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
-        + ("  (fell)" if report["ikd"]["fell"] else ""),
-        "measured ZMP from the reference, rms: " + ", ".join(
-            f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")
-            for ik, v in report["zmp_rms_mm"].items()),
-        f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
-        f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
-        f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
-        *[f"with obstacles ({course}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us  "
-          f"RCA evaluating {100 * r['rca_share']:.0f} % of periods (median then {r['step_us_median_rca']:.1f} us)"
-          f"{'' if r['success'] else '  (course not passed)'}"
-          for course, r in report["obstacles"]["courses"].items()],
-        f"obstacles_vs_lola_cycle = {report['obstacles_vs_lola_cycle']:.3f}  (median "
-        f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
-        "collision avoidance)",
-    ])
+    return "\n".join(
+        [
+            f"{report['env']} at {report['target_speed']} m/s, {report['duration']} s, seed {report['seed']}: "
+            f"{report['states']} IK states" + (" (fell)" if report["fell"] else ""),
+            f"controller step  median {c['step_us_median']:.1f} us  p99 {c['step_us_p99']:.1f} us  "
+            f"(start {c['start_ms']:.1f} ms)",
+            f"IK compiled      median {k['step_us_median']:.1f} us  p90 {k['step_us_p90']:.1f} us",
+            f"IK python        median {p['step_us_median']:.1f} us  p90 {p['step_us_p90']:.1f} us",
+            f"ik_compiled_vs_python = {report['ik_compiled_vs_python']:.3f}  "
+            f"(largest difference {report['ik_max_difference']:.1e})"
+            + _rounds_text(report.get("ik_compiled_vs_python_rounds")),
+            f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)"
+            + _rounds_text(report.get("controller_vs_lola_rounds")),
+            f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
+            + ("  (fell)" if report["ikd"]["fell"] else ""),
+            "measured ZMP from the reference, rms: "
+            + ", ".join(
+                f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")
+                for ik, v in report["zmp_rms_mm"].items()
+            ),
+            f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
+            f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
+            f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
+            *[
+                f"with obstacles ({course}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us  "
+                f"RCA evaluating {100 * r['rca_share']:.0f} % of periods (median then {r['step_us_median_rca']:.1f} us)"
+                f"{'' if r['success'] else '  (course not passed)'}"
+                for course, r in report["obstacles"]["courses"].items()
+            ],
+            f"obstacles_vs_lola_cycle = {report['obstacles_vs_lola_cycle']:.3f}  (median "
+            f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
+            "collision avoidance)",
+        ]
+    )
 
 
 def _rounds_text(stats: dict[str, Any] | None) -> str:

@@ -6,16 +6,16 @@ The core never imports gymnasium, mujoco, envs, policies, wrappers or eval: :mod
 
 from .clik.acceleration_clik import AccelerationClik, AccelerationClikResult
 from .clik.clik import Clik, ClikProblem, ClikResult
-from .objectives.collision_objective import CollisionObjective
 from .clik.compiled_clik import CompiledClik
+from .clik.redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
 from .exceptions import ControllerError
-from .tasks.frame_axis_task import FrameAxisTask
-from .tasks.frame_position_task import FramePositionTask
+from .objectives.collision_objective import CollisionObjective
 from .objectives.joint_limit_objective import JointLimitObjective
 from .objectives.objective import Objective, ObjectiveValue, sum_objectives
 from .objectives.posture_objective import PostureObjective
 from .predictive.predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, PredictiveRollout
-from .clik.redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
+from .tasks.frame_axis_task import FrameAxisTask
+from .tasks.frame_position_task import FramePositionTask
 from .tasks.task import Task
 
 __all__ = [

@@ -7,4 +7,3 @@ __all__ = ["ControllerError"]
 
 class ControllerError(ValueError):
     """Invalid controller parameters or inputs (the message names the valid choices)."""
-

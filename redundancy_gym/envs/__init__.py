@@ -7,4 +7,11 @@ from .biped_walk import BipedWalkEnv
 from .exceptions import EnvConfigError, InvalidActionError
 from .planar_reach import PlanarReachEnv
 
-__all__ = ["AgriReachEnv", "BipedObstaclesEnv", "BipedWalkEnv", "EnvConfigError", "InvalidActionError", "PlanarReachEnv"]
+__all__ = [
+    "AgriReachEnv",
+    "BipedObstaclesEnv",
+    "BipedWalkEnv",
+    "EnvConfigError",
+    "InvalidActionError",
+    "PlanarReachEnv",
+]

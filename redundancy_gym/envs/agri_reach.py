@@ -210,32 +210,92 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"grasp_task"})
 
-    def __init__(self, difficulty: str = "medium", leaves_per_stem: int | None = None,
-                 fruits_per_stem: Sequence[int] | None = None, shoot_probability: float | None = None,
-                 cluster_spread: float | None = None, row_distance: float = 1.05, row_gap: float = 0.45,
-                 row_length: float = 8.0, stem_spacing: Sequence[float] = (0.25, 0.35),
-                 stem_diameter: Sequence[float] = (0.010, 0.015), fruit_diameter: Sequence[float] = (0.08, 0.09),
-                 harvest_band: Sequence[float] = (0.9, 1.3), prune: bool = True, pregrasp_distance: float = 0.15,
-                 approach_elevation: Sequence[float] = (0.0, 30.0), observed_obstacles: int = 32,
-                 max_joint_speed: float = 1.5, max_lift_speed: float = 0.4, position_weight: float = 1.0,
-                 orientation_weight: float = 0.2, energy_weight: float = 10.0, leaf_penalty: float = 0.1,
-                 collision_penalty: float = 200.0, success_bonus: float = 10.0,
-                 success_position_tolerance: float = 0.01, success_angle_tolerance: float = 10.0,
-                 clearance_horizon: float = 0.1, reset_noise_scale: float = 0.05, frame_skip: int = 1,
-                 reference_speed: float = 0.35, reference_turn_rate: float = 0.8, reference_min_duration: float = 1.5,
-                 reference_approach_speed: float = 0.12, render_mode: str | None = None, width: int = 480, height: int = 480, camera_name: str = "side",
-                 obs_noise: float | dict[str, float] | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        difficulty: str = "medium",
+        leaves_per_stem: int | None = None,
+        fruits_per_stem: Sequence[int] | None = None,
+        shoot_probability: float | None = None,
+        cluster_spread: float | None = None,
+        row_distance: float = 1.05,
+        row_gap: float = 0.45,
+        row_length: float = 8.0,
+        stem_spacing: Sequence[float] = (0.25, 0.35),
+        stem_diameter: Sequence[float] = (0.010, 0.015),
+        fruit_diameter: Sequence[float] = (0.08, 0.09),
+        harvest_band: Sequence[float] = (0.9, 1.3),
+        prune: bool = True,
+        pregrasp_distance: float = 0.15,
+        approach_elevation: Sequence[float] = (0.0, 30.0),
+        observed_obstacles: int = 32,
+        max_joint_speed: float = 1.5,
+        max_lift_speed: float = 0.4,
+        position_weight: float = 1.0,
+        orientation_weight: float = 0.2,
+        energy_weight: float = 10.0,
+        leaf_penalty: float = 0.1,
+        collision_penalty: float = 200.0,
+        success_bonus: float = 10.0,
+        success_position_tolerance: float = 0.01,
+        success_angle_tolerance: float = 10.0,
+        clearance_horizon: float = 0.1,
+        reset_noise_scale: float = 0.05,
+        frame_skip: int = 1,
+        reference_speed: float = 0.35,
+        reference_turn_rate: float = 0.8,
+        reference_min_duration: float = 1.5,
+        reference_approach_speed: float = 0.12,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+        camera_name: str = "side",
+        obs_noise: float | dict[str, float] | None = None,
+        **kwargs: Any,
+    ) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(self, difficulty, leaves_per_stem, fruits_per_stem, shoot_probability, cluster_spread,
-                                row_distance, row_gap, row_length, stem_spacing, stem_diameter, fruit_diameter,
-                                harvest_band, prune, pregrasp_distance, approach_elevation, observed_obstacles,
-                                max_joint_speed, max_lift_speed, position_weight, orientation_weight, energy_weight,
-                                leaf_penalty, collision_penalty, success_bonus, success_position_tolerance,
-                                success_angle_tolerance, clearance_horizon, reset_noise_scale, frame_skip,
-                                reference_speed, reference_turn_rate, reference_min_duration, reference_approach_speed,
-                                render_mode, width, height, camera_name, obs_noise=obs_noise)
+        utils.EzPickle.__init__(
+            self,
+            difficulty,
+            leaves_per_stem,
+            fruits_per_stem,
+            shoot_probability,
+            cluster_spread,
+            row_distance,
+            row_gap,
+            row_length,
+            stem_spacing,
+            stem_diameter,
+            fruit_diameter,
+            harvest_band,
+            prune,
+            pregrasp_distance,
+            approach_elevation,
+            observed_obstacles,
+            max_joint_speed,
+            max_lift_speed,
+            position_weight,
+            orientation_weight,
+            energy_weight,
+            leaf_penalty,
+            collision_penalty,
+            success_bonus,
+            success_position_tolerance,
+            success_angle_tolerance,
+            clearance_horizon,
+            reset_noise_scale,
+            frame_skip,
+            reference_speed,
+            reference_turn_rate,
+            reference_min_duration,
+            reference_approach_speed,
+            render_mode,
+            width,
+            height,
+            camera_name,
+            obs_noise=obs_noise,
+        )
         check_choice("difficulty", difficulty, DIFFICULTIES)
         scene = crop_row_defaults(difficulty)
         if leaves_per_stem is not None:
@@ -247,55 +307,76 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         if cluster_spread is not None:
             scene["cluster_spread"] = check_real("cluster_spread", cluster_spread, low=0.0, unit="m")
         positive = {"low": 0.0, "low_open": True, "unit": "m"}
-        scene.update(row_distance=check_real("row_distance", row_distance, **positive),
-                     row_gap=check_real("row_gap", row_gap, **positive),
-                     row_length=check_real("row_length", row_length, **positive),
-                     stem_spacing=check_range_pair("stem_spacing", stem_spacing, **positive),
-                     stem_diameter=check_range_pair("stem_diameter", stem_diameter, **positive),
-                     fruit_diameter=check_range_pair("fruit_diameter", fruit_diameter, **positive),
-                     harvest_band=check_range_pair("harvest_band", harvest_band, low=0.0, unit="m"))
+        scene.update(
+            row_distance=check_real("row_distance", row_distance, **positive),
+            row_gap=check_real("row_gap", row_gap, **positive),
+            row_length=check_real("row_length", row_length, **positive),
+            stem_spacing=check_range_pair("stem_spacing", stem_spacing, **positive),
+            stem_diameter=check_range_pair("stem_diameter", stem_diameter, **positive),
+            fruit_diameter=check_range_pair("fruit_diameter", fruit_diameter, **positive),
+            harvest_band=check_range_pair("harvest_band", harvest_band, low=0.0, unit="m"),
+        )
         if scene["stem_spacing"][0] < scene["stem_diameter"][1]:
-            raise EnvConfigError(f"stem_spacing must not let stems overlap: its low {scene['stem_spacing'][0]:g} m "
-                                 f"is below the largest stem_diameter {scene['stem_diameter'][1]:g} m")
+            raise EnvConfigError(
+                f"stem_spacing must not let stems overlap: its low {scene['stem_spacing'][0]:g} m "
+                f"is below the largest stem_diameter {scene['stem_diameter'][1]:g} m"
+            )
         if scene["fruit_diameter"][0] < MIN_FRUIT_DIAMETER:
-            raise EnvConfigError(f"fruit_diameter must be at least {MIN_FRUIT_DIAMETER} m (a smaller pepper sits so close "
-                                 f"to its stem that the gripper's approach corridor, {_CORRIDOR[2]} m in radius, "
-                                 f"touches the stem), got {fruit_diameter!r}")
+            raise EnvConfigError(
+                f"fruit_diameter must be at least {MIN_FRUIT_DIAMETER} m (a smaller pepper sits so close "
+                f"to its stem that the gripper's approach corridor, {_CORRIDOR[2]} m in radius, "
+                f"touches the stem), got {fruit_diameter!r}"
+            )
         if scene["row_length"] < 2.0 * scene["stem_spacing"][1]:
-            raise EnvConfigError(f"row_length must hold at least two plants: >= 2 x the largest stem_spacing = "
-                                 f"{2.0 * scene['stem_spacing'][1]:g} m, got {scene['row_length']:g} m")
+            raise EnvConfigError(
+                f"row_length must hold at least two plants: >= 2 x the largest stem_spacing = "
+                f"{2.0 * scene['stem_spacing'][1]:g} m, got {scene['row_length']:g} m"
+            )
         if scene["harvest_band"][1] - scene["harvest_band"][0] < scene["cluster_spread"]:
-            raise EnvConfigError(f"harvest_band must be at least cluster_spread = {scene['cluster_spread']:g} m high, "
-                                 f"got {harvest_band!r}")
+            raise EnvConfigError(
+                f"harvest_band must be at least cluster_spread = {scene['cluster_spread']:g} m high, "
+                f"got {harvest_band!r}"
+            )
         self._scene = scene
         self._difficulty = difficulty
         self._prune = check_bool("prune", prune)
-        self._pregrasp_distance = check_real("pregrasp_distance", pregrasp_distance, high=MAX_PREGRASP_DISTANCE,
-                                             **positive)
+        self._pregrasp_distance = check_real(
+            "pregrasp_distance", pregrasp_distance, high=MAX_PREGRASP_DISTANCE, **positive
+        )
         elevation = check_range_pair("approach_elevation", approach_elevation, low=0.0, high=60.0, unit="deg")
         self._elevation = np.deg2rad(elevation)
         self._k = check_int("observed_obstacles", observed_obstacles, low=0)
         self._max_joint_speed = check_real("max_joint_speed", max_joint_speed, low=0.0, low_open=True, unit="rad/s")
         self._max_lift_speed = check_real("max_lift_speed", max_lift_speed, low=0.0, low_open=True, unit="m/s")
-        self._weights = {name: check_real(name, value, low=0.0) for name, value in (
-            ("position_weight", position_weight), ("orientation_weight", orientation_weight),
-            ("energy_weight", energy_weight), ("leaf_penalty", leaf_penalty),
-            ("collision_penalty", collision_penalty), ("success_bonus", success_bonus))}
+        self._weights = {
+            name: check_real(name, value, low=0.0)
+            for name, value in (
+                ("position_weight", position_weight),
+                ("orientation_weight", orientation_weight),
+                ("energy_weight", energy_weight),
+                ("leaf_penalty", leaf_penalty),
+                ("collision_penalty", collision_penalty),
+                ("success_bonus", success_bonus),
+            )
+        }
         self._success_position = check_real("success_position_tolerance", success_position_tolerance, **positive)
-        self._success_angle = np.deg2rad(check_real("success_angle_tolerance", success_angle_tolerance, low=0.0,
-                                                    low_open=True, unit="deg"))
+        self._success_angle = np.deg2rad(
+            check_real("success_angle_tolerance", success_angle_tolerance, low=0.0, low_open=True, unit="deg")
+        )
         self._horizon = check_real("clearance_horizon", clearance_horizon, **positive)
         self.reference_timing = GraspPathTiming(
             check_real("reference_speed", reference_speed, low=0.0, low_open=True, unit="m/s"),
             check_real("reference_turn_rate", reference_turn_rate, low=0.0, low_open=True, unit="rad/s"),
             check_real("reference_min_duration", reference_min_duration, low=0.0, unit="s"),
-            check_real("reference_approach_speed", reference_approach_speed, low=0.0, low_open=True, unit="m/s"))
+            check_real("reference_approach_speed", reference_approach_speed, low=0.0, low_open=True, unit="m/s"),
+        )
         self._path: GraspPath | None = None
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0)
         self.frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
         check_choice("camera_name", camera_name, ("side", "front"))
-        width, height = check_render_arguments(render_mode, width, height, camera_name,
-                                               tuple(self.metadata["render_modes"]))
+        width, height = check_render_arguments(
+            render_mode, width, height, camera_name, tuple(self.metadata["render_modes"])
+        )
         self.render_mode = render_mode
         self.width, self.height, self.camera_name = width, height, camera_name
 
@@ -309,9 +390,20 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._renderer: mujoco.Renderer | None = None
 
         self.action_space = spaces.Box(-1.0, 1.0, shape=(9,), dtype=np.float32)
-        sizes = {"q": 9, "qdot": 9, "tcp_position": 3, "tcp_quaternion": 4, "grasp_position": 3, "approach": 3,
-                 "pregrasp_position": 3, "time": 1, "tcp_reference": 6, "tcp_reference_velocity": 6, "tcp_error": 3,
-                 "obstacles": _OBSTACLE_FEATURES * self._k}
+        sizes = {
+            "q": 9,
+            "qdot": 9,
+            "tcp_position": 3,
+            "tcp_quaternion": 4,
+            "grasp_position": 3,
+            "approach": 3,
+            "pregrasp_position": 3,
+            "time": 1,
+            "tcp_reference": 6,
+            "tcp_reference_velocity": 6,
+            "tcp_error": 3,
+            "obstacles": _OBSTACLE_FEATURES * self._k,
+        }
         self.observation_layout: dict[str, slice] = {}
         start = 0
         for name, size in sizes.items():
@@ -320,17 +412,26 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self.observation_space = spaces.Box(-np.inf, np.inf, shape=(start,), dtype=np.float64)
         self._obs = np.zeros(start)
         lay = self.observation_layout
-        self._noise = check_noise("obs_noise", obs_noise, {
-            "q": (lay["q"],), "qdot": (lay["qdot"],), "tcp": (lay["tcp_position"],),
-            "tcp_quaternion": (lay["tcp_quaternion"],)}, ("q", "qdot", "tcp"))
+        self._noise = check_noise(
+            "obs_noise",
+            obs_noise,
+            {
+                "q": (lay["q"],),
+                "qdot": (lay["qdot"],),
+                "tcp": (lay["tcp_position"],),
+                "tcp_quaternion": (lay["tcp_quaternion"],),
+            },
+            ("q", "qdot", "tcp"),
+        )
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._reset_episode_state()
         self._row: CropRow | None = None
         self._part_geoms = np.zeros(0, dtype=np.int64)
 
     # ------------------------------------------------------------------ gymnasium API
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[NDArray[np.float64], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float64], dict[str, Any]]:
         super().reset(seed=seed)
         self._reset_episode_state()
         rng = self.np_random
@@ -353,7 +454,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                 "no reachable pepper with a clear approach in 50 generated rows; loosen the scene (fewer shoots or "
                 "clusters, a wider harvest_band, a row_distance near 1.05 m, a longer row_length): row_distance="
                 f"{s['row_distance']:g} m, row_length={s['row_length']:g} m, stem_spacing={s['stem_spacing']}, "
-                f"harvest_band={s['harvest_band']}")
+                f"harvest_band={s['harvest_band']}"
+            )
         self._row = row
         self._target = target
         self._place_scene(row, target)
@@ -368,9 +470,14 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self.data.qpos[self._qpos] = q
         self.data.act[self._servo_act] = q
         mujoco.mj_forward(self.model, self.data)
-        self._path = GraspPath.plan(self.data.site_xpos[self._tcp_site].copy(),
-                                    self.data.site_xmat[self._tcp_site].reshape(3, 3)[:, 0].copy(), self._pregrasp,
-                                    self._grasp, self._approach, self.reference_timing)
+        self._path = GraspPath.plan(
+            self.data.site_xpos[self._tcp_site].copy(),
+            self.data.site_xmat[self._tcp_site].reshape(3, 3)[:, 0].copy(),
+            self._pregrasp,
+            self._grasp,
+            self._approach,
+            self.reference_timing,
+        )
         warn_if_time_limit_short(self, self._path.duration, "this episode's reference path")
         metrics = self._metrics(np.zeros(9))
         return self._get_obs(), metrics
@@ -504,8 +611,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._collided = self._collided or collision
         self._leaf_total += leaves
         qd = qdot.tolist()
-        margin = min(min(a - lo, hi - a) for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list,
-                                                               self._upper_list))
+        margin = min(
+            min(a - lo, hi - a)
+            for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list, self._upper_list, strict=False)
+        )
         at_goal = bool(error <= self._success_position and angle <= self._success_angle)
         success = (not self._collided) and at_goal
         return {
@@ -549,8 +658,13 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
                 far = _REACH + _ARM_RADIUS + PART_REACH
                 length = min(length, 2.0 * np.sqrt(max(far * far - (x0 - 0.02) ** 2, 0.0)))
             stems += int(np.floor(length / s["stem_spacing"][0])) + 1 if length > 0.0 else 0
-        return {"stem": stems, "shoot": stems, "fruit": stems * s["fruits_per_stem"][1],
-                "petiole": stems * s["leaves_per_stem"], "leaf": stems * s["leaves_per_stem"]}
+        return {
+            "stem": stems,
+            "shoot": stems,
+            "fruit": stems * s["fruits_per_stem"][1],
+            "petiole": stems * s["leaves_per_stem"],
+            "leaf": stems * s["leaves_per_stem"],
+        }
 
     def _fits(self, row: CropRow) -> bool:
         """Whether the row's parts fit the compiled geom pools (a row that would not is drawn again)."""
@@ -568,25 +682,27 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         fruits = np.flatnonzero((row.category == "fruit") & row.near_row[row.plant])
         center = row.vertices[fruits, 0]
         plant = row.plant[fruits]
-        stem = row.stem_base[plant] + ((center[:, 2] - row.stem_base[plant, 2])
-                                       / (row.stem_top[plant, 2] - row.stem_base[plant, 2]))[:, None] \
-            * (row.stem_top[plant] - row.stem_base[plant])
+        stem = row.stem_base[plant] + (
+            (center[:, 2] - row.stem_base[plant, 2]) / (row.stem_top[plant, 2] - row.stem_base[plant, 2])
+        )[:, None] * (row.stem_top[plant] - row.stem_base[plant])
         radial = center[:, :2] - stem[:, :2]
         radial /= np.maximum(np.linalg.norm(radial, axis=1), 1e-9)[:, None]
         towards_arm = -center[:, :2] / np.maximum(np.linalg.norm(center[:, :2], axis=1), 1e-9)[:, None]
         beta = rng.uniform(self._elevation[0], self._elevation[1], fruits.size)
         approach = np.column_stack([-np.cos(beta)[:, None] * radial, np.sin(beta)])
         pregrasp = center - self._pregrasp_distance * approach
-        ok = (np.sum(radial * towards_arm, axis=1) >= np.cos(np.deg2rad(50.0))) \
-            & (np.linalg.norm(pregrasp[:, :2], axis=1) <= _REACH - 0.35) & (pregrasp[:, 2] > 0.6) \
+        ok = (
+            (np.sum(radial * towards_arm, axis=1) >= np.cos(np.deg2rad(50.0)))
+            & (np.linalg.norm(pregrasp[:, :2], axis=1) <= _REACH - 0.35)
+            & (pregrasp[:, 2] > 0.6)
             & (pregrasp[:, 2] < 1.5)
+        )
         candidates = np.flatnonzero(ok)
         rng.shuffle(candidates)
         hard = np.flatnonzero(row.hard)
         for c in candidates:
             f = fruits[c]
-            corridor = LSS(center[c] - _CORRIDOR[0] * approach[c], center[c] - _CORRIDOR[1] * approach[c],
-                           _CORRIDOR[2])
+            corridor = LSS(center[c] - _CORRIDOR[0] * approach[c], center[c] - _CORRIDOR[1] * approach[c], _CORRIDOR[2])
             others = hard[hard != f]
             if others.size and _distances_to(row, others, corridor).min() < 0.01:
                 continue
@@ -607,8 +723,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._part_geoms = np.empty(len(row), dtype=np.int64)
         for category in POOL_CATEGORIES:
             k = np.flatnonzero(row.category == category)
-            self._part_geoms[k] = self._pool[category][np.arange(k.size) // 2 if category == "leaf" else
-                                                        np.arange(k.size)]
+            self._part_geoms[k] = self._pool[category][
+                np.arange(k.size) // 2 if category == "leaf" else np.arange(k.size)
+            ]
         for category in ("stem", "shoot", "petiole"):
             k = np.flatnonzero(row.category == category)
             g = self._pool[category][: k.size]
@@ -624,8 +741,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         g = self._pool["leaf"][: k.size // 2]
         m.geom_rgba[g] = PLANT_COLORS["leaf"]
         _place_blades(m, g, v[k[0::2]], v[k[1::2], 2], r[k[0::2]])
-        _place_capsules(m, np.array([self._approach_line]), self._pregrasp[None], self._grasp[None],
-                        np.array([0.003]))
+        _place_capsules(m, np.array([self._approach_line]), self._pregrasp[None], self._grasp[None], np.array([0.003]))
 
     def _build_collision_pairs(self, row: CropRow, target: int) -> None:
         """The pair batches of the episode: arm vs hard parts, non-adjacent arm pairs, and arm vs
@@ -647,17 +763,20 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         batches = []
         for hard in (True, False):
             k = parts[row.hard[parts] == hard]
-            volumes = PackedVolumes(np.concatenate([vertices, row.vertices[k]]),
-                                    np.concatenate([m.geom_size[arm, 0], row.radius[k]]),
-                                    np.concatenate([kinds, row.kind[k]]))
+            volumes = PackedVolumes(
+                np.concatenate([vertices, row.vertices[k]]),
+                np.concatenate([m.geom_size[arm, 0], row.radius[k]]),
+                np.concatenate([kinds, row.kind[k]]),
+            )
             ia = np.repeat(moving, k.size)
             ib = np.tile(self._n_arm + np.arange(k.size), n_moving)
             if not hard:
                 self._soft_part = np.tile(k, n_moving)  # leaves are counted per part
             batches.append(PairBatch(volumes, ia, ib, moving=n_moving))
         own = PackedVolumes(vertices, m.geom_size[arm, 0], kinds)
-        batches.append(PairBatch(own, volume_of[self._self_pairs[:, 0]], volume_of[self._self_pairs[:, 1]],
-                                 moving=n_moving))
+        batches.append(
+            PairBatch(own, volume_of[self._self_pairs[:, 0]], volume_of[self._self_pairs[:, 1]], moving=n_moving)
+        )
         for batch in batches:
             batch.attach_frames(self.data.geom_xpos[g0:g1], self.data.geom_xmat[g0:g1], self._half_length[1:])
         self._hard_batch, self._soft_batch, self._self_batch = batches
@@ -716,8 +835,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._tcp_site = m.site(AGRI_ARM_TCP).id
         self._arm_geoms = np.array([m.geom(n).id for n in AGRI_ARM_GEOMS])
         self._n_arm = len(AGRI_ARM_GEOMS)
-        self._half_length = np.where(m.geom_type[self._arm_geoms] == mujoco.mjtGeom.mjGEOM_CAPSULE,
-                                     m.geom_size[self._arm_geoms, 1], 0.0)
+        self._half_length = np.where(
+            m.geom_type[self._arm_geoms] == mujoco.mjtGeom.mjGEOM_CAPSULE, m.geom_size[self._arm_geoms, 1], 0.0
+        )
         moving = self._arm_geoms[1:]
         if m.geom_bodyid[self._arm_geoms[0]] != 0 or np.any(np.diff(moving) != 1):
             raise EnvConfigError("agri arm geoms must be the world-fixed column, then the moving geoms in id order")
@@ -727,8 +847,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         mujoco.mju_quat2Mat(column_frame, m.geom_quat[self._arm_geoms[0]])
         self._column_half_axis = column_frame[2::3] * self._half_length[0]
         self._self_pairs = _self_collision_pairs(m, self._arm_geoms)
-        self._pool = {c: np.array([m.geom(pool_geom_name(c, k)).id for k in range(n)], dtype=np.int64)
-                      for c, n in self._pool_capacity().items()}
+        self._pool = {
+            c: np.array([m.geom(pool_geom_name(c, k)).id for k in range(n)], dtype=np.int64)
+            for c, n in self._pool_capacity().items()
+        }
         self._pool_all = np.concatenate(list(self._pool.values()))
         self._approach_line = m.geom("approach_line").id
 
@@ -736,14 +858,17 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 def _distances_to(row: CropRow, parts: NDArray[np.int64], volume: LSS) -> NDArray[np.float64]:
     """SSV distances of the row's ``parts`` to one volume, in one compiled call."""
     n = parts.size
-    packed = PackedVolumes(np.concatenate([row.vertices[parts], volume.vertices[None]]),
-                           np.concatenate([row.radius[parts], [volume.radius]]),
-                           np.concatenate([row.kind[parts], [volume.kind]]))
+    packed = PackedVolumes(
+        np.concatenate([row.vertices[parts], volume.vertices[None]]),
+        np.concatenate([row.radius[parts], [volume.radius]]),
+        np.concatenate([row.kind[parts], [volume.kind]]),
+    )
     return indexed_distances(packed, np.arange(n), np.full(n, n)).distance
 
 
-def _place_capsules(m: mujoco.MjModel, g: NDArray[np.int64], p0: NDArray[np.float64], p1: NDArray[np.float64],
-                    r: NDArray[np.float64]) -> None:
+def _place_capsules(
+    m: mujoco.MjModel, g: NDArray[np.int64], p0: NDArray[np.float64], p1: NDArray[np.float64], r: NDArray[np.float64]
+) -> None:
     """Capsule geoms ``g`` from ``p0`` to ``p1`` (rows) with radii ``r``."""
     axis = p1 - p0
     length = np.linalg.norm(axis, axis=1)
@@ -761,8 +886,13 @@ def _quat_z_to(z: NDArray[np.float64]) -> NDArray[np.float64]:
     return q / np.linalg.norm(q, axis=1, keepdims=True)
 
 
-def _place_blades(m: mujoco.MjModel, g: NDArray[np.int64], first: NDArray[np.float64], right: NDArray[np.float64],
-                  half_thickness: NDArray[np.float64]) -> None:
+def _place_blades(
+    m: mujoco.MjModel,
+    g: NDArray[np.int64],
+    first: NDArray[np.float64],
+    right: NDArray[np.float64],
+    half_thickness: NDArray[np.float64],
+) -> None:
     """Flat ellipsoids over leaf blades (drawn, not simulated): ``first`` holds the (end, left, tip) triangle of
     each blade, ``right`` its other side corner."""
     end, left, tip = first[:, 0], first[:, 1], first[:, 2]
@@ -775,9 +905,10 @@ def _place_blades(m: mujoco.MjModel, g: NDArray[np.int64], first: NDArray[np.flo
     y /= np.maximum(width, 1e-12)[:, None]
     frame = np.stack([x, y, np.cross(x, y)], axis=2).reshape(-1, 9)  # columns: blade axis, side, normal
     m.geom_pos[g] = 0.5 * (end + tip)
-    m.geom_size[g] = np.column_stack([np.maximum(0.5 * length, 1e-3), np.maximum(0.5 * width, 1e-3),
-                                      np.maximum(half_thickness, 1e-3)])
+    m.geom_size[g] = np.column_stack(
+        [np.maximum(0.5 * length, 1e-3), np.maximum(0.5 * width, 1e-3), np.maximum(half_thickness, 1e-3)]
+    )
     quat = np.empty(4)
-    for gi, f in zip(g, frame):
+    for gi, f in zip(g, frame, strict=False):
         mujoco.mju_mat2Quat(quat, f)
         m.geom_quat[gi] = quat

@@ -27,11 +27,24 @@ from ..geometry import SSV, PackedVolumes, PairBatch
 from .biped_walk import BipedWalkEnv
 from .biped_walk import default_config as _walk_config
 from .exceptions import EnvConfigError
-from .validation import (check_choice, check_int, check_range_pair, check_real, check_real_array,
-                         warn_if_time_limit_short)
+from .validation import (
+    check_choice,
+    check_int,
+    check_range_pair,
+    check_real,
+    check_real_array,
+    warn_if_time_limit_short,
+)
 
-__all__ = ["COURSES", "MAX_EPISODE_STEPS", "OBSTACLE_FEATURES", "OBSTACLE_LOOKBEHIND", "WALK_START_TIME",
-           "BipedObstaclesEnv", "default_config"]
+__all__ = [
+    "COURSES",
+    "MAX_EPISODE_STEPS",
+    "OBSTACLE_FEATURES",
+    "OBSTACLE_LOOKBEHIND",
+    "WALK_START_TIME",
+    "BipedObstaclesEnv",
+    "default_config",
+]
 
 COURSES = ("beam", "triangle", "random")
 """Values of ``course``: the monograph's two experiments and a seeded random course per reset."""
@@ -179,28 +192,58 @@ class BipedObstaclesEnv(BipedWalkEnv):
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"biped"})
 
-    def __init__(self, target_speed: float = _WALK_SPEED, speed_weight: float = 1.0, lateral_weight: float = 0.5,
-                 healthy_reward: float = 0.05, energy_weight: float = 0.001, fall_penalty: float = 10.0,
-                 min_base_height: float = 0.55, max_torso_tilt: float = 0.8, reset_noise_scale: float = 0.02,
-                 velocity_feedforward: bool = True, floor_friction: float = 1.0, frame_skip: int = 2,
-                 render_mode: str | None = None, width: int = 640, height: int = 480,
-                 camera_name: str | None = "track", sensor_noise: float | dict[str, float] | None = None,
-                 push: list[dict[str, Any]] | dict[str, Any] | None = None, actuator_torque_scale: float = 1.0,
-                 course: str = "random", obstacles: Sequence[Mapping[str, Any]] | None = None,
-                 n_obstacles: Sequence[int] = (3, 6), obstacle_spacing: Sequence[float] = (1.2, 3.0),
-                 first_obstacle_distance: float = 1.5, observed_obstacles: int = 8, contact_weight: float = 1.0,
-                 success_distance: float = 1.0, speed_scale: float = 0.25, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        target_speed: float = _WALK_SPEED,
+        speed_weight: float = 1.0,
+        lateral_weight: float = 0.5,
+        healthy_reward: float = 0.05,
+        energy_weight: float = 0.001,
+        fall_penalty: float = 10.0,
+        min_base_height: float = 0.55,
+        max_torso_tilt: float = 0.8,
+        reset_noise_scale: float = 0.02,
+        velocity_feedforward: bool = True,
+        floor_friction: float = 1.0,
+        frame_skip: int = 2,
+        render_mode: str | None = None,
+        width: int = 640,
+        height: int = 480,
+        camera_name: str | None = "track",
+        sensor_noise: float | dict[str, float] | None = None,
+        push: list[dict[str, Any]] | dict[str, Any] | None = None,
+        actuator_torque_scale: float = 1.0,
+        course: str = "random",
+        obstacles: Sequence[Mapping[str, Any]] | None = None,
+        n_obstacles: Sequence[int] = (3, 6),
+        obstacle_spacing: Sequence[float] = (1.2, 3.0),
+        first_obstacle_distance: float = 1.5,
+        observed_obstacles: int = 8,
+        contact_weight: float = 1.0,
+        success_distance: float = 1.0,
+        speed_scale: float = 0.25,
+        **kwargs: Any,
+    ) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
         check_choice("course", course, COURSES)
         self._course = course
         self._n_obstacles = check_range_pair("n_obstacles", n_obstacles, low=1, integer=True)
-        self._spacing = check_range_pair("obstacle_spacing", obstacle_spacing, low=MAX_OBSTACLE_DEPTH, unit="m",
-                                         note=f"obstacles up to {MAX_OBSTACLE_DEPTH:g} m deep must not overlap")
-        self._first_distance = check_real("first_obstacle_distance", first_obstacle_distance,
-                                          low=_MIN_FIRST_DISTANCE, unit="m",
-                                          note="the standing toes reach x = 0.19 m and an obstacle may be 0.4 m deep")
+        self._spacing = check_range_pair(
+            "obstacle_spacing",
+            obstacle_spacing,
+            low=MAX_OBSTACLE_DEPTH,
+            unit="m",
+            note=f"obstacles up to {MAX_OBSTACLE_DEPTH:g} m deep must not overlap",
+        )
+        self._first_distance = check_real(
+            "first_obstacle_distance",
+            first_obstacle_distance,
+            low=_MIN_FIRST_DISTANCE,
+            unit="m",
+            note="the standing toes reach x = 0.19 m and an obstacle may be 0.4 m deep",
+        )
         self._k = check_int("observed_obstacles", observed_obstacles, low=0)
         self._contact_weight = check_real("contact_weight", contact_weight, low=0.0)
         self._success_distance = check_real("success_distance", success_distance, low=0.0, unit="m")
@@ -214,29 +257,67 @@ class BipedObstaclesEnv(BipedWalkEnv):
         else:
             self._obstacles = ()  # drawn at every reset
         start = BipedWalkEnv.OBSERVATION_SIZE
-        self.OBSERVATION_LAYOUT = {**BipedWalkEnv.OBSERVATION_LAYOUT,  # type: ignore[misc]
-                                   "obstacles": slice(start, start + OBSTACLE_FEATURES * self._k)}
+        self.OBSERVATION_LAYOUT = {
+            **BipedWalkEnv.OBSERVATION_LAYOUT,  # type: ignore[misc]
+            "obstacles": slice(start, start + OBSTACLE_FEATURES * self._k),
+        }
         self.OBSERVATION_SIZE = start + OBSTACLE_FEATURES * self._k  # type: ignore[misc]
         self._base_xml: str | None = None
         self._touched = False
         self._contact_steps = 0
-        super().__init__(target_speed=target_speed, speed_weight=speed_weight, lateral_weight=lateral_weight,
-                         healthy_reward=healthy_reward, energy_weight=energy_weight, fall_penalty=fall_penalty,
-                         min_base_height=min_base_height, max_torso_tilt=max_torso_tilt,
-                         reset_noise_scale=reset_noise_scale, velocity_feedforward=velocity_feedforward,
-                         floor_friction=floor_friction, frame_skip=frame_skip, render_mode=render_mode, width=width,
-                         height=height, camera_name=camera_name, sensor_noise=sensor_noise, push=push,
-                         actuator_torque_scale=actuator_torque_scale, speed_scale=speed_scale)
+        super().__init__(
+            target_speed=target_speed,
+            speed_weight=speed_weight,
+            lateral_weight=lateral_weight,
+            healthy_reward=healthy_reward,
+            energy_weight=energy_weight,
+            fall_penalty=fall_penalty,
+            min_base_height=min_base_height,
+            max_torso_tilt=max_torso_tilt,
+            reset_noise_scale=reset_noise_scale,
+            velocity_feedforward=velocity_feedforward,
+            floor_friction=floor_friction,
+            frame_skip=frame_skip,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+            camera_name=camera_name,
+            sensor_noise=sensor_noise,
+            push=push,
+            actuator_torque_scale=actuator_torque_scale,
+            speed_scale=speed_scale,
+        )
         utils.EzPickle.__init__(
-            self, target_speed=target_speed, speed_weight=speed_weight, lateral_weight=lateral_weight,
-            healthy_reward=healthy_reward, energy_weight=energy_weight, fall_penalty=fall_penalty,
-            min_base_height=min_base_height, max_torso_tilt=max_torso_tilt, reset_noise_scale=reset_noise_scale,
-            velocity_feedforward=velocity_feedforward, floor_friction=floor_friction, frame_skip=frame_skip,
-            render_mode=render_mode, width=width, height=height, camera_name=camera_name, sensor_noise=sensor_noise,
-            push=push, actuator_torque_scale=actuator_torque_scale, course=course, obstacles=obstacles,
-            n_obstacles=n_obstacles, obstacle_spacing=obstacle_spacing,
-            first_obstacle_distance=first_obstacle_distance, observed_obstacles=observed_obstacles,
-            contact_weight=contact_weight, success_distance=success_distance, speed_scale=speed_scale)
+            self,
+            target_speed=target_speed,
+            speed_weight=speed_weight,
+            lateral_weight=lateral_weight,
+            healthy_reward=healthy_reward,
+            energy_weight=energy_weight,
+            fall_penalty=fall_penalty,
+            min_base_height=min_base_height,
+            max_torso_tilt=max_torso_tilt,
+            reset_noise_scale=reset_noise_scale,
+            velocity_feedforward=velocity_feedforward,
+            floor_friction=floor_friction,
+            frame_skip=frame_skip,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+            camera_name=camera_name,
+            sensor_noise=sensor_noise,
+            push=push,
+            actuator_torque_scale=actuator_torque_scale,
+            course=course,
+            obstacles=obstacles,
+            n_obstacles=n_obstacles,
+            obstacle_spacing=obstacle_spacing,
+            first_obstacle_distance=first_obstacle_distance,
+            observed_obstacles=observed_obstacles,
+            contact_weight=contact_weight,
+            success_distance=success_distance,
+            speed_scale=speed_scale,
+        )
         if self._explicit:
             self._check_clear_of_standing_robot()
 
@@ -262,8 +343,16 @@ class BipedObstaclesEnv(BipedWalkEnv):
         old.close()
         self.model, self.data = self._initialize_simulation()
         self._resolve_names()
-        self.mujoco_renderer = MujocoRenderer(self.model, self.data, old.default_cam_config, self.width, self.height,
-                                              old.max_geom, self.camera_id, self.camera_name)
+        self.mujoco_renderer = MujocoRenderer(
+            self.model,
+            self.data,
+            old.default_cam_config,
+            self.width,
+            self.height,
+            old.max_geom,
+            self.camera_id,
+            self.camera_name,
+        )
 
     def _resolve_names(self) -> None:
         super()._resolve_names()
@@ -310,9 +399,11 @@ class BipedObstaclesEnv(BipedWalkEnv):
             return
         packed = PackedVolumes.from_volumes(volumes)
         robot = self._batch  # BipedWalk's self-collision batch: the robot's volumes are its first n_robot
-        all_volumes = PackedVolumes(np.concatenate([robot.vertices, packed.vertices]),
-                                    np.concatenate([robot.radii, packed.radii]),
-                                    np.concatenate([robot.kinds, packed.kinds]))
+        all_volumes = PackedVolumes(
+            np.concatenate([robot.vertices, packed.vertices]),
+            np.concatenate([robot.radii, packed.radii]),
+            np.concatenate([robot.kinds, packed.kinds]),
+        )
         index_a = np.repeat(np.arange(n_robot), len(volumes))
         index_b = np.tile(n_robot + np.arange(len(volumes)), n_robot)
         self._obstacle_batch = PairBatch(all_volumes, index_a, index_b, moving=n_robot)
@@ -336,21 +427,32 @@ class BipedObstaclesEnv(BipedWalkEnv):
         worst = int(np.argmin(distance))
         if distance[worst] <= 0.0:
             k = int(self._pair_obstacle[worst])
-            raise EnvConfigError(f"obstacles[{k}] overlaps the standing robot (swept-sphere distance "
-                                 f"{distance[worst]:.3f} m): the robot stands at the origin, its toes reach x = 0.19 m "
-                                 f"and its soles span |y| <= 0.165 m; got {self._obstacles[k]}")
+            raise EnvConfigError(
+                f"obstacles[{k}] overlaps the standing robot (swept-sphere distance "
+                f"{distance[worst]:.3f} m): the robot stands at the origin, its toes reach x = 0.19 m "
+                f"and its soles span |y| <= 0.165 m; got {self._obstacles[k]}"
+            )
 
     # ------------------------------------------------------------------ gymnasium API
     def reset_model(self) -> NDArray[np.float64]:
         if not self._explicit and self._course == "random":
-            self._set_course(random_course(self.np_random, n_obstacles=self._n_obstacles,  # type: ignore[arg-type]
-                                           spacing=self._spacing, first_obstacle_distance=self._first_distance))
+            self._set_course(
+                random_course(
+                    self.np_random,
+                    n_obstacles=self._n_obstacles,  # type: ignore[arg-type]
+                    spacing=self._spacing,
+                    first_obstacle_distance=self._first_distance,
+                )
+            )
         self._contact_steps = 0
         obs = super().reset_model()
         self._touched = self._touching_obstacle()  # the contacts of the starting state (mj_forward of set_state)
         if self._target_speed > 0.0:
-            warn_if_time_limit_short(self, WALK_START_TIME + self._course_end / self._target_speed,
-                                     f"walking this course (course_end {self._course_end:.2f} m) at target_speed")
+            warn_if_time_limit_short(
+                self,
+                WALK_START_TIME + self._course_end / self._target_speed,
+                f"walking this course (course_end {self._course_end:.2f} m) at target_speed",
+            )
         return obs
 
     def _step_mujoco_simulation(self, ctrl: NDArray[np.float64], n_frames: int) -> None:
@@ -462,28 +564,42 @@ class BipedObstaclesEnv(BipedWalkEnv):
 def _parse_obstacles(value: Any) -> tuple[Obstacle, ...]:
     """The ``obstacles`` argument as a course, each entry checked with the name of its key."""
     if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence) or not value:
-        raise EnvConfigError("obstacles must be None or a non-empty list of dicts {'shape': box | prism | cylinder, "
-                             f"'center': [x, y, z], 'size': [...], 'yaw': 0.0}}, got {value!r}")
+        raise EnvConfigError(
+            "obstacles must be None or a non-empty list of dicts {'shape': box | prism | cylinder, "
+            f"'center': [x, y, z], 'size': [...], 'yaw': 0.0}}, got {value!r}"
+        )
     course = []
     for i, item in enumerate(value):
         name = f"obstacles[{i}]"
         if not isinstance(item, Mapping):
-            raise EnvConfigError(f"{name} must be a dict with keys shape, center, size (yaw, kind optional), got "
-                                 f"{item!r}")
+            raise EnvConfigError(
+                f"{name} must be a dict with keys shape, center, size (yaw, kind optional), got {item!r}"
+            )
         unknown = sorted(str(k) for k in item if k not in _OBSTACLE_KEYS)
         missing = [k for k in ("shape", "center", "size") if k not in item]
         if unknown or missing:
-            raise EnvConfigError(f"{name} has {'unknown key(s) ' + ', '.join(unknown) if unknown else ''}"
-                                 f"{'; ' if unknown and missing else ''}"
-                                 f"{'missing key(s) ' + ', '.join(missing) if missing else ''}; valid: "
-                                 f"{', '.join(_OBSTACLE_KEYS)} (yaw and kind optional)")
+            raise EnvConfigError(
+                f"{name} has {'unknown key(s) ' + ', '.join(unknown) if unknown else ''}"
+                f"{'; ' if unknown and missing else ''}"
+                f"{'missing key(s) ' + ', '.join(missing) if missing else ''}; valid: "
+                f"{', '.join(_OBSTACLE_KEYS)} (yaw and kind optional)"
+            )
         shape = check_choice(f"{name}['shape']", item["shape"], OBSTACLE_SHAPES)
-        center = check_real_array(f"{name}['center']", item["center"], shape=(3,), unit="m",
-                                  what="an (x, y, z) triple of finite real numbers")
+        center = check_real_array(
+            f"{name}['center']", item["center"], shape=(3,), unit="m", what="an (x, y, z) triple of finite real numbers"
+        )
         n = 2 if shape == "cylinder" else 3
-        size = check_real_array(f"{name}['size']", item["size"], shape=(n,), low=0.0, low_open=True, unit="m",
-                                what=f"a {shape}'s " + ("(radius, height)" if n == 2 else "(depth, width, height)")
-                                     + " of finite real numbers")
+        size = check_real_array(
+            f"{name}['size']",
+            item["size"],
+            shape=(n,),
+            low=0.0,
+            low_open=True,
+            unit="m",
+            what=f"a {shape}'s "
+            + ("(radius, height)" if n == 2 else "(depth, width, height)")
+            + " of finite real numbers",
+        )
         yaw = check_real(f"{name}['yaw']", item.get("yaw", 0.0), unit="rad")
         kind = check_choice(f"{name}['kind']", item.get("kind", "custom"), OBSTACLE_KINDS)
         course.append(Obstacle(shape, tuple(center), tuple(size), yaw, kind))  # type: ignore[arg-type]

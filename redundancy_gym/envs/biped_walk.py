@@ -24,18 +24,38 @@ from ..geometry import PackedVolumes, PairBatch
 from .exceptions import EnvConfigError, InvalidActionError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
-from .validation import (MAX_FRAME_SKIP, check_bool, check_int, check_noise, check_real, check_render_arguments,
-                         render_modes)
+from .validation import (
+    MAX_FRAME_SKIP,
+    check_bool,
+    check_int,
+    check_noise,
+    check_real,
+    check_render_arguments,
+    render_modes,
+)
 
-__all__ = ["MAX_TARGET_SPEED", "NOMINAL_POSTURE", "STANDING_PELVIS_HEIGHT", "SUCCESS_SPEED_TOLERANCE",
-           "BipedWalkEnv", "default_config"]
+__all__ = [
+    "MAX_TARGET_SPEED",
+    "NOMINAL_POSTURE",
+    "STANDING_PELVIS_HEIGHT",
+    "SUCCESS_SPEED_TOLERANCE",
+    "BipedWalkEnv",
+    "default_config",
+]
 
 _TIMESTEP = 0.002  # [s], the MJCF option
 _GRAVITY = 9.81
 NOMINAL_POSTURE: dict[str, float] = {
-    "r_hip_pitch": -0.5002, "r_knee": 0.9921, "r_ankle_pitch": -0.4919,
-    "l_hip_pitch": -0.5002, "l_knee": 0.9921, "l_ankle_pitch": -0.4919,
-    "r_shoulder_roll": -0.1835, "r_elbow": -0.2976, "l_shoulder_roll": 0.1835, "l_elbow": -0.2976,
+    "r_hip_pitch": -0.5002,
+    "r_knee": 0.9921,
+    "r_ankle_pitch": -0.4919,
+    "l_hip_pitch": -0.5002,
+    "l_knee": 0.9921,
+    "l_ankle_pitch": -0.4919,
+    "r_shoulder_roll": -0.1835,
+    "r_elbow": -0.2976,
+    "l_shoulder_roll": 0.1835,
+    "l_elbow": -0.2976,
 }
 """Standing posture [rad] (joints not named are 0): knees bent so that the CoM is 0.91 m high, feet flat."""
 MAX_TARGET_SPEED = 1.0
@@ -47,8 +67,16 @@ STANDING_PELVIS_HEIGHT = 0.9187
 SUCCESS_SPEED_TOLERANCE = 0.02
 """Smallest band [m/s] around ``target_speed`` in which the mean speed counts as a success (10 % of the command
 above 0.2 m/s): standing still at ``target_speed=0`` is a success."""
-_UPPER_BODY = ("pelvis_roll", "pelvis_yaw", "r_shoulder_pitch", "r_shoulder_roll", "r_elbow", "l_shoulder_pitch",
-               "l_shoulder_roll", "l_elbow")
+_UPPER_BODY = (
+    "pelvis_roll",
+    "pelvis_yaw",
+    "r_shoulder_pitch",
+    "r_shoulder_roll",
+    "r_elbow",
+    "l_shoulder_pitch",
+    "l_shoulder_roll",
+    "l_elbow",
+)
 
 
 def default_config() -> dict[str, Any]:
@@ -190,10 +218,23 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 250}
-    _SIZES = (("base_position", 3), ("base_quaternion", 4), ("q", 22), ("base_linear_velocity", 3),
-              ("base_angular_velocity", 3), ("qdot", 22), ("right_force", 3), ("right_torque", 3),
-              ("left_force", 3), ("left_torque", 3), ("imu_acceleration", 3), ("imu_gyro", 3),
-              ("imu_orientation", 4), ("command", 1), ("time", 1))
+    _SIZES = (
+        ("base_position", 3),
+        ("base_quaternion", 4),
+        ("q", 22),
+        ("base_linear_velocity", 3),
+        ("base_angular_velocity", 3),
+        ("qdot", 22),
+        ("right_force", 3),
+        ("right_torque", 3),
+        ("left_force", 3),
+        ("left_torque", 3),
+        ("imu_acceleration", 3),
+        ("imu_gyro", 3),
+        ("imu_orientation", 4),
+        ("command", 1),
+        ("time", 1),
+    )
     OBSERVATION_LAYOUT: dict[str, slice] = {}
     _start = 0
     for _name, _size in _SIZES:
@@ -207,67 +248,141 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"biped"})
 
-    def __init__(self, target_speed: float = 0.5, speed_weight: float = 1.0, lateral_weight: float = 0.5,
-                 healthy_reward: float = 0.05, energy_weight: float = 0.001, fall_penalty: float = 10.0,
-                 min_base_height: float = 0.55, max_torso_tilt: float = 0.8, reset_noise_scale: float = 0.02,
-                 velocity_feedforward: bool = True, floor_friction: float = 1.0, frame_skip: int = 2,
-                 render_mode: str | None = None, width: int = 640, height: int = 480,
-                 camera_name: str | None = "track", sensor_noise: float | dict[str, float] | None = None,
-                 push: list[dict[str, Any]] | dict[str, Any] | None = None, actuator_torque_scale: float = 1.0,
-                 speed_scale: float = 0.25, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        target_speed: float = 0.5,
+        speed_weight: float = 1.0,
+        lateral_weight: float = 0.5,
+        healthy_reward: float = 0.05,
+        energy_weight: float = 0.001,
+        fall_penalty: float = 10.0,
+        min_base_height: float = 0.55,
+        max_torso_tilt: float = 0.8,
+        reset_noise_scale: float = 0.02,
+        velocity_feedforward: bool = True,
+        floor_friction: float = 1.0,
+        frame_skip: int = 2,
+        render_mode: str | None = None,
+        width: int = 640,
+        height: int = 480,
+        camera_name: str | None = "track",
+        sensor_noise: float | dict[str, float] | None = None,
+        push: list[dict[str, Any]] | dict[str, Any] | None = None,
+        actuator_torque_scale: float = 1.0,
+        speed_scale: float = 0.25,
+        **kwargs: Any,
+    ) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(self, target_speed, speed_weight, lateral_weight, healthy_reward, energy_weight,
-                                fall_penalty, min_base_height, max_torso_tilt, reset_noise_scale,
-                                velocity_feedforward, floor_friction, frame_skip, render_mode, width, height,
-                                camera_name, sensor_noise=sensor_noise, push=push,
-                                actuator_torque_scale=actuator_torque_scale, speed_scale=speed_scale)
-        self._target_speed = check_real("target_speed", target_speed, low=0.0, high=MAX_TARGET_SPEED, unit="m/s",
-                                        note="the walking reference's fastest gait, 0.6 m steps every 0.6 s; "
-                                             "it walks reliably up to about 0.9 m/s")
+        utils.EzPickle.__init__(
+            self,
+            target_speed,
+            speed_weight,
+            lateral_weight,
+            healthy_reward,
+            energy_weight,
+            fall_penalty,
+            min_base_height,
+            max_torso_tilt,
+            reset_noise_scale,
+            velocity_feedforward,
+            floor_friction,
+            frame_skip,
+            render_mode,
+            width,
+            height,
+            camera_name,
+            sensor_noise=sensor_noise,
+            push=push,
+            actuator_torque_scale=actuator_torque_scale,
+            speed_scale=speed_scale,
+        )
+        self._target_speed = check_real(
+            "target_speed",
+            target_speed,
+            low=0.0,
+            high=MAX_TARGET_SPEED,
+            unit="m/s",
+            note="the walking reference's fastest gait, 0.6 m steps every 0.6 s; it walks reliably up to about 0.9 m/s",
+        )
         self._speed_weight = check_real("speed_weight", speed_weight, low=0.0)
         self._speed_scale = check_real("speed_scale", speed_scale, low=0.0, low_open=True, unit="m/s")
         self._lateral_weight = check_real("lateral_weight", lateral_weight, low=0.0)
         self._healthy_reward = check_real("healthy_reward", healthy_reward, low=0.0)
         self._energy_weight = check_real("energy_weight", energy_weight, low=0.0)
         self._fall_penalty = check_real("fall_penalty", fall_penalty, low=0.0)
-        self._min_base_height = check_real("min_base_height", min_base_height, low=0.0, high=STANDING_PELVIS_HEIGHT,
-                                           low_open=True, high_open=True, unit="m",
-                                           note="a fall is the pelvis below it; the standing pelvis height is "
-                                                f"{STANDING_PELVIS_HEIGHT:g} m")
-        self._max_torso_tilt = check_real("max_torso_tilt", max_torso_tilt, low=0.0, high=np.pi, low_open=True,
-                                          unit="rad")
+        self._min_base_height = check_real(
+            "min_base_height",
+            min_base_height,
+            low=0.0,
+            high=STANDING_PELVIS_HEIGHT,
+            low_open=True,
+            high_open=True,
+            unit="m",
+            note=f"a fall is the pelvis below it; the standing pelvis height is {STANDING_PELVIS_HEIGHT:g} m",
+        )
+        self._max_torso_tilt = check_real(
+            "max_torso_tilt", max_torso_tilt, low=0.0, high=np.pi, low_open=True, unit="rad"
+        )
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
         self._velocity_feedforward = check_bool("velocity_feedforward", velocity_feedforward)
         self._floor_friction = check_real("floor_friction", floor_friction, low=0.0, low_open=True)
         frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
-        self._torque_scale = check_real("actuator_torque_scale", actuator_torque_scale, low=0.0, high=1.0,
-                                        low_open=True, note="a fraction of the servos' torque limits")
+        self._torque_scale = check_real(
+            "actuator_torque_scale",
+            actuator_torque_scale,
+            low=0.0,
+            high=1.0,
+            low_open=True,
+            note="a fraction of the servos' torque limits",
+        )
         layout = self.OBSERVATION_LAYOUT
-        self._noise = check_noise("sensor_noise", sensor_noise, {
-            "q": (layout["q"],), "qdot": (layout["qdot"],),
-            "force": (layout["right_force"], layout["left_force"]),
-            "torque": (layout["right_torque"], layout["left_torque"]),
-            "imu": (layout["imu_acceleration"], layout["imu_gyro"]), "imu_orientation": (layout["imu_orientation"],),
-            "base": (layout["base_position"], layout["base_quaternion"], layout["base_linear_velocity"],
-                     layout["base_angular_velocity"])}, ("q", "qdot", "force", "torque", "imu"))
+        self._noise = check_noise(
+            "sensor_noise",
+            sensor_noise,
+            {
+                "q": (layout["q"],),
+                "qdot": (layout["qdot"],),
+                "force": (layout["right_force"], layout["left_force"]),
+                "torque": (layout["right_torque"], layout["left_torque"]),
+                "imu": (layout["imu_acceleration"], layout["imu_gyro"]),
+                "imu_orientation": (layout["imu_orientation"],),
+                "base": (
+                    layout["base_position"],
+                    layout["base_quaternion"],
+                    layout["base_linear_velocity"],
+                    layout["base_angular_velocity"],
+                ),
+            },
+            ("q", "qdot", "force", "torque", "imu"),
+        )
         self._push = None if push is None else PushSchedule(push, "torso")
         width, height = check_render_arguments(render_mode, width, height, camera_name)
-        self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
-                         "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
+        self.metadata = {
+            "render_modes": render_modes("rgb_array", "depth_array"),
+            "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip))),
+        }
         observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
-        MujocoEnv.__init__(self, str(BIPED_XML), int(frame_skip), observation_space=observation_space,
-                           render_mode=render_mode, width=width, height=height,
-                           camera_name=camera_name if render_mode is not None else None)
+        MujocoEnv.__init__(
+            self,
+            str(BIPED_XML),
+            int(frame_skip),
+            observation_space=observation_space,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+            camera_name=camera_name if render_mode is not None else None,
+        )
         self._resolve_names()
         if self._push is not None:
             ids = []
             for body in self._push.bodies:
                 ids.append(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, body))
                 if ids[-1] <= 0:
-                    raise EnvConfigError(f"push names the body {body!r}, which the biped does not have (e.g. torso, "
-                                         "pelvis, r_thigh)")
+                    raise EnvConfigError(
+                        f"push names the body {body!r}, which the biped does not have (e.g. torso, pelvis, r_thigh)"
+                    )
             self._push_bodies = ids
         self._push_force = np.zeros(3)
         self._time = 0.0
@@ -349,8 +464,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._fell = False
         self._self_collided = False
         q = self._nominal.copy()
-        q[self._upper_body] += self.np_random.uniform(-self._reset_noise_scale, self._reset_noise_scale,
-                                                      size=self._upper_body.size)
+        q[self._upper_body] += self.np_random.uniform(
+            -self._reset_noise_scale, self._reset_noise_scale, size=self._upper_body.size
+        )
         q = np.clip(q, self._lower, self._upper)
         qpos = self.init_qpos.copy()
         qpos[:7] = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
@@ -412,8 +528,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         ended = metrics["fell"] or metrics["self_collision"]
         terms = {
             # a bounded tracking reward: standing still (v_x = 0) earns exp(-(target / scale)^2), 2 % at 0.5 m/s
-            "reward_speed": self._speed_weight * math.exp(
-                -(((metrics["forward_speed"] - self._target_speed) / self._speed_scale) ** 2)),
+            "reward_speed": self._speed_weight
+            * math.exp(-(((metrics["forward_speed"] - self._target_speed) / self._speed_scale) ** 2)),
             "reward_lateral": -self._lateral_weight * metrics["lateral_speed"] ** 2,
             "reward_healthy": 0.0 if ended else self._healthy_reward,
             "reward_energy": -self._energy_weight * metrics["pseudoenergy"],
@@ -439,8 +555,12 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         mujoco.mj_subtreeVel(m, d)
         mean_speed = distance / self._time if self._time > 0.0 else 0.0
         ok = not (self._fell or self._self_collided)
-        moments = np.array([d.site_xmat[s].reshape(3, 3) @ -d.sensordata[a:a + 3]
-                            for s, a in zip(self._ankle_sites, self._torque_adr)])
+        moments = np.array(
+            [
+                d.site_xmat[s].reshape(3, 3) @ -d.sensordata[a : a + 3]
+                for s, a in zip(self._ankle_sites, self._torque_adr, strict=False)
+            ]
+        )
         return {
             "time": self._time,
             "forward_speed": float(forward_speed),
@@ -465,8 +585,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "peak_joint_speed": float(np.max(np.abs(qdot))),
             "speed_error": abs(float(forward_speed) - self._target_speed),
             "mean_speed_error": abs(mean_speed - self._target_speed),
-            "is_success": bool(ok and self._time > 0.0 and abs(mean_speed - self._target_speed)
-                               <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)),
+            "is_success": bool(
+                ok
+                and self._time > 0.0
+                and abs(mean_speed - self._target_speed) <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)
+            ),
         }
 
     def _contact_pressure(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -527,23 +650,38 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._scale = np.maximum(self._nominal - self._lower, self._upper - self._nominal)
         self._servo_lead = -m.actuator_biasprm[: len(BIPED_SERVOS), 2] / m.actuator_gainprm[: len(BIPED_SERVOS), 0]
         self._upper_body = np.array([BIPED_JOINTS.index(j) for j in _UPPER_BODY])
-        names = ("r_ankle_force", "r_ankle_torque", "l_ankle_force", "l_ankle_torque", "imu_accelerometer",
-                 "imu_gyro", "imu_orientation")
-        self._sensors = np.concatenate([np.arange(m.sensor(n).adr[0], m.sensor(n).adr[0] + m.sensor(n).dim[0])
-                                        for n in names])
+        names = (
+            "r_ankle_force",
+            "r_ankle_torque",
+            "l_ankle_force",
+            "l_ankle_torque",
+            "imu_accelerometer",
+            "imu_gyro",
+            "imu_orientation",
+        )
+        self._sensors = np.concatenate(
+            [np.arange(m.sensor(n).adr[0], m.sensor(n).adr[0] + m.sensor(n).dim[0]) for n in names]
+        )
         self._torque_adr = [int(m.sensor(n).adr[0]) for n in ("r_ankle_torque", "l_ankle_torque")]
         self._ankle_sites = [m.site(s).id for s in BIPED_ANKLE_SITES]
         self._pelvis = m.body("pelvis").id
         self._torso = m.body("torso").id
         self._floor = m.geom(BIPED_FLOOR_GEOM).id
         self._sole_geoms = [m.geom(g).id for g in BIPED_SOLE_GEOMS]
-        self._sole_side = {g: (0 if BIPED_SOLE_GEOMS[k].startswith("r_") else 1) for k, g in enumerate(self._sole_geoms)}
-        robot = [g for g in range(m.ngeom) if m.geom_bodyid[g] != 0
-                 and int(m.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))]
+        self._sole_side = {
+            g: (0 if BIPED_SOLE_GEOMS[k].startswith("r_") else 1) for k, g in enumerate(self._sole_geoms)
+        }
+        robot = [
+            g
+            for g in range(m.ngeom)
+            if m.geom_bodyid[g] != 0
+            and int(m.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CAPSULE))
+        ]
         self._ssv_geoms = np.array(robot, dtype=np.int64)
         capsule = m.geom_type[self._ssv_geoms] == int(mujoco.mjtGeom.mjGEOM_CAPSULE)
         self._half_length = np.where(capsule, m.geom_size[self._ssv_geoms, 1], 0.0)
         pairs = self_collision_pairs(m, self._ssv_geoms)
-        volumes = PackedVolumes(np.zeros((len(robot), 3, 3)), m.geom_size[self._ssv_geoms, 0].copy(),
-                                capsule.astype(np.int64))
+        volumes = PackedVolumes(
+            np.zeros((len(robot), 3, 3)), m.geom_size[self._ssv_geoms, 0].copy(), capsule.astype(np.int64)
+        )
         self._batch = PairBatch(volumes, pairs[:, 0], pairs[:, 1])

@@ -65,9 +65,11 @@ class PushSchedule:
             self.pushes: list[tuple[float, float, NDArray[np.float64], int]] = []
         else:
             if isinstance(push, (str, bytes)) or not isinstance(push, Sequence):
-                raise EnvConfigError(f"{name} must be None, a list of pushes (dicts with time, force, duration, body) "
-                                     f"or a random push process (a dict with rate, force, duration, body, direction), "
-                                     f"got {push!r} ({type(push).__name__})")
+                raise EnvConfigError(
+                    f"{name} must be None, a list of pushes (dicts with time, force, duration, body) "
+                    f"or a random push process (a dict with rate, force, duration, body, direction), "
+                    f"got {push!r} ({type(push).__name__})"
+                )
             self.pushes = []
             for i, entry in enumerate(push):
                 where = f"{name}[{i}]"
@@ -75,8 +77,13 @@ class PushSchedule:
                     raise EnvConfigError(f"{where} must be a dict with time, force, duration and body, got {entry!r}")
                 _keys(where, entry, ("time", "force", "duration", "body"), ("time", "force", "duration"))
                 start = check_real(f"{where}['time']", entry["time"], low=0.0, unit="s")
-                force = check_real_array(f"{where}['force']", entry["force"], shape=(3,), unit="N",
-                                         what="(fx, fy, fz), 3 finite real numbers")
+                force = check_real_array(
+                    f"{where}['force']",
+                    entry["force"],
+                    shape=(3,),
+                    unit="N",
+                    what="(fx, fy, fz), 3 finite real numbers",
+                )
                 duration = check_real(f"{where}['duration']", entry["duration"], low=0.0, low_open=True, unit="s")
                 body = self._body(entry.get("body", default_body), f"{where}['body']")
                 if body not in self.bodies:

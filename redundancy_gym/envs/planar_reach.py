@@ -179,31 +179,71 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"tcp_tracking", "tcp_reference"})
 
-    def __init__(self, obstacle: bool = True, obstacle_center: Sequence[float] = (0.7, -0.12),
-                 obstacle_radius: float = 0.1, line_start: Sequence[float] = (0.9, 0.45),
-                 line_end: Sequence[float] = (0.9, -0.45), duration: float = 2.0,
-                 initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5), max_joint_speed: float = 3.0,
-                 tracking_weight: float = 10.0, energy_weight: float = 40.0, collision_penalty: float = 100.0,
-                 reset_noise_scale: float = 0.1, success_tolerance: float = 1e-3, frame_skip: int = 10, render_mode: str | None = None,
-                 width: int = 480, height: int = 480, camera_name: str | None = "side",
-                 obs_noise: float | dict[str, float] | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        obstacle: bool = True,
+        obstacle_center: Sequence[float] = (0.7, -0.12),
+        obstacle_radius: float = 0.1,
+        line_start: Sequence[float] = (0.9, 0.45),
+        line_end: Sequence[float] = (0.9, -0.45),
+        duration: float = 2.0,
+        initial_configuration: Sequence[float] = (-1.3, 1.0, 0.9, 0.5),
+        max_joint_speed: float = 3.0,
+        tracking_weight: float = 10.0,
+        energy_weight: float = 40.0,
+        collision_penalty: float = 100.0,
+        reset_noise_scale: float = 0.1,
+        success_tolerance: float = 1e-3,
+        frame_skip: int = 10,
+        render_mode: str | None = None,
+        width: int = 480,
+        height: int = 480,
+        camera_name: str | None = "side",
+        obs_noise: float | dict[str, float] | None = None,
+        **kwargs: Any,
+    ) -> None:
         if kwargs:
             valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
             raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(self, obstacle, obstacle_center, obstacle_radius, line_start, line_end, duration,
-                                initial_configuration, max_joint_speed, tracking_weight, energy_weight,
-                                collision_penalty, reset_noise_scale, success_tolerance, frame_skip, render_mode, width, height,
-                                camera_name, obs_noise=obs_noise)
-        self._noise = check_noise("obs_noise", obs_noise, {
-            k: (self.OBSERVATION_LAYOUT[k],) for k in ("q", "qdot", "tcp")}, ("q", "qdot", "tcp"))
+        utils.EzPickle.__init__(
+            self,
+            obstacle,
+            obstacle_center,
+            obstacle_radius,
+            line_start,
+            line_end,
+            duration,
+            initial_configuration,
+            max_joint_speed,
+            tracking_weight,
+            energy_weight,
+            collision_penalty,
+            reset_noise_scale,
+            success_tolerance,
+            frame_skip,
+            render_mode,
+            width,
+            height,
+            camera_name,
+            obs_noise=obs_noise,
+        )
+        self._noise = check_noise(
+            "obs_noise",
+            obs_noise,
+            {k: (self.OBSERVATION_LAYOUT[k],) for k in ("q", "qdot", "tcp")},
+            ("q", "qdot", "tcp"),
+        )
         self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
         if np.max(np.abs(self._obstacle_center)) > MAX_OBSTACLE_DISTANCE:
-            raise EnvConfigError(f"obstacle_center must lie within +-{MAX_OBSTACLE_DISTANCE} m of the base in x and z, "
-                                 f"got {tuple(self._obstacle_center)}")
+            raise EnvConfigError(
+                f"obstacle_center must lie within +-{MAX_OBSTACLE_DISTANCE} m of the base in x and z, "
+                f"got {tuple(self._obstacle_center)}"
+            )
         # an obstacle larger than the workspace (1.4 m reach) makes no task; MuJoCo's geometry overflows far beyond
-        self._obstacle_radius = check_real("obstacle_radius", obstacle_radius, low=MIN_OBSTACLE_RADIUS,
-                                           high=MAX_OBSTACLE_RADIUS, unit="m")
+        self._obstacle_radius = check_real(
+            "obstacle_radius", obstacle_radius, low=MIN_OBSTACLE_RADIUS, high=MAX_OBSTACLE_RADIUS, unit="m"
+        )
         self._line_start = _point(line_start, "line_start")
         self._line_end = _point(line_end, "line_end")
         for name, p in (("line_start", self._line_start), ("line_end", self._line_end)):
@@ -217,26 +257,41 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._reset_noise_scale = check_real("reset_noise_scale", reset_noise_scale, low=0.0, unit="rad")
         self._success_tolerance = check_real("success_tolerance", success_tolerance, low=0.0, low_open=True, unit="m")
         frame_skip = check_int("frame_skip", frame_skip, low=1, high=MAX_FRAME_SKIP)
-        seed_q = check_real_array("initial_configuration", initial_configuration, shape=(4,),
-                                  what="4 joint angles [rad], finite real numbers")
+        seed_q = check_real_array(
+            "initial_configuration", initial_configuration, shape=(4,), what="4 joint angles [rad], finite real numbers"
+        )
         width, height = check_render_arguments(render_mode, width, height, camera_name)
         self._scene_xml = planar_arm_scene_xml(
             obstacle_center=self._obstacle_center if self._obstacle else None,
-            obstacle_radius=self._obstacle_radius, line_start=self._line_start, line_end=self._line_end)
-        self.metadata = {"render_modes": render_modes("rgb_array", "depth_array"),
-                         "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip)))}
+            obstacle_radius=self._obstacle_radius,
+            line_start=self._line_start,
+            line_end=self._line_end,
+        )
+        self.metadata = {
+            "render_modes": render_modes("rgb_array", "depth_array"),
+            "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip))),
+        }
         observation_space = spaces.Box(-np.inf, np.inf, shape=(20,), dtype=np.float64)
-        MujocoEnv.__init__(self, str(PLANAR_ARM_XML), int(frame_skip), observation_space=observation_space,
-                           render_mode=render_mode, width=width, height=height,
-                           camera_name=camera_name if render_mode is not None else None)
+        MujocoEnv.__init__(
+            self,
+            str(PLANAR_ARM_XML),
+            int(frame_skip),
+            observation_space=observation_space,
+            render_mode=render_mode,
+            width=width,
+            height=height,
+            camera_name=camera_name if render_mode is not None else None,
+        )
         self._resolve_names()
         self._time = 0.0
         self._max_tracking_error = 0.0
         self._collided = False
         self._nominal_q = self._project_to_line_start(np.clip(seed_q, self._lower, self._upper))
         if self._nominal_q is None:
-            raise EnvConfigError(f"no configuration near initial_configuration {tuple(seed_q)} puts the TCP at "
-                                 f"line_start {tuple(self._line_start)}")
+            raise EnvConfigError(
+                f"no configuration near initial_configuration {tuple(seed_q)} puts the TCP at "
+                f"line_start {tuple(self._line_start)}"
+            )
 
     # ------------------------------------------------------------------ gymnasium API
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -333,8 +388,19 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         ref_pos, ref_vel, phase = self.reference(self._time)
         center = self._obstacle_center if self._obstacle else np.zeros(2)
         radius = self._obstacle_radius if self._obstacle else 0.0
-        obs = np.concatenate([self.data.qpos[self._qpos], self.data.qvel[self._qvel], self.tcp_position,
-                              ref_pos, ref_vel, [phase], center, [radius], np.zeros(2)])
+        obs = np.concatenate(
+            [
+                self.data.qpos[self._qpos],
+                self.data.qvel[self._qvel],
+                self.tcp_position,
+                ref_pos,
+                ref_vel,
+                [phase],
+                center,
+                [radius],
+                np.zeros(2),
+            ]
+        )
         if self._noise is not None:
             index, std = self._noise
             obs[index] += std * self.np_random.standard_normal(index.size)
@@ -383,8 +449,12 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     def _min_clearance(self) -> float:
         if self._obstacle_geom is None:
             return float("inf")
-        return float(min(mujoco.mj_geomDistance(self.model, self.data, self._obstacle_geom, g,
-                                                _CLEARANCE_HORIZON, None) for g in self._link_geoms))
+        return float(
+            min(
+                mujoco.mj_geomDistance(self.model, self.data, self._obstacle_geom, g, _CLEARANCE_HORIZON, None)
+                for g in self._link_geoms
+            )
+        )
 
     # ------------------------------------------------------------------ helpers
     def _resolve_names(self) -> None:

@@ -16,9 +16,23 @@ from .. import validation as _checks
 from ..rendering_backend import can_open_window, require_render_backend, require_window
 from .exceptions import EnvConfigError
 
-__all__ = ["MAX_FRAME_SKIP", "RENDER_MODES", "check_bool", "check_choice", "check_int", "check_noise", "check_range_pair", "check_real",
-           "check_real_array", "check_render_arguments", "check_render_backend", "non_negative", "positive",
-           "render_modes", "warn_if_time_limit_short"]
+__all__ = [
+    "MAX_FRAME_SKIP",
+    "RENDER_MODES",
+    "check_bool",
+    "check_choice",
+    "check_int",
+    "check_noise",
+    "check_range_pair",
+    "check_real",
+    "check_real_array",
+    "check_render_arguments",
+    "check_render_backend",
+    "non_negative",
+    "positive",
+    "render_modes",
+    "warn_if_time_limit_short",
+]
 
 
 MAX_FRAME_SKIP = 1000
@@ -49,8 +63,10 @@ def warn_if_time_limit_short(env: Any, needed: float, what: str) -> bool:
         return False
     env._warned_time_limit = True
     steps = int(np.ceil(needed / env.dt - 1e-9))
-    gym.logger.warn(f"{spec.id}: {what} needs {needed:.2f} s, but the registered max_episode_steps={limit} ends "
-                    f"episodes at {limit * env.dt:.2f} s; pass max_episode_steps={steps} or more to gym.make")
+    gym.logger.warn(
+        f"{spec.id}: {what} needs {needed:.2f} s, but the registered max_episode_steps={limit} ends "
+        f"episodes at {limit * env.dt:.2f} s; pass max_episode_steps={steps} or more to gym.make"
+    )
     return True
 
 
@@ -84,8 +100,14 @@ check_choice = partial(_checks.check_choice, error=EnvConfigError)
 check_range_pair = partial(_checks.check_range_pair, error=EnvConfigError)
 check_real_array = partial(_checks.check_real_array, error=EnvConfigError)
 
-def check_noise(name: str, value: Any, groups: dict[str, tuple[slice, ...]], default_groups: tuple[str, ...],
-                unit: str | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+
+def check_noise(
+    name: str,
+    value: Any,
+    groups: dict[str, tuple[slice, ...]],
+    default_groups: tuple[str, ...],
+    unit: str | None = None,
+) -> tuple[np.ndarray, np.ndarray] | None:
     """An observation-noise argument (``sensor_noise``, ``obs_noise``) as ``(indices, stds)``, or None when off.
 
     ``value`` is None or 0 (off), a float std >= 0 for every group of ``default_groups``, or a dict from group
@@ -97,13 +119,19 @@ def check_noise(name: str, value: Any, groups: dict[str, tuple[slice, ...]], def
     if isinstance(value, dict):
         unknown = sorted(str(k) for k in value if k not in groups)
         if unknown:
-            raise EnvConfigError(f"{name} has unknown channel group(s) {', '.join(unknown)}; valid: "
-                                 f"{', '.join(groups)}")
+            raise EnvConfigError(
+                f"{name} has unknown channel group(s) {', '.join(unknown)}; valid: {', '.join(groups)}"
+            )
         stds = {k: check_real(f"{name}[{k!r}]", v, low=0.0, unit=unit) for k, v in value.items()}
     else:
-        std = check_real(name, value, low=0.0, unit=unit,
-                         note="None or 0: off; a float: the std of every sensor channel; a dict: a std per "
-                              f"channel group of {', '.join(groups)}")
+        std = check_real(
+            name,
+            value,
+            low=0.0,
+            unit=unit,
+            note="None or 0: off; a float: the std of every sensor channel; a dict: a std per "
+            f"channel group of {', '.join(groups)}",
+        )
         stds = {k: std for k in default_groups}
     index: list[int] = []
     scale: list[float] = []
@@ -122,8 +150,13 @@ RENDER_MODES: tuple[str, ...] = ("human", "rgb_array", "depth_array")
 """Every render mode an env may name (``"human"`` needs a display: :func:`check_render_backend`)."""
 
 
-def check_render_arguments(render_mode: str | None, width: int, height: int, camera_name: str | None,
-                           render_modes: tuple[str, ...] = RENDER_MODES) -> tuple[int, int]:
+def check_render_arguments(
+    render_mode: str | None,
+    width: int,
+    height: int,
+    camera_name: str | None,
+    render_modes: tuple[str, ...] = RENDER_MODES,
+) -> tuple[int, int]:
     """Check the rendering arguments every env takes; returns ``(width, height)`` as ints.
 
     ``render_mode``: None or one of ``render_modes``; ``width``, ``height``: ints >= 1 [pixels];
@@ -134,7 +167,8 @@ def check_render_arguments(render_mode: str | None, width: int, height: int, cam
     w = check_int("width", width, low=1)
     h = check_int("height", height, low=1)
     if camera_name is not None and not isinstance(camera_name, str):
-        raise EnvConfigError(f"camera_name must be None or a camera's name (a str), got {camera_name!r} "
-                             f"({type(camera_name).__name__})")
+        raise EnvConfigError(
+            f"camera_name must be None or a camera's name (a str), got {camera_name!r} ({type(camera_name).__name__})"
+        )
     check_render_backend(render_mode)
     return w, h  # type: ignore[return-value]

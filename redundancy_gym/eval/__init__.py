@@ -12,10 +12,27 @@ from .json_writer import write_json
 from .machine import finish_machine_info, machine_info
 from .parallel import EpisodeFailure, ParallelEvalError
 
-__all__ = ["EpisodeFailure", "EpisodeTrace", "EvalError", "EvalReport", "ParallelEvalError", "evaluate",
-           "finish_machine_info", "format_report", "machine_info", "make_env", "reseed_policy", "run_episode",
-           "write_json"]
+__all__ = [
+    "EpisodeFailure",
+    "EpisodeTrace",
+    "EvalError",
+    "EvalReport",
+    "ParallelEvalError",
+    "evaluate",
+    "finish_machine_info",
+    "format_report",
+    "machine_info",
+    "make_env",
+    "reseed_policy",
+    "run_episode",
+    "write_json",
+]
 
 # moved to redundancy_gym.learning in 0.2 (the old names warn and go in 0.3)
-__getattr__ = forward_attributes(__name__, {"TrainingRecord": "redundancy_gym.learning.training_record",
-                                            "read_training_record": "redundancy_gym.learning.training_record"})
+__getattr__ = forward_attributes(
+    __name__,
+    {
+        "TrainingRecord": "redundancy_gym.learning.training_record",
+        "read_training_record": "redundancy_gym.learning.training_record",
+    },
+)

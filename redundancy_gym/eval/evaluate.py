@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import functools
-import json
 import math
 import time
 from dataclasses import dataclass, field
@@ -145,8 +144,11 @@ class EvalReport:
         goals = [e for e in s if e.goal_error is not None]
         reached = [e.time_to_goal for e in goals if e.time_to_goal is not None]
         return {
-            "tracking_error_rms": (math.sqrt(sum(e.tracking_error_sq_sum or 0.0 for e in tracked)
-                                             / max(sum(e.length for e in tracked), 1)) if tracked else None),
+            "tracking_error_rms": (
+                math.sqrt(sum(e.tracking_error_sq_sum or 0.0 for e in tracked) / max(sum(e.length for e in tracked), 1))
+                if tracked
+                else None
+            ),
             "tracking_error_max": max(e.tracking_error_max or 0.0 for e in tracked) if tracked else None,
             "goal_error": float(np.mean([e.goal_error for e in goals])) if goals else None,
             "goal_error_max": max(e.goal_error or 0.0 for e in goals) if goals else None,
@@ -179,12 +181,15 @@ class EvalReport:
         s = self.summaries
         if any(e.fell is None for e in s):
             return {}
-        out = {"fall_rate": float(np.mean([bool(e.fell) for e in s])),
-               "forward_speed": float(np.mean([e.forward_speed for e in s]))}
+        out = {
+            "fall_rate": float(np.mean([bool(e.fell) for e in s])),
+            "forward_speed": float(np.mean([e.forward_speed for e in s])),
+        }
         if all(e.mean_speed_error is not None for e in s):
             out["speed_error"] = float(np.mean([e.mean_speed_error for e in s]))
-            out["speed_error_rms"] = math.sqrt(sum(e.speed_error_sq_sum or 0.0 for e in s)
-                                               / max(sum(e.length for e in s), 1))
+            out["speed_error_rms"] = math.sqrt(
+                sum(e.speed_error_sq_sum or 0.0 for e in s) / max(sum(e.length for e in s), 1)
+            )
         return out
 
     def write_json(self, path: str | Path) -> Path:
@@ -216,8 +221,9 @@ def _controller_clock(env: gym.Env) -> Any:
     return None
 
 
-def run_episode(env: gym.Env, policy: Any, seed: int, *,
-                frames: list[NDArray[np.uint8]] | None = None) -> tuple[EpisodeSummary, EpisodeTrace]:
+def run_episode(
+    env: gym.Env, policy: Any, seed: int, *, frames: list[NDArray[np.uint8]] | None = None
+) -> tuple[EpisodeSummary, EpisodeTrace]:
     """Run one episode from ``env.reset(seed=seed)``, timing only the policy: ``policy.predict`` plus, in an action
     wrapper, the wrapper's controller (its ``controller_time_us`` attribute); the simulation is not counted.
 
@@ -254,18 +260,33 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
         for key, low in clearances.items():
             if key in info:
                 clearances[key] = min(low, float(info[key]))
-        rows.append((now, float(info.get("tracking_error", np.nan)), float(info.get("goal_error", np.nan)),
-                     float(info.get("speed_error", np.nan)), float(info.get("peak_joint_speed", 0.0)),
-                     float(info.get("min_clearance", np.inf)), float(info.get("pseudoenergy", 0.0)), elapsed_us))
+        rows.append(
+            (
+                now,
+                float(info.get("tracking_error", np.nan)),
+                float(info.get("goal_error", np.nan)),
+                float(info.get("speed_error", np.nan)),
+                float(info.get("peak_joint_speed", 0.0)),
+                float(info.get("min_clearance", np.inf)),
+                float(info.get("pseudoenergy", 0.0)),
+                elapsed_us,
+            )
+        )
         if terminated or truncated:
             break
     data = np.asarray(rows, dtype=np.float64)
     trace = EpisodeTrace(*(data[:, k].copy() for k in range(8)))
     summary = EpisodeSummary(
-        seed=seed, length=len(rows), episode_return=ret, success=bool(info.get("is_success", False)),
-        collision=collision, pseudoenergy=float(np.sum(trace.pseudoenergy)),
-        peak_joint_speed=float(np.max(trace.joint_speed)), min_clearance=float(np.min(trace.min_clearance)),
-        first_step_us=float(trace.step_time_us[0]))
+        seed=seed,
+        length=len(rows),
+        episode_return=ret,
+        success=bool(info.get("is_success", False)),
+        collision=collision,
+        pseudoenergy=float(np.sum(trace.pseudoenergy)),
+        peak_joint_speed=float(np.max(trace.joint_speed)),
+        min_clearance=float(np.min(trace.min_clearance)),
+        first_step_us=float(trace.step_time_us[0]),
+    )
     if "tracking_error" in info:
         summary.tracking_error_max = float(np.max(trace.tracking_error))
         summary.tracking_error_sq_sum = float(np.sum(trace.tracking_error**2))
@@ -290,10 +311,21 @@ def run_episode(env: gym.Env, policy: Any, seed: int, *,
     return summary, trace
 
 
-def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env_kwargs: dict[str, Any] | None = None,
-             policy_kwargs: dict[str, Any] | None = None, keep_traces: bool = False,
-             progress: bool = True, warmup: int = 0, workers: int = 1, retries: int = 0,
-             ray_address: str | None = None) -> EvalReport:
+def evaluate(
+    env_id: str,
+    policy: str,
+    *,
+    episodes: int = 10,
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
+    policy_kwargs: dict[str, Any] | None = None,
+    keep_traces: bool = False,
+    progress: bool = True,
+    warmup: int = 0,
+    workers: int = 1,
+    retries: int = 0,
+    ray_address: str | None = None,
+) -> EvalReport:
     """Evaluate a policy (name or SB3 ``.zip``) on ``episodes`` episodes with seeds ``seed, seed + 1, ...``.
 
     Args:
@@ -328,8 +360,20 @@ def evaluate(env_id: str, policy: str, *, episodes: int = 10, seed: int = 0, env
     if policy == "random":
         policy_kwargs.setdefault("seed", seed)
     if workers != 1 or retries or ray_address is not None:
-        return _evaluate_parallel(env_id, policy, episodes, seed, env_kwargs, policy_kwargs, keep_traces, progress,
-                                  warmup, workers, retries, ray_address)
+        return _evaluate_parallel(
+            env_id,
+            policy,
+            episodes,
+            seed,
+            env_kwargs,
+            policy_kwargs,
+            keep_traces,
+            progress,
+            warmup,
+            workers,
+            retries,
+            ray_address,
+        )
     runner = _EpisodeRunner(env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
     try:
         summaries: list[EpisodeSummary] = []
@@ -350,8 +394,15 @@ class _EpisodeRunner:
     """The env and the policy of an evaluation, after its warm-up episodes; called with a seed, it runs that seed's
     episode (the policy reseeded first). The serial loop uses one; each parallel worker builds its own."""
 
-    def __init__(self, env_id: str, policy: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any],
-                 warmup: int, warmup_seed: int) -> None:
+    def __init__(
+        self,
+        env_id: str,
+        policy: str,
+        env_kwargs: dict[str, Any],
+        policy_kwargs: dict[str, Any],
+        warmup: int,
+        warmup_seed: int,
+    ) -> None:
         self.env = make_env(env_id, env_kwargs)
         try:
             self.agent = make_policy(policy, self.env, **policy_kwargs)
@@ -366,22 +417,43 @@ class _EpisodeRunner:
         return run_episode(self.env, self.agent, seed)
 
 
-def _evaluate_parallel(env_id: str, policy: str, episodes: int, seed: int, env_kwargs: dict[str, Any],
-                       policy_kwargs: dict[str, Any], keep_traces: bool, progress: bool, warmup: int, workers: int,
-                       retries: int, ray_address: str | None) -> EvalReport:
+def _evaluate_parallel(
+    env_id: str,
+    policy: str,
+    episodes: int,
+    seed: int,
+    env_kwargs: dict[str, Any],
+    policy_kwargs: dict[str, Any],
+    keep_traces: bool,
+    progress: bool,
+    warmup: int,
+    workers: int,
+    retries: int,
+    ray_address: str | None,
+) -> EvalReport:
     """:func:`evaluate` on worker processes."""
     make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs before any worker starts
     seeds = [seed + k for k in range(episodes)]
     where = "Ray actors" if ray_address is not None else "workers"
-    with tqdm(total=episodes, desc=f"eval {policy} on {env_id} ({workers} {where})", disable=not progress,
-              leave=False) as bar:
+    with tqdm(
+        total=episodes, desc=f"eval {policy} on {env_id} ({workers} {where})", disable=not progress, leave=False
+    ) as bar:
         setup = functools.partial(_EpisodeRunner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
-        outcomes = run_parallel(setup, seeds, workers=workers, retries=retries, progress=bar.update,
-                                ray_address=ray_address)
+        outcomes = run_parallel(
+            setup, seeds, workers=workers, retries=retries, progress=bar.update, ray_address=ray_address
+        )
     summaries = [summary for summary, _ in outcomes]
     traces = [trace for _, trace in outcomes]
-    return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries,
-                      np.concatenate([t.step_time_us for t in traces]), traces if keep_traces else [])
+    return EvalReport(
+        env_id,
+        policy,
+        episodes,
+        seed,
+        env_kwargs,
+        summaries,
+        np.concatenate([t.step_time_us for t in traces]),
+        traces if keep_traces else [],
+    )
 
 
 def format_report(report: dict[str, Any]) -> str:
@@ -395,26 +467,47 @@ def format_report(report: dict[str, Any]) -> str:
         ("collision rate", f"{report['collision_rate']:.3f}"),
     ]
     if report.get("tracking_error_rms") is not None:
-        rows.append(("tracking error rms / max [mm]",
-                     f"{1e3 * report['tracking_error_rms']:.2f} / {1e3 * report['tracking_error_max']:.2f}"))
+        rows.append(
+            (
+                "tracking error rms / max [mm]",
+                f"{1e3 * report['tracking_error_rms']:.2f} / {1e3 * report['tracking_error_max']:.2f}",
+            )
+        )
     if report.get("goal_error") is not None:
         reached = report["time_to_goal"]
-        rows.append(("goal error at end mean / max [mm]",
-                     f"{1e3 * report['goal_error']:.2f} / {1e3 * report['goal_error_max']:.2f}"))
-        rows.append(("goal reached rate, time to goal [s]",
-                     f"{report['goal_reached_rate']:.3f}, " + ("n/a" if reached is None else f"{reached:.2f}")))
+        rows.append(
+            (
+                "goal error at end mean / max [mm]",
+                f"{1e3 * report['goal_error']:.2f} / {1e3 * report['goal_error_max']:.2f}",
+            )
+        )
+        rows.append(
+            (
+                "goal reached rate, time to goal [s]",
+                f"{report['goal_reached_rate']:.3f}, " + ("n/a" if reached is None else f"{reached:.2f}"),
+            )
+        )
     if "speed_error" in report:
         rows.append(("speed error mean / rms [m/s]", f"{report['speed_error']:.3f} / {report['speed_error_rms']:.3f}"))
     rows += [
         ("pseudoenergy [rad^2/s]", f"{report['pseudoenergy']:.4f}"),
         ("peak joint speed [rad/s]", f"{report['peak_joint_speed']:.3f}"),
         ("min clearance [mm]", "n/a" if report["min_clearance"] is None else f"{1e3 * report['min_clearance']:.1f}"),
-        *((f"  {label} [mm]", "n/a" if report[key] is None else f"{1e3 * report[key]:.1f}")
-          for key, label in (("min_obstacle_clearance", "to obstacles"), ("min_self_clearance", "between own links"))
-          if key in report),
-        *((("leaf contacts per episode [leaf-steps]", f"{report['leaf_contacts']:.1f}"),) if "leaf_contacts" in report else ()),
-        *((("obstacle contact rate", f"{report['obstacle_contact_rate']:.3f}"),)
-          if "obstacle_contact_rate" in report else ()),
+        *(
+            (f"  {label} [mm]", "n/a" if report[key] is None else f"{1e3 * report[key]:.1f}")
+            for key, label in (("min_obstacle_clearance", "to obstacles"), ("min_self_clearance", "between own links"))
+            if key in report
+        ),
+        *(
+            (("leaf contacts per episode [leaf-steps]", f"{report['leaf_contacts']:.1f}"),)
+            if "leaf_contacts" in report
+            else ()
+        ),
+        *(
+            (("obstacle contact rate", f"{report['obstacle_contact_rate']:.3f}"),)
+            if "obstacle_contact_rate" in report
+            else ()
+        ),
         ("step time median / p99 / mean [us]", f"{step['median']:.1f} / {step['p99']:.1f} / {step['mean']:.1f}"),
         ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
@@ -429,10 +522,17 @@ def format_report(report: dict[str, Any]) -> str:
 
 def _episode_row(e: EpisodeSummary) -> dict[str, Any]:
     """One episode's entry of ``per_episode`` (fields the env does not define are left out)."""
-    row: dict[str, Any] = {"seed": e.seed, "length": e.length, "return": e.episode_return, "success": e.success,
-                           "collision": e.collision, "pseudoenergy": e.pseudoenergy,
-                           "peak_joint_speed": e.peak_joint_speed, "min_clearance": _finite_or_none(e.min_clearance),
-                           "first_step_us": e.first_step_us}
+    row: dict[str, Any] = {
+        "seed": e.seed,
+        "length": e.length,
+        "return": e.episode_return,
+        "success": e.success,
+        "collision": e.collision,
+        "pseudoenergy": e.pseudoenergy,
+        "peak_joint_speed": e.peak_joint_speed,
+        "min_clearance": _finite_or_none(e.min_clearance),
+        "first_step_us": e.first_step_us,
+    }
     if e.tracking_error_max is not None:
         row["tracking_error_max"] = e.tracking_error_max
     if e.goal_error is not None:

@@ -15,12 +15,38 @@ from typing import Any
 
 __all__ = ["RELEVANT_CPU_FLAGS", "finish_machine_info", "machine_info"]
 
-RELEVANT_CPU_FLAGS = ("sse4_2", "avx", "avx2", "fma", "bmi2", "avx512f", "avx512dq", "avx512cd", "avx512bw",
-                      "avx512vl", "avx512_vnni", "avx512_bf16", "avx512ifma", "avx_vnni", "neon", "asimd")
+RELEVANT_CPU_FLAGS = (
+    "sse4_2",
+    "avx",
+    "avx2",
+    "fma",
+    "bmi2",
+    "avx512f",
+    "avx512dq",
+    "avx512cd",
+    "avx512bw",
+    "avx512vl",
+    "avx512_vnni",
+    "avx512_bf16",
+    "avx512ifma",
+    "avx_vnni",
+    "neon",
+    "asimd",
+)
 """CPU flags that numba/LLVM, numpy, MuJoCo and pinocchio may use for vector code; those present are recorded."""
 
-_VERSIONS = {"numpy": "numpy", "numba": "numba", "llvmlite": "llvmlite", "scipy": "scipy", "mujoco": "mujoco",
-             "pinocchio": "pin", "coal": "coal", "gymnasium": "gymnasium", "mink": "mink", "daqp": "daqp"}
+_VERSIONS = {
+    "numpy": "numpy",
+    "numba": "numba",
+    "llvmlite": "llvmlite",
+    "scipy": "scipy",
+    "mujoco": "mujoco",
+    "pinocchio": "pin",
+    "coal": "coal",
+    "gymnasium": "gymnasium",
+    "mink": "mink",
+    "daqp": "daqp",
+}
 """Recorded package -> its distribution name (pinocchio's wheel is ``pin``)."""
 
 
@@ -34,9 +60,12 @@ def machine_info() -> dict[str, Any]:
     daqp where installed; torch when already imported) and ``load_average`` (1, 5 and 15 min, now). Keys that this
     machine cannot tell are left out.
     """
-    info: dict[str, Any] = {"processor": platform.processor() or platform.machine(),
-                            "python": platform.python_version(), "platform": platform.platform(),
-                            "cpu_count": os.cpu_count()}
+    info: dict[str, Any] = {
+        "processor": platform.processor() or platform.machine(),
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "cpu_count": os.cpu_count(),
+    }
     try:
         info["affinity_cores"] = len(os.sched_getaffinity(0))
     except (AttributeError, OSError):
@@ -77,8 +106,14 @@ def _cpuinfo() -> dict[str, Any]:
             text = f.read()
     except OSError:
         return out
-    keys = {"model name": "cpu_model", "cpu family": "cpu_family", "model": "cpu_model_number", "cpu MHz": "cpu_mhz",
-            "flags": "cpu_flags", "Features": "cpu_flags"}
+    keys = {
+        "model name": "cpu_model",
+        "cpu family": "cpu_family",
+        "model": "cpu_model_number",
+        "cpu MHz": "cpu_mhz",
+        "flags": "cpu_flags",
+        "Features": "cpu_flags",
+    }
     for line in text.splitlines():
         if not line.strip():
             if out:

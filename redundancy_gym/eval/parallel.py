@@ -22,8 +22,16 @@ from typing import Any
 
 from .exceptions import EvalError
 
-__all__ = ["LOCAL_RAY", "RAY_EXTRA_HINT", "EpisodeFailure", "ParallelEvalError", "import_ray", "init_ray", "ray_cpus",
-           "run_parallel"]
+__all__ = [
+    "LOCAL_RAY",
+    "RAY_EXTRA_HINT",
+    "EpisodeFailure",
+    "ParallelEvalError",
+    "import_ray",
+    "init_ray",
+    "ray_cpus",
+    "run_parallel",
+]
 
 
 @dataclass(frozen=True)
@@ -41,8 +49,10 @@ class ParallelEvalError(EvalError):
         self.failures = tuple(sorted(failures, key=lambda f: f.seed))
         seeds = ", ".join(str(f.seed) for f in self.failures)
         first = self.failures[0].error.strip().splitlines()[-1] if self.failures else ""
-        super().__init__(f"{len(self.failures)} episode(s) failed after {attempts} attempt(s): seeds {seeds} "
-                         f"(first: {first}); --retries K runs failed episodes again")
+        super().__init__(
+            f"{len(self.failures)} episode(s) failed after {attempts} attempt(s): seeds {seeds} "
+            f"(first: {first}); --retries K runs failed episodes again"
+        )
 
 
 # the worker's episode runner, built once per process by _init_worker
@@ -85,7 +95,7 @@ def _start_method() -> str:
 
 LOCAL_RAY = "local"
 """``ray_address`` of a Ray instance started on this machine (``ray.init()`` without an address)."""
-RAY_EXTRA_HINT = ("Ray is not installed; pip install -e '.[ray]' (in a clone) or pip install 'redundancy-gym[ray]'")
+RAY_EXTRA_HINT = "Ray is not installed; pip install -e '.[ray]' (in a clone) or pip install 'redundancy-gym[ray]'"
 
 
 def import_ray() -> Any:
@@ -108,8 +118,12 @@ def init_ray(address: str) -> Any:
     already did; returns the ``ray`` module."""
     ray = import_ray()
     if not ray.is_initialized():
-        ray.init(address=None if address == LOCAL_RAY else address, include_dashboard=False, log_to_driver=False,
-                 ignore_reinit_error=True)
+        ray.init(
+            address=None if address == LOCAL_RAY else address,
+            include_dashboard=False,
+            log_to_driver=False,
+            ignore_reinit_error=True,
+        )
     return ray
 
 
@@ -123,8 +137,13 @@ class _RayWorker:
         return _task(seed)
 
 
-def _keep(seed: int, outcome: Any, results: dict[int, Any], failures: dict[int, EpisodeFailure],
-          progress: Callable[[int], None] | None) -> None:
+def _keep(
+    seed: int,
+    outcome: Any,
+    results: dict[int, Any],
+    failures: dict[int, EpisodeFailure],
+    progress: Callable[[int], None] | None,
+) -> None:
     """File a worker's outcome for ``seed``: a traceback (text) is a failure, anything else the episode's result."""
     if isinstance(outcome, str):
         failures[seed] = EpisodeFailure(seed, outcome)
@@ -134,9 +153,13 @@ def _keep(seed: int, outcome: Any, results: dict[int, Any], failures: dict[int, 
         progress(1)
 
 
-def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, address: str,
-                 progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
-                                                                                           dict[int, EpisodeFailure]]:
+def _ray_attempt(
+    setup: Callable[[], Callable[[int], Any]],
+    workers: int,
+    address: str,
+    progress: Callable[[int], None] | None,
+    pending: Sequence[int],
+) -> tuple[dict[int, Any], dict[int, EpisodeFailure]]:
     ray = init_ray(address)
     actor = ray.remote(num_cpus=1)(_RayWorker)
     actors = [actor.remote(setup) for _ in range(min(workers, len(pending)))]
@@ -151,8 +174,9 @@ def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, addres
             try:
                 outcome = ray.get(done[0])
             except ray.exceptions.RayError as exc:  # the actor died (killed, out of memory) or its task broke
-                failures[seed] = EpisodeFailure(seed, f"a Ray worker died: {type(exc).__name__}: "
-                                                      f"{str(exc).strip().splitlines()[0]}")
+                failures[seed] = EpisodeFailure(
+                    seed, f"a Ray worker died: {type(exc).__name__}: {str(exc).strip().splitlines()[0]}"
+                )
                 continue
             _keep(seed, outcome, results, failures, progress)
     finally:
@@ -161,13 +185,18 @@ def _ray_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, addres
     return results, failures
 
 
-def _pool_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, context: Any,
-                  progress: Callable[[int], None] | None, pending: Sequence[int]) -> tuple[dict[int, Any],
-                                                                                           dict[int, EpisodeFailure]]:
+def _pool_attempt(
+    setup: Callable[[], Callable[[int], Any]],
+    workers: int,
+    context: Any,
+    progress: Callable[[int], None] | None,
+    pending: Sequence[int],
+) -> tuple[dict[int, Any], dict[int, EpisodeFailure]]:
     results: dict[int, Any] = {}
     failures: dict[int, EpisodeFailure] = {}
-    with ProcessPoolExecutor(max_workers=min(workers, len(pending)), mp_context=context,
-                             initializer=_init_worker, initargs=(setup,)) as pool:
+    with ProcessPoolExecutor(
+        max_workers=min(workers, len(pending)), mp_context=context, initializer=_init_worker, initargs=(setup,)
+    ) as pool:
         futures = {pool.submit(_task, seed): seed for seed in pending}
         for future in as_completed(futures):
             seed = futures[future]
@@ -180,9 +209,16 @@ def _pool_attempt(setup: Callable[[], Callable[[int], Any]], workers: int, conte
     return results, failures
 
 
-def run_parallel(setup: Callable[[], Callable[[int], Any]], seeds: Sequence[int], *, workers: int,
-                 retries: int = 0, start_method: str | None = None,
-                 progress: Callable[[int], None] | None = None, ray_address: str | None = None) -> list[Any]:
+def run_parallel(
+    setup: Callable[[], Callable[[int], Any]],
+    seeds: Sequence[int],
+    *,
+    workers: int,
+    retries: int = 0,
+    start_method: str | None = None,
+    progress: Callable[[int], None] | None = None,
+    ray_address: str | None = None,
+) -> list[Any]:
     """Run one episode per seed on ``workers`` processes (or Ray actors); returns each seed's result, in ``seeds``'
     order.
 
@@ -207,8 +243,9 @@ def run_parallel(setup: Callable[[], Callable[[int], Any]], seeds: Sequence[int]
     if ray_address is not None:
         attempt = functools.partial(_ray_attempt, setup, workers, ray_address, progress)
     else:
-        attempt = functools.partial(_pool_attempt, setup, workers,
-                                    multiprocessing.get_context(start_method or _start_method()), progress)
+        attempt = functools.partial(
+            _pool_attempt, setup, workers, multiprocessing.get_context(start_method or _start_method()), progress
+        )
     results: dict[int, Any] = {}
     pending = list(seeds)
     failures: dict[int, EpisodeFailure] = {}

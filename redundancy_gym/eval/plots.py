@@ -16,8 +16,9 @@ from .evaluate import EpisodeTrace  # noqa: E402
 __all__ = ["plot_clearance", "plot_traces", "save_figure"]
 
 
-def plot_traces(traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "",
-                error_tolerance: float | None = 1e-3) -> Path:
+def plot_traces(
+    traces: Mapping[str, EpisodeTrace], path: str | Path, *, title: str = "", error_tolerance: float | None = 1e-3
+) -> Path:
     """TCP tracking error (against the env's reference path), peak joint speed and obstacle clearance over time,
     one line per labelled episode.
 

@@ -26,8 +26,15 @@ from matplotlib.text import Text  # noqa: E402
 
 from .plots import save_figure  # noqa: E402
 
-__all__ = ["METRICS", "Metric", "axis_scale", "plot_speed_error", "plot_speed_error_panels",
-           "speed_error_markdown", "speed_error_paragraph"]
+__all__ = [
+    "METRICS",
+    "Metric",
+    "axis_scale",
+    "plot_speed_error",
+    "plot_speed_error_panels",
+    "speed_error_markdown",
+    "speed_error_paragraph",
+]
 
 
 @dataclass(frozen=True)
@@ -128,10 +135,16 @@ def _setting(reports: Mapping[str, Mapping[str, Any]]) -> str:
     return "; ".join(f"`{env}`, env kwargs `{kwargs}`" for env, kwargs in settings)
 
 
-def speed_error_markdown(reports: Mapping[str, Mapping[str, Any]], title: str, *,
-                         columns: Sequence[str] = ("tracking_rms", "tracking_max"),
-                         rank: Sequence[str] | None = None, tolerance: float = 0.05,
-                         time_tolerance: float = 0.20, note: str = "") -> str:
+def speed_error_markdown(
+    reports: Mapping[str, Mapping[str, Any]],
+    title: str,
+    *,
+    columns: Sequence[str] = ("tracking_rms", "tracking_max"),
+    rank: Sequence[str] | None = None,
+    tolerance: float = 0.05,
+    time_tolerance: float = 0.20,
+    note: str = "",
+) -> str:
     """A markdown section: header (env, kwargs, episodes, seeds), one table row per labelled policy, and a
     paragraph naming the fastest and the most accurate policy (:func:`speed_error_paragraph`).
 
@@ -153,17 +166,31 @@ def speed_error_markdown(reports: Mapping[str, Mapping[str, Any]], title: str, *
     for name in rank:
         _metric(name)
     pseudo = METRICS["pseudoenergy"]
-    headings = (["policy", "success", "collision"] + [m.heading for m in metrics]
-                + [pseudo.heading, "step time median / p99 [us]", "step time amortized (mean) [us]",
-                   "first step (plan) [ms]"])
-    lines = [f"## {title}", "", f"{_setting(reports)}; {_runs(reports)}." + (f" {note}" if note else ""), "",
-             "| " + " | ".join(headings) + " |", "|" + " --- |" * len(headings)]
+    headings = (
+        ["policy", "success", "collision"]
+        + [m.heading for m in metrics]
+        + [pseudo.heading, "step time median / p99 [us]", "step time amortized (mean) [us]", "first step (plan) [ms]"]
+    )
+    lines = [
+        f"## {title}",
+        "",
+        f"{_setting(reports)}; {_runs(reports)}." + (f" {note}" if note else ""),
+        "",
+        "| " + " | ".join(headings) + " |",
+        "|" + " --- |" * len(headings),
+    ]
     for label, r in reports.items():
         step = r["step_time_us"]
-        cells = ([label + (" (failed)" if _failed(r) else ""), f"{r['success_rate']:.2f}", f"{r['collision_rate']:.2f}"]
-                 + [_fmt(m.value(r)) for m in metrics]
-                 + [_fmt(pseudo.value(r)), f"{_fmt(step['median'])} / {_fmt(step['p99'])}", _fmt(step["mean"]),
-                    _fmt(1e-3 * step["first_step_mean"])])
+        cells = (
+            [label + (" (failed)" if _failed(r) else ""), f"{r['success_rate']:.2f}", f"{r['collision_rate']:.2f}"]
+            + [_fmt(m.value(r)) for m in metrics]
+            + [
+                _fmt(pseudo.value(r)),
+                f"{_fmt(step['median'])} / {_fmt(step['p99'])}",
+                _fmt(step["mean"]),
+                _fmt(1e-3 * step["first_step_mean"]),
+            ]
+        )
         lines.append("| " + " | ".join(cells) + " |")
     paragraph = speed_error_paragraph(reports, rank, tolerance=tolerance, time_tolerance=time_tolerance)
     return "\n".join(lines) + "\n\n" + paragraph + "\n"
@@ -181,8 +208,13 @@ def _names(labels: Sequence[str]) -> str:
     return quoted[0] if len(quoted) == 1 else ", ".join(quoted[:-1]) + " and " + quoted[-1]
 
 
-def speed_error_paragraph(reports: Mapping[str, Mapping[str, Any]], rank: Sequence[str], *,
-                          tolerance: float = 0.05, time_tolerance: float = 0.20) -> str:
+def speed_error_paragraph(
+    reports: Mapping[str, Mapping[str, Any]],
+    rank: Sequence[str],
+    *,
+    tolerance: float = 0.05,
+    time_tolerance: float = 0.20,
+) -> str:
     """A paragraph computed from the reports: the fastest policy by amortized step time, the best by each
     metric of ``rank`` (ties within ``tolerance`` relative or the metric's absolute tolerance are named
     together), the cost in time of the most accurate against the fastest, and the policies left out because
@@ -192,15 +224,20 @@ def speed_error_paragraph(reports: Mapping[str, Mapping[str, Any]], rank: Sequen
     valid = {label: r for label, r in reports.items() if not _failed(r)}
     out = []
     if not valid:
-        return ("Every policy failed every episode (success rate 0): no fastest or most accurate policy is named. "
-                f"Failed: {_names(failed)}.")
+        return (
+            "Every policy failed every episode (success rate 0): no fastest or most accurate policy is named. "
+            f"Failed: {_names(failed)}."
+        )
     times = {label: float(r["step_time_us"]["mean"]) for label, r in valid.items()}
     fastest, t_best = _ties(times, time_tolerance, 0.0)
-    head = (f"Fastest (amortized step time, first-step plan included): {_names(fastest[:1])}, "
-            f"{_fmt(t_best)} us (median {_fmt(float(valid[fastest[0]]['step_time_us']['median']))} us)")
+    head = (
+        f"Fastest (amortized step time, first-step plan included): {_names(fastest[:1])}, "
+        f"{_fmt(t_best)} us (median {_fmt(float(valid[fastest[0]]['step_time_us']['median']))} us)"
+    )
     if len(fastest) > 1:
         head += f"; within {time_tolerance:.0%} of it: " + ", ".join(
-            f"**{label}** ({_fmt(times[label])} us)" for label in fastest[1:])
+            f"**{label}** ({_fmt(times[label])} us)" for label in fastest[1:]
+        )
     out.append(head + ".")
     for k, metric in enumerate(metrics):
         values = {label: v for label, r in valid.items() if (v := metric.value(r)) is not None}
@@ -223,8 +260,10 @@ def speed_error_paragraph(reports: Mapping[str, Mapping[str, Any]], rank: Sequen
                 sentence += f"; {_names(both)} {'is' if len(both) == 1 else 'are'} among the fastest as well"
             else:
                 quickest = min(best, key=lambda label: times[label])
-                sentence += (f"; **{quickest}** takes {times[quickest] / t_best:.1f}x the amortized step time of "
-                             f"**{fastest[0]}**, which has {_fmt(values.get(fastest[0]))} {metric.unit}")
+                sentence += (
+                    f"; **{quickest}** takes {times[quickest] / t_best:.1f}x the amortized step time of "
+                    f"**{fastest[0]}**, which has {_fmt(values.get(fastest[0]))} {metric.unit}"
+                )
         out.append(sentence + ".")
     if failed:
         out.append(f"Left out as failed (success rate 0): {', '.join(failed)}.")
@@ -267,8 +306,9 @@ class _Label:
     median: float
 
 
-def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, title: str,
-                learned: Collection[str] = ()) -> list[_Label]:
+def _draw_panel(
+    ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, title: str, learned: Collection[str] = ()
+) -> list[_Label]:
     """Scatter (amortized time, error) with a thin line back to the median time; returns the labels to place
     once the figure is laid out. Labels in ``learned`` get the learned marker family."""
     metric = _metric(error)
@@ -293,30 +333,58 @@ def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, t
     px = ax.figure.dpi / 72.0
     sizes: list[float] = []
     for i, xy in enumerate(screen):
-        under = [sizes[j] for j in range(i)
-                 if np.hypot(*(screen[j] - xy)) < 0.6 * px * 0.5 * (math.sqrt(sizes[j]) + math.sqrt(_SIZE))]
+        under = [
+            sizes[j]
+            for j in range(i)
+            if np.hypot(*(screen[j] - xy)) < 0.6 * px * 0.5 * (math.sqrt(sizes[j]) + math.sqrt(_SIZE))
+        ]
         sizes.append(max(0.4 * min(under), 16.0) if under else _SIZE)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
-    markers = {label: (_LEARNED_MARKERS[i % len(_LEARNED_MARKERS)] if label in learned else
-                       _MARKERS[i % len(_MARKERS)])
-               for group in ([p[1] for p in points if p[1] not in learned], [p[1] for p in points if p[1] in learned])
-               for i, label in enumerate(group)}
+    markers = {
+        label: (_LEARNED_MARKERS[i % len(_LEARNED_MARKERS)] if label in learned else _MARKERS[i % len(_MARKERS)])
+        for group in ([p[1] for p in points if p[1] not in learned], [p[1] for p in points if p[1] in learned])
+        for i, label in enumerate(group)
+    }
     labels = []
     for (k, label, mean, median, value, failed), size in zip(points, sizes, strict=True):
         colour = colours[k % len(colours)]
         ax.plot([median, mean], [value, value], color=colour, lw=1.0, alpha=0.8, zorder=2)
         ax.plot([median], [value], marker="|", color=colour, ms=7, zorder=2)
-        ax.scatter([mean], [value], s=size, marker=markers[label], zorder=4 - size / 1000,
-                   linewidths=1.6, facecolors="none" if failed else colour, edgecolors=colour,
-                   label=label + (" (failed)" if failed else ""))
-        text = ax.annotate(label + (" (failed)" if failed else ""), (mean, value), xytext=(8, 0),
-                           textcoords="offset points", fontsize=7, color=colour, va="center", zorder=4,
-                           arrowprops={"arrowstyle": "-", "color": colour, "lw": 0.5, "alpha": 0.7,
-                                       "shrinkA": 1, "shrinkB": 0.5 * math.sqrt(size) + 1})
+        ax.scatter(
+            [mean],
+            [value],
+            s=size,
+            marker=markers[label],
+            zorder=4 - size / 1000,
+            linewidths=1.6,
+            facecolors="none" if failed else colour,
+            edgecolors=colour,
+            label=label + (" (failed)" if failed else ""),
+        )
+        text = ax.annotate(
+            label + (" (failed)" if failed else ""),
+            (mean, value),
+            xytext=(8, 0),
+            textcoords="offset points",
+            fontsize=7,
+            color=colour,
+            va="center",
+            zorder=4,
+            arrowprops={
+                "arrowstyle": "-",
+                "color": colour,
+                "lw": 0.5,
+                "alpha": 0.7,
+                "shrinkA": 1,
+                "shrinkB": 0.5 * math.sqrt(size) + 1,
+            },
+        )
         text.set_in_layout(False)
         labels.append(_Label(text, 0.5 * math.sqrt(size), median))
-    ax.set_xlabel("policy compute time per step [us]: amortized mean, first-step plan included\n"
-                  f"(thin line back to the median; {xscale} axis)")
+    ax.set_xlabel(
+        "policy compute time per step [us]: amortized mean, first-step plan included\n"
+        f"(thin line back to the median; {xscale} axis)"
+    )
     ax.set_ylabel(f"{metric.heading} ({yscale} axis)")
     ax.set_title(title, fontsize=9)
     ax.grid(True, which="both", alpha=0.3)
@@ -326,8 +394,9 @@ def _draw_panel(ax: Any, reports: Mapping[str, Mapping[str, Any]], error: str, t
     if learned:
         handles.append(Line2D([], [], color="grey", lw=0, marker="*", ms=9))
         names.append("star, plus, cross markers: learned policies; others: analytic controllers")
-    legend = ax.legend(handles, names, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2,
-                       frameon=False)
+    legend = ax.legend(
+        handles, names, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, frameon=False
+    )
     for handle in legend.legend_handles:  # nested markers are small on the plot, not in the legend
         if hasattr(handle, "set_sizes"):
             handle.set_sizes([70.0])
@@ -354,9 +423,15 @@ def _place_labels(fig: Any, axes: Sequence[Any], groups: Sequence[Sequence[_Labe
         for i in sorted(range(len(group)), key=lambda i: (-points[i][1], points[i][0])):
             label = group[i]
             gap = label.radius_pt + 3.0
-            candidates = sorted(((side * (gap + dx), dy) for side in (1, -1) for dx in (0.0, 12.0, 30.0, 50.0)
-                                 for dy in np.arange(-63.0, 64.0, 9.0)),
-                                key=lambda c: math.hypot(c[0], 1.5 * c[1]) + (0.0 if c[0] > 0 else 4.0))
+            candidates = sorted(
+                (
+                    (side * (gap + dx), dy)
+                    for side in (1, -1)
+                    for dx in (0.0, 12.0, 30.0, 50.0)
+                    for dy in np.arange(-63.0, 64.0, 9.0)
+                ),
+                key=lambda c: math.hypot(c[0], 1.5 * c[1]) + (0.0 if c[0] > 0 else 4.0),
+            )
             best, best_cost = candidates[0], math.inf
             for dx, dy in candidates:
                 label.text.set_position((dx, dy))
@@ -378,16 +453,22 @@ def _run_title(title: str, reports: Mapping[str, Mapping[str, Any]]) -> str:
     return f"{title}\n{_runs(reports)}"
 
 
-def plot_speed_error_panels(panels: Sequence[tuple[Mapping[str, Mapping[str, Any]], str, str]], path: str | Path,
-                            title: str = "", learned: Collection[str] = ()) -> Path:
+def plot_speed_error_panels(
+    panels: Sequence[tuple[Mapping[str, Mapping[str, Any]], str, str]],
+    path: str | Path,
+    title: str = "",
+    learned: Collection[str] = (),
+) -> Path:
     """Side-by-side speed-vs-error panels, each ``(reports, panel title, error)`` as in :func:`plot_speed_error`
     (the panel title gets the episodes and seeds appended); labels in ``learned`` get the learned markers."""
     for _, _, error in panels:
         _metric(error)
     fig, axes = plt.subplots(1, len(panels), figsize=(7.2 * len(panels), 6.2), squeeze=False)
     axes = list(axes[0])
-    labels = [_draw_panel(ax, reports, error, _run_title(panel_title, reports), learned)
-              for ax, (reports, panel_title, error) in zip(axes, panels, strict=True)]
+    labels = [
+        _draw_panel(ax, reports, error, _run_title(panel_title, reports), learned)
+        for ax, (reports, panel_title, error) in zip(axes, panels, strict=True)
+    ]
     if title:
         fig.suptitle(title)
     fig.tight_layout()
@@ -395,8 +476,13 @@ def plot_speed_error_panels(panels: Sequence[tuple[Mapping[str, Mapping[str, Any
     return save_figure(fig, path)
 
 
-def plot_speed_error(reports: Mapping[str, Mapping[str, Any]], path: str | Path, title: str,
-                     error: str = "tracking_max", learned: Collection[str] = ()) -> Path:
+def plot_speed_error(
+    reports: Mapping[str, Mapping[str, Any]],
+    path: str | Path,
+    title: str,
+    error: str = "tracking_max",
+    learned: Collection[str] = (),
+) -> Path:
     """Scatter of the amortized compute time per step [us] (first-step plan included; a thin line reaches back
     to the median) against ``error``, a name of :data:`METRICS`, one labelled point per policy.
 
@@ -409,4 +495,3 @@ def plot_speed_error(reports: Mapping[str, Mapping[str, Any]], path: str | Path,
         ValueError: an unknown ``error``, or no report that defines it.
     """
     return plot_speed_error_panels([(reports, title, error)], path, learned=learned)
-

@@ -64,10 +64,19 @@ class _FrameSink(list):
         self._bar.update(1)
 
 
-def record_episode(env_id: str, policy: str, path: str | Path, *, seed: int = 0,
-                   env_kwargs: dict[str, Any] | None = None, policy_kwargs: dict[str, Any] | None = None,
-                   width: int | None = None, height: int | None = None, max_fps: float | None = None,
-                   progress: bool = True) -> tuple[Path, EpisodeSummary]:
+def record_episode(
+    env_id: str,
+    policy: str,
+    path: str | Path,
+    *,
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
+    policy_kwargs: dict[str, Any] | None = None,
+    width: int | None = None,
+    height: int | None = None,
+    max_fps: float | None = None,
+    progress: bool = True,
+) -> tuple[Path, EpisodeSummary]:
     """Render one episode to ``path`` (``.mp4`` or ``.gif``), played back in real time.
 
     Frames are taken every ``n``-th control step, ``n`` the smallest stride that keeps the video at or below
@@ -100,8 +109,13 @@ def record_episode(env_id: str, policy: str, path: str | Path, *, seed: int = 0,
         else:  # pillow takes the frame time in ms and stores it in centiseconds
             writer = imageio.get_writer(path, mode="I", duration=1000.0 / fps, loop=0)
         steps = env.spec.max_episode_steps if env.spec is not None else None
-        bar = tqdm(total=None if steps is None else steps + 1, desc=f"render {path.name} ({fps:g} fps)",
-                   unit="step", disable=not progress, leave=False)
+        bar = tqdm(
+            total=None if steps is None else steps + 1,
+            desc=f"render {path.name} ({fps:g} fps)",
+            unit="step",
+            disable=not progress,
+            leave=False,
+        )
         try:
             sink = _FrameSink(writer, bar)
             summary, _ = run_episode(_EveryNthRender(env, stride), agent, seed, frames=sink)

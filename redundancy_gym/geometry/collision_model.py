@@ -68,8 +68,11 @@ def bounding_lss(volumes: Sequence[SSV]) -> LSS:
     radii = np.concatenate([np.full(len(v.points), v.radius) for v in volumes])
     center = points.mean(axis=0)
     centered = points - center
-    axis = np.linalg.svd(centered, full_matrices=False)[2][0] if np.ptp(points, axis=0).max() > 0.0 \
+    axis = (
+        np.linalg.svd(centered, full_matrices=False)[2][0]
+        if np.ptp(points, axis=0).max() > 0.0
         else np.array([0.0, 0.0, 1.0])
+    )
     proj = centered @ axis
     p0, p1 = center + proj.min() * axis, center + proj.max() * axis
     seg = p1 - p0
@@ -139,9 +142,16 @@ class CollisionModel:
         bounding_margin: [m], >= 0; pairs closer than this are always computed exactly.
     """
 
-    def __init__(self, robot: Sequence[Segment], environment: Sequence[Segment] = (), *,
-                 exclude: Iterable[tuple[str, str]] = (), self_collision: bool = True, bounding: bool = True,
-                 bounding_margin: float = 0.2) -> None:
+    def __init__(
+        self,
+        robot: Sequence[Segment],
+        environment: Sequence[Segment] = (),
+        *,
+        exclude: Iterable[tuple[str, str]] = (),
+        self_collision: bool = True,
+        bounding: bool = True,
+        bounding_margin: float = 0.2,
+    ) -> None:
         self.robot = tuple(robot)
         self.environment = tuple(environment)
         names = [s.name for s in self.robot + self.environment]
@@ -166,10 +176,18 @@ class CollisionModel:
         pairs: list[tuple[int, int]] = []
         nr = len(self.robot)
         if self_collision:
-            pairs += [(i, j) for i in range(nr) for j in range(i + 1, nr)
-                      if frozenset((self.segments[i].name, self.segments[j].name)) not in excluded]
-        pairs += [(i, index[e.name]) for i in range(nr) for e in self.environment
-                  if frozenset((self.segments[i].name, e.name)) not in excluded]
+            pairs += [
+                (i, j)
+                for i in range(nr)
+                for j in range(i + 1, nr)
+                if frozenset((self.segments[i].name, self.segments[j].name)) not in excluded
+            ]
+        pairs += [
+            (i, index[e.name])
+            for i in range(nr)
+            for e in self.environment
+            if frozenset((self.segments[i].name, e.name)) not in excluded
+        ]
         self.pairs = tuple((self.segments[i].name, self.segments[j].name) for i, j in pairs)
         self._pairs = np.array(pairs, dtype=np.int64).reshape(-1, 2)
 
@@ -200,15 +218,19 @@ class CollisionModel:
         # bounding capsules (one per segment with several volumes) and the pairs they can skip
         self.bounding = bool(bounding)
         bounds = [bounding_lss(s.volumes) for s in self.segments]
-        prunable = [p for p, (i, j) in enumerate(pairs)
-                    if len(self.segments[i].volumes) > 1 or len(self.segments[j].volumes) > 1]
+        prunable = [
+            p
+            for p, (i, j) in enumerate(pairs)
+            if len(self.segments[i].volumes) > 1 or len(self.segments[j].volumes) > 1
+        ]
         self._prunable = np.array(prunable, dtype=np.int64)
         self._has_bounds = self.bounding and bool(prunable)
         self._bound_row = np.full(len(pairs), -1, dtype=np.int64)
         self._bound_row[self._prunable] = np.arange(len(prunable))
         self._bound_local = PackedVolumes.from_volumes(bounds).vertices.copy()
-        self._bound_batch = PairBatch(bounds, self._pairs[prunable, 0] if prunable else [],
-                                      self._pairs[prunable, 1] if prunable else [])
+        self._bound_batch = PairBatch(
+            bounds, self._pairs[prunable, 0] if prunable else [], self._pairs[prunable, 1] if prunable else []
+        )
 
     @property
     def num_pairs(self) -> int:
@@ -228,19 +250,26 @@ class CollisionModel:
     def layout(self) -> CollisionLayout:
         """The segments, volumes and pairs as flat arrays (copies)."""
         starts = np.array([sl.start for sl in self._slices] + [len(self._local)], dtype=np.int64)
-        return CollisionLayout(tuple(s.frame for s in self.segments), starts, self._local.copy(),
-                               self._batch.radii.copy(), self._batch.kinds.copy(), self._pairs.copy(),
-                               np.append(self._starts, len(self._owner)).astype(np.int64),
-                               self._volume_a.copy(), self._volume_b.copy())
+        return CollisionLayout(
+            tuple(s.frame for s in self.segments),
+            starts,
+            self._local.copy(),
+            self._batch.radii.copy(),
+            self._batch.kinds.copy(),
+            self._pairs.copy(),
+            np.append(self._starts, len(self._owner)).astype(np.int64),
+            self._volume_a.copy(),
+            self._volume_b.copy(),
+        )
 
     def environment_volumes(self) -> PackedVolumes:
         """The environment segments' volumes in world coordinates with their current radii, in segment order
         (the volumes after the robot's in :meth:`layout`)."""
         first = self._slices[len(self.robot)].start if self.environment else len(self._local)
         vertices = np.empty((len(self._local) - first, 3, 3))
-        for s, sl in zip(self.environment, self._slices[len(self.robot):]):
+        for s, sl in zip(self.environment, self._slices[len(self.robot) :], strict=False):
             rot, pos = self._env_placement[s.name]
-            vertices[sl.start - first:sl.stop - first] = self._local[sl] @ rot.T + pos
+            vertices[sl.start - first : sl.stop - first] = self._local[sl] @ rot.T + pos
         return PackedVolumes(vertices, self._batch.radii[first:].copy(), self._batch.kinds[first:].copy())
 
     def set_environment_placement(self, name: str, rotation: ArrayLike, translation: ArrayLike) -> None:
@@ -271,7 +300,7 @@ class CollisionModel:
 
     def _place(self, kinematics: Kinematics) -> None:
         """World coordinates of every volume (and bounding capsule) into the batches' buffers."""
-        for k, (s, sl) in enumerate(zip(self.segments, self._slices)):
+        for k, (s, sl) in enumerate(zip(self.segments, self._slices, strict=False)):
             if s.frame is None:
                 if not self._env_dirty:
                     continue
@@ -308,12 +337,16 @@ class CollisionModel:
             skipped = np.flatnonzero(~exact)
             rows = self._bound_row[skipped]
             distance[skipped] = bound.distance[rows]
-            point_a[skipped], point_b[skipped], normal[skipped] = bound.point_a[rows], bound.point_b[rows], \
-                bound.normal[rows]
+            point_a[skipped], point_b[skipped], normal[skipped] = (
+                bound.point_a[rows],
+                bound.point_b[rows],
+                bound.normal[rows],
+            )
         return CollisionState(self.pairs, distance, point_a, point_b, normal, exact)
 
-    def distance_gradient(self, kinematics: Kinematics, state: CollisionState,
-                          pairs: ArrayLike | None = None) -> NDArray[np.float64]:
+    def distance_gradient(
+        self, kinematics: Kinematics, state: CollisionState, pairs: ArrayLike | None = None
+    ) -> NDArray[np.float64]:
         """``dd/dq`` (5.61) of the chosen pairs (default all), one row each (len(pairs) x nv).
 
         ``dd/dq = n^T (J_T - J_F)`` with ``n`` the unit vector from the ``from`` witness to the ``to`` witness

@@ -61,16 +61,19 @@ class PackedVolumes:
             if not isinstance(value, np.ndarray) or value.dtype != dtype:
                 given = np.asarray(value)
                 if given.dtype.kind not in ("iu" if name == "kinds" else "iuf"):
-                    raise GeometryError(f"PackedVolumes {name} must be an array of "
-                                        f"{'ints' if name == 'kinds' else 'real numbers'}, got dtype {given.dtype}")
+                    raise GeometryError(
+                        f"PackedVolumes {name} must be an array of "
+                        f"{'ints' if name == 'kinds' else 'real numbers'}, got dtype {given.dtype}"
+                    )
                 object.__setattr__(self, name, given.astype(dtype))
         m = self.vertices.shape[0] if self.vertices.ndim == 3 else -1
         if self.vertices.shape != (m, 3, 3):
             raise GeometryError(f"PackedVolumes vertices must have shape (M, 3, 3), got {self.vertices.shape}")
         for name in ("radii", "kinds"):
             if getattr(self, name).shape != (m,):
-                raise GeometryError(f"PackedVolumes {name} must have shape ({m},) like the vertices, got "
-                                    f"{getattr(self, name).shape}")
+                raise GeometryError(
+                    f"PackedVolumes {name} must have shape ({m},) like the vertices, got {getattr(self, name).shape}"
+                )
         check_packed_volumes(self)
 
     @classmethod
@@ -88,8 +91,9 @@ class PackedVolumes:
         return cls._checked(vertices, radii, kinds)
 
     @classmethod
-    def _checked(cls, vertices: NDArray[np.float64], radii: NDArray[np.float64],
-                 kinds: NDArray[np.int64]) -> PackedVolumes:
+    def _checked(
+        cls, vertices: NDArray[np.float64], radii: NDArray[np.float64], kinds: NDArray[np.int64]
+    ) -> PackedVolumes:
         """Arrays already known valid (from checked volumes), without checking them again."""
         packed = object.__new__(cls)
         for name, value in (("vertices", vertices), ("radii", radii), ("kinds", kinds)):
@@ -104,8 +108,9 @@ def check_packed_volumes(volumes: PackedVolumes) -> None:
     """Raise :class:`GeometryError` naming the first volume with a non-finite vertex or radius, a negative
     radius or an unknown kind (the arrays may have been written in place since they were packed)."""
     v, r, k = volumes.vertices, volumes.radii, volumes.kinds
-    if not len(volumes) or (math.isfinite(float(v.sum()) + float(r.sum())) and r.min() >= 0.0
-                            and k.min() >= 0 and k.max() <= 2):
+    if not len(volumes) or (
+        math.isfinite(float(v.sum()) + float(r.sum())) and r.min() >= 0.0 and k.min() >= 0 and k.max() <= 2
+    ):
         return
     bad = ~np.isfinite(volumes.vertices).reshape(len(volumes), 9).all(axis=1)
     if bad.any():
@@ -118,8 +123,9 @@ def check_packed_volumes(volumes: PackedVolumes) -> None:
     bad = (volumes.kinds < 0) | (volumes.kinds > 2)
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
-        raise GeometryError(f"PackedVolumes kinds must be 0 (PSS), 1 (LSS) or 2 (TSS); volume {i} has "
-                            f"{int(volumes.kinds[i])}")
+        raise GeometryError(
+            f"PackedVolumes kinds must be 0 (PSS), 1 (LSS) or 2 (TSS); volume {i} has {int(volumes.kinds[i])}"
+        )
 
 
 def distance(a: SSV, b: SSV) -> SSVDistance:
@@ -159,8 +165,13 @@ def _layout(kinds: NDArray[np.int64], index_a: ArrayLike, index_b: ArrayLike) ->
     hi = np.where(swap, ia, ib)
     group = GROUP_OF[kinds[lo], kinds[hi]]
     order = np.argsort(group, kind="stable")
-    return _Layout(np.ascontiguousarray(lo[order]), np.ascontiguousarray(hi[order]), order.astype(np.int64),
-                   swap[order].astype(np.int64), np.searchsorted(group[order], np.arange(7)).astype(np.int64))
+    return _Layout(
+        np.ascontiguousarray(lo[order]),
+        np.ascontiguousarray(hi[order]),
+        order.astype(np.int64),
+        swap[order].astype(np.int64),
+        np.searchsorted(group[order], np.arange(7)).astype(np.int64),
+    )
 
 
 def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: ArrayLike) -> SSVDistances:
@@ -175,8 +186,15 @@ def indexed_distances(volumes: PackedVolumes, index_a: ArrayLike, index_b: Array
     layout = _layout(volumes.kinds, index_a, index_b)
     k = layout.slot.size
     out = SSVDistances(np.empty(k), np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3)))
-    ssv_pairs_grouped(volumes.vertices, volumes.radii, volumes.kinds, *layout, np.ones(k, dtype=np.int64), *out,
-                      np.empty(k, dtype=np.int64))
+    ssv_pairs_grouped(
+        volumes.vertices,
+        volumes.radii,
+        volumes.kinds,
+        *layout,
+        np.ones(k, dtype=np.int64),
+        *out,
+        np.empty(k, dtype=np.int64),
+    )
     if not math.isfinite(float(out.distance.sum())):  # a non-finite input written after packing: say which
         check_packed_volumes(volumes)
     return out
@@ -188,8 +206,11 @@ def distances(a: Sequence[SSV] | PackedVolumes, b: Sequence[SSV] | PackedVolumes
     pb = b if isinstance(b, PackedVolumes) else PackedVolumes.from_volumes(b)
     if len(pa) != len(pb):
         raise GeometryError(f"distances needs equally many volumes, got {len(pa)} and {len(pb)}")
-    both = PackedVolumes._checked(np.concatenate([pa.vertices, pb.vertices]), np.concatenate([pa.radii, pb.radii]),
-                                  np.concatenate([pa.kinds, pb.kinds]))
+    both = PackedVolumes._checked(
+        np.concatenate([pa.vertices, pb.vertices]),
+        np.concatenate([pa.radii, pb.radii]),
+        np.concatenate([pa.kinds, pb.kinds]),
+    )
     n = len(pa)
     return indexed_distances(both, np.arange(n), np.arange(n, 2 * n))
 
@@ -209,8 +230,9 @@ class PairBatch:
             as fixed (their bounding spheres are computed here, and by :meth:`cull`). Default: all move.
     """
 
-    def __init__(self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike,
-                 moving: int | None = None) -> None:
+    def __init__(
+        self, volumes: PackedVolumes | Sequence[SSV], index_a: ArrayLike, index_b: ArrayLike, moving: int | None = None
+    ) -> None:
         packed = volumes if isinstance(volumes, PackedVolumes) else PackedVolumes.from_volumes(volumes)
         self.vertices = np.ascontiguousarray(packed.vertices, dtype=np.float64).copy()
         self.radii = np.ascontiguousarray(packed.radii, dtype=np.float64).copy()
@@ -232,8 +254,10 @@ class PairBatch:
         self._centers = np.empty((m, 3))
         self._bounds = np.empty(m)
         buffers = (self.vertices, self.radii, self.kinds, *layout, self._active, *self.result, self._todo)
-        self._header = np.array([b.ctypes.data for b in buffers] + [m, k, self._centers.ctypes.data,
-                                                                    self._bounds.ctypes.data], dtype=np.int64)
+        self._header = np.array(
+            [b.ctypes.data for b in buffers] + [m, k, self._centers.ctypes.data, self._bounds.ctypes.data],
+            dtype=np.int64,
+        )
         self._header_address = int(self._header.ctypes.data)
         # compile (or load from cache) once per process, not in the first control step
         if not ssv_pairs_at.signatures:
@@ -266,8 +290,9 @@ class PairBatch:
         is known to exceed ``margin`` (a broad phase; replaces any :meth:`set_active` mask)."""
         return int(self._cull_kernel(self._header_address, float(margin)))
 
-    def attach_frames(self, positions: NDArray[np.float64], rotations: NDArray[np.float64],
-                      half_lengths: ArrayLike) -> None:
+    def attach_frames(
+        self, positions: NDArray[np.float64], rotations: NDArray[np.float64], half_lengths: ArrayLike
+    ) -> None:
         """Let :meth:`compute_near` place volumes ``0..n`` from frames first: volume ``i`` becomes the segment
         ``positions[i] -/+ half_lengths[i] * z_i`` (``z_i`` the third column of the row-major rotation
         ``rotations[i]``), or the point ``positions[i]`` where the half length is 0; radii and kinds stay.
@@ -282,12 +307,19 @@ class PairBatch:
         n = h.size
         for name, a, shape in (("positions", p, (n, 3)), ("rotations", r, (n, 9))):
             if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
-                raise GeometryError(f"{name} must be a C-contiguous float64 array of shape {shape}, got "
-                                    f"{a.dtype} {a.shape}")
-        if n > self._moving or np.any(h < 0.0) or np.any((h > 0.0) != (self.kinds[:n] == 1)) \
-                or np.any((h == 0.0) != (self.kinds[:n] == 0)):
-            raise GeometryError(f"half_lengths must give an LSS (h > 0) or PSS (h = 0) for each of the first "
-                                f"volumes, at most moving={self._moving} of them")
+                raise GeometryError(
+                    f"{name} must be a C-contiguous float64 array of shape {shape}, got {a.dtype} {a.shape}"
+                )
+        if (
+            n > self._moving
+            or np.any(h < 0.0)
+            or np.any((h > 0.0) != (self.kinds[:n] == 1))
+            or np.any((h == 0.0) != (self.kinds[:n] == 0))
+        ):
+            raise GeometryError(
+                f"half_lengths must give an LSS (h > 0) or PSS (h = 0) for each of the first "
+                f"volumes, at most moving={self._moving} of them"
+            )
         self._frames = (p, r, h, np.array([p.ctypes.data, r.ctypes.data, h.ctypes.data, n], dtype=np.int64))
         self._frames_address = int(self._frames[3].ctypes.data)
 

@@ -32,15 +32,21 @@ class GraspPathTiming(NamedTuple):
     approach_speed: float = 0.12
 
 
-def grasp_path_durations(start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
-                         grasp: NDArray[np.float64], approach: NDArray[np.float64],
-                         timing: GraspPathTiming = GraspPathTiming()) -> tuple[float, float]:
+def grasp_path_durations(
+    start: NDArray[np.float64],
+    start_axis: NDArray[np.float64],
+    pregrasp: NDArray[np.float64],
+    grasp: NDArray[np.float64],
+    approach: NDArray[np.float64],
+    timing: GraspPathTiming = GraspPathTiming(),
+) -> tuple[float, float]:
     """Durations [s] of the move to the pre-grasp pose and of the approach, from the distances, the turn of the
     tool axis and ``timing`` (the approach takes at least 0.5 s)."""
     axis = start_axis / np.linalg.norm(start_axis)
     turn = float(np.arccos(np.clip(axis @ approach / np.linalg.norm(approach), -1.0, 1.0)))
-    move = max(timing.min_duration, float(np.linalg.norm(pregrasp - start)) / timing.max_speed,
-               turn / timing.max_turn_rate)
+    move = max(
+        timing.min_duration, float(np.linalg.norm(pregrasp - start)) / timing.max_speed, turn / timing.max_turn_rate
+    )
     approach_time = max(0.5, float(np.linalg.norm(grasp - pregrasp)) / timing.approach_speed)
     return move, approach_time
 
@@ -54,9 +60,16 @@ class GraspPath:
         move_duration, approach_duration: [s].
     """
 
-    def __init__(self, start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
-                 grasp: NDArray[np.float64], approach: NDArray[np.float64], move_duration: float,
-                 approach_duration: float) -> None:
+    def __init__(
+        self,
+        start: NDArray[np.float64],
+        start_axis: NDArray[np.float64],
+        pregrasp: NDArray[np.float64],
+        grasp: NDArray[np.float64],
+        approach: NDArray[np.float64],
+        move_duration: float,
+        approach_duration: float,
+    ) -> None:
         self.start, self.pregrasp, self.grasp = start.copy(), pregrasp.copy(), grasp.copy()
         self.start_axis = start_axis / np.linalg.norm(start_axis)
         self.approach = approach / np.linalg.norm(approach)
@@ -75,21 +88,43 @@ class GraspPath:
 
         # the constants of __call__ in one buffer for the compiled sampler
         k, a0 = self.turn_axis, self.start_axis
-        self._params = np.concatenate([self.start, self.pregrasp, self.grasp, self.approach, a0, np.cross(k, a0),
-                                       k * (k @ a0), k, [self.move_duration, self.approach_duration,
-                                                         self.turn_angle]])
+        self._params = np.concatenate(
+            [
+                self.start,
+                self.pregrasp,
+                self.grasp,
+                self.approach,
+                a0,
+                np.cross(k, a0),
+                k * (k @ a0),
+                k,
+                [self.move_duration, self.approach_duration, self.turn_angle],
+            ]
+        )
         self._out = np.empty(12)
         if not sample_grasp_path.signatures:
             sample_grasp_path.compile("void(float64[::1], float64, float64[::1])")
         self._sampler = sample_grasp_path.overloads[sample_grasp_path.signatures[0]].entry_point
 
     @classmethod
-    def plan(cls, start: NDArray[np.float64], start_axis: NDArray[np.float64], pregrasp: NDArray[np.float64],
-             grasp: NDArray[np.float64], approach: NDArray[np.float64],
-             timing: GraspPathTiming = GraspPathTiming()) -> GraspPath:
+    def plan(
+        cls,
+        start: NDArray[np.float64],
+        start_axis: NDArray[np.float64],
+        pregrasp: NDArray[np.float64],
+        grasp: NDArray[np.float64],
+        approach: NDArray[np.float64],
+        timing: GraspPathTiming = GraspPathTiming(),
+    ) -> GraspPath:
         """The path with durations from :func:`grasp_path_durations`."""
-        return cls(start, start_axis, pregrasp, grasp, approach,
-                   *grasp_path_durations(start, start_axis, pregrasp, grasp, approach, timing))
+        return cls(
+            start,
+            start_axis,
+            pregrasp,
+            grasp,
+            approach,
+            *grasp_path_durations(start, start_axis, pregrasp, grasp, approach, timing),
+        )
 
     @property
     def params(self) -> NDArray[np.float64]:

@@ -71,8 +71,15 @@ class PiecewisePotential:
         if not d.flags.c_contiguous:  # flat views below, written in place (keeping a 0-d shape)
             d = d.copy(order="C")
         value, slope, curvature = np.empty(d.shape), np.empty(d.shape), np.empty(d.shape)
-        _piecewise_potential_many(d.reshape(-1), da, self.slope, self.switch_ratio, value.reshape(-1),
-                                  slope.reshape(-1), curvature.reshape(-1))
+        _piecewise_potential_many(
+            d.reshape(-1),
+            da,
+            self.slope,
+            self.switch_ratio,
+            value.reshape(-1),
+            slope.reshape(-1),
+            curvature.reshape(-1),
+        )
         return PotentialValue(value, slope, curvature)
 
     def value(self, distance: ArrayLike) -> NDArray[np.float64]:
@@ -85,8 +92,9 @@ class PiecewisePotential:
 
 
 @njit(cache=True, error_model="numpy")
-def piecewise_potential_kernel(d: float, activation_distance: float, slope: float,
-                               switch_ratio: float) -> tuple[float, float, float]:
+def piecewise_potential_kernel(
+    d: float, activation_distance: float, slope: float, switch_ratio: float
+) -> tuple[float, float, float]:
     """``H_c23(d)`` (5.58), ``H_c23'(d)`` (5.59) and ``H_c23''(d)`` for one distance: the one implementation of
     :class:`PiecewisePotential`, also called inside compiled controllers."""
     da = activation_distance
@@ -95,8 +103,11 @@ def piecewise_potential_kernel(d: float, activation_distance: float, slope: floa
     if d > da:
         return 0.0, 0.0, 0.0
     if d < t * da:  # quadratic branch
-        return (-s0 * d * d / (da * (t + 1.0)) + s0 * d - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0)),
-                -2.0 * s0 * d / (da * (t + 1.0)) + s0, -2.0 * s0 / (da * (t + 1.0)))
+        return (
+            -s0 * d * d / (da * (t + 1.0)) + s0 * d - s0 * da * (t * t + t + 1.0) / (3.0 * (t + 1.0)),
+            -2.0 * s0 * d / (da * (t + 1.0)) + s0,
+            -2.0 * s0 / (da * (t + 1.0)),
+        )
     rest = da - d  # cubic branch
     denom = da * da * (t * t - 1.0)
     return s0 * rest**3 / (3.0 * denom), -s0 * rest * rest / denom, 2.0 * s0 * rest / denom

@@ -84,8 +84,11 @@ class SSV:
         return f"{self.kind_name}({pts}, radius={self.radius:g})"
 
     def __eq__(self, other: object) -> bool:
-        return (type(other) is type(self) and self.radius == other.radius  # type: ignore[attr-defined]
-                and bool(np.array_equal(self.vertices, other.vertices)))  # type: ignore[attr-defined]
+        return (
+            type(other) is type(self)
+            and self.radius == other.radius  # type: ignore[attr-defined]
+            and bool(np.array_equal(self.vertices, other.vertices))
+        )  # type: ignore[attr-defined]
 
     def __hash__(self) -> int:
         return hash((self.kind, self.radius, self.vertices.tobytes()))

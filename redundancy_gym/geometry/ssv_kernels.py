@@ -22,8 +22,18 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
-__all__ = ["BORROW", "GROUPS", "GROUP_OF", "KIND_LSS", "KIND_PSS", "KIND_TSS", "cull_pairs_at", "ssv_pairs_at",
-           "ssv_pairs_grouped", "volume_pair_distance"]
+__all__ = [
+    "BORROW",
+    "GROUPS",
+    "GROUP_OF",
+    "KIND_LSS",
+    "KIND_PSS",
+    "KIND_TSS",
+    "cull_pairs_at",
+    "ssv_pairs_at",
+    "ssv_pairs_grouped",
+    "volume_pair_distance",
+]
 
 KIND_PSS = 0
 KIND_LSS = 1
@@ -44,9 +54,9 @@ _CONTACT_GAP2 = 1e-24
 # Relative coordinates of a pair whose extent lies outside [2^-100, 2^100] m are scaled by a power of two (exact)
 # before the closest-point routines: their squared lengths and 2x2 determinants (fourth powers) would underflow
 # to zero below ~1e-80 m (every triangle and segment pair taken for degenerate) or overflow above ~1e77 m.
-_SCALE_LOW = 2.0 ** -100
-_SUBNORMAL = 2.0 ** -1000  # below, the scale 2^-exponent itself overflows: such a pair is left as it is (distance ~0)
-_SCALE_HIGH = 2.0 ** 100
+_SCALE_LOW = 2.0**-100
+_SUBNORMAL = 2.0**-1000  # below, the scale 2^-exponent itself overflows: such a pair is left as it is (distance ~0)
+_SCALE_HIGH = 2.0**100
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # here is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
@@ -407,8 +417,14 @@ _float64_pointer = _pointer_intrinsic(types.float64)
 _int64_pointer = _pointer_intrinsic(types.int64)
 
 
-GROUPS = ((KIND_PSS, KIND_PSS), (KIND_PSS, KIND_LSS), (KIND_PSS, KIND_TSS), (KIND_LSS, KIND_LSS),
-          (KIND_LSS, KIND_TSS), (KIND_TSS, KIND_TSS))
+GROUPS = (
+    (KIND_PSS, KIND_PSS),
+    (KIND_PSS, KIND_LSS),
+    (KIND_PSS, KIND_TSS),
+    (KIND_LSS, KIND_LSS),
+    (KIND_LSS, KIND_TSS),
+    (KIND_TSS, KIND_TSS),
+)
 # GROUP_OF[lower kind, higher kind] -> index into GROUPS
 GROUP_OF = np.full((3, 3), -1, dtype=np.int64)
 for _g, (_ka, _kb) in enumerate(GROUPS):
@@ -461,8 +477,9 @@ def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, 
 
 
 @njit(inline="always", **BORROW)
-def _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo, hi, out_d, out_pa, out_pb, out_n,
-                              todo):
+def _point_segment_pairs_fast(
+    v, radii, index_a, index_b, slot, swap, active, lo, hi, out_d, out_pa, out_pb, out_n, todo
+):
     """Sphere/capsule pairs ``lo..hi`` as one flat loop (the arithmetic of :func:`point_segment` relative to the
     sphere's centre, as the general path does); returns how many pairs it left in ``todo``.
 
@@ -488,8 +505,18 @@ def _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo
         dist = np.sqrt(q)
         inv = 1.0 / (dist if apart else 1.0)
         # witnesses: the centre and the point on the segment, exchanged where the pair was given capsule first
-        _write(slot[k], swap[k] != 0, dist - radii[i] - radii[j], o, _add_scaled(o, 1.0, p), _times(p, inv), out_d,
-               out_pa, out_pb, out_n)
+        _write(
+            slot[k],
+            swap[k] != 0,
+            dist - radii[i] - radii[j],
+            o,
+            _add_scaled(o, 1.0, p),
+            _times(p, inv),
+            out_d,
+            out_pa,
+            out_pb,
+            out_n,
+        )
         todo[nt] = k
         nt += 0 if (apart and active[k] != 0 and _SCALE_LOW <= extent <= _SCALE_HIGH) else 1
     return nt
@@ -532,16 +559,27 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
         apart = q > _CONTACT_GAP2
         dist = np.sqrt(q)
         inv = 1.0 / (dist if apart else 1.0)
-        _write(slot[k], False, dist - radii[i] - radii[j], _add_scaled(o, 1.0, pa),
-               _add_scaled(o, 1.0, _add_scaled(pa, 1.0, d)), _times(d, inv), out_d, out_pa, out_pb, out_n)
+        _write(
+            slot[k],
+            False,
+            dist - radii[i] - radii[j],
+            _add_scaled(o, 1.0, pa),
+            _add_scaled(o, 1.0, _add_scaled(pa, 1.0, d)),
+            _times(d, inv),
+            out_d,
+            out_pa,
+            out_pb,
+            out_n,
+        )
         todo[nt] = k
         nt += 0 if (regular and apart and active[k] != 0) else 1
     return nt
 
 
 @njit(**BORROW)
-def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb,
-                      out_n, todo):
+def ssv_pairs_grouped(
+    vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb, out_n, todo
+):
     """SSV distances of pairs of one volume array, pre-sorted into the six :data:`GROUPS`.
 
     ``index_a[k]`` holds the lower kind; pair ``k`` is written to row ``slot[k]``, with witnesses swapped back
@@ -564,14 +602,17 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
         hi = starts[g + 1]
         # the flat sphere, sphere/capsule and capsule loops leave their hard cases in todo[:n] for the general path
         if g == 0:
-            hi = lo + _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb,
-                                         out_n, todo)
+            hi = lo + _sphere_pairs_fast(
+                v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo
+            )
         elif g == 1:
-            hi = lo + _point_segment_pairs_fast(v, radii, index_a, index_b, slot, swap, active, lo, hi, out_d, out_pa,
-                                                out_pb, out_n, todo)
+            hi = lo + _point_segment_pairs_fast(
+                v, radii, index_a, index_b, slot, swap, active, lo, hi, out_d, out_pa, out_pb, out_n, todo
+            )
         elif g == 3:
-            hi = lo + _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb,
-                                          out_n, todo)
+            hi = lo + _segment_pairs_fast(
+                v, radii, index_a, index_b, slot, active, lo, hi, out_d, out_pa, out_pb, out_n, todo
+            )
         # the pair's vertices are read here, not in a callee that takes the arrays (see _closest_relative)
         for kk in range(lo, hi):
             k = todo[kk - lo] if g <= 1 or g == 3 else kk
@@ -580,11 +621,20 @@ def ssv_pairs_grouped(vertices, radii, kinds, index_a, index_b, slot, swap, star
                 continue
             i = index_a[k]
             j = index_b[k]
-            dist, pa, pb, n = _pair_result(_vertex(v, i, 0), _vertex(v, i, 1), _vertex(v, i, 2), kinds[i], radii[i],
-                                           _vertex(v, j, 0), _vertex(v, j, 1), _vertex(v, j, 2), kinds[j], radii[j], g)
+            dist, pa, pb, n = _pair_result(
+                _vertex(v, i, 0),
+                _vertex(v, i, 1),
+                _vertex(v, i, 2),
+                kinds[i],
+                radii[i],
+                _vertex(v, j, 0),
+                _vertex(v, j, 1),
+                _vertex(v, j, 2),
+                kinds[j],
+                radii[j],
+                g,
+            )
             _write(slot[k], swap[k] != 0, dist, pa, pb, n, out_d, out_pa, out_pb, out_n)
-
-
 
 
 @njit(**_JIT)
@@ -594,8 +644,9 @@ def _times(p, f):
 
 @njit(**_JIT)
 def _extent(p0, p1, p2):
-    return max(abs(p0[0]), abs(p0[1]), abs(p0[2]), abs(p1[0]), abs(p1[1]), abs(p1[2]), abs(p2[0]), abs(p2[1]),
-               abs(p2[2]))
+    return max(
+        abs(p0[0]), abs(p0[1]), abs(p0[2]), abs(p1[0]), abs(p1[1]), abs(p1[2]), abs(p2[0]), abs(p2[1]), abs(p2[2])
+    )
 
 
 @njit(**_JIT)
@@ -613,8 +664,13 @@ def _closest_relative(a1, a2, b0, b1, b2, g):
     scale = 1.0
     if extent > _SUBNORMAL and (extent < _SCALE_LOW or extent > _SCALE_HIGH):
         scale = math.ldexp(1.0, -math.frexp(extent)[1])
-        a1, a2, b0, b1, b2 = _times(a1, scale), _times(a2, scale), _times(b0, scale), _times(b1, scale), \
-            _times(b2, scale)
+        a1, a2, b0, b1, b2 = (
+            _times(a1, scale),
+            _times(a2, scale),
+            _times(b0, scale),
+            _times(b1, scale),
+            _times(b2, scale),
+        )
     if g == 0:
         d2 = _dist2(a0, b0)
         pa = a0
@@ -669,9 +725,19 @@ def volume_pair_distance(v, radii, kinds, i, j):
     ka = kinds[lo]
     kb = kinds[hi]
     # the radii in the caller's order: dist - r_i - r_j rounds the same whichever volume has the lower kind
-    dist, pa, pb, n = _pair_result(_vertex(v, lo, 0), _vertex(v, lo, 1), _vertex(v, lo, 2), ka, radii[i],
-                                   _vertex(v, hi, 0), _vertex(v, hi, 1), _vertex(v, hi, 2), kb, radii[j],
-                                   GROUP_OF[ka, kb])
+    dist, pa, pb, n = _pair_result(
+        _vertex(v, lo, 0),
+        _vertex(v, lo, 1),
+        _vertex(v, lo, 2),
+        ka,
+        radii[i],
+        _vertex(v, hi, 0),
+        _vertex(v, hi, 1),
+        _vertex(v, hi, 2),
+        kb,
+        radii[j],
+        GROUP_OF[ka, kb],
+    )
     if swap:
         return dist, pb, pa, (-n[0], -n[1], -n[2])
     return dist, pa, pb, n
@@ -695,14 +761,22 @@ def _header_buffers(h):
     """The 14 pair-batch buffers named by the addresses in a header (see :func:`ssv_pairs_at`)."""
     m = h[14]
     n = h[15]
-    return (carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
-            carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
-            carray(_int64_pointer(h[4]), (n,)), carray(_int64_pointer(h[5]), (n,)),
-            carray(_int64_pointer(h[6]), (n,)), carray(_int64_pointer(h[7]), (7,)),
-            carray(_int64_pointer(h[8]), (n,)),
-            carray(_float64_pointer(h[9]), (n,)), carray(_float64_pointer(h[10]), (n, 3)),
-            carray(_float64_pointer(h[11]), (n, 3)), carray(_float64_pointer(h[12]), (n, 3)),
-            carray(_int64_pointer(h[13]), (n,)))
+    return (
+        carray(_float64_pointer(h[0]), (m, 3, 3)),
+        carray(_float64_pointer(h[1]), (m,)),
+        carray(_int64_pointer(h[2]), (m,)),
+        carray(_int64_pointer(h[3]), (n,)),
+        carray(_int64_pointer(h[4]), (n,)),
+        carray(_int64_pointer(h[5]), (n,)),
+        carray(_int64_pointer(h[6]), (n,)),
+        carray(_int64_pointer(h[7]), (7,)),
+        carray(_int64_pointer(h[8]), (n,)),
+        carray(_float64_pointer(h[9]), (n,)),
+        carray(_float64_pointer(h[10]), (n, 3)),
+        carray(_float64_pointer(h[11]), (n, 3)),
+        carray(_float64_pointer(h[12]), (n, 3)),
+        carray(_int64_pointer(h[13]), (n,)),
+    )
 
 
 @njit(**BORROW)
@@ -759,8 +833,26 @@ def cull_pairs(vertices, radii, kinds, index_a, index_b, margin, active, centers
 
 
 @njit(**BORROW)
-def near_pairs(vertices, radii, kinds, index_a, index_b, slot, swap, starts, active, out_d, out_pa, out_pb, out_n,
-               todo, centers, bounds, margin, moving):
+def near_pairs(
+    vertices,
+    radii,
+    kinds,
+    index_a,
+    index_b,
+    slot,
+    swap,
+    starts,
+    active,
+    out_d,
+    out_pa,
+    out_pb,
+    out_n,
+    todo,
+    centers,
+    bounds,
+    margin,
+    moving,
+):
     """Broad and narrow phase in one pass: the pairs whose bounding spheres are at most ``margin`` apart get
     their exact SSV distance (general path), the others +inf; returns the smallest distance (+inf if none).
 
@@ -782,8 +874,19 @@ def near_pairs(vertices, radii, kinds, index_a, index_b, slot, swap, starts, act
             i = index_a[k]
             j = index_b[k]
             v = vertices
-            dist, pa, pb, n = _pair_result(_vertex(v, i, 0), _vertex(v, i, 1), _vertex(v, i, 2), kinds[i], radii[i],
-                                           _vertex(v, j, 0), _vertex(v, j, 1), _vertex(v, j, 2), kinds[j], radii[j], g)
+            dist, pa, pb, n = _pair_result(
+                _vertex(v, i, 0),
+                _vertex(v, i, 1),
+                _vertex(v, i, 2),
+                kinds[i],
+                radii[i],
+                _vertex(v, j, 0),
+                _vertex(v, j, 1),
+                _vertex(v, j, 2),
+                kinds[j],
+                radii[j],
+                g,
+            )
             _write(slot[k], swap[k] != 0, dist, pa, pb, n, out_d, out_pa, out_pb, out_n)
             smallest = min(smallest, dist)
     return smallest
@@ -795,10 +898,17 @@ def cull_pairs_at(header, margin):
     h = carray(_int64_pointer(header), (18,))
     m = h[14]
     n = h[15]
-    return cull_pairs(carray(_float64_pointer(h[0]), (m, 3, 3)), carray(_float64_pointer(h[1]), (m,)),
-                      carray(_int64_pointer(h[2]), (m,)), carray(_int64_pointer(h[3]), (n,)),
-                      carray(_int64_pointer(h[4]), (n,)), margin, carray(_int64_pointer(h[8]), (n,)),
-                      carray(_float64_pointer(h[16]), (m, 3)), carray(_float64_pointer(h[17]), (m,)))
+    return cull_pairs(
+        carray(_float64_pointer(h[0]), (m, 3, 3)),
+        carray(_float64_pointer(h[1]), (m,)),
+        carray(_int64_pointer(h[2]), (m,)),
+        carray(_int64_pointer(h[3]), (n,)),
+        carray(_int64_pointer(h[4]), (n,)),
+        margin,
+        carray(_int64_pointer(h[8]), (n,)),
+        carray(_float64_pointer(h[16]), (m, 3)),
+        carray(_float64_pointer(h[17]), (m,)),
+    )
 
 
 @njit(**BORROW)
@@ -825,7 +935,29 @@ def near_pairs_at(header, margin, moving, frames):
     if frames != 0:
         f = carray(_int64_pointer(frames), (4,))
         nf = f[3]
-        frames_to_volumes(carray(_float64_pointer(f[0]), (nf, 3)), carray(_float64_pointer(f[1]), (nf, 9)),
-                          carray(_float64_pointer(f[2]), (nf,)), v)
-    return near_pairs(v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td, carray(_float64_pointer(h[16]), (m, 3)),
-                      carray(_float64_pointer(h[17]), (m,)), margin, moving)
+        frames_to_volumes(
+            carray(_float64_pointer(f[0]), (nf, 3)),
+            carray(_float64_pointer(f[1]), (nf, 9)),
+            carray(_float64_pointer(f[2]), (nf,)),
+            v,
+        )
+    return near_pairs(
+        v,
+        r,
+        k,
+        ia,
+        ib,
+        sl,
+        sw,
+        st,
+        ac,
+        d,
+        pa,
+        pb,
+        nn,
+        td,
+        carray(_float64_pointer(h[16]), (m, 3)),
+        carray(_float64_pointer(h[17]), (m,)),
+        margin,
+        moving,
+    )

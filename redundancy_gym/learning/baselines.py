@@ -79,15 +79,19 @@ def _parse(path: Path) -> Baseline:
     learner, _, rest = path.stem.partition("-")
     action, _, _slug = rest.partition("-")
     if learner not in LEARNERS or action not in ACTIONS or not _slug:
-        raise LearningError(f"{path.name}: a baseline is named <learner>-<action>-<env>.yaml with learner in "
-                        f"{', '.join(LEARNERS)} and action in {', '.join(ACTIONS)}")
+        raise LearningError(
+            f"{path.name}: a baseline is named <learner>-<action>-<env>.yaml with learner in "
+            f"{', '.join(LEARNERS)} and action in {', '.join(ACTIONS)}"
+        )
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise LearningError(f"cannot read {path}: {exc}") from None
     if not isinstance(data, dict) or len(data) != 1 or next(iter(data)) not in ENV_IDS:
-        raise LearningError(f"{path}: a baseline holds one section keyed by a registered env id; found "
-                        f"{', '.join(map(str, data)) if isinstance(data, dict) else type(data).__name__}")
+        raise LearningError(
+            f"{path}: a baseline holds one section keyed by a registered env id; found "
+            f"{', '.join(map(str, data)) if isinstance(data, dict) else type(data).__name__}"
+        )
     return Baseline(path.stem, learner, action, next(iter(data)), path)
 
 
@@ -105,9 +109,15 @@ def baselines(names: Sequence[str] = (), directory: str | Path = BASELINES_DIR) 
     return [_parse(found[n]) for n in (names or list(found))]
 
 
-def train_baseline(baseline: Baseline, *, work_dir: str | Path = "runs/baselines",
-                   tensorboard_log: str | None = "runs/baselines_tb", models_dir: str | Path = SHIPPED_MODELS_DIR,
-                   steps: int | None = None, log: Callable[[str], None] | None = print) -> Path:
+def train_baseline(
+    baseline: Baseline,
+    *,
+    work_dir: str | Path = "runs/baselines",
+    tensorboard_log: str | None = "runs/baselines_tb",
+    models_dir: str | Path = SHIPPED_MODELS_DIR,
+    steps: int | None = None,
+    log: Callable[[str], None] | None = print,
+) -> Path:
     """Train ``baseline`` as its YAML file says (seed 0) and copy the model and its training record into
     ``models_dir``; returns the model's path there.
 
@@ -128,8 +138,9 @@ def train_baseline(baseline: Baseline, *, work_dir: str | Path = "runs/baselines
         options: dict[str, Any] = dict(config.hyperparameters)
         if "net_arch" in options:
             options["net_arch"] = tuple(options["net_arch"])
-        train_behaviour_cloning(baseline.env_id, work, env_kwargs=config.env_kwargs, seed=0, progress=False,
-                                log=log, **options)
+        train_behaviour_cloning(
+            baseline.env_id, work, env_kwargs=config.env_kwargs, seed=0, progress=False, log=log, **options
+        )
     else:
         budget = steps if steps is not None else config.n_timesteps
         if budget is None:
@@ -137,10 +148,24 @@ def train_baseline(baseline: Baseline, *, work_dir: str | Path = "runs/baselines
         n_envs = config.n_envs or 1
         # PPO learns once per rollout of n_steps x n_envs steps: evaluating more often would see the same agent
         rollout = n_envs * int(config.hyperparameters.get("n_steps", 2048) if baseline.learner == "ppo" else 1)
-        train(baseline.env_id, baseline.learner, budget, work, seed=0, env_kwargs=config.env_kwargs,
-              hyperparameters=config.hyperparameters, policy=config.policy, n_envs=n_envs, progress_bar=False,
-              tensorboard_log=tensorboard_log, log=log, eval_freq=max(rollout, budget // EVALUATIONS),
-              eval_episodes=EVAL_EPISODES, checkpoint_freq=max(rollout, budget // CHECKPOINTS), keep="best")
+        train(
+            baseline.env_id,
+            baseline.learner,
+            budget,
+            work,
+            seed=0,
+            env_kwargs=config.env_kwargs,
+            hyperparameters=config.hyperparameters,
+            policy=config.policy,
+            n_envs=n_envs,
+            progress_bar=False,
+            tensorboard_log=tensorboard_log,
+            log=log,
+            eval_freq=max(rollout, budget // EVALUATIONS),
+            eval_episodes=EVAL_EPISODES,
+            checkpoint_freq=max(rollout, budget // CHECKPOINTS),
+            keep="best",
+        )
     target = Path(models_dir) / f"{baseline.name}.zip"
     target.parent.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(work, target)

@@ -20,9 +20,9 @@ import numpy as np
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
+from ..eval.evaluate import make_env
 from ..policies import make_policy
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
-from ..eval.evaluate import make_env
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
 
@@ -54,12 +54,15 @@ class BehaviourCloningSummary:
     def format(self) -> str:
         """One line."""
         dagger = ", ".join(f"{s:.0%}" for s in self.learner_success) or "none"
-        return (f"behaviour cloning: {self.samples} samples from {self.env_steps} env steps in {self.rounds} rounds, "
-                f"{self.seconds:.1f} s; action MSE {self.loss:.2e}; learner's success per DAgger round: {dagger}")
+        return (
+            f"behaviour cloning: {self.samples} samples from {self.env_steps} env steps in {self.rounds} rounds, "
+            f"{self.seconds:.1f} s; action MSE {self.loss:.2e}; learner's success per DAgger round: {dagger}"
+        )
 
 
-def _rollout(env: Any, act: Any, expert: Any, episodes: int, seed: int
-             ) -> tuple[list[NDArray[np.float32]], list[NDArray[np.float32]], int, float]:
+def _rollout(
+    env: Any, act: Any, expert: Any, episodes: int, seed: int
+) -> tuple[list[NDArray[np.float32]], list[NDArray[np.float32]], int, float]:
     """``episodes`` episodes acted by ``act(obs, start)``, each state labelled by the expert: ``(observations, expert
     actions, steps, success rate)``."""
     observations, labels, steps, successes = [], [], 0, 0
@@ -80,12 +83,25 @@ def _rollout(env: Any, act: Any, expert: Any, episodes: int, seed: int
     return observations, labels, steps, successes / max(episodes, 1)
 
 
-def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None = None,
-                            expert_kwargs: dict[str, Any] | None = None, env_kwargs: dict[str, Any] | None = None,
-                            episodes: int = 20, dagger_rounds: int = 4, dagger_episodes: int = 10, epochs: int = 30,
-                            batch_size: int = 256, learning_rate: float = 1e-3, net_arch: tuple[int, ...] = (64, 64),
-                            log_std: float = -3.0, seed: int = 0, progress: bool = True,
-                            log: Any = print) -> BehaviourCloningSummary:
+def train_behaviour_cloning(
+    env_id: str,
+    out: str | Path,
+    *,
+    expert: str | None = None,
+    expert_kwargs: dict[str, Any] | None = None,
+    env_kwargs: dict[str, Any] | None = None,
+    episodes: int = 20,
+    dagger_rounds: int = 4,
+    dagger_episodes: int = 10,
+    epochs: int = 30,
+    batch_size: int = 256,
+    learning_rate: float = 1e-3,
+    net_arch: tuple[int, ...] = (64, 64),
+    log_std: float = -3.0,
+    seed: int = 0,
+    progress: bool = True,
+    log: Any = print,
+) -> BehaviourCloningSummary:
     """Clone ``expert`` (a registered policy; default: the env's reference, ``clik`` or ``walking``) into an SB3 PPO
     policy and save it to ``out``.
 
@@ -111,9 +127,13 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
         import torch
     except ImportError as exc:
         raise LearningError(f"behaviour cloning needs the learn extra: {LEARN_EXTRA_HINT}") from exc
-    for name, value, low in (("episodes", episodes, 1), ("dagger_rounds", dagger_rounds, 0),
-                             ("dagger_episodes", dagger_episodes, 1), ("epochs", epochs, 1),
-                             ("batch_size", batch_size, 1)):
+    for name, value, low in (
+        ("episodes", episodes, 1),
+        ("dagger_rounds", dagger_rounds, 0),
+        ("dagger_episodes", dagger_episodes, 1),
+        ("epochs", epochs, 1),
+        ("batch_size", batch_size, 1),
+    ):
         if not isinstance(value, int) or value < low:
             raise LearningError(f"{name} must be an int >= {low}, got {value!r}")
     if not math.isfinite(learning_rate) or learning_rate <= 0.0:
@@ -124,8 +144,14 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
         expert = "walking" if "Biped" in env_id else "clik"
     teacher = make_policy(expert, env, **(expert_kwargs or {}))
     torch.manual_seed(seed)
-    model = sb3.PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0,
-                    policy_kwargs={"net_arch": list(net_arch), "log_std_init": float(log_std)})
+    model = sb3.PPO(
+        "MlpPolicy",
+        env,
+        seed=seed,
+        device="cpu",
+        verbose=0,
+        policy_kwargs={"net_arch": list(net_arch), "log_std_init": float(log_std)},
+    )
     policy = model.policy
     optimizer = torch.optim.Adam(policy.parameters(), lr=learning_rate)
     low, high = env.action_space.low, env.action_space.high
@@ -138,7 +164,7 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
         for _ in range(epochs):
             order = rng.permutation(len(obs_t))
             for i in range(0, len(order), batch_size):
-                batch = torch.as_tensor(order[i:i + batch_size])
+                batch = torch.as_tensor(order[i : i + batch_size])
                 mean = policy.get_distribution(obs_t[batch]).distribution.mean
                 loss = torch.mean((mean - act_t[batch]) ** 2)
                 optimizer.zero_grad()
@@ -153,8 +179,9 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
         return action
 
     try:
-        with tqdm(total=1 + dagger_rounds, desc=f"behaviour cloning {expert}", unit="round",
-                  disable=not progress) as bar:
+        with tqdm(
+            total=1 + dagger_rounds, desc=f"behaviour cloning {expert}", unit="round", disable=not progress
+        ) as bar:
             observations, labels, steps, _ = _rollout(env, lambda obs, start, label: label, teacher, episodes, seed)
             loss = fit(np.array(observations), np.array(labels))
             bar.update(1)
@@ -176,17 +203,32 @@ def train_behaviour_cloning(env_id: str, out: str | Path, *, expert: str | None 
         env.close()
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     clock.__exit__()
-    summary = BehaviourCloningSummary(len(observations), 1 + dagger_rounds, steps, clock.wall_s, loss,
-                                      tuple(success), path)
-    TrainingRecord(learner="bc", env_id=env_id, env_steps=steps, wall_s=clock.wall_s, cpu_s=clock.cpu_s, seed=seed,
-                   settings={"expert": expert, "expert_kwargs": dict(expert_kwargs or {}),
-                             "env_kwargs": dict(env_kwargs or {}), "episodes": episodes,
-                             "dagger_rounds": dagger_rounds, "dagger_episodes": dagger_episodes, "epochs": epochs,
-                             "batch_size": batch_size, "learning_rate": learning_rate, "net_arch": list(net_arch),
-                             "log_std": log_std},
-                   machine=machine(),
-                   result={"samples": len(observations), "action_mse": loss,
-                           "learner_success_per_dagger_round": list(success)}).write(path)
+    summary = BehaviourCloningSummary(
+        len(observations), 1 + dagger_rounds, steps, clock.wall_s, loss, tuple(success), path
+    )
+    TrainingRecord(
+        learner="bc",
+        env_id=env_id,
+        env_steps=steps,
+        wall_s=clock.wall_s,
+        cpu_s=clock.cpu_s,
+        seed=seed,
+        settings={
+            "expert": expert,
+            "expert_kwargs": dict(expert_kwargs or {}),
+            "env_kwargs": dict(env_kwargs or {}),
+            "episodes": episodes,
+            "dagger_rounds": dagger_rounds,
+            "dagger_episodes": dagger_episodes,
+            "epochs": epochs,
+            "batch_size": batch_size,
+            "learning_rate": learning_rate,
+            "net_arch": list(net_arch),
+            "log_std": log_std,
+        },
+        machine=machine(),
+        result={"samples": len(observations), "action_mse": loss, "learner_success_per_dagger_round": list(success)},
+    ).write(path)
     if log is not None:
         log(summary.format())
     return summary

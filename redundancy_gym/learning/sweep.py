@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from ..eval.json_writer import write_json
-from .exceptions import LearningError
 from ..eval.parallel import init_ray
+from .exceptions import LearningError
 from .training_record import record_path
 
 __all__ = ["SweepError", "train_baselines_on_ray", "train_seed_sweep"]
@@ -31,22 +31,29 @@ class SweepError(LearningError):
         super().__init__(f"{len(failures)} task(s) failed: {', '.join(failures)} (first: {first})")
 
 
-def _train_task(env_id: str, algo: str, steps: int, seed: int, train_kwargs: dict[str, Any],
-                eval_episodes: int, eval_seed: int) -> dict[str, Any]:
+def _train_task(
+    env_id: str, algo: str, steps: int, seed: int, train_kwargs: dict[str, Any], eval_episodes: int, eval_seed: int
+) -> dict[str, Any]:
     """One seed on a Ray worker: train, evaluate on held-out seeds, return the model, its record and the row."""
     from ..eval.evaluate import evaluate
     from .training import train
 
     with tempfile.TemporaryDirectory() as tmp:
-        path = train(env_id, algo, steps, Path(tmp) / f"seed{seed}.zip", seed=seed, progress_bar=False, log=None,
-                     **train_kwargs)
-        report = evaluate(env_id, str(path), episodes=eval_episodes, seed=eval_seed,
-                          env_kwargs=train_kwargs.get("env_kwargs"), progress=False).to_json()
+        path = train(
+            env_id, algo, steps, Path(tmp) / f"seed{seed}.zip", seed=seed, progress_bar=False, log=None, **train_kwargs
+        )
+        report = evaluate(
+            env_id,
+            str(path),
+            episodes=eval_episodes,
+            seed=eval_seed,
+            env_kwargs=train_kwargs.get("env_kwargs"),
+            progress=False,
+        ).to_json()
         return {"model": path.read_bytes(), "record": record_path(path).read_text(), "report": report}
 
 
-def _gather(ray: Any, refs: dict[Any, str], log: Callable[[str], None] | None) -> tuple[dict[str, Any],
-                                                                                         dict[str, str]]:
+def _gather(ray: Any, refs: dict[Any, str], log: Callable[[str], None] | None) -> tuple[dict[str, Any], dict[str, str]]:
     done: dict[str, Any] = {}
     failures: dict[str, str] = {}
     remaining = list(refs)
@@ -65,9 +72,19 @@ def _gather(ray: Any, refs: dict[Any, str], log: Callable[[str], None] | None) -
     return done, failures
 
 
-def train_seed_sweep(env_id: str, algo: str, steps: int, out: str | Path, seeds: Sequence[int], *,
-                     ray_address: str = "local", train_kwargs: dict[str, Any] | None = None, eval_episodes: int = 10,
-                     eval_seed: int = 20000, log: Callable[[str], None] | None = print) -> dict[str, Any]:
+def train_seed_sweep(
+    env_id: str,
+    algo: str,
+    steps: int,
+    out: str | Path,
+    seeds: Sequence[int],
+    *,
+    ray_address: str = "local",
+    train_kwargs: dict[str, Any] | None = None,
+    eval_episodes: int = 10,
+    eval_seed: int = 20000,
+    log: Callable[[str], None] | None = print,
+) -> dict[str, Any]:
     """Train one config with each of ``seeds`` as Ray tasks; write ``<out>_seed<s>.zip`` (with its record) per seed
     and ``<out>_sweep.json``; returns the sweep: per seed the evaluation on ``eval_episodes`` held-out episodes
     from ``eval_seed``, and the mean and spread of success rate and return over the seeds.
@@ -95,16 +112,31 @@ def train_seed_sweep(env_id: str, algo: str, steps: int, out: str | Path, seeds:
         model.write_bytes(result["model"])
         record_path(model).write_text(result["record"])
         report = result["report"]
-        rows[seed] = {"model": str(model), "success_rate": report["success_rate"],
-                      "episode_return": report["episode_return"], "report": report,
-                      "training": {k: v for k, v in json.loads(result["record"]).items()
-                                   if k in ("env_steps", "wall_s", "cpu_s")}}
+        rows[seed] = {
+            "model": str(model),
+            "success_rate": report["success_rate"],
+            "episode_return": report["episode_return"],
+            "report": report,
+            "training": {
+                k: v for k, v in json.loads(result["record"]).items() if k in ("env_steps", "wall_s", "cpu_s")
+            },
+        }
     successes = [r["success_rate"] for r in rows.values()]
     returns = [r["episode_return"] for r in rows.values()]
-    sweep = {"env": env_id, "algo": algo, "steps": steps, "seeds": list(seeds), "eval_seed": eval_seed,
-             "eval_episodes": eval_episodes, "rows": rows, "failed": failures,
-             "success_mean": _mean(successes), "success_std": _std(successes),
-             "return_mean": _mean(returns), "return_std": _std(returns)}
+    sweep = {
+        "env": env_id,
+        "algo": algo,
+        "steps": steps,
+        "seeds": list(seeds),
+        "eval_seed": eval_seed,
+        "eval_episodes": eval_episodes,
+        "rows": rows,
+        "failed": failures,
+        "success_mean": _mean(successes),
+        "success_std": _std(successes),
+        "return_mean": _mean(returns),
+        "return_std": _std(returns),
+    }
     path = write_json(sweep, stem.with_name(f"{stem.name}_sweep.json"))
     if log is not None:
         log(f"wrote {path}")
@@ -118,13 +150,20 @@ def _train_baseline_task(name: str, steps: int | None) -> dict[str, Any]:
 
     (baseline,) = baselines([name])
     with tempfile.TemporaryDirectory() as tmp:
-        path = train_baseline(baseline, work_dir=Path(tmp) / "work", tensorboard_log=None, models_dir=tmp, log=None,
-                              steps=steps)
+        path = train_baseline(
+            baseline, work_dir=Path(tmp) / "work", tensorboard_log=None, models_dir=tmp, log=None, steps=steps
+        )
         return {"model": path.read_bytes(), "record": record_path(path).read_text()}
 
 
-def train_baselines_on_ray(names: Sequence[str], models_dir: str | Path, *, ray_address: str = "local",
-                           steps: int | None = None, log: Callable[[str], None] | None = print) -> list[Path]:
+def train_baselines_on_ray(
+    names: Sequence[str],
+    models_dir: str | Path,
+    *,
+    ray_address: str = "local",
+    steps: int | None = None,
+    log: Callable[[str], None] | None = print,
+) -> list[Path]:
     """Train the baselines ``names`` (``baselines/*.yaml``) as Ray tasks, one CPU each, and write their models and
     records into ``models_dir``; returns the models written. ``steps``: a PPO/SAC budget instead of the files'
     (a smoke run's).

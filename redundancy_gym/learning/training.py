@@ -20,14 +20,25 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..eval.evaluate import make_env
 from ..registration import ENV_IDS
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
-from ..eval.evaluate import make_env
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
 
-__all__ = ["ALGOS", "EVAL_CALLBACK_SEED", "KEEP", "LEARN_EXTRA_HINT", "VEC_ENVS", "LinearSchedule", "TrainingConfig", "TrainingSummary",
-           "load_config", "load_hyperparameters", "train"]
+__all__ = [
+    "ALGOS",
+    "EVAL_CALLBACK_SEED",
+    "KEEP",
+    "LEARN_EXTRA_HINT",
+    "VEC_ENVS",
+    "LinearSchedule",
+    "TrainingConfig",
+    "TrainingSummary",
+    "load_config",
+    "load_hyperparameters",
+    "train",
+]
 
 ALGOS: tuple[str, ...] = ("ppo", "sac")
 KEEP: tuple[str, ...] = ("last", "best")
@@ -41,8 +52,17 @@ DEFAULT_POLICY = "MlpPolicy"
 RECENT_EPISODES = 20  # episodes averaged in the printed statistics
 
 # rl-zoo3 keys that change the training set-up in ways `redundancy-gym train` does not reproduce
-_ZOO_ONLY = ("env_wrapper", "vec_env_wrapper", "callback", "frame_stack", "monitor_kwargs", "noise_type",
-             "noise_std", "replay_buffer_class", "replay_buffer_kwargs")
+_ZOO_ONLY = (
+    "env_wrapper",
+    "vec_env_wrapper",
+    "callback",
+    "frame_stack",
+    "monitor_kwargs",
+    "noise_type",
+    "noise_std",
+    "replay_buffer_class",
+    "replay_buffer_kwargs",
+)
 # keys that rl-zoo3 reads as schedules ("lin_<initial value>": linear decay to 0)
 _SCHEDULE_KEYS = ("learning_rate", "clip_range", "clip_range_vf", "delta_std")
 
@@ -111,15 +131,18 @@ def load_config(path: str | Path, env_id: str) -> TrainingConfig:
     if not isinstance(data, dict):
         raise LearningError(f"{path} must map env ids to hyperparameters (the rl-zoo3 layout, see configs/)")
     if env_id not in data and "default" not in data and not any(isinstance(v, dict) for v in data.values()):
-        raise LearningError(f"{path} must map env ids to hyperparameters (the rl-zoo3 layout): put its keys under "
-                        f"'{env_id}:' (see configs/)")
+        raise LearningError(
+            f"{path} must map env ids to hyperparameters (the rl-zoo3 layout): put its keys under "
+            f"'{env_id}:' (see configs/)"
+        )
     if env_id in data:
         section = data[env_id]
     elif "default" in data:
         section = data["default"]
     else:
-        raise LearningError(f"{path} has no section for {env_id} (nor 'default'); sections: "
-                        f"{', '.join(map(str, data)) or 'none'}")
+        raise LearningError(
+            f"{path} has no section for {env_id} (nor 'default'); sections: {', '.join(map(str, data)) or 'none'}"
+        )
     if not isinstance(section, dict):
         raise LearningError(f"{path}: the section of {env_id} must be a mapping of hyperparameters")
     hyper = dict(section)
@@ -127,8 +150,10 @@ def load_config(path: str | Path, env_id: str) -> TrainingConfig:
     if hyper.get("normalize"):
         unsupported.append("normalize")
     if unsupported:
-        raise LearningError(f"{path}: {', '.join(unsupported)} not supported by redundancy-gym train (the .zip must hold "
-                        "the whole policy); train with python -m rl_zoo3.train for these")
+        raise LearningError(
+            f"{path}: {', '.join(unsupported)} not supported by redundancy-gym train (the .zip must hold "
+            "the whole policy); train with python -m rl_zoo3.train for these"
+        )
     policy = hyper.pop("policy", DEFAULT_POLICY)
     if not isinstance(policy, str) or "." in policy:
         raise LearningError(f"{path}: policy must be an SB3 policy name such as MlpPolicy, got {policy!r}")
@@ -152,9 +177,13 @@ def load_config(path: str | Path, env_id: str) -> TrainingConfig:
         hyper["train_freq"] = tuple(hyper["train_freq"])
     if "policy_kwargs" in hyper:
         hyper["policy_kwargs"] = _policy_kwargs(hyper["policy_kwargs"], path)
-    return TrainingConfig(hyperparameters=hyper, policy=policy,
-                          n_timesteps=None if n_timesteps is None else int(float(n_timesteps)),
-                          n_envs=None if n_envs is None else int(n_envs), env_kwargs=env_kwargs)
+    return TrainingConfig(
+        hyperparameters=hyper,
+        policy=policy,
+        n_timesteps=None if n_timesteps is None else int(float(n_timesteps)),
+        n_envs=None if n_envs is None else int(n_envs),
+        env_kwargs=env_kwargs,
+    )
 
 
 def load_hyperparameters(path: str | Path, env_id: str) -> dict[str, Any]:
@@ -182,12 +211,16 @@ class TrainingSummary:
     def format(self) -> str:
         rate = self.steps / self.seconds if self.seconds > 0 else float("nan")
         plural = "" if self.episodes == 1 else "s"
-        head = (f"trained {self.steps} steps in {self.seconds:.1f} s ({rate:.0f} steps/s), "
-                f"{self.episodes} episode{plural}")
+        head = (
+            f"trained {self.steps} steps in {self.seconds:.1f} s ({rate:.0f} steps/s), {self.episodes} episode{plural}"
+        )
         if not self.episodes:
             return head + " (none finished: train longer to see returns)"
-        return head + f"; last {min(self.episodes, RECENT_EPISODES)}: " + _stats(
-            self.recent_return, self.recent_success, self.recent_length)
+        return (
+            head
+            + f"; last {min(self.episodes, RECENT_EPISODES)}: "
+            + _stats(self.recent_return, self.recent_success, self.recent_length)
+        )
 
 
 def _stats(ret: float, success: float, length: float) -> str:
@@ -220,8 +253,9 @@ def _statistics_callback(base_callback: type, total: int, every: int, log: Calla
                 if episode is None:
                     continue
                 success = episode.get("is_success", info.get("is_success"))
-                self.recent.append((float(episode["r"]), math.nan if success is None else float(success),
-                                    float(episode["l"])))
+                self.recent.append(
+                    (float(episode["r"]), math.nan if success is None else float(success), float(episode["l"]))
+                )
                 self.episodes += 1
             if self.num_timesteps >= self._next:
                 while self._next <= self.num_timesteps:
@@ -230,7 +264,7 @@ def _statistics_callback(base_callback: type, total: int, every: int, log: Calla
             return True
 
         def _recent(self) -> tuple[float, float, float]:
-            returns, successes, lengths = zip(*self.recent) if self.recent else ((), (), ())
+            returns, successes, lengths = zip(*self.recent, strict=False) if self.recent else ((), (), ())
             known = [s for s in successes if not math.isnan(s)]
             return _mean(list(returns)), _mean(known), _mean(list(lengths))
 
@@ -244,21 +278,42 @@ def _statistics_callback(base_callback: type, total: int, every: int, log: Calla
 
         def _on_training_end(self) -> None:
             ret, success, length = self._recent()
-            self.summary = TrainingSummary(steps=int(self.num_timesteps), episodes=self.episodes,
-                                           seconds=time.perf_counter() - self._start, recent_return=ret,
-                                           recent_success=success, recent_length=length)
+            self.summary = TrainingSummary(
+                steps=int(self.num_timesteps),
+                episodes=self.episodes,
+                seconds=time.perf_counter() - self._start,
+                recent_return=ret,
+                recent_success=success,
+                recent_length=length,
+            )
             log(self.summary.format())
 
     return TrainingLog()
 
 
-def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
-          env_kwargs: dict[str, Any] | None = None, hyperparameters: dict[str, Any] | None = None,
-          progress_bar: bool = True, tensorboard_log: str | None = None, n_envs: int = 1,
-          vec_env: str = "dummy", policy: str = DEFAULT_POLICY, print_every: int | None = None,
-          log: Callable[[str], None] | None = print, torch_threads: int | None = 1,
-          eval_freq: int | None = None, eval_episodes: int = 5, eval_seed: int = EVAL_CALLBACK_SEED,
-          checkpoint_freq: int | None = None, keep: str = "last") -> Path:
+def train(
+    env_id: str,
+    algo: str,
+    steps: int,
+    out: str | Path,
+    *,
+    seed: int = 0,
+    env_kwargs: dict[str, Any] | None = None,
+    hyperparameters: dict[str, Any] | None = None,
+    progress_bar: bool = True,
+    tensorboard_log: str | None = None,
+    n_envs: int = 1,
+    vec_env: str = "dummy",
+    policy: str = DEFAULT_POLICY,
+    print_every: int | None = None,
+    log: Callable[[str], None] | None = print,
+    torch_threads: int | None = 1,
+    eval_freq: int | None = None,
+    eval_episodes: int = 5,
+    eval_seed: int = EVAL_CALLBACK_SEED,
+    checkpoint_freq: int | None = None,
+    keep: str = "last",
+) -> Path:
     """Train an SB3 agent for ``steps`` environment steps and save it to ``out`` (a ``.zip`` that ``eval`` loads).
 
     Every env is wrapped in SB3's ``Monitor`` (recording ``is_success``); the statistics of the recent episodes
@@ -335,14 +390,25 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
         torch.set_num_threads(torch_threads)
     eval_env = None
     with CpuClock() as clock:
-        env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=n_envs, seed=seed,
-                           vec_env_cls=SubprocVecEnv if vec_env in ("subproc", "async") else DummyVecEnv,
-                           monitor_kwargs=monitor)
+        env = make_vec_env(
+            functools.partial(make_env, env_id, env_kwargs),
+            n_envs=n_envs,
+            seed=seed,
+            vec_env_cls=SubprocVecEnv if vec_env in ("subproc", "async") else DummyVecEnv,
+            monitor_kwargs=monitor,
+        )
         try:
             cls = {"ppo": sb3.PPO, "sac": sb3.SAC}[algo]
             try:
-                model = cls(policy, env, seed=seed, device="cpu", verbose=0, tensorboard_log=tensorboard_log,
-                            **(hyperparameters or {}))
+                model = cls(
+                    policy,
+                    env,
+                    seed=seed,
+                    device="cpu",
+                    verbose=0,
+                    tensorboard_log=tensorboard_log,
+                    **(hyperparameters or {}),
+                )
             except TypeError as exc:  # a keyword the algorithm does not take
                 raise LearningError(f"invalid {algo.upper()} hyperparameters: {exc}") from None
             total = int(steps)
@@ -350,25 +416,45 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
             if rollout and total % rollout:
                 total = -(-total // rollout) * rollout
                 if log is not None:
-                    log(f"note: {algo.upper()} collects n_steps x n_envs = {rollout} steps per update, so training "
-                        f"runs {total} steps, not {steps} (pass a multiple of {rollout} to --steps)")
-            statistics = _statistics_callback(BaseCallback, total, print_every or max(1000, total // 20),
-                                              log or (lambda line: None))
+                    log(
+                        f"note: {algo.upper()} collects n_steps x n_envs = {rollout} steps per update, so training "
+                        f"runs {total} steps, not {steps} (pass a multiple of {rollout} to --steps)"
+                    )
+            statistics = _statistics_callback(
+                BaseCallback, total, print_every or max(1000, total // 20), log or (lambda line: None)
+            )
             callbacks: list[Any] = [statistics]
             if eval_freq is not None:
                 # a separate env, seeded apart from training and from the reported seeds; SB3 counts the
                 # callback's frequency in calls, one per vectorized step of n_envs env steps
-                eval_env = make_vec_env(functools.partial(make_env, env_id, env_kwargs), n_envs=1, seed=eval_seed,
-                                        monitor_kwargs=monitor)
-                callbacks.append(EvalCallback(eval_env, n_eval_episodes=eval_episodes,
-                                              eval_freq=max(1, eval_freq // n_envs),
-                                              best_model_save_path=str(stem) + "_best_dir", log_path=None,
-                                              deterministic=True, verbose=0))
+                eval_env = make_vec_env(
+                    functools.partial(make_env, env_id, env_kwargs), n_envs=1, seed=eval_seed, monitor_kwargs=monitor
+                )
+                callbacks.append(
+                    EvalCallback(
+                        eval_env,
+                        n_eval_episodes=eval_episodes,
+                        eval_freq=max(1, eval_freq // n_envs),
+                        best_model_save_path=str(stem) + "_best_dir",
+                        log_path=None,
+                        deterministic=True,
+                        verbose=0,
+                    )
+                )
             if checkpoint_freq is not None:
-                callbacks.append(CheckpointCallback(save_freq=max(1, checkpoint_freq // n_envs),
-                                                    save_path=str(stem) + "_checkpoints", name_prefix=algo))
-            model.learn(total_timesteps=int(steps), progress_bar=progress_bar, callback=CallbackList(callbacks),
-                        tb_log_name=f"{algo}_{env_id.split('/')[-1]}")
+                callbacks.append(
+                    CheckpointCallback(
+                        save_freq=max(1, checkpoint_freq // n_envs),
+                        save_path=str(stem) + "_checkpoints",
+                        name_prefix=algo,
+                    )
+                )
+            model.learn(
+                total_timesteps=int(steps),
+                progress_bar=progress_bar,
+                callback=CallbackList(callbacks),
+                tb_log_name=f"{algo}_{env_id.split('/')[-1]}",
+            )
             out.parent.mkdir(parents=True, exist_ok=True)
             best_eval = None
             if eval_freq is not None:
@@ -388,16 +474,35 @@ def train(env_id: str, algo: str, steps: int, out: str | Path, *, seed: int = 0,
                 eval_env.close()
             torch.set_num_threads(threads)
     summary = statistics.summary
-    result: dict[str, Any] = {} if summary is None else {
-        "recent_return": summary.recent_return, "recent_success": summary.recent_success,
-        "episodes": summary.episodes}
+    result: dict[str, Any] = (
+        {}
+        if summary is None
+        else {
+            "recent_return": summary.recent_return,
+            "recent_success": summary.recent_success,
+            "episodes": summary.episodes,
+        }
+    )
     if best_eval is not None:
         result["best_eval_return"] = best_eval
         result["eval_seed"] = eval_seed
         result["kept"] = keep
-    TrainingRecord(learner=algo, env_id=env_id, env_steps=int(model.num_timesteps), wall_s=clock.wall_s,
-                   cpu_s=clock.cpu_s, seed=seed,
-                   settings={"policy": policy, "n_envs": n_envs, "vec_env": vec_env, "steps": int(steps),
-                             "env_kwargs": dict(env_kwargs or {}), "hyperparameters": dict(hyperparameters or {})},
-                   machine=machine(), result=result).write(out)
+    TrainingRecord(
+        learner=algo,
+        env_id=env_id,
+        env_steps=int(model.num_timesteps),
+        wall_s=clock.wall_s,
+        cpu_s=clock.cpu_s,
+        seed=seed,
+        settings={
+            "policy": policy,
+            "n_envs": n_envs,
+            "vec_env": vec_env,
+            "steps": int(steps),
+            "env_kwargs": dict(env_kwargs or {}),
+            "hyperparameters": dict(hyperparameters or {}),
+        },
+        machine=machine(),
+        result=result,
+    ).write(out)
     return out

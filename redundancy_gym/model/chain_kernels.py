@@ -15,8 +15,18 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["FREE", "JOINT_DOFS", "PRISMATIC", "REVOLUTE", "chain_centroidal", "chain_forward", "chain_integrate",
-           "chain_jacobian", "chain_jacobian_transpose_times", "place_frame"]
+__all__ = [
+    "FREE",
+    "JOINT_DOFS",
+    "PRISMATIC",
+    "REVOLUTE",
+    "chain_centroidal",
+    "chain_forward",
+    "chain_integrate",
+    "chain_jacobian",
+    "chain_jacobian_transpose_times",
+    "place_frame",
+]
 
 REVOLUTE, PRISMATIC, FREE = 0, 1, 2
 """Joint type codes of :attr:`SerialChain.joint_type`."""
@@ -28,8 +38,9 @@ _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", 
 
 
 @njit(**_JIT)
-def chain_forward(parent, placement_rotation, placement_translation, axis, joint_type, q_index, q,
-                  rotation, position, world_axis):
+def chain_forward(
+    parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation, position, world_axis
+):
     """World placement of every joint frame at ``q`` into ``rotation`` (J, 3, 3) and ``position`` (J, 3),
     and each 1-DoF joint's axis in world coordinates into ``world_axis`` (J, 3). Parents precede children."""
     for j in range(parent.shape[0]):
@@ -40,15 +51,20 @@ def chain_forward(parent, placement_rotation, placement_translation, axis, joint
                 if p < 0:
                     rotation[j, r, c] = placement_rotation[j, r, c]
                 else:
-                    rotation[j, r, c] = (rotation[p, r, 0] * placement_rotation[j, 0, c]
-                                         + rotation[p, r, 1] * placement_rotation[j, 1, c]
-                                         + rotation[p, r, 2] * placement_rotation[j, 2, c])
+                    rotation[j, r, c] = (
+                        rotation[p, r, 0] * placement_rotation[j, 0, c]
+                        + rotation[p, r, 1] * placement_rotation[j, 1, c]
+                        + rotation[p, r, 2] * placement_rotation[j, 2, c]
+                    )
             if p < 0:
                 position[j, r] = placement_translation[j, r]
             else:
-                position[j, r] = (position[p, r] + rotation[p, r, 0] * placement_translation[j, 0]
-                                  + rotation[p, r, 1] * placement_translation[j, 1]
-                                  + rotation[p, r, 2] * placement_translation[j, 2])
+                position[j, r] = (
+                    position[p, r]
+                    + rotation[p, r, 0] * placement_translation[j, 0]
+                    + rotation[p, r, 1] * placement_translation[j, 1]
+                    + rotation[p, r, 2] * placement_translation[j, 2]
+                )
         k = q_index[j]
         if joint_type[j] == FREE:
             # M <- M * (R(quat), p); the quaternion's matrix as Eigen forms it (pinocchio's free flyer)
@@ -101,13 +117,18 @@ def place_frame(rotation, position, joint, local_rotation, local_translation, ou
             for c in range(3):
                 out_rotation[r, c] = local_rotation[r, c]
             continue
-        out_translation[r] = (position[joint, r] + rotation[joint, r, 0] * local_translation[0]
-                              + rotation[joint, r, 1] * local_translation[1]
-                              + rotation[joint, r, 2] * local_translation[2])
+        out_translation[r] = (
+            position[joint, r]
+            + rotation[joint, r, 0] * local_translation[0]
+            + rotation[joint, r, 1] * local_translation[1]
+            + rotation[joint, r, 2] * local_translation[2]
+        )
         for c in range(3):
-            out_rotation[r, c] = (rotation[joint, r, 0] * local_rotation[0, c]
-                                  + rotation[joint, r, 1] * local_rotation[1, c]
-                                  + rotation[joint, r, 2] * local_rotation[2, c])
+            out_rotation[r, c] = (
+                rotation[joint, r, 0] * local_rotation[0, c]
+                + rotation[joint, r, 1] * local_rotation[1, c]
+                + rotation[joint, r, 2] * local_rotation[2, c]
+            )
 
 
 @njit(**_JIT)
@@ -150,8 +171,9 @@ def chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, 
 
 
 @njit(**_JIT)
-def chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, joint, px, py, pz,
-                                   nx, ny, nz, scale, out):
+def chain_jacobian_transpose_times(
+    parent, joint_type, v_index, rotation, position, world_axis, joint, px, py, pz, nx, ny, nz, scale, out
+):
     """``out += scale * J_T(p)^T n``: the gradient of ``n . p`` for the point ``p`` moving with ``joint``
     (5.61), without forming the Jacobian."""
     k = joint
@@ -196,8 +218,21 @@ def _momentum_column(composite, j, ox, oy, oz, vx, vy, vz, cx, cy, cz, mass, col
 
 
 @njit(**_JIT)
-def chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com,
-                     body_inertia, composite, com, jac_com, jac_angular):
+def chain_centroidal(
+    parent,
+    joint_type,
+    v_index,
+    rotation,
+    position,
+    world_axis,
+    body_mass,
+    body_com,
+    body_inertia,
+    composite,
+    com,
+    jac_com,
+    jac_angular,
+):
     """Centre of mass ``com`` [m], its Jacobian ``jac_com`` (3 x nv) and the angular rows of the centroidal
     momentum matrix ``jac_angular`` (3 x nv: ``L_G = jac_angular qdot`` about the CoM) after
     :func:`chain_forward`; returns the total mass [kg].
@@ -209,12 +244,24 @@ def chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis
     nj = parent.shape[0]
     for j in range(nj):
         m = body_mass[j]
-        c0 = position[j, 0] + rotation[j, 0, 0] * body_com[j, 0] + rotation[j, 0, 1] * body_com[j, 1] \
+        c0 = (
+            position[j, 0]
+            + rotation[j, 0, 0] * body_com[j, 0]
+            + rotation[j, 0, 1] * body_com[j, 1]
             + rotation[j, 0, 2] * body_com[j, 2]
-        c1 = position[j, 1] + rotation[j, 1, 0] * body_com[j, 0] + rotation[j, 1, 1] * body_com[j, 1] \
+        )
+        c1 = (
+            position[j, 1]
+            + rotation[j, 1, 0] * body_com[j, 0]
+            + rotation[j, 1, 1] * body_com[j, 1]
             + rotation[j, 1, 2] * body_com[j, 2]
-        c2 = position[j, 2] + rotation[j, 2, 0] * body_com[j, 0] + rotation[j, 2, 1] * body_com[j, 1] \
+        )
+        c2 = (
+            position[j, 2]
+            + rotation[j, 2, 0] * body_com[j, 0]
+            + rotation[j, 2, 1] * body_com[j, 1]
             + rotation[j, 2, 2] * body_com[j, 2]
+        )
         composite[j, 0] = m
         composite[j, 1] = m * c0
         composite[j, 2] = m * c1
@@ -226,9 +273,11 @@ def chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis
                 # R I R^T + m (|c|^2 I - c c^T)
                 acc = 0.0
                 for a in range(3):
-                    acc += rotation[j, r, a] * (body_inertia[j, a, 0] * rotation[j, s, 0]
-                                                + body_inertia[j, a, 1] * rotation[j, s, 1]
-                                                + body_inertia[j, a, 2] * rotation[j, s, 2])
+                    acc += rotation[j, r, a] * (
+                        body_inertia[j, a, 0] * rotation[j, s, 0]
+                        + body_inertia[j, a, 1] * rotation[j, s, 1]
+                        + body_inertia[j, a, 2] * rotation[j, s, 2]
+                    )
                 acc -= m * cc[r] * cc[s]
                 if r == s:
                     acc += m * norm2
@@ -255,18 +304,64 @@ def chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis
         if joint_type[j] == FREE:
             for i in range(3):
                 wx, wy, wz = rotation[j, 0, i], rotation[j, 1, i], rotation[j, 2, i]
-                _momentum_column(composite, j, 0.0, 0.0, 0.0, wx, wy, wz, cx, cy, cz, mass, col + i, jac_com,
-                                 jac_angular)
+                _momentum_column(
+                    composite, j, 0.0, 0.0, 0.0, wx, wy, wz, cx, cy, cz, mass, col + i, jac_com, jac_angular
+                )
                 # rotation about the joint origin o: the origin point moves with o x w
-                _momentum_column(composite, j, wx, wy, wz, oy * wz - oz * wy, oz * wx - ox * wz, ox * wy - oy * wx,
-                                 cx, cy, cz, mass, col + 3 + i, jac_com, jac_angular)
+                _momentum_column(
+                    composite,
+                    j,
+                    wx,
+                    wy,
+                    wz,
+                    oy * wz - oz * wy,
+                    oz * wx - ox * wz,
+                    ox * wy - oy * wx,
+                    cx,
+                    cy,
+                    cz,
+                    mass,
+                    col + 3 + i,
+                    jac_com,
+                    jac_angular,
+                )
         elif joint_type[j] == PRISMATIC:
-            _momentum_column(composite, j, 0.0, 0.0, 0.0, world_axis[j, 0], world_axis[j, 1], world_axis[j, 2],
-                             cx, cy, cz, mass, col, jac_com, jac_angular)
+            _momentum_column(
+                composite,
+                j,
+                0.0,
+                0.0,
+                0.0,
+                world_axis[j, 0],
+                world_axis[j, 1],
+                world_axis[j, 2],
+                cx,
+                cy,
+                cz,
+                mass,
+                col,
+                jac_com,
+                jac_angular,
+            )
         else:
             wx, wy, wz = world_axis[j, 0], world_axis[j, 1], world_axis[j, 2]
-            _momentum_column(composite, j, wx, wy, wz, oy * wz - oz * wy, oz * wx - ox * wz, ox * wy - oy * wx,
-                             cx, cy, cz, mass, col, jac_com, jac_angular)
+            _momentum_column(
+                composite,
+                j,
+                wx,
+                wy,
+                wz,
+                oy * wz - oz * wy,
+                oz * wx - ox * wz,
+                ox * wy - oy * wx,
+                cx,
+                cy,
+                cz,
+                mass,
+                col,
+                jac_com,
+                jac_angular,
+            )
     return mass
 
 

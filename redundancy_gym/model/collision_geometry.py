@@ -37,13 +37,13 @@ class CollisionGeometry:
     adjacent: tuple[tuple[str, str], ...]
     skipped: tuple[str, ...]
 
-    def collision_model(self, environment: tuple[Segment, ...] | list[Segment] = (),
-                        **kwargs: object) -> CollisionModel:
+    def collision_model(
+        self, environment: tuple[Segment, ...] | list[Segment] = (), **kwargs: object
+    ) -> CollisionModel:
         """A :class:`CollisionModel` of these robot segments (adjacent links excluded) plus the MJCF's world
         geoms and ``environment``; ``kwargs`` go to :class:`CollisionModel`. Reading the MJCF once and calling
         this per episode saves the parse."""
-        return CollisionModel(self.robot, tuple(self.environment) + tuple(environment), exclude=self.adjacent,
-                              **kwargs)  # type: ignore[arg-type]
+        return CollisionModel(self.robot, tuple(self.environment) + tuple(environment), exclude=self.adjacent, **kwargs)  # type: ignore[arg-type]
 
 
 def _triangle(points: np.ndarray, name: str) -> tuple[np.ndarray, float]:
@@ -85,8 +85,9 @@ def _volume(obj: pin.GeometryObject, prefix: str) -> SSV | None:
     return None
 
 
-def collision_geometry_from_mjcf(model: RobotModel, path: str | Path | None = None, *,
-                                 triangle_prefix: str = TRIANGLE_PREFIX) -> CollisionGeometry:
+def collision_geometry_from_mjcf(
+    model: RobotModel, path: str | Path | None = None, *, triangle_prefix: str = TRIANGLE_PREFIX
+) -> CollisionGeometry:
     """Segments of an MJCF (default: the file ``model`` was built from)."""
     source = Path(path if path is not None else model.source)
     if not source.is_file():
@@ -138,8 +139,12 @@ def _mjcf_excludes(path: Path) -> list[tuple[str, str]]:
     return [(e.get("body1", ""), e.get("body2", "")) for e in root.iter("exclude")]
 
 
-def collision_model_from_mjcf(model: RobotModel, environment: tuple[Segment, ...] | list[Segment] = (),
-                              path: str | Path | None = None, **kwargs: object) -> CollisionModel:
+def collision_model_from_mjcf(
+    model: RobotModel,
+    environment: tuple[Segment, ...] | list[Segment] = (),
+    path: str | Path | None = None,
+    **kwargs: object,
+) -> CollisionModel:
     """A :class:`CollisionModel` of the MJCF's robot geoms (adjacent links excluded) plus ``environment``
     (and the MJCF's own world geoms); ``kwargs`` go to :class:`CollisionModel`."""
     return collision_geometry_from_mjcf(model, path).collision_model(environment, **kwargs)

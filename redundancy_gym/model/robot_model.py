@@ -33,10 +33,14 @@ _FRAME_TUPLES_CACHED = 64
 """Frame tuples whose indices a model keeps (:meth:`RobotModel.measure`); later ones are resolved on each call."""
 # 1-DoF joints the compiled kinematics handle: short name -> (joint type, axis or None for "read it")
 _CHAIN_JOINTS: dict[str, tuple[int, tuple[float, float, float] | None]] = {
-    "JointModelRX": (REVOLUTE, (1.0, 0.0, 0.0)), "JointModelRY": (REVOLUTE, (0.0, 1.0, 0.0)),
-    "JointModelRZ": (REVOLUTE, (0.0, 0.0, 1.0)), "JointModelRevoluteUnaligned": (REVOLUTE, None),
-    "JointModelPX": (PRISMATIC, (1.0, 0.0, 0.0)), "JointModelPY": (PRISMATIC, (0.0, 1.0, 0.0)),
-    "JointModelPZ": (PRISMATIC, (0.0, 0.0, 1.0)), "JointModelPrismaticUnaligned": (PRISMATIC, None),
+    "JointModelRX": (REVOLUTE, (1.0, 0.0, 0.0)),
+    "JointModelRY": (REVOLUTE, (0.0, 1.0, 0.0)),
+    "JointModelRZ": (REVOLUTE, (0.0, 0.0, 1.0)),
+    "JointModelRevoluteUnaligned": (REVOLUTE, None),
+    "JointModelPX": (PRISMATIC, (1.0, 0.0, 0.0)),
+    "JointModelPY": (PRISMATIC, (0.0, 1.0, 0.0)),
+    "JointModelPZ": (PRISMATIC, (0.0, 0.0, 1.0)),
+    "JointModelPrismaticUnaligned": (PRISMATIC, None),
 }
 
 
@@ -200,8 +204,10 @@ class RobotModel:
                     axis = tuple(np.asarray(joint.extract().axis, dtype=np.float64))
                 axis = tuple(np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis))
             else:
-                raise ModelError(f"joint {m.names[j]!r} is {kind}; compiled kinematics support "
-                                 f"{', '.join(_CHAIN_JOINTS)}, JointModelFreeFlyer")
+                raise ModelError(
+                    f"joint {m.names[j]!r} is {kind}; compiled kinematics support "
+                    f"{', '.join(_CHAIN_JOINTS)}, JointModelFreeFlyer"
+                )
             names.append(m.names[j])
             parent.append(int(m.parents[j]) - 1)
             rot.append(m.jointPlacements[j].rotation)
@@ -212,16 +218,21 @@ class RobotModel:
             v_index.append(joint.idx_v)
         n = len(names)
         inertias = [m.inertias[j] for j in range(1, m.njoints)]
-        return SerialChain(tuple(names), np.array(parent, dtype=np.int64).reshape(n),
-                           np.array(rot, dtype=np.float64).reshape(n, 3, 3),
-                           np.array(pos, dtype=np.float64).reshape(n, 3),
-                           np.array(axes, dtype=np.float64).reshape(n, 3),
-                           np.array(types, dtype=np.int64).reshape(n), np.array(q_index, dtype=np.int64),
-                           np.array(v_index, dtype=np.int64),
-                           np.array([i.mass for i in inertias], dtype=np.float64).reshape(n),
-                           np.array([i.lever for i in inertias], dtype=np.float64).reshape(n, 3),
-                           np.array([i.inertia for i in inertias], dtype=np.float64).reshape(n, 3, 3),
-                           self.nq, self.nv)
+        return SerialChain(
+            tuple(names),
+            np.array(parent, dtype=np.int64).reshape(n),
+            np.array(rot, dtype=np.float64).reshape(n, 3, 3),
+            np.array(pos, dtype=np.float64).reshape(n, 3),
+            np.array(axes, dtype=np.float64).reshape(n, 3),
+            np.array(types, dtype=np.int64).reshape(n),
+            np.array(q_index, dtype=np.int64),
+            np.array(v_index, dtype=np.int64),
+            np.array([i.mass for i in inertias], dtype=np.float64).reshape(n),
+            np.array([i.lever for i in inertias], dtype=np.float64).reshape(n, 3),
+            np.array([i.inertia for i in inertias], dtype=np.float64).reshape(n, 3, 3),
+            self.nq,
+            self.nv,
+        )
 
     def frame_attachment(self, frame: str | int) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
         """``(joint, R, p)``: the :meth:`serial_chain` joint a frame moves with (-1 for the world) and the
@@ -296,8 +307,9 @@ class RobotModel:
         # v_p = v_o + omega x r = v_o - r x omega
         return jac[:3] - _skew(offset) @ jac[3:]
 
-    def frame_jacobian_derivative_times_velocity(self, q: ArrayLike, qdot: ArrayLike, frame: str | int,
-                                                 kind: JacobianKind = "full") -> NDArray[np.float64]:
+    def frame_jacobian_derivative_times_velocity(
+        self, q: ArrayLike, qdot: ArrayLike, frame: str | int, kind: JacobianKind = "full"
+    ) -> NDArray[np.float64]:
         """``Jdot qdot`` of the world-aligned frame Jacobian (the drift term of (5.18)).
 
         Computed as the frame's classical acceleration at zero joint acceleration, so it matches
@@ -306,8 +318,9 @@ class RobotModel:
         """
         return self.frames_jacobian_derivative_times_velocity(q, qdot, (frame,), kind)[0]
 
-    def frames_jacobian_derivative_times_velocity(self, q: ArrayLike, qdot: ArrayLike, frames: Sequence[str | int],
-                                                  kind: JacobianKind = "full") -> NDArray[np.float64]:
+    def frames_jacobian_derivative_times_velocity(
+        self, q: ArrayLike, qdot: ArrayLike, frames: Sequence[str | int], kind: JacobianKind = "full"
+    ) -> NDArray[np.float64]:
         """:meth:`frame_jacobian_derivative_times_velocity` of several ``frames`` (rows in their order) from one
         kinematic pass."""
         rows = self._rows(kind)
@@ -315,9 +328,15 @@ class RobotModel:
         qdot = self._check_velocity(qdot)
         # same q: placements and the joint Jacobians of update() stay valid
         pin.forwardKinematics(self._model, self._data, q, qdot, np.zeros(self.nv))
-        return np.array([np.asarray(pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(f),
-                                                                      _WORLD_ALIGNED).vector)[rows] for f in frames],
-                        dtype=np.float64)
+        return np.array(
+            [
+                np.asarray(
+                    pin.getFrameClassicalAcceleration(self._model, self._data, self._resolve(f), _WORLD_ALIGNED).vector
+                )[rows]
+                for f in frames
+            ],
+            dtype=np.float64,
+        )
 
     def acceleration_terms(self, q: ArrayLike, qdot: ArrayLike, frames: Sequence[str | int]) -> AccelerationTerms:
         """The placements, Jacobians and ``Jdot qdot`` of ``frames`` and the CoM, ``A_G`` and ``Adot_G qdot`` at
@@ -351,8 +370,9 @@ class RobotModel:
             position[i] = placement.translation
             jacobian[i] = pin.getFrameJacobian(model, data, f, _WORLD_ALIGNED)
             drift[i] = pin.getFrameClassicalAcceleration(model, data, f, _WORLD_ALIGNED).vector
-        return AccelerationTerms(rotation, position, jacobian, drift, np.array(data.com[0], dtype=np.float64),
-                                 centroidal, centroidal_drift)
+        return AccelerationTerms(
+            rotation, position, jacobian, drift, np.array(data.com[0], dtype=np.float64), centroidal, centroidal_drift
+        )
 
     # ------------------------------------------------------------------ mass properties and momentum
     def com(self) -> NDArray[np.float64]:
@@ -380,8 +400,9 @@ class RobotModel:
         ag = np.array(pin.computeCentroidalMap(self._model, self._data, q), dtype=np.float64)
         return np.array(self._data.com[0], dtype=np.float64), ag
 
-    def measure(self, q: ArrayLike, v: ArrayLike, frames: tuple[str | int, ...] = ()
-                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def measure(
+        self, q: ArrayLike, v: ArrayLike, frames: tuple[str | int, ...] = ()
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(c, c_dot, R, p)`` of a measured state in one forward pass: CoM [m], its velocity [m/s] and the
         world rotations (k, 3, 3) and positions (k, 3) [m] of ``frames``.
 

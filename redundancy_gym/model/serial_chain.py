@@ -73,8 +73,19 @@ class SerialChain:
         rotation, position, world_axis = self._forward(q)
         p = np.asarray(point, dtype=np.float64)
         out = np.zeros((6, self.nv))
-        chain_jacobian(self.parent, self.joint_type, self.v_index, rotation, position, world_axis, int(joint),
-                       float(p[0]), float(p[1]), float(p[2]), out)
+        chain_jacobian(
+            self.parent,
+            self.joint_type,
+            self.v_index,
+            rotation,
+            position,
+            world_axis,
+            int(joint),
+            float(p[0]),
+            float(p[1]),
+            float(p[2]),
+            out,
+        )
         return out
 
     def centroidal(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
@@ -82,9 +93,21 @@ class SerialChain:
         momentum matrix (3 x nv, ``L_G = A_L qdot`` [kg m^2/s] about the CoM)."""
         rotation, position, world_axis = self._forward(q)
         com, jac_com, jac_angular = np.zeros(3), np.zeros((3, self.nv)), np.zeros((3, self.nv))
-        chain_centroidal(self.parent, self.joint_type, self.v_index, rotation, position, world_axis,
-                         self.body_mass, self.body_com, self.body_inertia, np.zeros((self.num_joints, 13)), com,
-                         jac_com, jac_angular)
+        chain_centroidal(
+            self.parent,
+            self.joint_type,
+            self.v_index,
+            rotation,
+            position,
+            world_axis,
+            self.body_mass,
+            self.body_com,
+            self.body_inertia,
+            np.zeros((self.num_joints, 13)),
+            com,
+            jac_com,
+            jac_angular,
+        )
         return com, jac_com, jac_angular
 
     def integrate(self, q: ArrayLike, v: ArrayLike, dt: float) -> NDArray[np.float64]:
@@ -107,6 +130,16 @@ class SerialChain:
         q = self._check(q, self.nq, "q")
         n = self.num_joints
         rotation, position, world_axis = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
-        chain_forward(self.parent, self.placement_rotation, self.placement_translation, self.axis, self.joint_type,
-                      self.q_index, q, rotation, position, world_axis)
+        chain_forward(
+            self.parent,
+            self.placement_rotation,
+            self.placement_translation,
+            self.axis,
+            self.joint_type,
+            self.q_index,
+            q,
+            rotation,
+            position,
+            world_axis,
+        )
         return rotation, position, world_axis

@@ -71,12 +71,17 @@ __all__ = [
 
 # the policy classes import the controllers (numba kernels, pinocchio): loaded on first access
 _LAZY = {
-    "ClikPolicy": "clik_policy", "ClikPolicyConfig": "clik_policy",
-    "GraspClikPolicy": "grasp_clik_policy", "GraspClikConfig": "grasp_clik_policy",
-    "PredictivePolicy": "predictive_policy", "PredictivePolicyConfig": "predictive_policy",
-    "RandomPolicy": "random_policy", "RandomPolicyConfig": "random_policy",
+    "ClikPolicy": "clik_policy",
+    "ClikPolicyConfig": "clik_policy",
+    "GraspClikPolicy": "grasp_clik_policy",
+    "GraspClikConfig": "grasp_clik_policy",
+    "PredictivePolicy": "predictive_policy",
+    "PredictivePolicyConfig": "predictive_policy",
+    "RandomPolicy": "random_policy",
+    "RandomPolicyConfig": "random_policy",
     "Sb3Policy": "sb3_policy",
-    "WalkingPolicy": "walking_policy", "WalkingPolicyConfig": "walking_policy",
+    "WalkingPolicy": "walking_policy",
+    "WalkingPolicyConfig": "walking_policy",
     "ZeroPolicy": "zero_policy",
 }
 

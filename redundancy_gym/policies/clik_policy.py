@@ -88,16 +88,22 @@ class ClikPolicy(PerEnvPolicy):
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
         self.config = config_from_options(ClikPolicyConfig, kwargs)
-        base = env_with_attributes(env, ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES",
-                                         "max_joint_speed"), "clik")
+        base = env_with_attributes(
+            env, ("OBSERVATION_LAYOUT", "ROBOT_XML", "TCP_FRAME", "TASK_AXES", "max_joint_speed"), "clik"
+        )
         self._layout = base.OBSERVATION_LAYOUT
         self._speed = float(base.max_joint_speed)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         objectives = []
         if self.config.joint_limit_weight > 0.0:
-            objectives.append(JointLimitObjective.from_model(
-                self.model, activation_distance=self.config.joint_limit_activation,
-                slope=self.config.joint_limit_slope, weight=self.config.joint_limit_weight))
+            objectives.append(
+                JointLimitObjective.from_model(
+                    self.model,
+                    activation_distance=self.config.joint_limit_activation,
+                    slope=self.config.joint_limit_slope,
+                    weight=self.config.joint_limit_weight,
+                )
+            )
         if self.config.posture_weight > 0.0:
             reference = getattr(base, "nominal_configuration", None)
             if reference is None:
@@ -107,17 +113,25 @@ class ClikPolicy(PerEnvPolicy):
         self._obstacle_slices: tuple[slice, slice] | None = None
         self._obstacle_seen: tuple[float, ...] | None = None
         if self.config.collision_avoidance not in COLLISION_MODES:
-            raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: "
-                              f"{', '.join(COLLISION_MODES)}")
+            raise PolicyError(
+                f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: {', '.join(COLLISION_MODES)}"
+            )
         has_obstacle = bool(getattr(base, "has_obstacle", False))
         wanted = self.config.collision_avoidance == "on" or (self.config.collision_avoidance == "auto" and has_obstacle)
         if wanted:
             self.collision = self._collision_objective(base, has_obstacle)
             objectives.append(self.collision)
-        clik = Clik(self.model, FramePositionTask(base.TCP_FRAME, base.TASK_AXES), method=self.config.method,
-                    gain=self.config.gain, nullspace_gain=self.config.nullspace_gain, objectives=objectives,
-                    dls_threshold=self.config.dls_threshold, dls_max_damping=self.config.dls_max_damping,
-                    period=control_period(base))
+        clik = Clik(
+            self.model,
+            FramePositionTask(base.TCP_FRAME, base.TASK_AXES),
+            method=self.config.method,
+            gain=self.config.gain,
+            nullspace_gain=self.config.nullspace_gain,
+            objectives=objectives,
+            dls_threshold=self.config.dls_threshold,
+            dls_max_damping=self.config.dls_max_damping,
+            period=control_period(base),
+        )
         self.controller: Clik | CompiledClik = CompiledClik(clik) if self.config.backend == "compiled" else clik
         self.last_result: ClikResult | None = None
         self._init_per_env(env, kwargs)  # a velocity-level law: no episode state
@@ -127,14 +141,20 @@ class ClikPolicy(PerEnvPolicy):
         environment = []
         if has_obstacle:
             if "obstacle_center" not in self._layout or "obstacle_radius" not in self._layout:
-                raise PolicyError(f"{type(base).__name__} has an obstacle but no obstacle_center/obstacle_radius "
-                                  "in OBSERVATION_LAYOUT")
+                raise PolicyError(
+                    f"{type(base).__name__} has an obstacle but no obstacle_center/obstacle_radius "
+                    "in OBSERVATION_LAYOUT"
+                )
             # a unit sphere at the origin, moved and scaled from the observation in predict()
             environment.append(Segment(OBSTACLE_SEGMENT, (PSS(np.zeros(3), 1.0),)))
             self._obstacle_slices = (self._layout["obstacle_center"], self._layout["obstacle_radius"])
         model = collision_model_from_mjcf(self.model, environment, self_collision=self.config.self_collision)
-        return CollisionObjective(model, activation_distance=self.config.collision_activation,
-                                  slope=self.config.collision_slope, weight=self.config.collision_weight)
+        return CollisionObjective(
+            model,
+            activation_distance=self.config.collision_activation,
+            slope=self.config.collision_slope,
+            weight=self.config.collision_weight,
+        )
 
     def update_obstacle(self, obs: NDArray[np.float64]) -> None:
         """Place the collision model's obstacle where the observation says (done by :meth:`predict`)."""
@@ -157,8 +177,9 @@ class ClikPolicy(PerEnvPolicy):
         """The env's joint speed limits [rad/s] (nv): an action of 1 commands them."""
         return np.full(self.model.nv, self._speed)
 
-    def task_reference(self, obs: NDArray[np.float64], starting: bool
-                       ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def task_reference(
+        self, obs: NDArray[np.float64], starting: bool
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """The configuration, task target and target velocity of one observation, for :attr:`controller`
         (places the observed obstacle in the collision model); ``starting``: a new episode (unused: the law keeps
         no episode state)."""
@@ -175,4 +196,3 @@ class ClikPolicy(PerEnvPolicy):
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""
         return asdict(self.config)
-

@@ -42,7 +42,7 @@ def grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, resu
         return BAD_OBSERVATION
     for k in range(nq):
         inputs[k] = obs[q_start + k]
-    sample_grasp_path(path, obs[time_index], inputs[nq:nq + 12])  # [p, a, v, omega]: the target, then its velocity
+    sample_grasp_path(path, obs[time_index], inputs[nq : nq + 12])  # [p, a, v, omega]: the target, then its velocity
     code = clik_step(f, i, True, False)
     if code != OK:
         return code

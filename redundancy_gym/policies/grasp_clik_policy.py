@@ -17,11 +17,11 @@ from numpy.typing import NDArray
 
 from ..controllers.clik.clik import Clik, ClikResult
 from ..controllers.clik.clik_kernels import OK
-from ..controllers.objectives.collision_objective import CollisionObjective
 from ..controllers.clik.compiled_clik import CompiledClik
 from ..controllers.kernels.buffers import compiled_entry_point
-from ..controllers.tasks.frame_axis_task import FrameAxisTask
+from ..controllers.objectives.collision_objective import CollisionObjective
 from ..controllers.objectives.joint_limit_objective import JointLimitObjective
+from ..controllers.tasks.frame_axis_task import FrameAxisTask
 from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
 from ..model import RobotModel, collision_geometry_from_mjcf
@@ -34,8 +34,9 @@ __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
 # grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, result); obs in any layout (a row of a
 # batch, a strided view), the others are the policy's own contiguous arrays
-_FUSED_SIGNATURE = ("int64(float64[::1], int64[::1], float64[:], int64, int64, float64[::1], float64[::1], "
-                    "float32[::1], float64[::1])")
+_FUSED_SIGNATURE = (
+    "int64(float64[::1], int64[::1], float64[:], int64, int64, float64[::1], float64[::1], float32[::1], float64[::1])"
+)
 
 
 @dataclass(frozen=True)
@@ -120,21 +121,29 @@ class GraspClikPolicy(PerEnvPolicy):
         self.config = config_from_options(GraspClikConfig, kwargs)
         if self.config.collision_avoidance not in ("on", "off"):
             raise PolicyError(f"unknown collision_avoidance {self.config.collision_avoidance!r}; valid: on, off")
-        base = env_with_attributes(env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"),
-                                   "grasp clik")
+        base = env_with_attributes(
+            env, ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds"), "grasp clik"
+        )
         self._layout = dict(base.observation_layout)
         self._speeds = np.array(base.max_joint_speeds, dtype=np.float64)  # own contiguous copy: the kernel reads it
         self._period = control_period(base)  # the command keeps every joint inside its range over one period
         env_timing = getattr(base, "reference_timing", None)
         env_timing = env_timing if isinstance(env_timing, GraspPathTiming) else GraspPathTiming()
         c = self.config
-        self.timing = GraspPathTiming(*(env if own is None else float(own) for own, env in zip(
-            (c.max_speed, c.max_turn_rate, c.min_duration, c.approach_speed), env_timing)))
+        self.timing = GraspPathTiming(
+            *(
+                env if own is None else float(own)
+                for own, env in zip((c.max_speed, c.max_turn_rate, c.min_duration, c.approach_speed), env_timing, strict=False)
+            )
+        )
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         self._geometry = collision_geometry_from_mjcf(self.model)  # the arm's own segments, read once
         self.joint_limits = JointLimitObjective.from_model(
-            self.model, activation_distance=self.config.joint_limit_activation, slope=1.0,
-            weight=self.config.joint_limit_weight)
+            self.model,
+            activation_distance=self.config.joint_limit_activation,
+            slope=1.0,
+            weight=self.config.joint_limit_weight,
+        )
         self.task = FrameAxisTask(base.TCP_FRAME, axis=0)
         self.collision: CollisionObjective | None = None
         self.path: GraspPath | None = None
@@ -159,11 +168,22 @@ class GraspClikPolicy(PerEnvPolicy):
         self.collision = None
         if self.config.collision_avoidance == "on":
             model = self._geometry.collision_model(environment)
-            self.collision = CollisionObjective(model, activation_distance=self.config.collision_activation,
-                                                slope=self.config.collision_slope, weight=self.config.collision_weight)
+            self.collision = CollisionObjective(
+                model,
+                activation_distance=self.config.collision_activation,
+                slope=self.config.collision_slope,
+                weight=self.config.collision_weight,
+            )
             objectives.append(self.collision)
-        clik = Clik(self.model, self.task, method=self.config.method, gain=self.config.gain,
-                    nullspace_gain=self.config.nullspace_gain, objectives=objectives, period=self._period)
+        clik = Clik(
+            self.model,
+            self.task,
+            method=self.config.method,
+            gain=self.config.gain,
+            nullspace_gain=self.config.nullspace_gain,
+            objectives=objectives,
+            period=self._period,
+        )
         return CompiledClik(clik) if self.config.backend == "compiled" else clik
 
     def plan(self, obs: NDArray[np.float64]) -> None:
@@ -185,8 +205,12 @@ class GraspClikPolicy(PerEnvPolicy):
         self._path_params = self.path.params.copy()  # the constants the one-call step samples the path from (a
         # writable copy: the entry point is compiled for writable arrays)
         self._fused = None
-        if isinstance(self.controller, CompiledClik) and self._q_start is not None and self._time is not None \
-                and self._speeds.shape == (self._nv,):
+        if (
+            isinstance(self.controller, CompiledClik)
+            and self._q_start is not None
+            and self._time is not None
+            and self._speeds.shape == (self._nv,)
+        ):
             self._fused = compiled_entry_point(grasp_clik_action, _FUSED_SIGNATURE)
             if self._outputs.size != self.controller.output_size:
                 self._outputs = np.zeros(self.controller.output_size)
@@ -206,8 +230,9 @@ class GraspClikPolicy(PerEnvPolicy):
         """The env's joint speed limits [rad/s or m/s] (nv): an action of 1 commands them."""
         return self._speeds.copy()
 
-    def task_reference(self, obs: NDArray[np.float64], starting: bool
-                       ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def task_reference(
+        self, obs: NDArray[np.float64], starting: bool
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """The configuration, task target ``[p_d, a_d]`` and target velocity ``[v_d, omega_d]`` of one observation,
         for :attr:`controller`; at a new episode (``starting``, or the observation's time ~0 or going back) it
         plans the path and builds the controller first (:meth:`plan`)."""
@@ -225,8 +250,10 @@ class GraspClikPolicy(PerEnvPolicy):
         if fused is not None:  # the compiled backend: one kernel call from observation to action
             f, i = self.controller.kernel_buffers()  # type: ignore[union-attr]
             action = np.empty(self._nv, dtype=np.float32)
-            if fused(f, i, obs, self._q_start, self._time, self._path_params, self._speeds, action,
-                     self._outputs) == OK:
+            if (
+                fused(f, i, obs, self._q_start, self._time, self._path_params, self._speeds, action, self._outputs)
+                == OK
+            ):
                 self._result_pending = True
                 return action
         # the Python backend, or an input the kernel rejects: the separate calls raise the controller's error

@@ -62,16 +62,31 @@ class OptionRule:
         if self.kind == "bool":
             return checks.check_bool(name, value, error=error)
         if self.kind == "int":
-            return checks.check_int(name, value, low=None if self.low is None else int(self.low),
-                                    high=None if self.high is None else int(self.high), optional=self.optional,
-                                    error=error)
+            return checks.check_int(
+                name,
+                value,
+                low=None if self.low is None else int(self.low),
+                high=None if self.high is None else int(self.high),
+                optional=self.optional,
+                error=error,
+            )
         if self.kind == "str":
             if isinstance(value, str):
                 return value
-            raise error(f"{name} must be {'None or ' if self.optional else ''}a str, got {value!r} "
-                        f"({type(value).__name__})")
-        return checks.check_real(name, value, low=self.low, high=self.high, low_open=self.low_open,
-                                 high_open=self.high_open, unit=self.unit, optional=self.optional, error=error)
+            raise error(
+                f"{name} must be {'None or ' if self.optional else ''}a str, got {value!r} ({type(value).__name__})"
+            )
+        return checks.check_real(
+            name,
+            value,
+            low=self.low,
+            high=self.high,
+            low_open=self.low_open,
+            high_open=self.high_open,
+            unit=self.unit,
+            optional=self.optional,
+            error=error,
+        )
 
     @property
     def has_range(self) -> bool:
@@ -91,30 +106,53 @@ OPTION_RULES: dict[str, OptionRule] = {
     # task-space feedback K: > 0 (0 leaves the task error uncorrected); nullspace and stabilizer gains may be 0 (off)
     "gain": _above(0.0, "1/s"),
     "nullspace_gain": _at_least(0.0),
-    "dcm_gain": _at_least(0.0), "zmp_gain": _at_least(0.0), "com_gain": _at_least(0.0, "1/s"),
+    "dcm_gain": _at_least(0.0),
+    "zmp_gain": _at_least(0.0),
+    "com_gain": _at_least(0.0, "1/s"),
     # potentials: activation distances and slopes > 0, weights >= 0 (0 switches the objective off)
-    "joint_limit_activation": _above(0.0), "joint_limit_slope": _above(0.0), "joint_limit_weight": _at_least(0.0),
-    "collision_activation": _above(0.0, "m"), "collision_slope": _above(0.0, "1/m"),
+    "joint_limit_activation": _above(0.0),
+    "joint_limit_slope": _above(0.0),
+    "joint_limit_weight": _at_least(0.0),
+    "collision_activation": _above(0.0, "m"),
+    "collision_slope": _above(0.0, "1/m"),
     "collision_weight": _at_least(0.0),
-    "self_collision_activation": _above(0.0, "m"), "self_collision_slope": _above(0.0, "1/m"),
+    "self_collision_activation": _above(0.0, "m"),
+    "self_collision_slope": _above(0.0, "1/m"),
     "self_collision_weight": _at_least(0.0),
-    "posture_weight": _at_least(0.0), "velocity_weight": _at_least(0.0), "input_weight": _at_least(0.0),
-    "dls_threshold": _above(0.0), "dls_max_damping": _at_least(0.0), "damping": _at_least(0.0),
+    "posture_weight": _at_least(0.0),
+    "velocity_weight": _at_least(0.0),
+    "input_weight": _at_least(0.0),
+    "dls_threshold": _above(0.0),
+    "dls_max_damping": _at_least(0.0),
+    "damping": _at_least(0.0),
     # the grasp path's timing: speeds > 0 (a time divides by them), a duration >= 0
-    "max_speed": _above(0.0, "m/s"), "approach_speed": _above(0.0, "m/s"), "max_turn_rate": _above(0.0, "rad/s"),
+    "max_speed": _above(0.0, "m/s"),
+    "approach_speed": _above(0.0, "m/s"),
+    "max_turn_rate": _above(0.0, "rad/s"),
     "min_duration": _at_least(0.0, "s"),
     # prediction
-    "horizon": _above(0.0, "s"), "sample_time": _above(0.0, "s"), "tolerance": _at_least(0.0),
-    "iterations": _at_least(0), "global_iterations": _at_least(0),
+    "horizon": _above(0.0, "s"),
+    "sample_time": _above(0.0, "s"),
+    "tolerance": _at_least(0.0),
+    "iterations": _at_least(0),
+    "global_iterations": _at_least(0),
     # walking: W = gamma I + J^T J must be invertible, beta divides the nullspace step
-    "gamma": _above(0.0), "beta": _above(0.0), "step_duration": _above(0.0, "s"), "com_height": _above(0.0, "m"),
+    "gamma": _above(0.0),
+    "beta": _above(0.0),
+    "step_duration": _above(0.0, "s"),
+    "com_height": _above(0.0, "m"),
     "correction_iterations": _at_least(0),
-    "step_min_remaining": _above(0.0, "s"), "step_max_forward": _at_least(0.0, "m"),
-    "step_max_backward": _at_least(0.0, "m"), "step_min_width": _at_least(0.0, "m"), "step_max_width": _above(0.0, "m"),
+    "step_min_remaining": _above(0.0, "s"),
+    "step_max_forward": _at_least(0.0, "m"),
+    "step_max_backward": _at_least(0.0, "m"),
+    "step_min_width": _at_least(0.0, "m"),
+    "step_max_width": _above(0.0, "m"),
     # obstacles (SSTA): a clearance above a box [m], a step-over single support (0: the nominal one) [s]
-    "obstacle_clearance": _at_least(0.0, "m"), "step_over_duration": _at_least(0.0, "s"),
+    "obstacle_clearance": _at_least(0.0, "m"),
+    "step_over_duration": _at_least(0.0, "s"),
     # choices
-    "method": OptionRule(kind="str", choices=METHODS), "backend": OptionRule(kind="str", choices=BACKENDS),
+    "method": OptionRule(kind="str", choices=METHODS),
+    "backend": OptionRule(kind="str", choices=BACKENDS),
     "descent": OptionRule(kind="str", choices=DESCENT_METHODS),
     "collision_avoidance": OptionRule(kind="str", choices=("auto", "on", "off")),
     "ik": OptionRule(kind="str", choices=WALKING_IK),
@@ -126,9 +164,17 @@ _CLASS_RULES: dict[tuple[str, str], OptionRule] = {
 }
 
 SUFFIX_RULES: tuple[tuple[str, OptionRule], ...] = (
-    ("_weight", _at_least(0.0)), ("_gain", _at_least(0.0)), ("_activation", _above(0.0)), ("_slope", _above(0.0)),
-    ("_speed", _above(0.0)), ("_rate", _above(0.0)), ("_duration", _at_least(0.0, "s")), ("_time", _above(0.0, "s")),
-    ("_iterations", _at_least(0)), ("_damping", _at_least(0.0)), ("_distance", _above(0.0, "m")),
+    ("_weight", _at_least(0.0)),
+    ("_gain", _at_least(0.0)),
+    ("_activation", _above(0.0)),
+    ("_slope", _above(0.0)),
+    ("_speed", _above(0.0)),
+    ("_rate", _above(0.0)),
+    ("_duration", _at_least(0.0, "s")),
+    ("_time", _above(0.0, "s")),
+    ("_iterations", _at_least(0)),
+    ("_damping", _at_least(0.0)),
+    ("_distance", _above(0.0, "m")),
 )
 """Ranges of options that :data:`OPTION_RULES` does not name, by how the name ends."""
 
@@ -140,7 +186,7 @@ def _kind(annotation: Any) -> tuple[str | None, bool]:
         optional = "None" in parts or annotation.startswith("Optional[")
         parts.discard("None")
         base = parts.pop() if len(parts) == 1 else None
-        base = base[len("Optional["):-1] if base and base.startswith("Optional[") else base
+        base = base[len("Optional[") : -1] if base and base.startswith("Optional[") else base
         return {"bool": "bool", "int": "int", "float": "real", "str": "str"}.get(base or "", None), optional
     optional = False
     if typing.get_origin(annotation) in (typing.Union, types.UnionType):
@@ -167,14 +213,26 @@ def option_rule(config_type: type, name: str) -> OptionRule | None:
     if kind is None:
         return None
     own: Mapping[str, OptionRule] = getattr(config_type, "OPTION_RULES", {})
-    rule = (field.metadata.get("option_rule") or own.get(name) or _CLASS_RULES.get((config_type.__name__, name))
-            or OPTION_RULES.get(name))
+    rule = (
+        field.metadata.get("option_rule")
+        or own.get(name)
+        or _CLASS_RULES.get((config_type.__name__, name))
+        or OPTION_RULES.get(name)
+    )
     if rule is None and kind in ("int", "real"):
         rule = next((r for suffix, r in SUFFIX_RULES if name.endswith(suffix)), None)
     if rule is None or (rule.choices is None and kind in ("bool", "str")):
         rule = OptionRule()
-    return OptionRule(kind=kind, optional=optional, low=rule.low, high=rule.high, low_open=rule.low_open,
-                      high_open=rule.high_open, unit=rule.unit, choices=rule.choices if kind == "str" else None)
+    return OptionRule(
+        kind=kind,
+        optional=optional,
+        low=rule.low,
+        high=rule.high,
+        low_open=rule.low_open,
+        high_open=rule.high_open,
+        unit=rule.unit,
+        choices=rule.choices if kind == "str" else None,
+    )
 
 
 def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
@@ -190,7 +248,9 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
     valid = {f.name for f in fields(config_type)}  # type: ignore[arg-type]
     unknown = set(options) - valid
     if unknown:
-        raise PolicyError(f"unknown option(s) of {config_type.__name__}: {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}")
+        raise PolicyError(
+            f"unknown option(s) of {config_type.__name__}: {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}"
+        )
     checked = {}
     for name, value in options.items():
         rule = option_rule(config_type, name)  # type: ignore[arg-type]
@@ -207,8 +267,10 @@ def env_with_attributes(env: Any, required: tuple[str, ...], policy: str) -> Any
     base = getattr(env, "unwrapped", env)
     missing = [name for name in required if not hasattr(base, name)]
     if missing:
-        raise PolicyError(f"policy {policy!r} does not support {env_name(env)} "
-                          f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})")
+        raise PolicyError(
+            f"policy {policy!r} does not support {env_name(env)} "
+            f"(for an env of your own: {type(base).__name__} lacks {', '.join(missing)})"
+        )
     return base
 
 

@@ -20,8 +20,13 @@ __all__ = ["PerEnvPolicy", "Policy", "observation_time_index"]
 class Policy(Protocol):
     """The stable-baselines3 prediction signature shared by every policy."""
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+    def predict(
+        self,
+        observation: NDArray[np.floating],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.floating], Any]:
         """Action for an observation, and the (unused) recurrent state."""
         ...
 
@@ -58,8 +63,9 @@ def _batch_starts(episode_start: Any, n: int) -> NDArray[np.bool_]:
         return np.zeros(n, dtype=bool)
     flags = np.asarray(episode_start, dtype=bool).reshape(-1)
     if flags.size != n:
-        raise PolicyError(f"episode_start must have one entry per observation ({n}), got shape "
-                          f"{np.shape(episode_start)}")
+        raise PolicyError(
+            f"episode_start must have one entry per observation ({n}), got shape {np.shape(episode_start)}"
+        )
     return flags
 
 
@@ -124,8 +130,13 @@ class PerEnvPolicy:
         """The action for one observation of this env index; ``starting``: its ``episode_start``."""
         raise NotImplementedError
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[Any], Any]:
+    def predict(
+        self,
+        observation: NDArray[np.floating],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[Any], Any]:
         """The action ``(act_dim,)`` for one observation, or the actions ``(n, act_dim)`` for a batch ``(n, obs_dim)``
         (row ``i``: env index ``i``); ``episode_start``: a flag per observation (True begins a new episode there);
         ``state`` comes back unchanged (no recurrent state); the policies are deterministic.
@@ -146,8 +157,9 @@ class PerEnvPolicy:
             raise PolicyError(f"invalid robot state in the observation: {exc}") from exc
         if obs.ndim != 2 or (self._obs_shape is not None and obs.shape[1:] != self._obs_shape):
             dim = "obs_dim" if self._obs_shape is None else self._obs_shape[0]
-            raise PolicyError(f"observation must have shape {self._obs_shape or '(obs_dim,)'} or (n, {dim}), "
-                              f"got {obs.shape}")
+            raise PolicyError(
+                f"observation must have shape {self._obs_shape or '(obs_dim,)'} or (n, {dim}), got {obs.shape}"
+            )
         starts = _batch_starts(episode_start, obs.shape[0])
         if obs.shape[0] == 0:
             return self._no_actions(), state
@@ -163,4 +175,3 @@ class PerEnvPolicy:
         space = getattr(self._env, "action_space", None)
         shape = tuple(getattr(space, "shape", None) or (0,))
         return np.zeros((0, *shape), dtype=getattr(space, "dtype", np.float32))
-

@@ -16,10 +16,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers.objectives.collision_objective import CollisionObjective
 from ..controllers.clik.compiled_clik import CompiledClik
-from ..controllers.tasks.frame_axis_task import FrameAxisTask
-from ..controllers.tasks.frame_position_task import FramePositionTask
+from ..controllers.objectives.collision_objective import CollisionObjective
 from ..controllers.objectives.joint_limit_objective import JointLimitObjective
 from ..controllers.predictive.predictive_ik import (
     DESCENT_METHODS,
@@ -28,6 +26,8 @@ from ..controllers.predictive.predictive_ik import (
     PredictiveRollout,
 )
 from ..controllers.predictive.receding_horizon import HorizonUpdate, RecedingHorizon
+from ..controllers.tasks.frame_axis_task import FrameAxisTask
+from ..controllers.tasks.frame_position_task import FramePositionTask
 from ..model import RobotModel
 from .clik_policy import ClikPolicy
 from .exceptions import PolicyError
@@ -97,8 +97,12 @@ class PredictivePolicyConfig:
 
 TASK_DEFAULTS: dict[str, dict[str, float | None]] = {
     "planar": {"joint_limit_weight": 0.6, "collision_weight": 1.0},
-    "grasp": {"joint_limit_weight": 0.6, "collision_weight": 100.0, "collision_activation": 0.02,
-              "collision_slope": 30.0},
+    "grasp": {
+        "joint_limit_weight": 0.6,
+        "collision_weight": 100.0,
+        "collision_activation": 0.02,
+        "collision_slope": 30.0,
+    },
 }
 """Cost options of :class:`PredictivePolicyConfig` left at ``None``, per task. ``planar`` (PlanarReach): the
 weights of fig. 5.31 on the ``clik`` reference's potentials. ``grasp`` (AgriReach, 9 DoF): a collision
@@ -107,25 +111,50 @@ motion (the reference's 10 cm, 4/m potential made the optimum keep 5 cm away at 
 weight let the short horizon collide); found on the fig. 5.10 move, ``redundancy-gym bench pik``."""
 
 
-def predictive_problem(model: RobotModel, task: FramePositionTask | FrameAxisTask, joint_limits: JointLimitObjective,
-                       collision: CollisionObjective | None, config: PredictivePolicyConfig, *,
-                       augmented: bool) -> PredictiveIk:
+def predictive_problem(
+    model: RobotModel,
+    task: FramePositionTask | FrameAxisTask,
+    joint_limits: JointLimitObjective,
+    collision: CollisionObjective | None,
+    config: PredictivePolicyConfig,
+    *,
+    augmented: bool,
+) -> PredictiveIk:
     """:class:`PredictiveIk` on a reference controller's potentials with the weights of ``config``
     (``joint_limit_weight`` on (5.58), ``collision_weight`` on (5.49), ``velocity_weight`` on (5.131)) and
     its collision potential's shape where set; ``config`` must have its weights (:meth:`~PredictivePolicyConfig.for_task`)."""
     if config.joint_limit_weight is None or config.collision_weight is None:
         raise PolicyError("the configuration has no cost weights; fill them with for_task()")
     p = joint_limits.potential
-    limits = JointLimitObjective(joint_limits.lower, joint_limits.upper, activation_distance=p.activation_distance,
-                                 slope=p.slope, switch_ratio=p.switch_ratio, weight=config.joint_limit_weight)
+    limits = JointLimitObjective(
+        joint_limits.lower,
+        joint_limits.upper,
+        activation_distance=p.activation_distance,
+        slope=p.slope,
+        switch_ratio=p.switch_ratio,
+        weight=config.joint_limit_weight,
+    )
     if collision is not None:
         p = collision.potential
         activation = p.activation_distance if config.collision_activation is None else config.collision_activation
         slope = p.slope if config.collision_slope is None else config.collision_slope
-        collision = CollisionObjective(collision.collision_model, activation_distance=activation, slope=slope,
-                                       switch_ratio=p.switch_ratio, weight=config.collision_weight)
-    return PredictiveIk(model, task, velocity_weight=config.velocity_weight, joint_limits=limits, collision=collision,
-                        augmented=augmented, input_weight=config.input_weight, damping=config.damping)
+        collision = CollisionObjective(
+            collision.collision_model,
+            activation_distance=activation,
+            slope=slope,
+            switch_ratio=p.switch_ratio,
+            weight=config.collision_weight,
+        )
+    return PredictiveIk(
+        model,
+        task,
+        velocity_weight=config.velocity_weight,
+        joint_limits=limits,
+        collision=collision,
+        augmented=augmented,
+        input_weight=config.input_weight,
+        damping=config.damping,
+    )
 
 
 class PredictivePolicy(PerEnvPolicy):
@@ -169,8 +198,10 @@ class PredictivePolicy(PerEnvPolicy):
             raise PolicyError(f"sample_time must be finite and > 0, got {self.dt!r}")
         self.substeps = int(round(self.dt / self.control_dt))
         if self.substeps < 1 or abs(self.substeps * self.control_dt - self.dt) > 1e-9 * self.dt:
-            raise PolicyError(f"sample_time must be a whole multiple of the env's control period "
-                              f"{self.control_dt:g} s, got {self.dt!r}")
+            raise PolicyError(
+                f"sample_time must be a whole multiple of the env's control period "
+                f"{self.control_dt:g} s, got {self.dt!r}"
+            )
         self._grasp = "grasp_position" in getattr(base, "observation_layout", {})
         self.config = c = c.for_task("grasp" if self._grasp else "planar")
         if self._grasp:
@@ -209,10 +240,17 @@ class PredictivePolicy(PerEnvPolicy):
         else:
             clik = ref.controller.clik if isinstance(ref.controller, CompiledClik) else ref.controller
             task = clik.task
-            limits = JointLimitObjective.from_model(self.model, activation_distance=ref.config.joint_limit_activation,
-                                                    slope=ref.config.joint_limit_slope)
-        return predictive_problem(self.model, task, limits, ref.collision, self.config,
-                                  augmented=self.config.augmented and self.mode == "predictive")
+            limits = JointLimitObjective.from_model(
+                self.model, activation_distance=ref.config.joint_limit_activation, slope=ref.config.joint_limit_slope
+            )
+        return predictive_problem(
+            self.model,
+            task,
+            limits,
+            ref.collision,
+            self.config,
+            augmented=self.config.augmented and self.mode == "predictive",
+        )
 
     def start(self, obs: NDArray[np.float64]) -> None:
         """A new episode: plan the reference (and the obstacles), build the problem, solve it once (global)."""
@@ -231,6 +269,7 @@ class PredictivePolicy(PerEnvPolicy):
             def sample(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
                 position, velocity, _ = self._reference(t)
                 return position, velocity
+
         horizon_steps = max(1, int(round(c.horizon / self.dt)))
         total = (int(np.ceil(end / self.dt)) + horizon_steps + 1) * self.substeps
         first = sample(0.0)
@@ -238,7 +277,7 @@ class PredictivePolicy(PerEnvPolicy):
         table = np.zeros((total, 12))  # per control step
         for k in range(total):
             target, velocity = sample(k * self.control_dt)
-            table[k, :width], table[k, 6:6 + width] = target, velocity
+            table[k, :width], table[k, 6 : 6 + width] = target, velocity
         self._table, self._width = table, width
         self.pik = self.problem()
         q = obs[self._layout["q"]]
@@ -246,13 +285,21 @@ class PredictivePolicy(PerEnvPolicy):
         self.horizon = None
         if self.mode == "global":
             steps = max(1, int(np.ceil(end / self.dt)))
-            result = self.pik.optimize(q, self.wdot(0, steps), self.dt, np.zeros((steps, self.model.nv)),
-                                       max_iterations=c.global_iterations, tolerance=1e-9, method=c.descent)
+            result = self.pik.optimize(
+                q,
+                self.wdot(0, steps),
+                self.dt,
+                np.zeros((steps, self.model.nv)),
+                max_iterations=c.global_iterations,
+                tolerance=1e-9,
+                method=c.descent,
+            )
             self.plan = result.rollout
             self.global_result = result
         else:
-            self.horizon = RecedingHorizon(self.pik, horizon_steps, self.dt, iterations=c.iterations,
-                                           tolerance=c.tolerance, method=c.descent)
+            self.horizon = RecedingHorizon(
+                self.pik, horizon_steps, self.dt, iterations=c.iterations, tolerance=c.tolerance, method=c.descent
+            )
         self._step = 0
 
     def wdot(self, first: int, steps: int) -> NDArray[np.float64]:
@@ -260,7 +307,7 @@ class PredictivePolicy(PerEnvPolicy):
         assert self._table is not None
         index = np.minimum(np.arange(first, first + steps) * self.substeps, len(self._table) - 1)
         wdot = np.zeros((steps, 6))
-        wdot[:, :self._width] = self._table[index, 6:6 + self._width]
+        wdot[:, : self._width] = self._table[index, 6 : 6 + self._width]
         return wdot
 
     # ------------------------------------------------------------------ step
@@ -281,7 +328,7 @@ class PredictivePolicy(PerEnvPolicy):
                 self.last_update = self.horizon.update(q, self.wdot(sample, self.horizon.steps))
             u = self.horizon.input_at(within * self.control_dt)
         row = self._table[min(k, len(self._table) - 1)]
-        qdot, self.last_error = self.pik.command(q, u, row[:self._width], row[6:6 + self._width], self._gain)
+        qdot, self.last_error = self.pik.command(q, u, row[: self._width], row[6 : 6 + self._width], self._gain)
         self._step += 1
         return np.clip(qdot / self._speeds, -1.0, 1.0).astype(np.float32)
 

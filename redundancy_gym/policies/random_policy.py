@@ -62,4 +62,3 @@ class RandomPolicy(PerEnvPolicy):
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
         """A uniform random action."""
         return self._rng.uniform(self._low, self._high).astype(self._dtype)
-

@@ -23,9 +23,9 @@ from typing import Any
 import numpy as np
 
 from .exceptions import PolicyError
-from .shipped_models import is_shipped_name, shipped_model_path
 from .options import env_name
 from .per_env_policy import Policy
+from .shipped_models import is_shipped_name, shipped_model_path
 
 __all__ = [
     "CAPABILITY_ATTRIBUTES",
@@ -59,8 +59,15 @@ CAPABILITY_ATTRIBUTES: dict[str, tuple[str, ...]] = {
     # a joint-velocity arm that reaches a grasp pose among observed obstacles (AgriReach)
     "grasp_task": ("observation_layout", "ROBOT_XML", "TCP_FRAME", "max_joint_speeds", "dt"),
     # a position-controlled floating-base biped with ankle wrench sensors and a speed command (BipedWalk)
-    "biped": ("OBSERVATION_LAYOUT", "ROBOT_XML", "SOFT_LIMIT_MARGIN", "joint_limits", "nominal_configuration",
-              "action_scale", "dt"),
+    "biped": (
+        "OBSERVATION_LAYOUT",
+        "ROBOT_XML",
+        "SOFT_LIMIT_MARGIN",
+        "joint_limits",
+        "nominal_configuration",
+        "action_scale",
+        "dt",
+    ),
     # from the outermost action space
     "box_action": (),
     "bounded_action": (),
@@ -70,8 +77,11 @@ CAPABILITY_ATTRIBUTES: dict[str, tuple[str, ...]] = {
 _LAYOUT_KEYS: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "tcp_tracking": ("OBSERVATION_LAYOUT", "layout", ("q", "tcp_ref", "tcp_ref_vel")),
     "grasp_task": ("observation_layout", "layout", ("q", "grasp_position")),
-    "biped": ("OBSERVATION_LAYOUT", "layout", ("base_position", "q", "base_linear_velocity", "qdot", "right_force",
-                                               "left_torque", "command")),
+    "biped": (
+        "OBSERVATION_LAYOUT",
+        "layout",
+        ("base_position", "q", "base_linear_velocity", "qdot", "right_force", "left_torque", "command"),
+    ),
 }
 
 
@@ -145,8 +155,9 @@ def register(name: str, kind: str, implementations: Iterable[Implementation], su
     for impl in implementations:
         unknown = sorted(impl.capabilities - set(CAPABILITY_ATTRIBUTES))
         if unknown:
-            raise PolicyError(f"unknown capability {', '.join(unknown)} of {kind} {name!r}; valid: "
-                              f"{', '.join(CAPABILITY_ATTRIBUTES)}")
+            raise PolicyError(
+                f"unknown capability {', '.join(unknown)} of {kind} {name!r}; valid: {', '.join(CAPABILITY_ATTRIBUTES)}"
+            )
     _REGISTRY[name] = RegistryEntry(name, kind, implementations, summary)
     _registered_support.cache_clear()
 
@@ -171,8 +182,11 @@ def action_wrapper(env: Any) -> Any:
     package), or None."""
     current, seen = env, 0
     while current is not None and seen < 64:
-        if "CAPABILITIES" in type(current).__dict__ and hasattr(current, "env") and current is not getattr(
-                current, "unwrapped", current):
+        if (
+            "CAPABILITIES" in type(current).__dict__
+            and hasattr(current, "env")
+            and current is not getattr(current, "unwrapped", current)
+        ):
             return current
         nxt = getattr(current, "env", None)
         current, seen = (nxt if nxt is not current else None), seen + 1
@@ -279,28 +293,35 @@ def supported_env_ids(name: str, kind: str = "policy") -> tuple[str, ...]:
     return tuple(env_id for env_id, caps in _registered_support().items() if entry.implementation_for(caps))
 
 
-def unsupported_error(name: str, env: Any, missing: list[str], kind: str = "policy",
-                      error: type[Exception] = PolicyError) -> Exception:
+def unsupported_error(
+    name: str, env: Any, missing: list[str], kind: str = "policy", error: type[Exception] = PolicyError
+) -> Exception:
     """The error for a policy or wrapper on an env that lacks ``missing``: it names the registered envs that are
     supported and what an env of one's own must declare."""
     if hasattr(env, "num_envs"):  # a VecEnv that is not a plain DummyVecEnv
-        return error(f"{kind} {name!r} is built from one env, got the VecEnv {type(env).__name__}: pass one "
-                     "of its envs (e.g. gym.make(env_id))" + ("; the policy then takes the VecEnv's batches"
-                                                              if kind == "policy" else ""))
+        return error(
+            f"{kind} {name!r} is built from one env, got the VecEnv {type(env).__name__}: pass one "
+            "of its envs (e.g. gym.make(env_id))"
+            + ("; the policy then takes the VecEnv's batches" if kind == "policy" else "")
+        )
     entry = lookup(name, kind, error)
     ids = supported_env_ids(name, kind)
     supports = ", ".join(ids) if ids else "no registered env"
     wrapper = action_wrapper(env)
     if wrapper is not None:  # the env offers what the policy needs, but its action is now the wrapper's
         offered = ", ".join(e.name for e in registered("policy") if not missing_capabilities(e.name, env))
-        return error(f"{kind} {name!r} supports {supports}; got {env_name(env)}, which is in the action wrapper "
-                     f"{type(wrapper).__name__}: its action is the wrapper's, so it takes {offered} or an SB3 .zip "
-                     "(build the policy on the env without the wrapper)")
+        return error(
+            f"{kind} {name!r} supports {supports}; got {env_name(env)}, which is in the action wrapper "
+            f"{type(wrapper).__name__}: its action is the wrapper's, so it takes {offered} or an SB3 .zip "
+            "(build the policy on the env without the wrapper)"
+        )
     base = getattr(env, "unwrapped", env)
-    return error(f"{kind} {name!r} supports {supports}; got {env_name(env)} (for an env of your own: "
-                 f"{type(base).__name__} lacks the capabilities {', '.join(missing)}; {name!r} needs "
-                 f"{entry.supports}, declared in CAPABILITIES with the attributes listed in "
-                 "redundancy_gym.policies.CAPABILITY_ATTRIBUTES)")
+    return error(
+        f"{kind} {name!r} supports {supports}; got {env_name(env)} (for an env of your own: "
+        f"{type(base).__name__} lacks the capabilities {', '.join(missing)}; {name!r} needs "
+        f"{entry.supports}, declared in CAPABILITIES with the attributes listed in "
+        "redundancy_gym.policies.CAPABILITY_ATTRIBUTES)"
+    )
 
 
 def _one_env(env: Any) -> Any:
@@ -337,8 +358,9 @@ def build(name: str, kind: str, env: Any, kwargs: dict[str, Any], error: type[Ex
     problems = capability_problems(env, impl.capabilities)
     if problems:
         base = getattr(env, "unwrapped", env)
-        raise error(f"{type(base).__name__} declares {', '.join(sorted(impl.capabilities))} but lacks "
-                    f"{', '.join(problems)}")
+        raise error(
+            f"{type(base).__name__} declares {', '.join(sorted(impl.capabilities))} but lacks {', '.join(problems)}"
+        )
     return impl.load()(env, **impl.fixed, **kwargs)
 
 
@@ -381,51 +403,102 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
         raise PolicyError(f"invalid option for the {name} policy: {exc}") from exc
 
 
-def _policy(capabilities: Iterable[str], entry_point: str, options: str | None = None,
-            **fixed: Any) -> Implementation:
-    return Implementation(frozenset(capabilities), f"redundancy_gym.policies.{entry_point}",
-                          None if options is None else f"redundancy_gym.policies.{options}", fixed)
+def _policy(capabilities: Iterable[str], entry_point: str, options: str | None = None, **fixed: Any) -> Implementation:
+    return Implementation(
+        frozenset(capabilities),
+        f"redundancy_gym.policies.{entry_point}",
+        None if options is None else f"redundancy_gym.policies.{options}",
+        fixed,
+    )
 
 
 # The built-in policies and wrappers, by name (entry points are strings: nothing is imported until it is built).
-register("clik", "policy", (
-    _policy({"tcp_tracking"}, "clik_policy:ClikPolicy", "clik_policy:ClikPolicyConfig"),
-    _policy({"grasp_task"}, "grasp_clik_policy:GraspClikPolicy", "grasp_clik_policy:GraspClikConfig"),
-), "CLIK (5.14) on the env's task with nullspace joint-limit and collision avoidance")
-register("walking", "policy", (
-    _policy({"biped"}, "walking_policy:WalkingPolicy", "walking_policy:WalkingPolicyConfig"),
-), "DCM walking pattern, stabilizer, step adjustment and whole-body CLIK")
-for _mode, _summary in (("predictive", "receding-horizon predictive IK (algorithm 12)"),
-                        ("global", "predictive IK over the whole episode, planned once")):
-    register(_mode, "policy", (
-        _policy({"tcp_tracking", "tcp_reference"}, "predictive_policy:PredictivePolicy",
-                "predictive_policy:PredictivePolicyConfig", mode=_mode),
-        _policy({"grasp_task"}, "predictive_policy:PredictivePolicy", "predictive_policy:PredictivePolicyConfig",
-                mode=_mode),
-    ), _summary)
+register(
+    "clik",
+    "policy",
+    (
+        _policy({"tcp_tracking"}, "clik_policy:ClikPolicy", "clik_policy:ClikPolicyConfig"),
+        _policy({"grasp_task"}, "grasp_clik_policy:GraspClikPolicy", "grasp_clik_policy:GraspClikConfig"),
+    ),
+    "CLIK (5.14) on the env's task with nullspace joint-limit and collision avoidance",
+)
+register(
+    "walking",
+    "policy",
+    (_policy({"biped"}, "walking_policy:WalkingPolicy", "walking_policy:WalkingPolicyConfig"),),
+    "DCM walking pattern, stabilizer, step adjustment and whole-body CLIK",
+)
+for _mode, _summary in (
+    ("predictive", "receding-horizon predictive IK (algorithm 12)"),
+    ("global", "predictive IK over the whole episode, planned once"),
+):
+    register(
+        _mode,
+        "policy",
+        (
+            _policy(
+                {"tcp_tracking", "tcp_reference"},
+                "predictive_policy:PredictivePolicy",
+                "predictive_policy:PredictivePolicyConfig",
+                mode=_mode,
+            ),
+            _policy(
+                {"grasp_task"},
+                "predictive_policy:PredictivePolicy",
+                "predictive_policy:PredictivePolicyConfig",
+                mode=_mode,
+            ),
+        ),
+        _summary,
+    )
 register("zero", "policy", (_policy({"box_action"}, "zero_policy:ZeroPolicy"),), "always the zero action")
-register("random", "policy", (
-    _policy({"bounded_action"}, "random_policy:RandomPolicy", "random_policy:RandomPolicyConfig"),
-), "uniform random actions from a seeded generator")
+register(
+    "random",
+    "policy",
+    (_policy({"bounded_action"}, "random_policy:RandomPolicy", "random_policy:RandomPolicyConfig"),),
+    "uniform random actions from a seeded generator",
+)
 
 POLICY_NAMES: tuple[str, ...] = tuple(e.name for e in registered("policy"))
 """The built-in policy names."""
 
 
 def _wrapper(capability_sets: Iterable[Iterable[str]], module: str, name: str) -> tuple[Implementation, ...]:
-    return tuple(Implementation(frozenset(caps), f"redundancy_gym.wrappers.{module}:{name}",
-                                f"redundancy_gym.wrappers.{module}:{name}Config") for caps in capability_sets)
+    return tuple(
+        Implementation(
+            frozenset(caps),
+            f"redundancy_gym.wrappers.{module}:{name}",
+            f"redundancy_gym.wrappers.{module}:{name}Config",
+        )
+        for caps in capability_sets
+    )
 
 
 _ARMS = ({"tcp_tracking"}, {"grasp_task"})
-register("task_space", "wrapper", _wrapper(_ARMS, "task_space_action", "TaskSpaceAction"),
-         "the action is a TCP velocity; CLIK with joint-limit and collision avoidance moves the joints")
-register("nullspace", "wrapper", _wrapper(_ARMS, "nullspace_action", "NullspaceAction"),
-         "CLIK tracks the env's reference; the action is the nullspace input u of (5.100)")
-register("residual", "wrapper", _wrapper((*_ARMS, {"biped"}), "residual_action", "ResidualAction"),
-         "the action is a bounded correction added to the reference policy's")
-register("walking_command", "wrapper", _wrapper(({"biped"},), "walking_command_action", "WalkingCommandAction"),
-         "the action is the walking velocity and yaw rate; the walking reference moves the joints")
+register(
+    "task_space",
+    "wrapper",
+    _wrapper(_ARMS, "task_space_action", "TaskSpaceAction"),
+    "the action is a TCP velocity; CLIK with joint-limit and collision avoidance moves the joints",
+)
+register(
+    "nullspace",
+    "wrapper",
+    _wrapper(_ARMS, "nullspace_action", "NullspaceAction"),
+    "CLIK tracks the env's reference; the action is the nullspace input u of (5.100)",
+)
+register(
+    "residual",
+    "wrapper",
+    _wrapper((*_ARMS, {"biped"}), "residual_action", "ResidualAction"),
+    "the action is a bounded correction added to the reference policy's",
+)
+register(
+    "walking_command",
+    "wrapper",
+    _wrapper(({"biped"},), "walking_command_action", "WalkingCommandAction"),
+    "the action is the walking velocity and yaw rate; the walking reference moves the joints",
+)
 
 WRAPPER_NAMES: tuple[str, ...] = tuple(e.name for e in registered("wrapper"))
 """The built-in wrapper names."""

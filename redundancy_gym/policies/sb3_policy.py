@@ -58,11 +58,17 @@ class Sb3Policy:
             here = getattr(env, f"{kind}_space", None)
             shapes = (getattr(trained, "shape", None), getattr(here, "shape", None))
             if None not in shapes and shapes[0] != shapes[1]:
-                raise PolicyError(f"{path} was trained with {kind} shape {shapes[0]}, but {env_name(env)} has "
-                                  f"{shapes[1]}: it was trained on another env (or other env kwargs)")
+                raise PolicyError(
+                    f"{path} was trained with {kind} shape {shapes[0]}, but {env_name(env)} has "
+                    f"{shapes[1]}: it was trained on another env (or other env kwargs)"
+                )
 
-    def predict(self, observation: NDArray[np.floating], state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[NDArray[np.floating], Any]:
+    def predict(
+        self,
+        observation: NDArray[np.floating],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.floating], Any]:
         """The SB3 model's action."""
         return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
-

@@ -9,8 +9,15 @@ from typing import Any
 
 from .exceptions import PolicyError
 
-__all__ = ["ACTIONS", "LEARNERS", "SHIPPED_MODELS_DIR", "env_slug", "is_shipped_name", "shipped_model_path",
-           "shipped_models"]
+__all__ = [
+    "ACTIONS",
+    "LEARNERS",
+    "SHIPPED_MODELS_DIR",
+    "env_slug",
+    "is_shipped_name",
+    "shipped_model_path",
+    "shipped_models",
+]
 
 SHIPPED_MODELS_DIR = Path(__file__).resolve().parents[2] / "baselines" / "models"
 """Where the trained baselines live: ``baselines/models/`` of the source checkout (``make baselines`` writes it)."""
@@ -50,13 +57,13 @@ def _check_action_space(name: str, env: Any) -> None:
     if env_id not in BASE_ENV_IDS and env_id not in WRAPPED_ENV_IDS:
         return  # an env built outside the registry: nothing to compare against
     action = name.split("-", 1)[1]
-    base = next((b for b in BASE_ENV_IDS if b == env_id or env_id in (wrapped_env_id(b, a) for a in ACTIONS)),
-                env_id)
+    base = next((b for b in BASE_ENV_IDS if b == env_id or env_id in (wrapped_env_id(b, a) for a in ACTIONS)), env_id)
     expected = base if action == "joint" else wrapped_env_id(base, action)
     if expected is not None and env_id != expected:
         where = "the raw env" if action == "joint" else f"--wrapper {action}"
-        raise PolicyError(f"{name} acts in the {action} action space: evaluate it on {expected} ({where}), "
-                          f"not on {env_id}")
+        raise PolicyError(
+            f"{name} acts in the {action} action space: evaluate it on {expected} ({where}), not on {env_id}"
+        )
 
 
 def shipped_model_path(name: str, env: Any) -> Path:
@@ -70,7 +77,12 @@ def shipped_model_path(name: str, env: Any) -> Path:
     if path.is_file():
         _check_action_space(name, env)
         return path
-    available = ", ".join(shipped_models()) or f"none ({SHIPPED_MODELS_DIR} is empty or absent: the models ship " \
-                                                "with the source checkout; `make baselines` trains them)"
-    raise PolicyError(f"no shipped model {name!r} for {type(getattr(env, 'unwrapped', env)).__name__} "
-                      f"({path.name}); shipped: {available}")
+    available = (
+        ", ".join(shipped_models())
+        or f"none ({SHIPPED_MODELS_DIR} is empty or absent: the models ship "
+        "with the source checkout; `make baselines` trains them)"
+    )
+    raise PolicyError(
+        f"no shipped model {name!r} for {type(getattr(env, 'unwrapped', env)).__name__} "
+        f"({path.name}); shipped: {available}"
+    )

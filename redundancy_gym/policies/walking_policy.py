@@ -8,7 +8,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..controllers.walking import WalkingIkdConfig
 from ..controllers.walking import (
     GaitConfig,
     RcaConfig,
@@ -18,6 +17,7 @@ from ..controllers.walking import (
     WalkingCommand,
     WalkingController,
     WalkingIkConfig,
+    WalkingIkdConfig,
 )
 from ..geometry import SSV
 from ..model import RobotModel
@@ -123,8 +123,19 @@ class WalkingPolicy(PerEnvPolicy):
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
         self.config = config_from_options(WalkingPolicyConfig, kwargs)
-        base = env_with_attributes(env, ("OBSERVATION_LAYOUT", "ROBOT_XML", "SOFT_LIMIT_MARGIN", "joint_limits",
-                                         "nominal_configuration", "action_scale", "dt"), "walking")
+        base = env_with_attributes(
+            env,
+            (
+                "OBSERVATION_LAYOUT",
+                "ROBOT_XML",
+                "SOFT_LIMIT_MARGIN",
+                "joint_limits",
+                "nominal_configuration",
+                "action_scale",
+                "dt",
+            ),
+            "walking",
+        )
         layout = base.OBSERVATION_LAYOUT
         needed = ("base_position", "q", "qdot", "right_force", "left_torque", "command")
         if any(k not in layout for k in needed):
@@ -145,27 +156,57 @@ class WalkingPolicy(PerEnvPolicy):
         if c.step_min_width > c.step_max_width:  # StepAdjusterConfig checks it too, without the options' names
             raise PolicyError(f"step_min_width={c.step_min_width!r} exceeds step_max_width={c.step_max_width!r} [m]")
         try:
-            gait = GaitConfig(step_duration=c.step_duration, com_height=c.com_height,
-                              min_step_duration=min(GaitConfig.min_step_duration, c.step_duration))
-            gains = StabilizerGains(dcm=c.dcm_gain, zmp=c.zmp_gain, com=c.com_gain) if c.stabilizer \
+            gait = GaitConfig(
+                step_duration=c.step_duration,
+                com_height=c.com_height,
+                min_step_duration=min(GaitConfig.min_step_duration, c.step_duration),
+            )
+            gains = (
+                StabilizerGains(dcm=c.dcm_gain, zmp=c.zmp_gain, com=c.com_gain)
+                if c.stabilizer
                 else StabilizerGains(dcm=0.0, zmp=0.0, com=0.0)
-            ik = WalkingIkConfig(gamma=c.gamma, beta=c.beta, momentum_minimization=c.momentum_minimization,
-                                 self_collision_weight=c.self_collision_weight,
-                                 self_collision_activation=c.self_collision_activation,
-                                 self_collision_slope=c.self_collision_slope, backend=c.backend)
+            )
+            ik = WalkingIkConfig(
+                gamma=c.gamma,
+                beta=c.beta,
+                momentum_minimization=c.momentum_minimization,
+                self_collision_weight=c.self_collision_weight,
+                self_collision_activation=c.self_collision_activation,
+                self_collision_slope=c.self_collision_slope,
+                backend=c.backend,
+            )
             stepping = StepAdjusterConfig(
-                enabled=c.push_recovery, min_remaining=c.step_min_remaining,
-                max_forward=c.step_max_forward, max_backward=c.step_max_backward, min_width=c.step_min_width,
-                max_width=c.step_max_width)
-            ssta = SstaConfig(clearance=c.obstacle_clearance, step_height=gait.step_height,
-                              max_step_length=gait.max_step_length, toe_length=gait.toe_length,
-                              step_over_single=c.step_over_duration or None)
+                enabled=c.push_recovery,
+                min_remaining=c.step_min_remaining,
+                max_forward=c.step_max_forward,
+                max_backward=c.step_max_backward,
+                min_width=c.step_min_width,
+                max_width=c.step_max_width,
+            )
+            ssta = SstaConfig(
+                clearance=c.obstacle_clearance,
+                step_height=gait.step_height,
+                max_step_length=gait.max_step_length,
+                toe_length=gait.toe_length,
+                step_over_single=c.step_over_duration or None,
+            )
             self.controller = WalkingController(
-                self.model, float(base.dt), np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
-                np.asarray(upper) - base.SOFT_LIMIT_MARGIN, gait=gait, gains=gains, ik=ik, stepping=stepping,
-                correction_iterations=c.correction_iterations, ssta=ssta, rca=RcaConfig(),
-                use_ssta=c.ssta, use_rca=c.rca, correction_configuration=self._nominal,
-                ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None)
+                self.model,
+                float(base.dt),
+                np.asarray(lower) + base.SOFT_LIMIT_MARGIN,
+                np.asarray(upper) - base.SOFT_LIMIT_MARGIN,
+                gait=gait,
+                gains=gains,
+                ik=ik,
+                stepping=stepping,
+                correction_iterations=c.correction_iterations,
+                ssta=ssta,
+                rca=RcaConfig(),
+                use_ssta=c.ssta,
+                use_rca=c.rca,
+                correction_configuration=self._nominal,
+                ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None,
+            )
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc
         self.last_command: WalkingCommand | None = None

@@ -21,4 +21,3 @@ class ZeroPolicy(PerEnvPolicy):
 
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[Any]:
         return self._action.copy()
-

@@ -32,7 +32,6 @@ against it.
 
 from __future__ import annotations
 
-import json
 import math
 import textwrap
 import time
@@ -49,10 +48,10 @@ from numpy.typing import NDArray  # noqa: E402
 from tqdm.auto import tqdm  # noqa: E402
 
 from ..assets import BIPED_JOINTS, BIPED_SOFT_LIMIT_MARGIN, BIPED_XML  # noqa: E402
-from ..controllers.objectives.actuated_objective import ActuatedObjective  # noqa: E402
 from ..controllers.ikd.biped_ikd import GRAVITY, BipedIkd, BipedIkdReference  # noqa: E402
 from ..controllers.ikd.error_compensation import ErrorCompensation  # noqa: E402
 from ..controllers.ikd.plan_stabilizer import PlanStabilizer  # noqa: E402
+from ..controllers.objectives.actuated_objective import ActuatedObjective  # noqa: E402
 from ..controllers.objectives.joint_limit_objective import JointLimitObjective  # noqa: E402
 from ..controllers.objectives.posture_objective import PostureObjective  # noqa: E402
 from ..controllers.walking import (  # noqa: E402
@@ -65,14 +64,22 @@ from ..controllers.walking import (  # noqa: E402
     WholeBodyReference,
 )
 from ..envs.biped_walk import NOMINAL_POSTURE  # noqa: E402
-from ..model import RobotModel  # noqa: E402
 from ..eval.json_writer import write_json  # noqa: E402
 from ..eval.machine import machine_info  # noqa: E402
-from .exceptions import StudyError  # noqa: E402
 from ..eval.plots import save_figure  # noqa: E402
+from ..model import RobotModel  # noqa: E402
+from .exceptions import StudyError  # noqa: E402
 
-__all__ = ["IkdStudy", "IkdStudyConfig", "IkdWalk", "contact_wrench", "format_ikd_study", "plot_ikd_study",
-           "run_ikd_study", "write_ikd_study"]
+__all__ = [
+    "IkdStudy",
+    "IkdStudyConfig",
+    "IkdWalk",
+    "contact_wrench",
+    "format_ikd_study",
+    "plot_ikd_study",
+    "run_ikd_study",
+    "write_ikd_study",
+]
 
 FEET = ("r_sole", "l_sole")
 SOLE_X = (-0.095, 0.165)
@@ -199,16 +206,28 @@ class IkdStudy:
             gain = float(feedback.gain or 0.0)
             kp = gain * 40.0 / c.period
             for name, walk in (("moment", feedback), ("hybrid", hybrid)):
-                sweep.append({"k": gain, "kp_per_s2": kp, "kd_per_s": 2.0 * 0.85 * math.sqrt(kp),
-                              "stabilization": name, **_summary(walk, self.step_ends)})
+                sweep.append(
+                    {
+                        "k": gain,
+                        "kp_per_s2": kp,
+                        "kd_per_s": 2.0 * 0.85 * math.sqrt(kp),
+                        "stabilization": name,
+                        **_summary(walk, self.step_ends),
+                    }
+                )
         distances = _distance_after_steps(self.unstabilized, self.step_ends)
         return {
             "config": {**asdict(c), "gains": list(c.gains)},
-            "walk": {"duration_s": self.step_ends[-1], "step_ends_s": list(self.step_ends),
-                     "periods": int(round(self.step_ends[-1] / c.period))},
+            "walk": {
+                "duration_s": self.step_ends[-1],
+                "step_ends_s": list(self.step_ends),
+                "periods": int(round(self.step_ends[-1] / c.period)),
+            },
             "pendulum_bound_kp_per_s2": GRAVITY / GaitConfig().com_height,
-            "fig_5_21_unstabilized": {"com_distance_after_step_m": distances, **_summary(self.unstabilized,
-                                                                                          self.step_ends)},
+            "fig_5_21_unstabilized": {
+                "com_distance_after_step_m": distances,
+                **_summary(self.unstabilized, self.step_ends),
+            },
             "k_sweep": sweep,
             "fig_5_27_comparison": {
                 "plan_clik": _summary(self.clik, self.step_ends),
@@ -221,8 +240,9 @@ class IkdStudy:
 
 
 # ---------------------------------------------------------------------------------------------- inverse dynamics
-def contact_wrench(model: RobotModel, q: NDArray[np.float64], qdot: NDArray[np.float64],
-                   qddot: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def contact_wrench(
+    model: RobotModel, q: NDArray[np.float64], qdot: NDArray[np.float64], qddot: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The ground's wrench that the motion ``(q, qdot, qddot)`` of the floating-base ``model`` needs: ``(force [N],
     moment [N m] about the world origin)``, from the base rows of ``tau = M qddot + h`` (a spatial force in the base
     frame at its origin, pinocchio's free flyer: position ``q[:3]``, quaternion ``q[3:7]`` as x, y, z, w)."""
@@ -235,9 +255,13 @@ def contact_wrench(model: RobotModel, q: NDArray[np.float64], qdot: NDArray[np.f
 
 def _quaternion_matrix(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
     x, y, z, w = quaternion / np.linalg.norm(quaternion)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _cop(force: NDArray[np.float64], moment: NDArray[np.float64], ground: float) -> NDArray[np.float64]:
@@ -268,8 +292,15 @@ class _Walk:
         feet = np.array([model.frame_position(f) for f in FEET])
         rotations = np.array([model.frame_rotation(f) for f in FEET])
         com = model.com()
-        stand = WholeBodyReference(np.array([com[0], com[1], float(feet[:, 2].mean()) + gait.com_height]),
-                                   np.zeros(3), feet, rotations, np.zeros((2, 6)), np.eye(3), np.zeros(3)).to_array()
+        stand = WholeBodyReference(
+            np.array([com[0], com[1], float(feet[:, 2].mean()) + gait.com_height]),
+            np.zeros(3),
+            feet,
+            rotations,
+            np.zeros((2, 6)),
+            np.eye(3),
+            np.zeros(3),
+        ).to_array()
         solver = self.clik()
         for _ in range(20):
             q = solver.step(q, stand, stand, h).q
@@ -287,12 +318,15 @@ class _Walk:
         self.count = int(round(pattern.step_start(config.steps) / h))
         self.step_ends = tuple(pattern.step_start(k + 1) for k in range(config.steps))
         # each sample's ZMP is the reference ZMP that the whole body should have (the plan's own without a correction)
-        self.samples: list[PatternSample] = [replace(sample, zmp=pattern.reference_zmp(n * h).copy())
-                                             for n, sample in ((n, pattern.sample(n * h))
-                                                               for n in range(self.count + 1))]
+        self.samples: list[PatternSample] = [
+            replace(sample, zmp=pattern.reference_zmp(n * h).copy())
+            for n, sample in ((n, pattern.sample(n * h)) for n in range(self.count + 1))
+        ]
         self.ground = pattern.ground
-        self.windows = {k: (pattern.step_start(k) + pattern.step_single(k), pattern.step_start(k + 1))
-                        for k in range(config.steps + 1)}
+        self.windows = {
+            k: (pattern.step_start(k) + pattern.step_single(k), pattern.step_start(k + 1))
+            for k in range(config.steps + 1)
+        }
         self.ideal = np.array([self.force * np.array([s.zmp[1], -s.zmp[0]]) for s in self.samples])
         self.support = np.array([_support(s) for s in self.samples])
         self.double_support = np.array([all(s.contact) for s in self.samples])
@@ -302,18 +336,26 @@ class _Walk:
         """The walking controller's CLIK (its default gains, posture and joint-limit objectives; self-collision,
         which straight walking does not activate, left out), compiled."""
         model = self.model
-        objectives = (ActuatedObjective(PostureObjective(self._posture, 1.0), model),
-                      ActuatedObjective(JointLimitObjective(*self._limits, activation_distance=0.15, slope=2.0,
-                                                            weight=1.0), model))
-        return CompiledWholeBodyIk(WholeBodyIk(model, feet_frames=FEET, gain=100.0, gamma=0.008, beta=10.0,
-                                               objectives=objectives))
+        objectives = (
+            ActuatedObjective(PostureObjective(self._posture, 1.0), model),
+            ActuatedObjective(
+                JointLimitObjective(*self._limits, activation_distance=0.15, slope=2.0, weight=1.0), model
+            ),
+        )
+        return CompiledWholeBodyIk(
+            WholeBodyIk(model, feet_frames=FEET, gain=100.0, gamma=0.008, beta=10.0, objectives=objectives)
+        )
 
 
 def _support(sample: PatternSample) -> NDArray[np.float64]:
     """The bounding box of the soles planned on the ground ``((x_min, y_min), (x_max, y_max))`` [m]."""
     feet = [f for f, on in zip(sample.feet, sample.contact, strict=True) if on]
-    return np.array([np.min([[f[0] + SOLE_X[0], f[1] - SOLE_HALF_WIDTH] for f in feet], axis=0),
-                     np.max([[f[0] + SOLE_X[1], f[1] + SOLE_HALF_WIDTH] for f in feet], axis=0)])
+    return np.array(
+        [
+            np.min([[f[0] + SOLE_X[0], f[1] - SOLE_HALF_WIDTH] for f in feet], axis=0),
+            np.max([[f[0] + SOLE_X[1], f[1] + SOLE_HALF_WIDTH] for f in feet], axis=0),
+        ]
+    )
 
 
 def _pitch(angle: float) -> NDArray[np.float64]:
@@ -329,9 +371,15 @@ def _feet_twist(sample: PatternSample) -> NDArray[np.float64]:
 
 def _clik_reference(sample: PatternSample) -> NDArray[np.float64]:
     """The CLIK's packed reference of a straight-walking sample: the plan's CoM, soles pitched, torso upright."""
-    return WholeBodyReference(sample.com.copy(), sample.com_velocity.copy(), sample.feet.copy(),
-                              np.array([_pitch(a) for a in sample.feet_pitch]), _feet_twist(sample), np.eye(3),
-                              np.zeros(3)).to_array()
+    return WholeBodyReference(
+        sample.com.copy(),
+        sample.com_velocity.copy(),
+        sample.feet.copy(),
+        np.array([_pitch(a) for a in sample.feet_pitch]),
+        _feet_twist(sample),
+        np.eye(3),
+        np.zeros(3),
+    ).to_array()
 
 
 class _Recorder:
@@ -341,8 +389,13 @@ class _Recorder:
         self.walk = walk
         self.rows: dict[str, list[Any]] = {k: [] for k in ("moment", "inverse_dynamics_moment", "com", "cop")}
 
-    def add(self, moment: NDArray[np.float64], force: NDArray[np.float64], id_moment: NDArray[np.float64],
-            com: NDArray[np.float64]) -> None:
+    def add(
+        self,
+        moment: NDArray[np.float64],
+        force: NDArray[np.float64],
+        id_moment: NDArray[np.float64],
+        com: NDArray[np.float64],
+    ) -> None:
         self.rows["moment"].append(moment[:2].copy())
         self.rows["inverse_dynamics_moment"].append(id_moment[:2].copy())
         self.rows["com"].append(com[:2].copy())
@@ -352,9 +405,21 @@ class _Recorder:
         w = self.walk
         n = len(self.rows["moment"])
         arrays = {k: np.array(v, dtype=np.float64).reshape(n, 2) for k, v in self.rows.items()}
-        return IkdWalk(label, np.arange(n) * w.period, arrays["moment"], arrays["inverse_dynamics_moment"],
-                       w.ideal[:n].copy(), arrays["com"], np.array([s.com[:2] for s in w.samples[:n]]).reshape(n, 2),
-                       arrays["cop"], w.support[:n].copy(), w.double_support[:n].copy(), completed, gain, planning)
+        return IkdWalk(
+            label,
+            np.arange(n) * w.period,
+            arrays["moment"],
+            arrays["inverse_dynamics_moment"],
+            w.ideal[:n].copy(),
+            arrays["com"],
+            np.array([s.com[:2] for s in w.samples[:n]]).reshape(n, 2),
+            arrays["cop"],
+            w.support[:n].copy(),
+            w.double_support[:n].copy(),
+            completed,
+            gain,
+            planning,
+        )
 
 
 # ---------------------------------------------------------------------------------------------- the runs
@@ -385,10 +450,18 @@ def _ikd_walk(walk: _Walk, gain: float, planning: bool, bar: Any) -> IkdWalk:
             plan += np.concatenate([out.com_offset, out.com_offset_rate])
         velocity = _feet_twist(sample)
         reference = BipedIkdReference(
-            sample.feet.copy(), np.array([_pitch(a) for a in sample.feet_pitch]), velocity,
-            (_feet_twist(ahead) - velocity) / h, np.eye(3), np.zeros(3), np.zeros(3),
-            np.array([sample.com[2], 0.0, 0.0]), walk.force * np.array([zmp[1], -zmp[0]]),
-            plan if gain > 0.0 else None, walk.support[n])
+            sample.feet.copy(),
+            np.array([_pitch(a) for a in sample.feet_pitch]),
+            velocity,
+            (_feet_twist(ahead) - velocity) / h,
+            np.eye(3),
+            np.zeros(3),
+            np.zeros(3),
+            np.array([sample.com[2], 0.0, 0.0]),
+            walk.force * np.array([zmp[1], -zmp[0]]),
+            plan if gain > 0.0 else None,
+            walk.support[n],
+        )
         result = ikd.step(q, qdot, reference)
         distance = float(np.linalg.norm(com[:2] - sample.com[:2]))
         if not result.success or distance > c.divergence:
@@ -432,12 +505,12 @@ def _clik_walks(walk: _Walk, bar: Any) -> tuple[IkdWalk, IkdWalk]:
         del q_plain[0], q_comp[0]
         bar.update(1)
     name = walk.config.plan_name
-    return (plain.done(f"{name}, CLIK", True),
-            compensated.done(f"{name} + error compensation (5.98), CLIK", True))
+    return (plain.done(f"{name}, CLIK", True), compensated.done(f"{name} + error compensation (5.98), CLIK", True))
 
 
-def _differenced_wrench(model: RobotModel, q: list[NDArray[np.float64]], h: float
-                        ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+def _differenced_wrench(
+    model: RobotModel, q: list[NDArray[np.float64]], h: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """The ground's wrench at ``q[1]`` for the motion through ``q[0], q[1], q[2]`` (central differences), and the
     CoM there."""
     before = model.difference(q[0], q[1]) / h
@@ -457,10 +530,18 @@ def run_ikd_study(config: IkdStudyConfig | None = None, *, progress: bool = True
         feedback = {k: _ikd_walk(walk, k, False, bar) for k in gains}
         hybrid = {k: _ikd_walk(walk, k, True, bar) for k in gains}
         clik, compensated = _clik_walks(walk, bar)
-    return IkdStudy(config, feedback[0.0] if 0.0 in feedback else _ikd_walk(walk, 0.0, False, _Null()),
-                    tuple(feedback[k] for k in config.gains), tuple(hybrid[k] for k in config.gains), clik,
-                    compensated, hybrid[config.comparison_gain], walk.step_ends, time.perf_counter() - began,
-                    machine_info())
+    return IkdStudy(
+        config,
+        feedback[0.0] if 0.0 in feedback else _ikd_walk(walk, 0.0, False, _Null()),
+        tuple(feedback[k] for k in config.gains),
+        tuple(hybrid[k] for k in config.gains),
+        clik,
+        compensated,
+        hybrid[config.comparison_gain],
+        walk.step_ends,
+        time.perf_counter() - began,
+        machine_info(),
+    )
 
 
 class _Null:
@@ -481,26 +562,32 @@ def _summary(walk: IkdWalk, step_ends: tuple[float, ...]) -> dict[str, Any]:
     error = walk.moment - walk.ideal_moment
     norm = np.linalg.norm(error, axis=1)
     distance = np.linalg.norm(walk.com - walk.plan_com, axis=1)
-    outside = np.maximum(np.maximum(walk.support[:, 0] - walk.cop, walk.cop - walk.support[:, 1]), 0.0).max(axis=1) \
-        if len(walk.time) else np.zeros(0)
+    outside = (
+        np.maximum(np.maximum(walk.support[:, 0] - walk.cop, walk.cop - walk.support[:, 1]), 0.0).max(axis=1)
+        if len(walk.time)
+        else np.zeros(0)
+    )
     scale = np.maximum(np.abs(walk.moment).max(axis=1), 1e-12) if len(walk.time) else np.zeros(0)
-    id_error = np.abs(walk.inverse_dynamics_moment - walk.moment).max(axis=1) / scale if len(walk.time) else \
-        np.zeros(0)
+    id_error = np.abs(walk.inverse_dynamics_moment - walk.moment).max(axis=1) / scale if len(walk.time) else np.zeros(0)
     total = float(norm.sum())
     return {
         "label": walk.label,
         "completed": walk.completed,
         "duration_s": float(len(walk.time) * (walk.time[1] - walk.time[0])) if len(walk.time) > 1 else 0.0,
         "moment_error_rms_nm": {"x": _rms(error[:, 0]), "y": _rms(error[:, 1]), "norm": _rms(norm)},
-        "moment_error_max_nm": {"x": float(np.abs(error[:, 0]).max(initial=0.0)),
-                                "y": float(np.abs(error[:, 1]).max(initial=0.0)), "norm": float(norm.max(initial=0.0))},
+        "moment_error_max_nm": {
+            "x": float(np.abs(error[:, 0]).max(initial=0.0)),
+            "y": float(np.abs(error[:, 1]).max(initial=0.0)),
+            "norm": float(norm.max(initial=0.0)),
+        },
         "modification_share_in_double_support": float(norm[walk.double_support].sum() / total) if total > 0.0 else 0.0,
         "com_distance_max_m": float(distance.max(initial=0.0)),
         "com_distance_final_m": float(distance[-1]) if distance.size else 0.0,
         "cop_outside_support_fraction": float(np.mean(outside > COP_TOLERANCE)) if outside.size else 0.0,
         "cop_outside_support_max_m": float(outside.max(initial=0.0)),
         "cop_margin_min_m": float(np.minimum(walk.cop - walk.support[:, 0], walk.support[:, 1] - walk.cop).min())
-        if len(walk.time) else 0.0,
+        if len(walk.time)
+        else 0.0,
         "inverse_dynamics_relative_error_max": float(id_error.max(initial=0.0)),
     }
 
@@ -526,30 +613,44 @@ def format_ikd_study(report: dict[str, Any]) -> str:
     lines = []
     fig = report["fig_5_21_unstabilized"]
     steps = ", ".join("-" if d is None else f"{1e3 * d:.1f}" for d in fig["com_distance_after_step_m"])
-    lines.append(f"fig. 5.21, IKD unstabilized: CoM distance from the plan after each step [mm]: {steps}"
-                 f" ({'walked' if fig['completed'] else 'stopped at'} {fig['duration_s']:.2f} s)")
+    lines.append(
+        f"fig. 5.21, IKD unstabilized: CoM distance from the plan after each step [mm]: {steps}"
+        f" ({'walked' if fig['completed'] else 'stopped at'} {fig['duration_s']:.2f} s)"
+    )
     lines.append("")
     lines.append("figs. 5.23/5.24, k sweep (moment error against the ideal [N m]; CoM distance from the plan [mm]):")
-    lines.append(f"{'k':>8} {'K_p':>6} {'stabilization':>13} {'walked':>7} {'rms T_x':>8} {'rms T_y':>8} {'max |dT|':>9}"
-                 f" {'in DS':>6} {'max dist':>9} {'ID rel.':>8}")
+    lines.append(
+        f"{'k':>8} {'K_p':>6} {'stabilization':>13} {'walked':>7} {'rms T_x':>8} {'rms T_y':>8} {'max |dT|':>9}"
+        f" {'in DS':>6} {'max dist':>9} {'ID rel.':>8}"
+    )
     for row in report["k_sweep"]:
         rms, peak = row["moment_error_rms_nm"], row["moment_error_max_nm"]
-        lines.append(f"{row['k']:>8g} {row['kp_per_s2']:>6.1f} {row['stabilization']:>13} {row['duration_s']:>6.2f}s"
-                     f" {rms['x']:>8.2f} {rms['y']:>8.2f} {peak['norm']:>9.2f} "
-                     f"{100 * row['modification_share_in_double_support']:>5.0f}% "
-                     f"{1e3 * row['com_distance_max_m']:>9.1f} {row['inverse_dynamics_relative_error_max']:>8.1e}")
+        lines.append(
+            f"{row['k']:>8g} {row['kp_per_s2']:>6.1f} {row['stabilization']:>13} {row['duration_s']:>6.2f}s"
+            f" {rms['x']:>8.2f} {rms['y']:>8.2f} {peak['norm']:>9.2f} "
+            f"{100 * row['modification_share_in_double_support']:>5.0f}% "
+            f"{1e3 * row['com_distance_max_m']:>9.1f} {row['inverse_dynamics_relative_error_max']:>8.1e}"
+        )
     lines.append("")
-    lines.append("fig. 5.27, moment by inverse dynamics against the ideal [N m]; the CoP against the support box "
-                 "(the soles' bounding box):")
-    lines.append(f"{'method':>26} {'rms T_x':>8} {'rms T_y':>8} {'max T_x':>8} {'max T_y':>8} {'CoP out':>8}"
-                 f" {'by [mm]':>8} {'min margin [mm]':>16}")
+    lines.append(
+        "fig. 5.27, moment by inverse dynamics against the ideal [N m]; the CoP against the support box "
+        "(the soles' bounding box):"
+    )
+    lines.append(
+        f"{'method':>26} {'rms T_x':>8} {'rms T_y':>8} {'max T_x':>8} {'max T_y':>8} {'CoP out':>8}"
+        f" {'by [mm]':>8} {'min margin [mm]':>16}"
+    )
     for name, row in report["fig_5_27_comparison"].items():
         rms, peak = row["moment_error_rms_nm"], row["moment_error_max_nm"]
-        lines.append(f"{name:>26} {rms['x']:>8.2f} {rms['y']:>8.2f} {peak['x']:>8.2f} {peak['y']:>8.2f} "
-                     f"{100 * row['cop_outside_support_fraction']:>7.1f}% {1e3 * row['cop_outside_support_max_m']:>8.1f}"
-                     f" {1e3 * row['cop_margin_min_m']:>16.1f}")
-    lines.append(f"({report['walk']['periods']} periods of {1e3 * report['config']['period']:g} ms, "
-                 f"{report['wall_s']:.1f} s wall)")
+        lines.append(
+            f"{name:>26} {rms['x']:>8.2f} {rms['y']:>8.2f} {peak['x']:>8.2f} {peak['y']:>8.2f} "
+            f"{100 * row['cop_outside_support_fraction']:>7.1f}% {1e3 * row['cop_outside_support_max_m']:>8.1f}"
+            f" {1e3 * row['cop_margin_min_m']:>16.1f}"
+        )
+    lines.append(
+        f"({report['walk']['periods']} periods of {1e3 * report['config']['period']:g} ms, "
+        f"{report['wall_s']:.1f} s wall)"
+    )
     return "\n".join(lines)
 
 
@@ -621,17 +722,34 @@ def plot_ikd_study(study: IkdStudy, out_dir: str | Path, suffix: str = "") -> li
     axes[1].set_ylabel("CoM distance from the plan [mm]")
     axes[1].set_xlabel("time [s] (dots: step ends)")
     axes[1].grid(alpha=0.3, which="both")
-    axes[0].set_title(textwrap.fill(f"Kinematic IKD without stabilization drifts off the plan (fig. 5.21 analogue; "
-                                    f"{speed})", 90), fontsize=10)
+    axes[0].set_title(
+        textwrap.fill(f"Kinematic IKD without stabilization drifts off the plan (fig. 5.21 analogue; {speed})", 90),
+        fontsize=10,
+    )
     written.append(save_figure(fig, out / f"ikd_fig_5_21{suffix}.png"))
-    written.append(_moment_figure(study.moment_feedback, reference,
-                                  f"Contact moment, IKD stabilized via the contact moment (5.97) (fig. 5.23 analogue; "
-                                  f"{speed})", out / f"ikd_fig_5_23{suffix}.png"))
-    written.append(_moment_figure(study.hybrid, reference,
-                                  f"Contact moment, IKD hybrid: planning + contact moment (fig. 5.24 analogue; {speed})",
-                                  out / f"ikd_fig_5_24{suffix}.png"))
+    written.append(
+        _moment_figure(
+            study.moment_feedback,
+            reference,
+            f"Contact moment, IKD stabilized via the contact moment (5.97) (fig. 5.23 analogue; {speed})",
+            out / f"ikd_fig_5_23{suffix}.png",
+        )
+    )
+    written.append(
+        _moment_figure(
+            study.hybrid,
+            reference,
+            f"Contact moment, IKD hybrid: planning + contact moment (fig. 5.24 analogue; {speed})",
+            out / f"ikd_fig_5_24{suffix}.png",
+        )
+    )
     comparison = (study.clik, study.error_compensation, study.comparison)
-    written.append(_moment_figure(comparison, reference,
-                                  f"Contact moment by inverse dynamics against the ideal (fig. 5.27 analogue; {speed})",
-                                  out / f"ikd_fig_5_27{suffix}.png"))
+    written.append(
+        _moment_figure(
+            comparison,
+            reference,
+            f"Contact moment by inverse dynamics against the ideal (fig. 5.27 analogue; {speed})",
+            out / f"ikd_fig_5_27{suffix}.png",
+        )
+    )
     return written

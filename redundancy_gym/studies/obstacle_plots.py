@@ -21,8 +21,14 @@ from .. import make_policy  # noqa: E402
 from ..eval.evaluate import make_env  # noqa: E402
 from ..eval.plots import save_figure  # noqa: E402
 
-__all__ = ["FOOT_COLORS", "ObstacleTrace", "obstacle_windows", "plot_footholds_top_view", "plot_swing_trajectories",
-           "record_obstacle_walk"]
+__all__ = [
+    "FOOT_COLORS",
+    "ObstacleTrace",
+    "obstacle_windows",
+    "plot_footholds_top_view",
+    "plot_swing_trajectories",
+    "record_obstacle_walk",
+]
 
 _OBSTACLES = "redundancy_gym/BipedObstacles-v0"
 # sole extent around the sole point [m] (biped.xml: plate and toe boxes): 0.26 m long, 0.15 m wide
@@ -85,13 +91,16 @@ class ObstacleTrace:
 
 def _boxes_array(boxes: Any) -> NDArray[np.float64]:
     """``(b, 2, 3)`` array of ``(lower, upper)`` pairs or ObstacleBoxes."""
-    rows = [(np.asarray(b.lower), np.asarray(b.upper)) if hasattr(b, "lower") else (np.asarray(b[0]), np.asarray(b[1]))
-            for b in boxes]
+    rows = [
+        (np.asarray(b.lower), np.asarray(b.upper)) if hasattr(b, "lower") else (np.asarray(b[0]), np.asarray(b[1]))
+        for b in boxes
+    ]
     return np.asarray(rows, dtype=np.float64).reshape(-1, 2, 3)
 
 
-def record_obstacle_walk(course: str, seed: int = 0, duration: float | None = None,
-                         **policy_kwargs: Any) -> ObstacleTrace:
+def record_obstacle_walk(
+    course: str, seed: int = 0, duration: float | None = None, **policy_kwargs: Any
+) -> ObstacleTrace:
     """Walk BipedObstacles-v0 with the ``walking`` policy and keep what the obstacle figures need.
 
     The walk ends at termination (success, a fall) or truncation, when the pelvis passes the env's ``course_end``
@@ -116,8 +125,10 @@ def record_obstacle_walk(course: str, seed: int = 0, duration: float | None = No
         sites = (base.data.site("r_sole"), base.data.site("l_sole"))
         boxes = _boxes_array(o.bounding_box() for o in base.obstacles)
         steps = None if duration is None else int(round(duration / base.dt))
-        rows: dict[str, list[Any]] = {k: [] for k in ("time", "nominal", "planned", "reference", "measured",
-                                                      "planned_contact", "obstacle_contact")}
+        rows: dict[str, list[Any]] = {
+            k: []
+            for k in ("time", "nominal", "planned", "reference", "measured", "planned_contact", "obstacle_contact")
+        }
         offset = np.zeros(3)  # RCA's offset on the period-start reference: the last period's end offset
         plan_boxes = None
         last_step = -1
@@ -163,10 +174,18 @@ def record_obstacle_walk(course: str, seed: int = 0, duration: float | None = No
     finally:
         env.close()
     arrays = {k: np.asarray(v, dtype=bool if "contact" in k else np.float64) for k, v in rows.items()}
-    return ObstacleTrace(course=course, **arrays, footholds=footholds, nominal_footholds=nominal_footholds,
-                         obstacle_boxes=boxes, plan_boxes=plan_boxes, modifications=tuple(modifications),
-                         obstacle_contacts=int(info["obstacle_contacts"]), success=bool(info["is_success"]),
-                         fell=bool(info["fell"]))
+    return ObstacleTrace(
+        course=course,
+        **arrays,
+        footholds=footholds,
+        nominal_footholds=nominal_footholds,
+        obstacle_boxes=boxes,
+        plan_boxes=plan_boxes,
+        modifications=tuple(modifications),
+        obstacle_contacts=int(info["obstacle_contacts"]),
+        success=bool(info["is_success"]),
+        fell=bool(info["fell"]),
+    )
 
 
 def obstacle_windows(trace: ObstacleTrace) -> list[tuple[int, float, float]]:
@@ -180,7 +199,7 @@ def obstacle_windows(trace: ObstacleTrace) -> list[tuple[int, float, float]]:
             over |= (x + _SOLE_X[1] >= lower[0]) & (x + _SOLE_X[0] <= upper[0])
         over &= ~trace.planned_contact[:, foot]
         edges = np.flatnonzero(np.diff(np.r_[0, over.astype(np.int8), 0]))
-        for a, b in zip(edges[::2], edges[1::2]):
+        for a, b in zip(edges[::2], edges[1::2], strict=False):
             windows.append((foot, float(trace.time[a]), float(trace.time[b - 1])))
     return sorted(windows, key=lambda w: w[1])
 
@@ -193,8 +212,11 @@ def _describe(trace: ObstacleTrace) -> str:
         what = f"over, toe path at {100 * height:.1f} cm" if kind == "over" else f"around, {100 * lateral:+.1f} cm in y"
         parts.append(f"step {k} ({foot}): {what}")
     swings = "; ".join(parts) if parts else "no swing modified by SSTA"
-    contacts = f"{trace.obstacle_contacts} control steps with an obstacle contact" if trace.obstacle_contacts \
+    contacts = (
+        f"{trace.obstacle_contacts} control steps with an obstacle contact"
+        if trace.obstacle_contacts
         else "no obstacle contact"
+    )
     return f"SSTA: {swings}. {contacts}; success: {'yes' if trace.success else 'no'}"
 
 
@@ -207,16 +229,26 @@ def plot_swing_trajectories(trace: ObstacleTrace, path: str | Path, title: str) 
     fig, axes = plt.subplots(2, 1, figsize=(13, 7.5), sharex=True)
     t = trace.time
     windows = obstacle_windows(trace)
-    for axis, ax in zip((1, 2), axes):
+    for axis, ax in zip((1, 2), axes, strict=False):
         for foot, start, end in windows:
             ax.axvspan(start, end, color=FOOT_COLORS[foot], alpha=0.08, lw=0)
             for lower, upper in trace.obstacle_boxes:
                 lo, hi = (lower[axis], upper[axis])
-                ax.add_patch(Rectangle((start, lo), end - start, hi - lo, facecolor="0.55", edgecolor="0.3",
-                                       alpha=0.6, lw=0.8))
+                ax.add_patch(
+                    Rectangle((start, lo), end - start, hi - lo, facecolor="0.55", edgecolor="0.3", alpha=0.6, lw=0.8)
+                )
                 if axis == 1:  # where the sole point must not be: the box grown by the half sole width
-                    ax.add_patch(Rectangle((start, lo - _SOLE_Y), end - start, hi - lo + 2 * _SOLE_Y, fill=False,
-                                           edgecolor="0.3", ls="--", lw=0.8))
+                    ax.add_patch(
+                        Rectangle(
+                            (start, lo - _SOLE_Y),
+                            end - start,
+                            hi - lo + 2 * _SOLE_Y,
+                            fill=False,
+                            edgecolor="0.3",
+                            ls="--",
+                            lw=0.8,
+                        )
+                    )
         for foot in range(2):
             c = FOOT_COLORS[foot]
             ax.plot(t, trace.nominal[:, foot, axis], "--", color=c, lw=1.0, alpha=0.9)
@@ -239,8 +271,12 @@ def plot_swing_trajectories(trace: ObstacleTrace, path: str | Path, title: str) 
         Line2D([], [], color="0.1", lw=0.6, label="measured sole"),
         Patch(color=FOOT_COLORS[0], label="right foot"),
         Patch(color=FOOT_COLORS[1], label="left foot"),
-        Patch(facecolor="0.55", edgecolor="0.3", alpha=0.6,
-              label="obstacle's y / z extent, while a swinging\nsole overlaps it along x (shaded)"),
+        Patch(
+            facecolor="0.55",
+            edgecolor="0.3",
+            alpha=0.6,
+            label="obstacle's y / z extent, while a swinging\nsole overlaps it along x (shaded)",
+        ),
         Patch(fill=False, edgecolor="0.3", ls="--", label="obstacle y-extent + half sole width (0.075 m)"),
     ]
     if trace.obstacle_contact.any():
@@ -253,8 +289,7 @@ def plot_swing_trajectories(trace: ObstacleTrace, path: str | Path, title: str) 
 
 def _sole(ax: Axes, point: NDArray[np.float64], **style: Any) -> None:
     """The sole's rectangle around the sole point ``point`` [m] (heading +x)."""
-    ax.add_patch(Rectangle((point[0] + _SOLE_X[0], point[1] - _SOLE_Y), _SOLE_X[1] - _SOLE_X[0], 2 * _SOLE_Y,
-                           **style))
+    ax.add_patch(Rectangle((point[0] + _SOLE_X[0], point[1] - _SOLE_Y), _SOLE_X[1] - _SOLE_X[0], 2 * _SOLE_Y, **style))
 
 
 def plot_footholds_top_view(trace: ObstacleTrace, path: str | Path, title: str) -> Path:
@@ -275,12 +310,14 @@ def plot_footholds_top_view(trace: ObstacleTrace, path: str | Path, title: str) 
     # equal aspect: the figure's height follows the zoomed region's (about 7 in of axes width beside the legend)
     fig, ax = plt.subplots(figsize=(12.5, max(3.2, 7.0 * (y_hi - y_lo) / (x_hi - x_lo) + 2.0)))
     for lower, upper in boxes:
-        ax.add_patch(Rectangle(lower[:2], *(upper[:2] - lower[:2]), facecolor="0.45", edgecolor="k", lw=1.0,
-                               alpha=0.8, zorder=3))
+        ax.add_patch(
+            Rectangle(lower[:2], *(upper[:2] - lower[:2]), facecolor="0.45", edgecolor="k", lw=1.0, alpha=0.8, zorder=3)
+        )
     for lower, upper in trace.plan_boxes:
-        ax.add_patch(Rectangle(lower[:2], *(upper[:2] - lower[:2]), fill=False, edgecolor="k", ls=":", lw=1.0,
-                               zorder=3))
-    for j, (h, n) in enumerate(zip(trace.footholds, trace.nominal_footholds)):
+        ax.add_patch(
+            Rectangle(lower[:2], *(upper[:2] - lower[:2]), fill=False, edgecolor="k", ls=":", lw=1.0, zorder=3)
+        )
+    for j, (h, n) in enumerate(zip(trace.footholds, trace.nominal_footholds, strict=False)):
         c = FOOT_COLORS[j % 2]
         _sole(ax, n, fill=False, edgecolor=c, ls="--", lw=1.0, zorder=2)
         _sole(ax, h, facecolor=c, edgecolor=c, alpha=0.3, lw=1.0, zorder=1)
@@ -289,17 +326,39 @@ def plot_footholds_top_view(trace: ObstacleTrace, path: str | Path, title: str) 
     for foot in range(2):
         c = FOOT_COLORS[foot]
         swing = ~trace.planned_contact[:, foot]
-        ax.plot(np.where(swing, trace.planned[:, foot, 0], np.nan), np.where(swing, trace.planned[:, foot, 1], np.nan),
-                color=c, lw=3.0, alpha=0.35, solid_capstyle="butt", zorder=4)
-        ax.plot(np.where(swing, trace.reference[:, foot, 0], np.nan),
-                np.where(swing, trace.reference[:, foot, 1], np.nan), color=c, lw=1.0, zorder=4)
-        ax.plot(trace.measured[:, foot, 0], trace.measured[:, foot, 1], color=_MEASURED_COLORS[foot], lw=0.8,
-                ls=(0, (3, 1.5)), zorder=4)
+        ax.plot(
+            np.where(swing, trace.planned[:, foot, 0], np.nan),
+            np.where(swing, trace.planned[:, foot, 1], np.nan),
+            color=c,
+            lw=3.0,
+            alpha=0.35,
+            solid_capstyle="butt",
+            zorder=4,
+        )
+        ax.plot(
+            np.where(swing, trace.reference[:, foot, 0], np.nan),
+            np.where(swing, trace.reference[:, foot, 1], np.nan),
+            color=c,
+            lw=1.0,
+            zorder=4,
+        )
+        ax.plot(
+            trace.measured[:, foot, 0],
+            trace.measured[:, foot, 1],
+            color=_MEASURED_COLORS[foot],
+            lw=0.8,
+            ls=(0, (3, 1.5)),
+            zorder=4,
+        )
     contact = trace.obstacle_contact
     if contact.any():
         # the foot nearer the obstacles at each contact
-        near = np.array([np.argmin([np.min(np.abs(m[f, 0] - boxes[:, :, 0].mean(axis=1))) for f in range(2)])
-                         for m in trace.measured[contact]])
+        near = np.array(
+            [
+                np.argmin([np.min(np.abs(m[f, 0] - boxes[:, :, 0].mean(axis=1))) for f in range(2)])
+                for m in trace.measured[contact]
+            ]
+        )
         points = trace.measured[contact][np.arange(near.size), near]
         ax.plot(points[:, 0], points[:, 1], "x", color="k", ms=5, zorder=6)
     ax.set_aspect("equal")

@@ -19,13 +19,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..assets import AGRI_ARM_TCP, AGRI_ARM_XML
-from ..policies.grasp_clik_policy import GraspClikPolicy, GraspPath
-from ..model import RobotModel, collision_model_from_mjcf
 from ..eval.plots import save_figure
+from ..model import RobotModel, collision_model_from_mjcf
+from ..policies.grasp_clik_policy import GraspClikPolicy, GraspPath
 from .exceptions import StudyError
 
-__all__ = ["plot_point_to_point", "FIG_5_10", "PointToPointScenario", "PointToPointSetup", "PointToPointTrace", "prepare_point_to_point",
-           "rollout_point_to_point"]
+__all__ = [
+    "plot_point_to_point",
+    "FIG_5_10",
+    "PointToPointScenario",
+    "PointToPointSetup",
+    "PointToPointTrace",
+    "prepare_point_to_point",
+    "rollout_point_to_point",
+]
 
 
 @dataclass(frozen=True)
@@ -104,13 +111,13 @@ class PointToPointSetup(NamedTuple):
     steps: int
 
 
-def prepare_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
-                           **policy_options: float | str) -> PointToPointSetup:
+def prepare_point_to_point(
+    scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True, **policy_options: float | str
+) -> PointToPointSetup:
     """The grasp CLIK reference (``policy_options``: fields of
     :class:`~redundancy_gym.policies.grasp_clik_policy.GraspClikConfig`), its controller, the self-clearance
     monitor and the TCP path of ``scenario``."""
-    policy = GraspClikPolicy(_Robot(), collision_avoidance="on" if collision_avoidance else "off",
-                             **policy_options)
+    policy = GraspClikPolicy(_Robot(), collision_avoidance="on" if collision_avoidance else "off", **policy_options)
     model: RobotModel = policy.model
     q = np.asarray(scenario.q_start, dtype=np.float64)
     goal = np.asarray(scenario.q_goal, dtype=np.float64)
@@ -122,14 +129,22 @@ def prepare_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collisi
     goal_position = model.frame_position(AGRI_ARM_TCP).copy()
     goal_axis = model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy()
     model.update(q)
-    path = GraspPath(model.frame_position(AGRI_ARM_TCP).copy(), model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
-                     goal_position, goal_position, goal_axis, scenario.duration, scenario.hold)
+    path = GraspPath(
+        model.frame_position(AGRI_ARM_TCP).copy(),
+        model.frame_rotation(AGRI_ARM_TCP)[:, 0].copy(),
+        goal_position,
+        goal_position,
+        goal_axis,
+        scenario.duration,
+        scenario.hold,
+    )
     steps = int(round((scenario.duration + scenario.hold) / scenario.dt))
     return PointToPointSetup(policy, controller, monitor, path, q, goal_position, steps)
 
 
-def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True,
-                           **policy_options: float | str) -> PointToPointTrace:
+def rollout_point_to_point(
+    scenario: PointToPointScenario = FIG_5_10, *, collision_avoidance: bool = True, **policy_options: float | str
+) -> PointToPointTrace:
     """Kinematic CLIK rollout of ``scenario``; ``policy_options`` are fields of
     :class:`~redundancy_gym.policies.grasp_clik_policy.GraspClikConfig` (defaults otherwise)."""
     setup = prepare_point_to_point(scenario, collision_avoidance=collision_avoidance, **policy_options)
@@ -149,8 +164,9 @@ def rollout_point_to_point(scenario: PointToPointScenario = FIG_5_10, *, collisi
         pairs.append("/".join(state.pairs[i]))
         errors.append(result.error_norm)
     final = float(np.linalg.norm(model.frame_position(AGRI_ARM_TCP) - setup.goal_position))
-    return PointToPointTrace(np.array(times), np.array(qs), np.array(clearance), tuple(pairs), np.array(errors),
-                             collision_avoidance, final)
+    return PointToPointTrace(
+        np.array(times), np.array(qs), np.array(clearance), tuple(pairs), np.array(errors), collision_avoidance, final
+    )
 
 
 def plot_point_to_point(traces: Mapping[str, PointToPointTrace], path: str | Path, title: str) -> Path:
@@ -161,8 +177,11 @@ def plot_point_to_point(traces: Mapping[str, PointToPointTrace], path: str | Pat
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True, height_ratios=(2, 1))
     for label, trace in traces.items():
         k = int(np.argmin(trace.self_clearance))
-        (line,) = top.plot(trace.time, 1e3 * trace.self_clearance,
-                           label=f"{label}: min {1e3 * trace.self_clearance[k]:.1f} mm ({trace.closest_pair[k]})")
+        (line,) = top.plot(
+            trace.time,
+            1e3 * trace.self_clearance,
+            label=f"{label}: min {1e3 * trace.self_clearance[k]:.1f} mm ({trace.closest_pair[k]})",
+        )
         top.plot(trace.time[k], 1e3 * trace.self_clearance[k], "o", color=line.get_color())
         bottom.plot(trace.time, 1e3 * trace.task_error, color=line.get_color())
     top.axhline(0.0, color="k", lw=0.8, ls="--", label="self-collision")

@@ -46,8 +46,9 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
     env = make_env(_BIPED, {"target_speed": speed})
     policy = make_policy("walking", env, **policy_kwargs)
     obs, info = env.reset(seed=seed)
-    rows: dict[str, list[Any]] = {k: [] for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "feet", "contact", "lz",
-                                                  "lz_model")}
+    rows: dict[str, list[Any]] = {
+        k: [] for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "feet", "contact", "lz", "lz_model")
+    }
     start = True
     try:
         for _ in range(int(round(duration / env.unwrapped.dt))):
@@ -76,11 +77,11 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
     """CoM and ZMP (planned and measured) in x and y over time, with the support polygon's extent."""
     fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
     t = trace.time
-    for axis, (ax, label) in enumerate(zip(axes, ("x [m]", "y [m]"))):
+    for axis, (ax, label) in enumerate(zip(axes, ("x [m]", "y [m]"), strict=False)):
         lo, hi = [], []
-        for feet, contact in zip(trace.feet, trace.contact):
+        for feet, contact in zip(trace.feet, trace.contact, strict=False):
             on = feet[np.asarray(contact)]
-            ext = (_SOLE_X if axis == 0 else (-_SOLE_Y, _SOLE_Y))
+            ext = _SOLE_X if axis == 0 else (-_SOLE_Y, _SOLE_Y)
             lo.append(on[:, axis].min() + ext[0])
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")

@@ -54,6 +54,8 @@ def check_policy_kwargs(value: Any, wrapper: str) -> dict[str, Any]:
     if value is None:
         return {}
     if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-        raise WrapperError(f"{wrapper}: policy_kwargs must be a dict of the reference policy's options, got "
-                           f"{value!r} ({type(value).__name__})")
+        raise WrapperError(
+            f"{wrapper}: policy_kwargs must be a dict of the reference policy's options, got "
+            f"{value!r} ({type(value).__name__})"
+        )
     return dict(value)

@@ -81,18 +81,26 @@ class NullspaceAction(gym.Wrapper):
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
 
-    def __init__(self, env: gym.Env, max_nullspace_speed: float = NullspaceActionConfig.max_nullspace_speed,
-                 objectives: bool = False, policy_kwargs: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        max_nullspace_speed: float = NullspaceActionConfig.max_nullspace_speed,
+        objectives: bool = False,
+        policy_kwargs: dict[str, Any] | None = None,
+    ) -> None:
         super().__init__(env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = NullspaceActionConfig(
-            max_nullspace_speed=check_real("max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0,
-                                           low_open=True, error=WrapperError),
+            max_nullspace_speed=check_real(
+                "max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0, low_open=True, error=WrapperError
+            ),
             objectives=check_bool("objectives", objectives, error=WrapperError),
-            policy_kwargs=check_policy_kwargs(policy_kwargs, "NullspaceAction"))
-        options = dict(self.config.policy_kwargs) if objectives else {**_without_objectives(env),
-                                                                      **self.config.policy_kwargs}
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "NullspaceAction"),
+        )
+        options = (
+            dict(self.config.policy_kwargs) if objectives else {**_without_objectives(env), **self.config.policy_kwargs}
+        )
         try:
             self.reference: Any = make_policy("clik", env, **options)
         except PolicyError as exc:
@@ -103,8 +111,9 @@ class NullspaceAction(gym.Wrapper):
         self._obs: NDArray[np.float64] | None = None
         self._starting = True
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self._obs = np.asarray(obs, dtype=np.float64)
         self._starting = True
@@ -137,6 +146,10 @@ class NullspaceAction(gym.Wrapper):
         joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
-        info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    nullspace_fraction=fraction)
+        info.update(
+            clik_sigma_min=result.sigma_min,
+            clik_damping=result.damping,
+            clik_limited=result.limited,
+            nullspace_fraction=fraction,
+        )
         return obs, reward, terminated, truncated, info

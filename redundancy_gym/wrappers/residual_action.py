@@ -75,22 +75,34 @@ class ResidualAction(gym.Wrapper):
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
 
-    def __init__(self, env: gym.Env, scale: float = ResidualActionConfig.scale, policy: str | None = None,
-                 policy_kwargs: dict[str, Any] | None = None, observe_reference: bool = False) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        scale: float = ResidualActionConfig.scale,
+        policy: str | None = None,
+        policy_kwargs: dict[str, Any] | None = None,
+        observe_reference: bool = False,
+    ) -> None:
         super().__init__(env)
         self.config = ResidualActionConfig(
             scale=check_real("scale", scale, low=0.0, high=2.0, low_open=True, error=WrapperError),
-            policy=policy, policy_kwargs=check_policy_kwargs(policy_kwargs, "ResidualAction"),
-            observe_reference=check_bool("observe_reference", observe_reference, error=WrapperError))
+            policy=policy,
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "ResidualAction"),
+            observe_reference=check_bool("observe_reference", observe_reference, error=WrapperError),
+        )
         space = env.action_space
-        if not isinstance(space, spaces.Box) or not (np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))):
+        if not isinstance(space, spaces.Box) or not (
+            np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
+        ):
             raise WrapperError(f"ResidualAction needs a bounded Box action space, got {space}")
         if policy is None:
             offered = supported_policies(env)
             policy = next((p for p in REFERENCE_POLICIES if p in offered), None)
             if policy is None:
-                raise WrapperError(f"ResidualAction: the env offers none of the reference policies "
-                                   f"{', '.join(REFERENCE_POLICIES)} (it offers {', '.join(offered)})")
+                raise WrapperError(
+                    f"ResidualAction: the env offers none of the reference policies "
+                    f"{', '.join(REFERENCE_POLICIES)} (it offers {', '.join(offered)})"
+                )
         try:
             self.reference = make_policy(policy, env, **self.config.policy_kwargs)
         except PolicyError as exc:
@@ -103,9 +115,11 @@ class ResidualAction(gym.Wrapper):
         self.action_space = spaces.Box(-1.0, 1.0, shape=space.shape, dtype=np.float32)
         if self.config.observe_reference:
             obs = env.observation_space
-            self.observation_space = spaces.Box(np.concatenate([obs.low, space.low]).astype(obs.dtype),
-                                                np.concatenate([obs.high, space.high]).astype(obs.dtype),
-                                                dtype=obs.dtype)
+            self.observation_space = spaces.Box(
+                np.concatenate([obs.low, space.low]).astype(obs.dtype),
+                np.concatenate([obs.high, space.high]).astype(obs.dtype),
+                dtype=obs.dtype,
+            )
         self._reference_action: NDArray[Any] | None = None
         self._reference_time_us = 0.0
         self.controller_time_us = 0.0
@@ -122,8 +136,9 @@ class ResidualAction(gym.Wrapper):
             return np.concatenate([obs, self._reference_action.astype(obs.dtype)])
         return obs
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         return self._observe(obs, True), info
 

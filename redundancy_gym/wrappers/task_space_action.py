@@ -156,28 +156,37 @@ class TaskSpaceAction(gym.Wrapper):
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
 
-    def __init__(self, env: gym.Env, max_speed: float = TaskSpaceActionConfig.max_speed,
-                 max_turn_rate: float = TaskSpaceActionConfig.max_turn_rate,
-                 max_lead: float = TaskSpaceActionConfig.max_lead,
-                 max_lead_angle: float = TaskSpaceActionConfig.max_lead_angle,
-                 guard_distance: float = TaskSpaceActionConfig.guard_distance,
-                 stop_distance: float = TaskSpaceActionConfig.stop_distance,
-                 policy_kwargs: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        max_speed: float = TaskSpaceActionConfig.max_speed,
+        max_turn_rate: float = TaskSpaceActionConfig.max_turn_rate,
+        max_lead: float = TaskSpaceActionConfig.max_lead,
+        max_lead_angle: float = TaskSpaceActionConfig.max_lead_angle,
+        guard_distance: float = TaskSpaceActionConfig.guard_distance,
+        stop_distance: float = TaskSpaceActionConfig.stop_distance,
+        policy_kwargs: dict[str, Any] | None = None,
+    ) -> None:
         super().__init__(env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = TaskSpaceActionConfig(
-            max_speed=check_real("max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s",
-                                 error=WrapperError),
-            max_turn_rate=check_real("max_turn_rate", max_turn_rate, low=0.0, high=6.0, low_open=True, unit="rad/s",
-                                     error=WrapperError),
+            max_speed=check_real(
+                "max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s", error=WrapperError
+            ),
+            max_turn_rate=check_real(
+                "max_turn_rate", max_turn_rate, low=0.0, high=6.0, low_open=True, unit="rad/s", error=WrapperError
+            ),
             max_lead=check_real("max_lead", max_lead, low=0.0, high=0.5, low_open=True, unit="m", error=WrapperError),
-            max_lead_angle=check_real("max_lead_angle", max_lead_angle, low=0.0, high=1.5, low_open=True, unit="rad",
-                                      error=WrapperError),
-            guard_distance=check_real("guard_distance", guard_distance, low=0.0, high=0.2, low_open=True, unit="m",
-                                      error=WrapperError),
+            max_lead_angle=check_real(
+                "max_lead_angle", max_lead_angle, low=0.0, high=1.5, low_open=True, unit="rad", error=WrapperError
+            ),
+            guard_distance=check_real(
+                "guard_distance", guard_distance, low=0.0, high=0.2, low_open=True, unit="m", error=WrapperError
+            ),
             stop_distance=check_real("stop_distance", stop_distance, low=0.0, unit="m", error=WrapperError),
-            policy_kwargs=check_policy_kwargs(policy_kwargs, "TaskSpaceAction"))
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "TaskSpaceAction"),
+        )
         if self.config.stop_distance >= self.config.guard_distance:
             raise WrapperError(f"stop_distance={stop_distance!r} must be below guard_distance={guard_distance!r} [m]")
         options = {"collision_avoidance": "on", **self.config.policy_kwargs}
@@ -207,8 +216,9 @@ class TaskSpaceAction(gym.Wrapper):
         """The observed TCP position [m]."""
         return obs[self._layout["tcp_position" if self._grasp else "tcp"]].tolist()
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self._obs = np.asarray(obs, dtype=np.float64)
         if self._grasp:  # the controller of this episode's obstacles (PlanarReach's is placed in command())
@@ -257,8 +267,9 @@ class TaskSpaceAction(gym.Wrapper):
         self._axis = _unit(target_axis)
         return self._guarded(q, np.array([*target, *self._axis]), np.array([*velocity, *omega]))
 
-    def _guarded(self, q: NDArray[np.float64], target: NDArray[np.float64],
-                 velocity: NDArray[np.float64]) -> ClikResult:
+    def _guarded(
+        self, q: NDArray[np.float64], target: NDArray[np.float64], velocity: NDArray[np.float64]
+    ) -> ClikResult:
         """The CLIK step with a velocity damper on every collision pair nearer than ``guard_distance``: the
         pair's distance may shrink at most at ``max_speed`` times ``(d - stop_distance) / (guard_distance -
         stop_distance)`` (zero at ``stop_distance``, growing below it), enforced by projecting ``qdot`` onto each
@@ -267,8 +278,9 @@ class TaskSpaceAction(gym.Wrapper):
         result = controller.step(q, target, velocity)
         c = self.config
         closest = getattr(controller, "last_min_distance", 0.0)  # the compiled kernel's: no pair is nearer
-        distances, rows = self._close_pairs(controller, q, c.guard_distance) if closest < c.guard_distance else \
-            _NO_PAIRS
+        distances, rows = (
+            self._close_pairs(controller, q, c.guard_distance) if closest < c.guard_distance else _NO_PAIRS
+        )
         qdot = result.qdot
         # the controller bounds the command to the model's joint speeds, the env's may be lower (AgriReach: half):
         # the env would clip each joint, turning the command; slower instead, in the same direction
@@ -308,8 +320,9 @@ class TaskSpaceAction(gym.Wrapper):
             qdot = bounded
         return result._replace(qdot=qdot, limited=True) if changed else result
 
-    def _close_pairs(self, controller: Any, q: NDArray[np.float64], limit: float
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def _close_pairs(
+        self, controller: Any, q: NDArray[np.float64], limit: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Distances and ``dd/dq`` rows of the collision pairs nearer than ``limit`` at ``q`` (the compiled
         controller's last step, or the Python controller's collision model)."""
         if hasattr(controller, "close_pairs"):
@@ -333,6 +346,7 @@ class TaskSpaceAction(gym.Wrapper):
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         lag = math.dist(self._position, self._tcp(self._obs))
-        info.update(clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited,
-                    target_lag=lag)
+        info.update(
+            clik_sigma_min=result.sigma_min, clik_damping=result.damping, clik_limited=result.limited, target_lag=lag
+        )
         return obs, reward, terminated, truncated, info

@@ -102,29 +102,37 @@ class WalkingCommandAction(gym.Wrapper):
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
 
-    def __init__(self, env: gym.Env, min_forward_speed: float = WalkingCommandActionConfig.min_forward_speed,
-                 max_forward_speed: float = WalkingCommandActionConfig.max_forward_speed,
-                 max_lateral_speed: float = WalkingCommandActionConfig.max_lateral_speed,
-                 max_yaw_rate: float = WalkingCommandActionConfig.max_yaw_rate,
-                 command_period: int = WalkingCommandActionConfig.command_period,
-                 policy_kwargs: dict[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        env: gym.Env,
+        min_forward_speed: float = WalkingCommandActionConfig.min_forward_speed,
+        max_forward_speed: float = WalkingCommandActionConfig.max_forward_speed,
+        max_lateral_speed: float = WalkingCommandActionConfig.max_lateral_speed,
+        max_yaw_rate: float = WalkingCommandActionConfig.max_yaw_rate,
+        command_period: int = WalkingCommandActionConfig.command_period,
+        policy_kwargs: dict[str, Any] | None = None,
+    ) -> None:
         super().__init__(env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = WalkingCommandActionConfig(
-            min_forward_speed=check_real("min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s",
-                                         error=WrapperError),
-            max_forward_speed=check_real("max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s",
-                                         error=WrapperError),
-            max_lateral_speed=check_real("max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s",
-                                         error=WrapperError),
-            max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s",
-                                    error=WrapperError),
+            min_forward_speed=check_real(
+                "min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s", error=WrapperError
+            ),
+            max_forward_speed=check_real(
+                "max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s", error=WrapperError
+            ),
+            max_lateral_speed=check_real(
+                "max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s", error=WrapperError
+            ),
+            max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s", error=WrapperError),
             command_period=check_int("command_period", command_period, low=1, high=1000, error=WrapperError),
-            policy_kwargs=check_policy_kwargs(policy_kwargs, "WalkingCommandAction"))
+            policy_kwargs=check_policy_kwargs(policy_kwargs, "WalkingCommandAction"),
+        )
         if self.config.min_forward_speed >= self.config.max_forward_speed:
-            raise WrapperError(f"min_forward_speed={min_forward_speed!r} must be below "
-                               f"max_forward_speed={max_forward_speed!r} [m/s]")
+            raise WrapperError(
+                f"min_forward_speed={min_forward_speed!r} must be below max_forward_speed={max_forward_speed!r} [m/s]"
+            )
         try:
             self.reference: Any = make_policy("walking", env, **self.config.policy_kwargs)
         except PolicyError as exc:
@@ -133,8 +141,9 @@ class WalkingCommandAction(gym.Wrapper):
         self._obs: NDArray[np.float64] | None = None
         self._periods = 0  # control periods of the episode so far
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
-              ) -> tuple[NDArray[np.floating], dict[str, Any]]:
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.floating], dict[str, Any]]:
         obs, info = self.env.reset(seed=seed, options=options)
         self._obs = np.asarray(obs, dtype=np.float64)
         self.reference.begin(self._obs)
@@ -180,8 +189,13 @@ class WalkingCommandAction(gym.Wrapper):
                 truncated = True  # the time limit counts this wrapper's steps, each command_period periods long
             if terminated or truncated:
                 break
-        info = {**info, **held, "commanded_forward_speed": forward, "commanded_lateral_speed": lateral,
-                "commanded_yaw_rate": yaw_rate,
-                "step_adjusted": adjusted}
+        info = {
+            **info,
+            **held,
+            "commanded_forward_speed": forward,
+            "commanded_lateral_speed": lateral,
+            "commanded_yaw_rate": yaw_rate,
+            "step_adjusted": adjusted,
+        }
         self.controller_time_us = elapsed_ns * 1e-3
         return obs, total, terminated, truncated, info

@@ -39,8 +39,7 @@ def wrapper_option_names(name: str) -> tuple[str, ...]:
     return tuple(names)
 
 
-def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] | None = None,
-                     **kwargs: Any) -> gym.Env:
+def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] | None = None, **kwargs: Any) -> gym.Env:
     """The entry point of a wrapped env id (``redundancy_gym/AgriReach-Nullspace-v0``): the env ``env_id`` built
     from its registered entry point (without its ``gym.make`` wrappers: the wrapped id's own time limit and
     checks go around the whole) and wrapped in ``wrapper``.
@@ -51,23 +50,26 @@ def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] |
     """
     options = set(wrapper_option_names(wrapper))
     if wrapper_kwargs is not None and not isinstance(wrapper_kwargs, dict):
-        raise WrapperError(f"wrapper_kwargs must be a dict of {wrapper} options ({', '.join(sorted(options))}), "
-                           f"got {type(wrapper_kwargs).__name__}")
+        raise WrapperError(
+            f"wrapper_kwargs must be a dict of {wrapper} options ({', '.join(sorted(options))}), "
+            f"got {type(wrapper_kwargs).__name__}"
+        )
     own = {k: v for k, v in kwargs.items() if k in options}
     clash = sorted(set(own) & set(wrapper_kwargs or {}))
     if clash:
         raise WrapperError(f"{', '.join(clash)} given both as a keyword and in wrapper_kwargs")
     env_kwargs = {k: v for k, v in kwargs.items() if k not in options}
     spec = gym.spec(env_id)
-    creator = gym.envs.registration.load_env_creator(spec.entry_point) if isinstance(spec.entry_point, str) \
+    creator = (
+        gym.envs.registration.load_env_creator(spec.entry_point)
+        if isinstance(spec.entry_point, str)
         else spec.entry_point
+    )
     try:
         env = creator(**{**spec.kwargs, **env_kwargs})
     except EnvConfigError as exc:
         if "unknown keyword" in str(exc):  # a typo may have meant a wrapper option: name those too
-            raise EnvConfigError(f"{exc}; or an option of the {wrapper} wrapper: {', '.join(sorted(options))}") \
-                from exc
+            raise EnvConfigError(f"{exc}; or an option of the {wrapper} wrapper: {', '.join(sorted(options))}") from exc
         raise
     env.spec = spec  # the base env's spec, so that make_policy and messages name the env it is
     return make_wrapper(wrapper, env, **{**own, **(wrapper_kwargs or {})})
-

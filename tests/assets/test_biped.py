@@ -28,8 +28,10 @@ def plant() -> tuple[mujoco.MjModel, mujoco.MjData]:
 
 
 def _with_floor() -> mujoco.MjModel:
-    xml = (f'<mujoco><include file="{BIPED_XML}"/><worldbody><geom name="floor" type="plane" size="5 5 0.1" '
-           'contype="1" conaffinity="1"/></worldbody></mujoco>')
+    xml = (
+        f'<mujoco><include file="{BIPED_XML}"/><worldbody><geom name="floor" type="plane" size="5 5 0.1" '
+        'contype="1" conaffinity="1"/></worldbody></mujoco>'
+    )
     return mujoco.MjModel.from_xml_string(xml)
 
 
@@ -57,14 +59,14 @@ def test_sole_is_26_by_15_cm_with_a_toe_segment(plant) -> None:
         assert front - back == pytest.approx(0.26)
         assert 2 * sizes[0][1] == pytest.approx(0.15) and 2 * sizes[1][1] == pytest.approx(0.15)
         # standing straight the soles touch z = 0
-        assert min(b.xpos[2] - s[2] for b, s in zip(boxes, sizes)) == pytest.approx(0.0, abs=1e-9)
+        assert min(b.xpos[2] - s[2] for b, s in zip(boxes, sizes, strict=False)) == pytest.approx(0.0, abs=1e-9)
     assert set(BIPED_SOLE_GEOMS) <= {model.geom(i).name for i in range(model.ngeom)}
 
 
 def test_joint_ranges_are_the_measured_hardware_limits_mirrored_left(plant) -> None:
     model, _ = plant
     for name, (lo, hi) in BIPED_HARDWARE_LIMITS_DEG.items():
-        sides = (("r_", "l_") if f"r_{name}" in BIPED_JOINTS else ("",))
+        sides = ("r_", "l_") if f"r_{name}" in BIPED_JOINTS else ("",)
         for side in sides:
             expected = (-hi, -lo) if side == "l_" and name in MIRRORED else (lo, hi)
             assert np.degrees(model.joint(side + name).range) == pytest.approx(expected, abs=1e-3)
@@ -86,8 +88,13 @@ def test_pinocchio_and_mujoco_agree_on_kinematics_and_com(plant, rng) -> None:
     sites = ("head_top", "imu", "r_sole", "l_sole", "r_hand", "l_hand", *BIPED_ANKLE_SITES)
     for _ in range(20):
         quat = rng.normal(size=4)
-        qpos = np.concatenate([rng.normal(0.0, 0.3, 3) + [0, 0, 1], quat / np.linalg.norm(quat),
-                               rng.uniform(model.jnt_range[1:, 0], model.jnt_range[1:, 1])])
+        qpos = np.concatenate(
+            [
+                rng.normal(0.0, 0.3, 3) + [0, 0, 1],
+                quat / np.linalg.norm(quat),
+                rng.uniform(model.jnt_range[1:, 0], model.jnt_range[1:, 1]),
+            ]
+        )
         data.qpos[:] = qpos
         mujoco.mj_kinematics(model, data)
         mujoco.mj_comPos(model, data)

@@ -7,15 +7,20 @@ import json
 
 import pytest
 
-from redundancy_gym.eval.json_writer import write_json
-
 from redundancy_gym.bench.envs import format_envs_bench, run_envs_bench
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.eval.json_writer import write_json
 
 
 def test_envs_bench_report(tmp_path) -> None:
-    report = run_envs_bench(seconds=0.15, envs=("redundancy_gym/AgriReach-v0",), peers=("Pusher-v5",),
-                            wrapped=("redundancy_gym/AgriReach-Nullspace-v0",), rounds=3, progress=False)
+    report = run_envs_bench(
+        seconds=0.15,
+        envs=("redundancy_gym/AgriReach-v0",),
+        peers=("Pusher-v5",),
+        wrapped=("redundancy_gym/AgriReach-Nullspace-v0",),
+        rounds=3,
+        progress=False,
+    )
     timing = report["timing"]
     assert timing["rounds"] == 3 and timing["warmup"] == 1 and timing["window_s"] == pytest.approx(0.05)
     labels = ["redundancy_gym/AgriReach-v0", "Pusher-v5", "redundancy_gym/AgriReach-v0 (prune=False)"]

@@ -5,14 +5,19 @@ import json
 
 import pytest
 
+from redundancy_gym.bench.learned import LEARNED_SETTINGS, _picks, _setting, learned_markdown, run_learned_bench
 from redundancy_gym.cli import main
 from redundancy_gym.learning.baselines import baselines
-from redundancy_gym.bench.learned import LEARNED_SETTINGS, _picks, _setting, learned_markdown, run_learned_bench
 
 
 def _report(success: float, collision: float, median_us: float, tracking_m: float) -> dict:
-    return {"success_rate": success, "collision_rate": collision, "tracking_error_rms": tracking_m,
-            "step_time_us": {"median": median_us, "p99": 2 * median_us, "mean": median_us}, "pseudoenergy": 1.0}
+    return {
+        "success_rate": success,
+        "collision_rate": collision,
+        "tracking_error_rms": tracking_m,
+        "step_time_us": {"median": median_us, "p99": 2 * median_us, "mean": median_us},
+        "pseudoenergy": 1.0,
+    }
 
 
 def test_picks_only_among_policies_that_succeed_and_break_accuracy_ties_by_speed() -> None:
@@ -51,8 +56,26 @@ def test_planar_reach_table_holds_every_reference_and_shipped_model(tmp_path) ->
 
 def test_cli_writes_json_markdown_and_one_plot_per_env(tmp_path, capsys) -> None:
     path = tmp_path / "learned.json"
-    assert main(["bench", "learned", "--envs", "planar_reach", "--episodes", "2", "--seed", "21000",
-                 "--json", str(path), "--no-progress", "--workers", "2"]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "learned",
+                "--envs",
+                "planar_reach",
+                "--episodes",
+                "2",
+                "--seed",
+                "21000",
+                "--json",
+                str(path),
+                "--no-progress",
+                "--workers",
+                "2",
+            ]
+        )
+        == 0
+    )
     data = json.loads(path.read_text())
     assert data["seed"] == 21000 and data["episodes"] == 2 and set(data["envs"]) == {"planar_reach"}
     assert (tmp_path / "learned.md").read_text().startswith("# Learned baselines")

@@ -7,10 +7,15 @@ import json
 import numpy as np
 import pytest
 
-from redundancy_gym.bench.pik import (JUMP_SAMPLE_TIME, format_pik_bench, planar_kinematic_traces, plot_pseudoenergy,
-                                          run_pik_bench)
-from redundancy_gym.eval.json_writer import write_json
+from redundancy_gym.bench.pik import (
+    JUMP_SAMPLE_TIME,
+    format_pik_bench,
+    planar_kinematic_traces,
+    plot_pseudoenergy,
+    run_pik_bench,
+)
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.eval.json_writer import write_json
 
 
 def test_pik_bench_report(tmp_path) -> None:
@@ -18,19 +23,24 @@ def test_pik_bench_report(tmp_path) -> None:
     planar = report["planar"]
     assert set(planar) == {"clik", "predictive", "global"}
     assert report["planar_mpc_vs_local_pseudoenergy"] == pytest.approx(
-        planar["predictive"]["pseudoenergy"] / planar["clik"]["pseudoenergy"])
+        planar["predictive"]["pseudoenergy"] / planar["clik"]["pseudoenergy"]
+    )
     agri = report["agri_self_collision"]
     assert set(agri) == {"local CLIK", "MPC 0.15 s", "MPC 2 s", "global"}
     assert report["agri_horizon2s_update_ms_median"] == agri["MPC 2 s"]["update_ms_median"] > 0.0
     # the update times come from alternating rounds of timed rollouts: MPC against the local CLIK step
-    assert report["timing"]["orders"] == [["local CLIK", "MPC 0.15 s", "MPC 2 s"], ["MPC 2 s", "MPC 0.15 s", "local CLIK"]]
+    assert report["timing"]["orders"] == [
+        ["local CLIK", "MPC 0.15 s", "MPC 2 s"],
+        ["MPC 2 s", "MPC 0.15 s", "local CLIK"],
+    ]
     for name in ("agri_horizon2s_vs_local", "agri_horizon015s_vs_local"):
         stats = report[f"{name}_rounds"]
         assert report[name] == stats["median"] and stats["rounds"] == 2
         assert 1.0 < stats["min"] <= stats["median"] <= stats["max"]  # an MPC update costs more than a CLIK step
     assert report["agri_horizon2s_vs_local"] > report["agri_horizon015s_vs_local"]
     assert report["agri_horizon2s_vs_local"] == pytest.approx(
-        agri["MPC 2 s"]["update_ms_median"] / agri["local CLIK"]["update_ms_median"], rel=0.5)
+        agri["MPC 2 s"]["update_ms_median"] / agri["local CLIK"]["update_ms_median"], rel=0.5
+    )
     assert len(report["machine"]["load_average_end"]) == 3
     descent = report["descent"]
     assert descent["cg_costs"][0] == descent["sd_costs"][0] > descent["best_cost"]

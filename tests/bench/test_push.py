@@ -8,8 +8,14 @@ import sys
 
 import pytest
 
-from redundancy_gym.bench.push import (DIRECTIONS, RECOVERY_TARGET, format_push_bench, plot_push_bench,
-                                            push_trial, run_push_bench)
+from redundancy_gym.bench.push import (
+    DIRECTIONS,
+    RECOVERY_TARGET,
+    format_push_bench,
+    plot_push_bench,
+    push_trial,
+    run_push_bench,
+)
 from redundancy_gym.eval.exceptions import EvalError
 
 
@@ -40,15 +46,23 @@ def test_report_levels_and_figures_are_consistent(tmp_path) -> None:
     assert (tmp_path / "push.png").stat().st_size > 10_000 and path.endswith("push.png")
 
 
-@pytest.mark.parametrize("kwargs, match", [({"trials": 0}, "trials"), ({"trials": True}, "trials"),
-                                           ({"impulses": (10.0, 5.0)}, "impulses"),
-                                           ({"impulses": ()}, "impulses"), ({"impulses": (float("nan"),)}, "impulses")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"trials": 0}, "trials"),
+        ({"trials": True}, "trials"),
+        ({"impulses": (10.0, 5.0)}, "impulses"),
+        ({"impulses": ()}, "impulses"),
+        ({"impulses": (float("nan"),)}, "impulses"),
+    ],
+)
 def test_bad_arguments_raise(kwargs: dict, match: str) -> None:
     with pytest.raises(EvalError, match=match):
         run_push_bench(progress=False, **kwargs)
 
 
 def test_cli_rejects_trials_for_other_benches() -> None:
-    result = subprocess.run([sys.executable, "-m", "redundancy_gym.cli", "bench", "ssv", "--trials", "3"],
-                            capture_output=True, text=True)
+    result = subprocess.run(
+        [sys.executable, "-m", "redundancy_gym.cli", "bench", "ssv", "--trials", "3"], capture_output=True, text=True
+    )
     assert result.returncode == 2 and "--trials applies to bench push only" in result.stderr

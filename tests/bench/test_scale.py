@@ -2,8 +2,8 @@ import json
 
 import pytest
 
-from redundancy_gym.cli import main
 from redundancy_gym.bench.scale import amdahl_serial_fraction, amdahl_speedup, run_scale_bench
+from redundancy_gym.cli import main
 from redundancy_gym.eval.exceptions import EvalError
 
 
@@ -18,8 +18,9 @@ def test_amdahl_round_trip_and_bounds() -> None:
 
 
 def test_a_quick_run_measures_every_part() -> None:
-    report = run_scale_bench(workers=(2,), episodes=2, rounds=1, cases=("agri_reach",), num_envs=(1, 2),
-                             vec_steps=5, progress=False)
+    report = run_scale_bench(
+        workers=(2,), episodes=2, rounds=1, cases=("agri_reach",), num_envs=(1, 2), vec_steps=5, progress=False
+    )
     row = report["eval"]["agri_reach"]
     assert row["workers"]["2"]["episodes_per_second"] > 0 and row["workers"]["2"]["serial_episodes_per_second"] > 0
     assert 0.0 <= row["serial_fraction"] <= 1.0 and row["predicted_speedup_64"] >= 1.0

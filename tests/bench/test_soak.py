@@ -8,12 +8,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from redundancy_gym.eval.json_writer import write_json
-
 from redundancy_gym import ENV_IDS
-from redundancy_gym.cli import main
 from redundancy_gym.bench.soak import SOURCES, format_soak_bench, run_soak_bench
+from redundancy_gym.cli import main
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.eval.json_writer import write_json
 
 FAULTY_ID = "soak_test/Faulty-v0"
 BROKEN_RESET_ID = "soak_test/BrokenReset-v0"
@@ -71,8 +70,9 @@ def test_short_soak_of_every_env_is_clean(tmp_path) -> None:
 
 
 def test_seconds_budget_and_table() -> None:
-    report = run_soak_bench(seconds=0.1, envs=("redundancy_gym/PlanarReach-v0",), sources=("random", "bang_bang"),
-                            progress=False)
+    report = run_soak_bench(
+        seconds=0.1, envs=("redundancy_gym/PlanarReach-v0",), sources=("random", "bang_bang"), progress=False
+    )
     r = report["envs"]["redundancy_gym/PlanarReach-v0"]["sources"]
     assert r["random"]["steps"] >= 64 and r["bang_bang"]["steps"] >= 64
     assert report["ok"] and "OK" in format_soak_bench(report)
@@ -103,8 +103,9 @@ def test_env_whose_reset_always_fails_is_stopped() -> None:
     assert r["exceptions"]["first"][0]["type"] == "ValueError"
 
 
-@pytest.mark.parametrize("kwargs", [{}, {"seconds": 1.0, "steps": 10}, {"seconds": 0.0}, {"steps": 0},
-                                    {"steps": 10, "sources": ("nope",)}])
+@pytest.mark.parametrize(
+    "kwargs", [{}, {"seconds": 1.0, "steps": 10}, {"seconds": 0.0}, {"steps": 0}, {"steps": 10, "sources": ("nope",)}]
+)
 def test_bad_arguments(kwargs) -> None:
     with pytest.raises(EvalError):
         run_soak_bench(progress=False, **kwargs)

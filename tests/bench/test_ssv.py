@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from redundancy_gym.cli import main
 from redundancy_gym.bench.ssv import PAIR_TYPES, TABLE_5_1, format_ssv_bench, run_ssv_bench
+from redundancy_gym.cli import main
 from redundancy_gym.eval.exceptions import EvalError
 
 

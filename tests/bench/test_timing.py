@@ -9,8 +9,8 @@ import time
 import pytest
 
 from redundancy_gym.bench.timing import RatioStats, TimedPasses, alternating_rounds, timed_call, timed_calls
-from redundancy_gym.eval.machine import finish_machine_info, machine_info
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.eval.machine import finish_machine_info, machine_info
 
 
 def _work(n: int) -> int:
@@ -18,8 +18,13 @@ def _work(n: int) -> int:
 
 
 def test_twice_the_work_gives_a_ratio_near_two() -> None:
-    rounds = alternating_rounds({"ours": timed_calls(lambda: _work(20000), min_time=0.01),
-                                 "peer": timed_calls(lambda: _work(10000), min_time=0.01)}, rounds=7)
+    rounds = alternating_rounds(
+        {
+            "ours": timed_calls(lambda: _work(20000), min_time=0.01),
+            "peer": timed_calls(lambda: _work(10000), min_time=0.01),
+        },
+        rounds=7,
+    )
     stats = rounds.ratio("ours", "peer")
     assert stats.rounds == 7
     assert stats.min <= stats.median <= stats.max
@@ -39,6 +44,7 @@ def test_order_alternates_and_warmup_is_not_recorded() -> None:
         def sample() -> float:
             calls.append(name)
             return float(next(values))
+
         return sample
 
     rounds = alternating_rounds({"a": sampler("a"), "b": sampler("b"), "c": sampler("c")}, rounds=4, warmup=2)

@@ -6,9 +6,9 @@ import json
 
 import pytest
 
-from redundancy_gym.eval.json_writer import write_json
 from redundancy_gym.bench.walk import LOLA_CYCLE_US, format_walk_bench, run_walk_bench
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.eval.json_writer import write_json
 
 
 def test_walk_bench_report(tmp_path) -> None:

@@ -141,7 +141,8 @@ def test_clik_reference_reaches_the_grasp_pose() -> None:
         assert info["goal_error"] <= 0.01 and np.degrees(info["orientation_error"]) <= 10.0 and info["goal_reached"]
         # the clik reference follows the env's own reference path to within the servo lag
         assert info["tracking_error"] < 0.01 and np.linalg.norm(info["tcp"] - info["tcp_ref"]) == pytest.approx(
-            info["tracking_error"])
+            info["tracking_error"]
+        )
 
 
 def test_invalid_arguments_name_the_valid_choices() -> None:

@@ -56,8 +56,9 @@ def _surface_points(obstacle: Obstacle, rng: np.random.Generator, n: int = 2000)
         face = rng.integers(3, size=n)
         u[np.arange(n), face] = rng.choice((-1.0, 1.0), n)
         local = 0.5 * u * np.asarray(obstacle.size)
-        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * 0.5 * np.asarray(
-            obstacle.size)
+        corners = (
+            np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * 0.5 * np.asarray(obstacle.size)
+        )
         return obstacle.to_world(np.concatenate([local, corners]))
     if obstacle.shape == "cylinder":
         radius, height = obstacle.size
@@ -85,8 +86,9 @@ def _surface_points(obstacle: Obstacle, rng: np.random.Generator, n: int = 2000)
 def _distance_to_volumes(points: np.ndarray, volumes: tuple[SSV, ...]) -> np.ndarray:
     """Smallest SSV distance [m] of each point (a PSS of radius 0) to the volumes."""
     out = np.full(len(points), np.inf)
-    packed_points = PackedVolumes(np.repeat(points[:, None], 3, axis=1), np.zeros(len(points)),
-                                  np.zeros(len(points), dtype=np.int64))
+    packed_points = PackedVolumes(
+        np.repeat(points[:, None], 3, axis=1), np.zeros(len(points)), np.zeros(len(points), dtype=np.int64)
+    )
     for v in volumes:
         many = PackedVolumes.from_volumes([v] * len(points))
         out = np.minimum(out, distances(packed_points, many).distance)
@@ -117,13 +119,20 @@ def test_swept_sphere_model_fits_the_shape(obstacle: Obstacle) -> None:
         assert [v.kind_name for v in volumes] == ["TSS", "TSS"]
         assert volumes[0].radius == pytest.approx(0.5 * min(obstacle.size))
         # the rectangle lies in the mid-plane: the box's centre is on it
-        assert distance(PSS(obstacle.center, 0.0), volumes[0]).distance + volumes[0].radius <= 1e-12 or \
-            distance(PSS(obstacle.center, 0.0), volumes[1]).distance + volumes[1].radius <= 1e-12
+        assert (
+            distance(PSS(obstacle.center, 0.0), volumes[0]).distance + volumes[0].radius <= 1e-12
+            or distance(PSS(obstacle.center, 0.0), volumes[1]).distance + volumes[1].radius <= 1e-12
+        )
     elif obstacle.shape == "prism":
         assert [v.kind_name for v in volumes] == ["TSS"] and volumes[0].radius == pytest.approx(0.5 * obstacle.size[0])
     else:
-        assert volumes == (LSS(np.subtract(obstacle.center, (0, 0, 0.5 * obstacle.height)),
-                               np.add(obstacle.center, (0, 0, 0.5 * obstacle.height)), obstacle.size[0]),)
+        assert volumes == (
+            LSS(
+                np.subtract(obstacle.center, (0, 0, 0.5 * obstacle.height)),
+                np.add(obstacle.center, (0, 0, 0.5 * obstacle.height)),
+                obstacle.size[0],
+            ),
+        )
 
 
 @pytest.mark.parametrize("obstacle", SHAPES, ids=lambda o: f"{o.shape}-yaw{o.yaw:g}")
@@ -155,7 +164,7 @@ def test_mjcf_geom_is_the_shape(obstacle: Obstacle) -> None:
     frame = data.geom_xmat[g].reshape(3, 3)
     if obstacle.shape == "prism":
         mesh = model.geom_dataid[g]
-        local = model.mesh_vert[model.mesh_vertadr[mesh]: model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
+        local = model.mesh_vert[model.mesh_vertadr[mesh] : model.mesh_vertadr[mesh] + model.mesh_vertnum[mesh]]
         world = data.geom_xpos[g] + local @ frame.T
         expected = obstacle.vertices()
         assert len(world) == 6 and all(np.min(np.linalg.norm(world - p, axis=1)) < 1e-6 for p in expected)
@@ -224,7 +233,7 @@ def test_random_courses_respect_every_range(kwargs: dict) -> None:
         assert n_range[0] <= len(course) <= n_range[1]
         x = [o.center[0] for o in course]
         assert x[0] == pytest.approx(first)
-        assert all(gap[0] <= b - a <= gap[1] for a, b in zip(x, x[1:]))
+        assert all(gap[0] <= b - a <= gap[1] for a, b in zip(x, x[1:], strict=False))
         for o in course:
             kinds.append(o.kind)
             shapes.add((o.kind, o.shape))
@@ -258,7 +267,8 @@ def test_random_courses_respect_every_range(kwargs: dict) -> None:
                 assert lower[1] > 0.0 or upper[1] < 0.0
     assert counts == set(range(n_range[0], n_range[1] + 1))
     assert {k: kinds.count(k) / len(kinds) for k in set(kinds)} == pytest.approx(
-        {"step_over": 1 / 3, "swing_around": 1 / 3, "beside": 1 / 3}, abs=0.06)
+        {"step_over": 1 / 3, "swing_around": 1 / 3, "beside": 1 / 3}, abs=0.06
+    )
     assert {("swing_around", "prism"), ("swing_around", "cylinder")} <= shapes
     # the overlap is uniform over 0-10 cm: its quartiles near 2.5, 5, 7.5 cm
     assert np.allclose(np.percentile(overlaps, [25, 50, 75]), [0.025, 0.05, 0.075], atol=0.012)
@@ -301,7 +311,7 @@ def test_observation_layout_padding_and_order() -> None:
     base.set_state(qpos, data.qvel)
     moved = base._get_obs()[81:].reshape(8, 14)
     behind = sum(float(v.points[:, 0].max() + v.radius) < qpos[0] - OBSTACLE_LOOKBEHIND for v in ordered)
-    assert behind >= 2 and np.array_equal(moved[: 6 - behind], block[behind:6]) and np.all(moved[6 - behind:] == 0)
+    assert behind >= 2 and np.array_equal(moved[: 6 - behind], block[behind:6]) and np.all(moved[6 - behind :] == 0)
 
 
 def test_foot_inside_a_box_is_an_obstacle_contact() -> None:
@@ -322,8 +332,9 @@ def test_foot_inside_a_box_is_an_obstacle_contact() -> None:
     assert reward == pytest.approx(sum(v for k, v in info.items() if k.startswith("reward_")))
     # the robot geoms in contact with the box: the left foot's
     box_id = int(base.obstacle_geoms[0])
-    touching = {base.model.geom(int(g)).name for pair in base.data.contact.geom if box_id in pair for g in pair
-                if g != box_id}
+    touching = {
+        base.model.geom(int(g)).name for pair in base.data.contact.geom if box_id in pair for g in pair if g != box_id
+    }
     assert touching and all(name.startswith("l_") for name in touching), touching
     _, _, _, _, info = env.step(np.zeros(22))
     assert info["obstacle_contacts"] >= 1 and not info["is_success"]
@@ -424,38 +435,52 @@ def test_random_course_per_reset_is_seeded() -> None:
     env.reset(seed=12)
     assert base.obstacles != course and base.model is not model
     assert [base.model.geom(int(g)).name for g in base.obstacle_geoms] == [
-        f"obstacle_{k}" for k in range(len(base.obstacles))]
+        f"obstacle_{k}" for k in range(len(base.obstacles))
+    ]
 
 
-@pytest.mark.parametrize(("kwargs", "match"), [
-    ({"course": "forest"}, "course must be one of beam, triangle, random"),
-    ({"obstacles": []}, "obstacles must be None or a non-empty list"),
-    ({"obstacles": {"shape": "box"}}, "obstacles must be None or a non-empty list"),
-    ({"obstacles": [{"shape": "sphere", "center": [1, 0, 0], "size": [1, 1, 1]}]},
-     r"obstacles\[0\]\['shape'\] must be one of box, prism, cylinder"),
-    ({"obstacles": [{"shape": "cylinder", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3]}]},
-     r"obstacles\[0\]\['size'\] must be a cylinder's \(radius, height\)"),
-    ({"obstacles": [{"shape": "box", "center": [1, 0], "size": [0.1, 0.2, 0.3]}]}, r"obstacles\[0\]\['center'\]"),
-    ({"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, -0.2, 0.3]}]}, r"obstacles\[0\]\['size'\]"),
-    ({"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3], "yaw": "left"}]},
-     r"obstacles\[0\]\['yaw'\]"),
-    ({"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3], "colour": "red"}]},
-     r"obstacles\[0\] has unknown key\(s\) colour"),
-    ({"obstacles": [{"shape": "box", "center": [1, 0, 0]}]}, r"obstacles\[0\] has missing key\(s\) size"),
-    ({"obstacles": [{"shape": "box", "center": [0.1, 0.0, 0.1], "size": [0.2, 0.2, 0.2]}]},
-     r"obstacles\[0\] overlaps the standing robot"),
-    ({"n_obstacles": (0, 3)}, "n_obstacles"),
-    ({"n_obstacles": (4, 3)}, "n_obstacles"),
-    ({"n_obstacles": (1.0, 3)}, "n_obstacles"),
-    ({"obstacle_spacing": (0.1, 1.0)}, "obstacle_spacing must be .* both >= 0.4"),
-    ({"first_obstacle_distance": 0.2}, "first_obstacle_distance must be .* >= 0.5"),
-    ({"observed_obstacles": -1}, "observed_obstacles"),
-    ({"observed_obstacles": 2.0}, "observed_obstacles"),
-    ({"contact_weight": -1.0}, "contact_weight"),
-    ({"success_distance": float("nan")}, "success_distance"),
-    ({"target_speed": 2.0}, "target_speed"),
-    ({"obstacle": None}, "unknown keyword argument.*valid: .*obstacles"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"course": "forest"}, "course must be one of beam, triangle, random"),
+        ({"obstacles": []}, "obstacles must be None or a non-empty list"),
+        ({"obstacles": {"shape": "box"}}, "obstacles must be None or a non-empty list"),
+        (
+            {"obstacles": [{"shape": "sphere", "center": [1, 0, 0], "size": [1, 1, 1]}]},
+            r"obstacles\[0\]\['shape'\] must be one of box, prism, cylinder",
+        ),
+        (
+            {"obstacles": [{"shape": "cylinder", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3]}]},
+            r"obstacles\[0\]\['size'\] must be a cylinder's \(radius, height\)",
+        ),
+        ({"obstacles": [{"shape": "box", "center": [1, 0], "size": [0.1, 0.2, 0.3]}]}, r"obstacles\[0\]\['center'\]"),
+        ({"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, -0.2, 0.3]}]}, r"obstacles\[0\]\['size'\]"),
+        (
+            {"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3], "yaw": "left"}]},
+            r"obstacles\[0\]\['yaw'\]",
+        ),
+        (
+            {"obstacles": [{"shape": "box", "center": [1, 0, 0], "size": [0.1, 0.2, 0.3], "colour": "red"}]},
+            r"obstacles\[0\] has unknown key\(s\) colour",
+        ),
+        ({"obstacles": [{"shape": "box", "center": [1, 0, 0]}]}, r"obstacles\[0\] has missing key\(s\) size"),
+        (
+            {"obstacles": [{"shape": "box", "center": [0.1, 0.0, 0.1], "size": [0.2, 0.2, 0.2]}]},
+            r"obstacles\[0\] overlaps the standing robot",
+        ),
+        ({"n_obstacles": (0, 3)}, "n_obstacles"),
+        ({"n_obstacles": (4, 3)}, "n_obstacles"),
+        ({"n_obstacles": (1.0, 3)}, "n_obstacles"),
+        ({"obstacle_spacing": (0.1, 1.0)}, "obstacle_spacing must be .* both >= 0.4"),
+        ({"first_obstacle_distance": 0.2}, "first_obstacle_distance must be .* >= 0.5"),
+        ({"observed_obstacles": -1}, "observed_obstacles"),
+        ({"observed_obstacles": 2.0}, "observed_obstacles"),
+        ({"contact_weight": -1.0}, "contact_weight"),
+        ({"success_distance": float("nan")}, "success_distance"),
+        ({"target_speed": 2.0}, "target_speed"),
+        ({"obstacle": None}, "unknown keyword argument.*valid: .*obstacles"),
+    ],
+)
 def test_invalid_arguments_raise_naming_the_argument(kwargs: dict, match: str) -> None:
     with pytest.raises(EnvConfigError, match=match):
         gym.make(ENV_ID, **kwargs)

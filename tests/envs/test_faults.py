@@ -19,8 +19,9 @@ AGRI = "redundancy_gym/AgriReach-v0"
 LAYOUT = BipedWalkEnv.OBSERVATION_LAYOUT
 
 
-def _run(env_id: str, steps: int = 100, seed: int = 3, action: Any = None,
-         **kwargs: Any) -> tuple[np.ndarray, np.ndarray, list[dict[str, Any]]]:
+def _run(
+    env_id: str, steps: int = 100, seed: int = 3, action: Any = None, **kwargs: Any
+) -> tuple[np.ndarray, np.ndarray, list[dict[str, Any]]]:
     """Observations (reset first) and rewards of ``steps`` steps of seeded small random actions."""
     env = gym.make(env_id, **kwargs)
     obs, _ = env.reset(seed=seed)
@@ -39,12 +40,19 @@ def _run(env_id: str, steps: int = 100, seed: int = 3, action: Any = None,
     return np.array(observations), np.array(rewards), infos
 
 
-@pytest.mark.parametrize(("env_id", "off"), [
-    (BIPED, {"sensor_noise": 0.0}), (BIPED, {"sensor_noise": None, "push": None, "actuator_torque_scale": 1.0}),
-    (BIPED, {"sensor_noise": {"q": 0.0}}), (BIPED, {"push": []}),
-    (PLANAR, {"obs_noise": 0}), (PLANAR, {"obs_noise": None}), (AGRI, {"obs_noise": 0.0}),
-    (AGRI, {"obs_noise": {"q": 0.0, "tcp": 0.0}}),
-])
+@pytest.mark.parametrize(
+    ("env_id", "off"),
+    [
+        (BIPED, {"sensor_noise": 0.0}),
+        (BIPED, {"sensor_noise": None, "push": None, "actuator_torque_scale": 1.0}),
+        (BIPED, {"sensor_noise": {"q": 0.0}}),
+        (BIPED, {"push": []}),
+        (PLANAR, {"obs_noise": 0}),
+        (PLANAR, {"obs_noise": None}),
+        (AGRI, {"obs_noise": 0.0}),
+        (AGRI, {"obs_noise": {"q": 0.0, "tcp": 0.0}}),
+    ],
+)
 def test_faults_off_are_bitwise_identical_to_the_defaults(env_id: str, off: dict[str, Any]) -> None:
     obs, rewards, _ = _run(env_id)
     obs_off, rewards_off, _ = _run(env_id, **off)
@@ -52,14 +60,33 @@ def test_faults_off_are_bitwise_identical_to_the_defaults(env_id: str, off: dict
     assert np.array_equal(rewards, rewards_off)
 
 
-@pytest.mark.parametrize(("env_id", "kwarg", "channels"), [
-    (BIPED, "sensor_noise", [LAYOUT[k] for k in ("q", "qdot", "right_force", "right_torque", "left_force",
-                                                  "left_torque", "imu_acceleration", "imu_gyro")]),
-    (PLANAR, "obs_noise", [slice(0, 4), slice(4, 8), slice(8, 10), slice(18, 20)]),  # tcp_error: from the noisy TCP
-    (AGRI, "obs_noise", [slice(0, 9), slice(9, 18), slice(18, 21), slice(47, 50)]),  # tcp_error as PlanarReach's
-])
-def test_observation_noise_is_seeded_and_on_the_measured_channels_only(env_id: str, kwarg: str,
-                                                                        channels: list[slice]) -> None:
+@pytest.mark.parametrize(
+    ("env_id", "kwarg", "channels"),
+    [
+        (
+            BIPED,
+            "sensor_noise",
+            [
+                LAYOUT[k]
+                for k in (
+                    "q",
+                    "qdot",
+                    "right_force",
+                    "right_torque",
+                    "left_force",
+                    "left_torque",
+                    "imu_acceleration",
+                    "imu_gyro",
+                )
+            ],
+        ),
+        (PLANAR, "obs_noise", [slice(0, 4), slice(4, 8), slice(8, 10), slice(18, 20)]),  # tcp_error: from the noisy TCP
+        (AGRI, "obs_noise", [slice(0, 9), slice(9, 18), slice(18, 21), slice(47, 50)]),  # tcp_error as PlanarReach's
+    ],
+)
+def test_observation_noise_is_seeded_and_on_the_measured_channels_only(
+    env_id: str, kwarg: str, channels: list[slice]
+) -> None:
     clean, rewards, _ = _run(env_id, steps=30)
     noisy, noisy_rewards, _ = _run(env_id, steps=30, **{kwarg: 0.01})
     again, _, _ = _run(env_id, steps=30, **{kwarg: 0.01})
@@ -77,13 +104,21 @@ def test_observation_noise_is_seeded_and_on_the_measured_channels_only(env_id: s
     assert np.array_equal(noisy[:, ~measured], clean[:, ~measured])
 
 
-@pytest.mark.parametrize(("env_id", "kwarg", "part", "std"), [
-    (BIPED, "sensor_noise", "q", 0.02), (BIPED, "sensor_noise", "force", 5.0),
-    (PLANAR, "obs_noise", "q", 0.05), (AGRI, "obs_noise", "q", 0.05),
-])
+@pytest.mark.parametrize(
+    ("env_id", "kwarg", "part", "std"),
+    [
+        (BIPED, "sensor_noise", "q", 0.02),
+        (BIPED, "sensor_noise", "force", 5.0),
+        (PLANAR, "obs_noise", "q", 0.05),
+        (AGRI, "obs_noise", "q", 0.05),
+    ],
+)
 def test_observation_noise_has_the_requested_std(env_id: str, kwarg: str, part: str, std: float) -> None:
-    slices = {BIPED: {"q": LAYOUT["q"], "force": LAYOUT["right_force"]}, PLANAR: {"q": slice(0, 4)},
-              AGRI: {"q": slice(0, 9)}}[env_id]
+    slices = {
+        BIPED: {"q": LAYOUT["q"], "force": LAYOUT["right_force"]},
+        PLANAR: {"q": slice(0, 4)},
+        AGRI: {"q": slice(0, 9)},
+    }[env_id]
     value = {part: std} if env_id == BIPED else std
     zero = np.zeros({BIPED: 22, PLANAR: 4, AGRI: 9}[env_id])  # no resets
     clean, _, _ = _run(env_id, steps=200, seed=5, action=zero)
@@ -109,8 +144,7 @@ def _stand(steps: int, **kwargs: Any) -> tuple[np.ndarray, list[dict[str, Any]]]
 
 
 @pytest.mark.parametrize(("force", "axis"), [((0.0, 150.0, 0.0), 1), ((-150.0, 0.0, 0.0), 0)])
-def test_scheduled_push_moves_the_base_in_its_direction_during_its_window(force: tuple[float, ...],
-                                                                         axis: int) -> None:
+def test_scheduled_push_moves_the_base_in_its_direction_during_its_window(force: tuple[float, ...], axis: int) -> None:
     dt = 0.004
     steps = 150  # 0.6 s; the push acts in [0.4, 0.5)
     obs, infos = _stand(steps, push=[{"time": 0.4, "force": force, "duration": 0.1}])
@@ -118,7 +152,7 @@ def test_scheduled_push_moves_the_base_in_its_direction_during_its_window(force:
     velocity = LAYOUT["base_linear_velocity"].start + axis
     sign = np.sign(force[axis])
     start, end = int(round(0.4 / dt)), int(round(0.5 / dt))  # obs[k] is after k steps
-    assert np.array_equal(obs[:start + 1], ref[:start + 1])  # nothing before the window
+    assert np.array_equal(obs[: start + 1], ref[: start + 1])  # nothing before the window
     pushed = [np.asarray(i["push_force"]) for i in infos]
     assert all(not p.any() for p in pushed[:start]) and all(not p.any() for p in pushed[end:])
     assert all(np.array_equal(p, force) for p in pushed[start:end])
@@ -187,30 +221,33 @@ def test_actuator_torque_scale_weakens_the_servos() -> None:
     assert results[0.3][0] <= 0.3 * 250.0 + 1e-6 < results[1.0][0]
 
 
-@pytest.mark.parametrize(("env_id", "kwargs", "name"), [
-    (BIPED, {"sensor_noise": -0.1}, "sensor_noise"),
-    (BIPED, {"sensor_noise": "0.1"}, "sensor_noise"),
-    (BIPED, {"sensor_noise": float("nan")}, "sensor_noise"),
-    (BIPED, {"sensor_noise": {"gps": 0.1}}, "sensor_noise"),
-    (BIPED, {"sensor_noise": {"q": -1.0}}, "sensor_noise"),
-    (BIPED, {"actuator_torque_scale": 0.0}, "actuator_torque_scale"),
-    (BIPED, {"actuator_torque_scale": 1.5}, "actuator_torque_scale"),
-    (BIPED, {"actuator_torque_scale": True}, "actuator_torque_scale"),
-    (BIPED, {"push": "yes"}, "push"),
-    (BIPED, {"push": [{"time": -1.0, "force": [0, 1, 0], "duration": 0.1}]}, r"push\[0\]\['time'\]"),
-    (BIPED, {"push": [{"time": 1.0, "force": [0, 1], "duration": 0.1}]}, r"push\[0\]\['force'\]"),
-    (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.0}]}, r"push\[0\]\['duration'\]"),
-    (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0]}]}, r"push\[0\]"),
-    (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.1, "body": "tail"}]}, "push"),
-    (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.1, "bdy": "torso"}]}, r"push\[0\]"),
-    (BIPED, {"push": {"rate": 0.0, "force": (1, 2), "duration": 0.1}}, r"push\['rate'\]"),
-    (BIPED, {"push": {"rate": 1.0, "force": (2, 1), "duration": 0.1}}, r"push\['force'\]"),
-    (BIPED, {"push": {"rate": 1.0, "force": (1, 2), "duration": 0.1, "direction": "up"}}, r"push\['direction'\]"),
-    (PLANAR, {"obs_noise": -0.1}, "obs_noise"),
-    (PLANAR, {"obs_noise": {"target": 0.1}}, "obs_noise"),
-    (AGRI, {"obs_noise": float("inf")}, "obs_noise"),
-    (AGRI, {"obs_noise": [0.1]}, "obs_noise"),
-])
+@pytest.mark.parametrize(
+    ("env_id", "kwargs", "name"),
+    [
+        (BIPED, {"sensor_noise": -0.1}, "sensor_noise"),
+        (BIPED, {"sensor_noise": "0.1"}, "sensor_noise"),
+        (BIPED, {"sensor_noise": float("nan")}, "sensor_noise"),
+        (BIPED, {"sensor_noise": {"gps": 0.1}}, "sensor_noise"),
+        (BIPED, {"sensor_noise": {"q": -1.0}}, "sensor_noise"),
+        (BIPED, {"actuator_torque_scale": 0.0}, "actuator_torque_scale"),
+        (BIPED, {"actuator_torque_scale": 1.5}, "actuator_torque_scale"),
+        (BIPED, {"actuator_torque_scale": True}, "actuator_torque_scale"),
+        (BIPED, {"push": "yes"}, "push"),
+        (BIPED, {"push": [{"time": -1.0, "force": [0, 1, 0], "duration": 0.1}]}, r"push\[0\]\['time'\]"),
+        (BIPED, {"push": [{"time": 1.0, "force": [0, 1], "duration": 0.1}]}, r"push\[0\]\['force'\]"),
+        (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.0}]}, r"push\[0\]\['duration'\]"),
+        (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0]}]}, r"push\[0\]"),
+        (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.1, "body": "tail"}]}, "push"),
+        (BIPED, {"push": [{"time": 1.0, "force": [0, 1, 0], "duration": 0.1, "bdy": "torso"}]}, r"push\[0\]"),
+        (BIPED, {"push": {"rate": 0.0, "force": (1, 2), "duration": 0.1}}, r"push\['rate'\]"),
+        (BIPED, {"push": {"rate": 1.0, "force": (2, 1), "duration": 0.1}}, r"push\['force'\]"),
+        (BIPED, {"push": {"rate": 1.0, "force": (1, 2), "duration": 0.1, "direction": "up"}}, r"push\['direction'\]"),
+        (PLANAR, {"obs_noise": -0.1}, "obs_noise"),
+        (PLANAR, {"obs_noise": {"target": 0.1}}, "obs_noise"),
+        (AGRI, {"obs_noise": float("inf")}, "obs_noise"),
+        (AGRI, {"obs_noise": [0.1]}, "obs_noise"),
+    ],
+)
 def test_invalid_fault_arguments_raise_naming_the_argument(env_id: str, kwargs: dict[str, Any], name: str) -> None:
     with pytest.raises(EnvConfigError, match=name):
         gym.make(env_id, **kwargs)

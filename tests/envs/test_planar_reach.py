@@ -52,8 +52,9 @@ def test_zero_action_holds_posture_and_accumulates_error() -> None:
     assert np.allclose(obs[:4], obs0[:4], atol=1e-3)  # gravity compensated, servo holds
     assert info["min_clearance"] == float("inf") and not info["collision"]
     assert info["tracking_error"] > 0.1 and not info["is_success"]
-    assert info["goal_error"] == pytest.approx(np.linalg.norm(np.subtract(default_config()["line_end"],
-                                                                          default_config()["line_start"])), abs=2e-3)
+    assert info["goal_error"] == pytest.approx(
+        np.linalg.norm(np.subtract(default_config()["line_end"], default_config()["line_start"])), abs=2e-3
+    )
 
 
 def test_collision_terminates() -> None:
@@ -75,9 +76,14 @@ def test_collision_terminates() -> None:
 
 @pytest.mark.parametrize(
     "kwargs, match",
-    [(dict(duration=0.0), "duration"), (dict(line_start=(1.5, 0.5)), "reach"), (dict(obstacle_radius=-1), "radius"),
-     (dict(line_end=(0.9,)), "line_end"), (dict(frame_skip=0), "frame_skip"),
-     (dict(initial_configuration=(0, 0, 0)), "initial_configuration")],
+    [
+        (dict(duration=0.0), "duration"),
+        (dict(line_start=(1.5, 0.5)), "reach"),
+        (dict(obstacle_radius=-1), "radius"),
+        (dict(line_end=(0.9,)), "line_end"),
+        (dict(frame_skip=0), "frame_skip"),
+        (dict(initial_configuration=(0, 0, 0)), "initial_configuration"),
+    ],
 )
 def test_invalid_kwargs(kwargs: dict, match: str) -> None:
     with pytest.raises(EnvConfigError, match=match):

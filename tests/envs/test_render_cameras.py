@@ -14,8 +14,9 @@ import redundancy_gym  # noqa: F401 - registers the ids
 WIDTH, HEIGHT = 320, 240
 
 
-def _project(model: mujoco.MjModel, data: mujoco.MjData, camera: str, points: NDArray[np.float64],
-             width: int, height: int) -> NDArray[np.float64]:
+def _project(
+    model: mujoco.MjModel, data: mujoco.MjData, camera: str, points: NDArray[np.float64], width: int, height: int
+) -> NDArray[np.float64]:
     """Pixel (column, row) of world ``points`` (N, 3) in ``camera``'s image; NaN behind the camera."""
     cam = model.camera(camera).id
     rotation = data.cam_xmat[cam].reshape(3, 3)  # columns: image right, image up, backwards
@@ -23,16 +24,21 @@ def _project(model: mujoco.MjModel, data: mujoco.MjData, camera: str, points: ND
     depth = -local[:, 2]
     focal = 0.5 * height / np.tan(np.deg2rad(model.cam_fovy[cam]) / 2.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        pixels = np.column_stack([0.5 * width + focal * local[:, 0] / depth,
-                                  0.5 * height - focal * local[:, 1] / depth])
+        pixels = np.column_stack(
+            [0.5 * width + focal * local[:, 0] / depth, 0.5 * height - focal * local[:, 1] / depth]
+        )
     pixels[depth <= 0.0] = np.nan
     return pixels
 
 
 def _inside(pixels: NDArray[np.float64], width: int, height: int, margin: float = 0.0) -> NDArray[np.bool_]:
     col, row = pixels[:, 0], pixels[:, 1]
-    return ((col >= margin * width) & (col <= (1 - margin) * width) & (row >= margin * height)
-            & (row <= (1 - margin) * height))
+    return (
+        (col >= margin * width)
+        & (col <= (1 - margin) * width)
+        & (row >= margin * height)
+        & (row <= (1 - margin) * height)
+    )
 
 
 def test_projection_matches_the_renderer() -> None:
@@ -70,7 +76,7 @@ def test_biped_camera_tracks_a_lit_textured_floor(forward: float) -> None:
     assert _inside(pixels, WIDTH, HEIGHT, margin=0.05).all()
     com = _project(u.model, u.data, "track", u.data.subtree_com[u.model.body("pelvis").id], WIDTH, HEIGHT)[0]
     assert abs(com[0] - 0.5 * WIDTH) < 0.15 * WIDTH and abs(com[1] - 0.5 * HEIGHT) < 0.2 * HEIGHT
-    floor = frame[3 * HEIGHT // 4:]  # the bottom quarter shows floor only
+    floor = frame[3 * HEIGHT // 4 :]  # the bottom quarter shows floor only
     assert floor.mean() > 90.0  # lit (the old scene: about 22 after 4.6 m)
     assert floor.mean(axis=2).std() > 15.0  # the checker contrasts (old scene: about 3)
     env.close()
@@ -90,7 +96,7 @@ def test_biped_camera_follows_the_walk() -> None:
     frame = env.render().astype(np.float64)
     pixels = _project(u.model, u.data, "track", u.data.geom_xpos[u.model.geom_bodyid > 0], WIDTH, HEIGHT)
     assert _inside(pixels, WIDTH, HEIGHT, margin=0.05).all()
-    assert frame[3 * HEIGHT // 4:].mean() > 90.0
+    assert frame[3 * HEIGHT // 4 :].mean() > 90.0
     env.close()
 
 
@@ -98,8 +104,9 @@ def test_biped_camera_follows_the_walk() -> None:
 def test_agri_cameras_frame_the_target_arm_and_plants(camera: str) -> None:
     """For several seeds: the target pepper, the TCP and the shoulder project well inside the frame, as do most
     placed plant parts near the target; the pepper itself is seen (not hidden by leaves) for most seeds."""
-    env = gym.make("redundancy_gym/AgriReach-v0", render_mode="rgb_array", camera_name=camera, width=WIDTH,
-                   height=WIDTH)
+    env = gym.make(
+        "redundancy_gym/AgriReach-v0", render_mode="rgb_array", camera_name=camera, width=WIDTH, height=WIDTH
+    )
     u = env.unwrapped
     segmenter = mujoco.Renderer(u.model, WIDTH, WIDTH)
     segmenter.enable_segmentation_rendering()

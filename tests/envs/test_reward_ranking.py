@@ -27,11 +27,14 @@ def _returns(env_id: str, env_kwargs: dict, policy: str, episodes: int) -> np.nd
     return np.array([episode["return"] for episode in report.to_json()["per_episode"]])
 
 
-@pytest.mark.parametrize("env_id, env_kwargs, reference, episodes, still_share", CASES,
-                         ids=[f"{c[0].split('/')[1]}-{c[2]}-{'-'.join(f'{k}={v}' for k, v in c[1].items())}"
-                              for c in CASES])
-def test_reference_beats_standing_still_which_beats_random_actions(env_id, env_kwargs, reference, episodes,
-                                                                    still_share):
+@pytest.mark.parametrize(
+    "env_id, env_kwargs, reference, episodes, still_share",
+    CASES,
+    ids=[f"{c[0].split('/')[1]}-{c[2]}-{'-'.join(f'{k}={v}' for k, v in c[1].items())}" for c in CASES],
+)
+def test_reference_beats_standing_still_which_beats_random_actions(
+    env_id, env_kwargs, reference, episodes, still_share
+):
     best = _returns(env_id, env_kwargs, reference, episodes)
     still = _returns(env_id, env_kwargs, "zero", episodes)
     random = _returns(env_id, env_kwargs, "random", episodes)

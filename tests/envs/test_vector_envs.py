@@ -32,8 +32,14 @@ def test_sync_vector_env_steps(env_id: str) -> None:
     _rollout(env_id, "sync")
 
 
-@pytest.mark.parametrize("env_id", ["redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-Nullspace-v0",
-                                    "redundancy_gym/BipedWalk-WalkingCommand-v0"])
+@pytest.mark.parametrize(
+    "env_id",
+    [
+        "redundancy_gym/PlanarReach-v0",
+        "redundancy_gym/AgriReach-Nullspace-v0",
+        "redundancy_gym/BipedWalk-WalkingCommand-v0",
+    ],
+)
 def test_async_steps_as_sync(env_id: str) -> None:
     for a, b in zip(_rollout(env_id, "sync"), _rollout(env_id, "async"), strict=True):
         np.testing.assert_array_equal(a, b)
@@ -46,8 +52,9 @@ def test_sb3_subproc_vec_env_on_a_wrapped_id() -> None:
 
     # SB3 starts its workers with forkserver: "module:id" makes gym.make import the package (and register the ids)
     # in each worker
-    envs = make_vec_env("redundancy_gym:redundancy_gym/PlanarReach-Residual-v0", n_envs=2, seed=0,
-                        vec_env_cls=SubprocVecEnv)
+    envs = make_vec_env(
+        "redundancy_gym:redundancy_gym/PlanarReach-Residual-v0", n_envs=2, seed=0, vec_env_cls=SubprocVecEnv
+    )
     try:
         envs.reset()
         obs, reward, done, info = envs.step(np.zeros((2, 4), dtype=np.float32))

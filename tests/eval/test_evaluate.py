@@ -6,9 +6,25 @@ from redundancy_gym.cli import main
 from redundancy_gym.eval import EvalError, evaluate, format_report
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
-CONTRACT = {"env", "policy", "episodes", "success_rate", "collision_rate", "tracking_error_rms", "tracking_error_max",
-            "goal_error", "goal_error_max", "goal_reached_rate", "time_to_goal", "pseudoenergy", "peak_joint_speed",
-            "min_clearance", "step_time_us", "compute_time_per_episode_ms", "episode_return"}
+CONTRACT = {
+    "env",
+    "policy",
+    "episodes",
+    "success_rate",
+    "collision_rate",
+    "tracking_error_rms",
+    "tracking_error_max",
+    "goal_error",
+    "goal_error_max",
+    "goal_reached_rate",
+    "time_to_goal",
+    "pseudoenergy",
+    "peak_joint_speed",
+    "min_clearance",
+    "step_time_us",
+    "compute_time_per_episode_ms",
+    "episode_return",
+}
 
 
 def test_json_contract_and_clik_success() -> None:
@@ -32,15 +48,36 @@ def test_zero_policy_fails_and_collision_is_counted() -> None:
     data = evaluate(ENV_ID, "zero", episodes=2, seed=0, progress=False).to_json()
     assert data["success_rate"] == 0.0 and data["tracking_error_max"] > 0.1
     assert data["goal_reached_rate"] == 0.0 and data["time_to_goal"] is None
-    blocked = evaluate(ENV_ID, "clik", episodes=2, seed=0, progress=False,
-                       env_kwargs={"obstacle_center": (0.9, 0.2), "obstacle_radius": 0.05}).to_json()
+    blocked = evaluate(
+        ENV_ID,
+        "clik",
+        episodes=2,
+        seed=0,
+        progress=False,
+        env_kwargs={"obstacle_center": (0.9, 0.2), "obstacle_radius": 0.05},
+    ).to_json()
     assert blocked["collision_rate"] == 1.0 and blocked["min_clearance"] <= 0.0
 
 
 def test_cli_eval_writes_json(tmp_path, capsys) -> None:
     out = tmp_path / "report.json"
-    code = main(["eval", ENV_ID, "--policy", "clik", "--episodes", "2", "--seed", "5", "--no-progress",
-                 "--env-kwargs", '{"obstacle": false}', "--json", str(out)])
+    code = main(
+        [
+            "eval",
+            ENV_ID,
+            "--policy",
+            "clik",
+            "--episodes",
+            "2",
+            "--seed",
+            "5",
+            "--no-progress",
+            "--env-kwargs",
+            '{"obstacle": false}',
+            "--json",
+            str(out),
+        ]
+    )
     assert code == 0
     data = json.loads(out.read_text())
     assert CONTRACT <= set(data) and data["episodes"] == 2 and data["env_kwargs"] == {"obstacle": False}
@@ -77,8 +114,9 @@ def test_agri_tracking_error_separates_the_reference_from_holding_still() -> Non
 
 
 def test_biped_reports_speed_error_not_tracking_error() -> None:
-    data = evaluate("redundancy_gym/BipedWalk-v0", "zero", episodes=1, seed=0, progress=False,
-                    env_kwargs={"target_speed": 0.5}).to_json()
+    data = evaluate(
+        "redundancy_gym/BipedWalk-v0", "zero", episodes=1, seed=0, progress=False, env_kwargs={"target_speed": 0.5}
+    ).to_json()
     assert data["tracking_error_rms"] is None and data["goal_error"] is None
     # standing still (or falling) at a 0.5 m/s command: the mean speed error is about the command
     assert data["speed_error"] == pytest.approx(0.5, abs=0.1) and data["speed_error_rms"] > 0.3

@@ -23,16 +23,20 @@ def _without_timings(report: dict) -> dict:
     return out
 
 
-@pytest.mark.parametrize(("env_id", "policy", "episodes", "env_kwargs"), [
-    ("redundancy_gym/PlanarReach-v0", "clik", 5, {"obstacle": True}),
-    ("redundancy_gym/PlanarReach-v0", "random", 3, {}),  # reseeded per episode: order does not matter
-    ("redundancy_gym/AgriReach-v0", "clik", 3, {}),
-    ("redundancy_gym/BipedWalk-v0", "walking", 2, {"max_episode_steps": 300}),
-])
+@pytest.mark.parametrize(
+    ("env_id", "policy", "episodes", "env_kwargs"),
+    [
+        ("redundancy_gym/PlanarReach-v0", "clik", 5, {"obstacle": True}),
+        ("redundancy_gym/PlanarReach-v0", "random", 3, {}),  # reseeded per episode: order does not matter
+        ("redundancy_gym/AgriReach-v0", "clik", 3, {}),
+        ("redundancy_gym/BipedWalk-v0", "walking", 2, {"max_episode_steps": 300}),
+    ],
+)
 def test_workers_give_the_serial_json(env_id: str, policy: str, episodes: int, env_kwargs: dict) -> None:
     serial = evaluate(env_id, policy, episodes=episodes, seed=40, env_kwargs=env_kwargs, progress=False).to_json()
-    split = evaluate(env_id, policy, episodes=episodes, seed=40, env_kwargs=env_kwargs, progress=False,
-                     workers=2).to_json()
+    split = evaluate(
+        env_id, policy, episodes=episodes, seed=40, env_kwargs=env_kwargs, progress=False, workers=2
+    ).to_json()
     assert _without_timings(split) == _without_timings(serial)
     assert split["step_time_us"]["steps"] == serial["step_time_us"]["steps"]
 
@@ -66,8 +70,9 @@ def test_a_killed_worker_fails_its_seeds_and_a_retry_completes_the_serial_json(t
     assert _without_timings(retried.to_json()) == _without_timings(serial)
 
 
-def test_an_exception_in_an_episode_is_reported_with_its_seed_and_the_cli_exits_non_zero(tmp_path, monkeypatch,
-                                                                                         capsys) -> None:
+def test_an_exception_in_an_episode_is_reported_with_its_seed_and_the_cli_exits_non_zero(
+    tmp_path, monkeypatch, capsys
+) -> None:
     original = parallel._run_seed
 
     def run(seed: int):
@@ -83,8 +88,25 @@ def test_an_exception_in_an_episode_is_reported_with_its_seed_and_the_cli_exits_
     monkeypatch.setattr(parallel, "_start_method", lambda: "fork")  # the zero policy: no torch in the workers
     monkeypatch.setattr(parallel, "_run_seed", run)
     path = tmp_path / "eval.json"
-    code = main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "zero", "--episodes", "4", "--seed", "0",
-                 "--workers", "2", "--retries", "1", "--json", str(path), "--no-progress"])
+    code = main(
+        [
+            "eval",
+            "redundancy_gym/PlanarReach-v0",
+            "--policy",
+            "zero",
+            "--episodes",
+            "4",
+            "--seed",
+            "0",
+            "--workers",
+            "2",
+            "--retries",
+            "1",
+            "--json",
+            str(path),
+            "--no-progress",
+        ]
+    )
     err = capsys.readouterr().err
     assert code == 2 and not path.exists()  # never a partial table
     assert "1 episode(s) failed after 2 attempt(s): seeds 2" in err and "simulated fault in episode 2" in err
@@ -111,8 +133,24 @@ def test_bad_arguments_are_named() -> None:
 def test_cli_workers_write_the_serial_json(tmp_path) -> None:
     paths = [tmp_path / "serial.json", tmp_path / "split.json"]
     for path, workers in zip(paths, ("1", "2"), strict=True):
-        assert main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "clik", "--episodes", "3", "--workers",
-                     workers, "--json", str(path), "--no-progress"]) == 0
+        assert (
+            main(
+                [
+                    "eval",
+                    "redundancy_gym/PlanarReach-v0",
+                    "--policy",
+                    "clik",
+                    "--episodes",
+                    "3",
+                    "--workers",
+                    workers,
+                    "--json",
+                    str(path),
+                    "--no-progress",
+                ]
+            )
+            == 0
+        )
     serial, split = (json.loads(p.read_text()) for p in paths)
     assert _without_timings(split) == _without_timings(serial)
 

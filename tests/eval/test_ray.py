@@ -36,15 +36,26 @@ def local_ray():
     ray.shutdown()
 
 
-@pytest.mark.parametrize(("env_id", "policy", "episodes", "env_kwargs"), [
-    ("redundancy_gym/PlanarReach-v0", "clik", 4, {"obstacle": True}),
-    ("redundancy_gym/AgriReach-v0", "clik", 3, {}),
-    ("redundancy_gym/BipedWalk-v0", "walking", 2, {"max_episode_steps": 300}),
-])
+@pytest.mark.parametrize(
+    ("env_id", "policy", "episodes", "env_kwargs"),
+    [
+        ("redundancy_gym/PlanarReach-v0", "clik", 4, {"obstacle": True}),
+        ("redundancy_gym/AgriReach-v0", "clik", 3, {}),
+        ("redundancy_gym/BipedWalk-v0", "walking", 2, {"max_episode_steps": 300}),
+    ],
+)
 def test_ray_gives_the_serial_json(env_id: str, policy: str, episodes: int, env_kwargs: dict) -> None:
     serial = evaluate(env_id, policy, episodes=episodes, seed=50, env_kwargs=env_kwargs, progress=False).to_json()
-    remote = evaluate(env_id, policy, episodes=episodes, seed=50, env_kwargs=env_kwargs, progress=False, workers=2,
-                      ray_address=LOCAL_RAY).to_json()
+    remote = evaluate(
+        env_id,
+        policy,
+        episodes=episodes,
+        seed=50,
+        env_kwargs=env_kwargs,
+        progress=False,
+        workers=2,
+        ray_address=LOCAL_RAY,
+    ).to_json()
     assert _without_timings(remote) == _without_timings(serial)
 
 
@@ -78,15 +89,44 @@ def test_a_killed_ray_actor_fails_its_seeds_and_a_retry_completes(tmp_path: Path
 
 def test_cli_ray_uses_the_clusters_cpus(tmp_path: Path, capsys) -> None:
     path = tmp_path / "ray.json"
-    assert main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "zero", "--episodes", "3", "--ray",
-                 "--json", str(path), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "eval",
+                "redundancy_gym/PlanarReach-v0",
+                "--policy",
+                "zero",
+                "--episodes",
+                "3",
+                "--ray",
+                "--json",
+                str(path),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     assert path.is_file()
 
 
 def test_without_ray_the_option_says_how_to_install_it(monkeypatch, capsys) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # import ray now raises ImportError
-    assert main(["eval", "redundancy_gym/PlanarReach-v0", "--policy", "zero", "--episodes", "1", "--ray", "1.2.3.4:6379",
-                 "--no-progress"]) == 2
+    assert (
+        main(
+            [
+                "eval",
+                "redundancy_gym/PlanarReach-v0",
+                "--policy",
+                "zero",
+                "--episodes",
+                "1",
+                "--ray",
+                "1.2.3.4:6379",
+                "--no-progress",
+            ]
+        )
+        == 2
+    )
     assert "pip install -e '.[ray]'" in capsys.readouterr().err
 
 
@@ -101,16 +141,42 @@ def test_seed_sweep_on_ray_trains_each_seed_as_a_serial_run_would(tmp_path: Path
     from redundancy_gym.learning.training import train
 
     config = tmp_path / "ppo.yaml"
-    config.write_text("redundancy_gym/PlanarReach-v0:\n  n_timesteps: 128\n  n_envs: 1\n  n_steps: 128\n"
-                      "  batch_size: 64\n  n_epochs: 1\n")
+    config.write_text(
+        "redundancy_gym/PlanarReach-v0:\n  n_timesteps: 128\n  n_envs: 1\n  n_steps: 128\n"
+        "  batch_size: 64\n  n_epochs: 1\n"
+    )
     out = tmp_path / "sweep.zip"
-    assert main(["train", "redundancy_gym/PlanarReach-v0", "--config", str(config), "--ray", "--seeds", "0", "3",
-                 "--out", str(out), "--no-progress"]) == 0
+    assert (
+        main(
+            [
+                "train",
+                "redundancy_gym/PlanarReach-v0",
+                "--config",
+                str(config),
+                "--ray",
+                "--seeds",
+                "0",
+                "3",
+                "--out",
+                str(out),
+                "--no-progress",
+            ]
+        )
+        == 0
+    )
     sweep = json.loads((tmp_path / "sweep_sweep.json").read_text())
     assert set(sweep["rows"]) == {"0", "3"} and sweep["failed"] == {}
     assert sweep["rows"]["3"]["report"]["seed"] == 20000 and sweep["rows"]["3"]["training"]["env_steps"] == 128
-    serial = train("redundancy_gym/PlanarReach-v0", "ppo", 128, tmp_path / "serial3.zip", seed=3,
-                   hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1}, progress_bar=False, log=None)
+    serial = train(
+        "redundancy_gym/PlanarReach-v0",
+        "ppo",
+        128,
+        tmp_path / "serial3.zip",
+        seed=3,
+        hyperparameters={"n_steps": 128, "batch_size": 64, "n_epochs": 1},
+        progress_bar=False,
+        log=None,
+    )
     a, b = PPO.load(serial, device="cpu"), PPO.load(tmp_path / "sweep_seed3.zip", device="cpu")
     for x, y in zip(a.policy.parameters(), b.policy.parameters(), strict=True):
         np.testing.assert_array_equal(x.detach().numpy(), y.detach().numpy())
@@ -132,8 +198,9 @@ def test_bench_learned_on_ray_gives_the_local_table(tmp_path: Path) -> None:
     from redundancy_gym.bench.learned import run_learned_bench
 
     local = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None)
-    remote = run_learned_bench(episodes=1, envs=["planar_reach"], progress=False, log=None, workers=2,
-                               ray_address=LOCAL_RAY)
+    remote = run_learned_bench(
+        episodes=1, envs=["planar_reach"], progress=False, log=None, workers=2, ray_address=LOCAL_RAY
+    )
     for label, row in local["envs"]["planar_reach"]["rows"].items():
         other = remote["envs"]["planar_reach"]["rows"][label]
         assert _without_timings(other["report"]) == _without_timings(row["report"])

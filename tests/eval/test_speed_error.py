@@ -18,22 +18,49 @@ from redundancy_gym.eval.speed_error import (
 )
 
 
-def _report(mean_us: float, tracking_max: float, *, success: float = 1.0, median_us: float | None = None,
-            first_us: float = 20.0, pseudoenergy: float = 0.5, **extra: Any) -> dict[str, Any]:
+def _report(
+    mean_us: float,
+    tracking_max: float,
+    *,
+    success: float = 1.0,
+    median_us: float | None = None,
+    first_us: float = 20.0,
+    pseudoenergy: float = 0.5,
+    **extra: Any,
+) -> dict[str, Any]:
     """A synthetic evaluation-contract object (SI units, as ``EvalReport.to_json`` writes them)."""
     median = mean_us if median_us is None else median_us
-    return {"env": "redundancy_gym/PlanarReach-v0", "env_kwargs": {"obstacle": False}, "episodes": 5, "seed": 3,
-            "success_rate": success, "collision_rate": 0.0, "tracking_error_rms": 0.6 * tracking_max,
-            "tracking_error_max": tracking_max, "goal_error": 0.002, "time_to_goal": 1.5,
-            "pseudoenergy": pseudoenergy,
-            "step_time_us": {"median": median, "p99": 2.0 * median, "mean": mean_us, "first_step_mean": first_us},
-            **extra}
+    return {
+        "env": "redundancy_gym/PlanarReach-v0",
+        "env_kwargs": {"obstacle": False},
+        "episodes": 5,
+        "seed": 3,
+        "success_rate": success,
+        "collision_rate": 0.0,
+        "tracking_error_rms": 0.6 * tracking_max,
+        "tracking_error_max": tracking_max,
+        "goal_error": 0.002,
+        "time_to_goal": 1.5,
+        "pseudoenergy": pseudoenergy,
+        "step_time_us": {"median": median, "p99": 2.0 * median, "mean": mean_us, "first_step_mean": first_us},
+        **extra,
+    }
 
 
 def _biped(mean_us: float, speed: float) -> dict[str, Any]:
-    return {**_report(mean_us, 0.0), "env": "redundancy_gym/BipedWalk-v0", "env_kwargs": {"target_speed": 0.7},
-            "episodes": 2, "seed": 0, "tracking_error_rms": None, "tracking_error_max": None, "goal_error": None,
-            "time_to_goal": None, "speed_error": speed, "speed_error_rms": 4.0 * speed}
+    return {
+        **_report(mean_us, 0.0),
+        "env": "redundancy_gym/BipedWalk-v0",
+        "env_kwargs": {"target_speed": 0.7},
+        "episodes": 2,
+        "seed": 0,
+        "tracking_error_rms": None,
+        "tracking_error_max": None,
+        "goal_error": None,
+        "time_to_goal": None,
+        "speed_error": speed,
+        "speed_error_rms": 4.0 * speed,
+    }
 
 
 def _table(text: str) -> list[list[str]]:
@@ -41,16 +68,29 @@ def _table(text: str) -> list[list[str]]:
 
 
 def test_markdown_columns_units_and_header() -> None:
-    text = speed_error_markdown({"a": _report(10.0, 0.0005, first_us=12500.0), "b": _report(20.0, 0.0004)}, "T",
-                                columns=("tracking_rms", "tracking_max", "goal", "time_to_goal"))
+    text = speed_error_markdown(
+        {"a": _report(10.0, 0.0005, first_us=12500.0), "b": _report(20.0, 0.0004)},
+        "T",
+        columns=("tracking_rms", "tracking_max", "goal", "time_to_goal"),
+    )
     rows = _table(text)
-    assert rows[0] == ["policy", "success", "collision", "tracking error rms [mm]", "tracking error max [mm]",
-                       "goal error at the end [mm]", "time to goal [s]", "pseudoenergy [rad^2/s]",
-                       "step time median / p99 [us]", "step time amortized (mean) [us]", "first step (plan) [ms]"]
+    assert rows[0] == [
+        "policy",
+        "success",
+        "collision",
+        "tracking error rms [mm]",
+        "tracking error max [mm]",
+        "goal error at the end [mm]",
+        "time to goal [s]",
+        "pseudoenergy [rad^2/s]",
+        "step time median / p99 [us]",
+        "step time amortized (mean) [us]",
+        "first step (plan) [ms]",
+    ]
     assert rows[2] == ["a", "1.00", "0.00", "0.3", "0.5", "2.00", "1.50", "0.5", "10.0 / 20.0", "10.0", "12.5"]
     assert len(rows) == 4
     assert text.startswith("## T\n")
-    assert "`redundancy_gym/PlanarReach-v0`, env kwargs `{\"obstacle\": false}`" in text
+    assert '`redundancy_gym/PlanarReach-v0`, env kwargs `{"obstacle": false}`' in text
     assert "5 episodes per policy, seeds 3-7" in text
 
 
@@ -65,10 +105,12 @@ def test_markdown_biped_columns_in_metres_per_second() -> None:
 
 
 def test_paragraph_names_fastest_and_most_accurate_and_leaves_out_the_failed() -> None:
-    reports = {"zero": _report(0.4, 0.0001, success=0.0),  # fastest and "most accurate", but failed
-               "local": _report(10.0, 0.0008),
-               "predictive": _report(2000.0, 0.0002),
-               "global": _report(100.0, 0.0004, median_us=20.0, first_us=12000.0)}
+    reports = {
+        "zero": _report(0.4, 0.0001, success=0.0),  # fastest and "most accurate", but failed
+        "local": _report(10.0, 0.0008),
+        "predictive": _report(2000.0, 0.0002),
+        "global": _report(100.0, 0.0004, median_us=20.0, first_us=12000.0),
+    }
     text = speed_error_paragraph(reports, ["tracking_max"])
     assert "Fastest (amortized step time, first-step plan included): **local**, 10.0 us" in text
     assert "Most accurate by tracking error max: **predictive**, 0.2 mm" in text
@@ -122,8 +164,11 @@ def _captured_figure(monkeypatch: pytest.MonkeyPatch) -> list[Any]:
 
 def test_plot_small_spread_is_linear_from_zero_and_marks_failed(tmp_path, monkeypatch) -> None:
     figures = _captured_figure(monkeypatch)
-    reports = {"compiled": _biped(220.0, 0.0503), "python": _biped(830.0, 0.0504),
-               "broken": {**_biped(225.0, 0.0505), "success_rate": 0.0}}
+    reports = {
+        "compiled": _biped(220.0, 0.0503),
+        "python": _biped(830.0, 0.0504),
+        "broken": {**_biped(225.0, 0.0505), "success_rate": 0.0},
+    }
     path = plot_speed_error(reports, tmp_path / "biped.png", "Biped", error="speed")
     assert path.is_file() and path.stat().st_size > 1000
     ax = figures[0].axes[0]
@@ -140,22 +185,28 @@ def test_plot_small_spread_is_linear_from_zero_and_marks_failed(tmp_path, monkey
 
 def test_plot_wide_spread_is_log_and_labels_do_not_overlap(tmp_path, monkeypatch) -> None:
     figures = _captured_figure(monkeypatch)
-    reports = {"zero": _report(0.3, 0.9, success=0.0), "dls": _report(7.0, 0.0005), "pinv": _report(7.1, 0.0005),
-               "no limits": _report(7.2, 0.0005), "transpose": _report(7.0, 0.055, success=0.0)}
+    reports = {
+        "zero": _report(0.3, 0.9, success=0.0),
+        "dls": _report(7.0, 0.0005),
+        "pinv": _report(7.1, 0.0005),
+        "no limits": _report(7.2, 0.0005),
+        "transpose": _report(7.0, 0.055, success=0.0),
+    }
     plot_speed_error(reports, tmp_path / "free.png", "Free", error="tracking_max")
     fig = figures[0]
     ax = fig.axes[0]
     assert ax.get_xscale() == "log" and ax.get_yscale() == "log"
     boxes = fig.label_boxes[0]
     assert len(boxes) == 5
-    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1:])
+    assert not any(a.overlaps(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :])
     plt.close("all")
 
 
 def test_panels_and_unknown_error(tmp_path) -> None:
     reports = {"a": _report(10.0, 0.0005), "b": _report(100.0, 0.0004, pseudoenergy=0.4)}
-    path = plot_speed_error_panels([(reports, "P", "pseudoenergy"), (reports, "Q", "tracking_rms")],
-                                   tmp_path / "p.png", "both")
+    path = plot_speed_error_panels(
+        [(reports, "P", "pseudoenergy"), (reports, "Q", "tracking_rms")], tmp_path / "p.png", "both"
+    )
     assert path.stat().st_size > 1000
     with pytest.raises(ValueError, match="unknown error 'rms'.*tracking_max"):
         plot_speed_error(reports, tmp_path / "t.png", "T", error="rms")
@@ -166,8 +217,15 @@ def test_panels_and_unknown_error(tmp_path) -> None:
 
 
 def test_warm_evaluation_times_the_requested_seeds() -> None:
-    report = evaluate("redundancy_gym/PlanarReach-v0", "zero", episodes=2, seed=4, env_kwargs={"obstacle": False},
-                      progress=False, warmup=1).to_json()
+    report = evaluate(
+        "redundancy_gym/PlanarReach-v0",
+        "zero",
+        episodes=2,
+        seed=4,
+        env_kwargs={"obstacle": False},
+        progress=False,
+        warmup=1,
+    ).to_json()
     assert report["episodes"] == 2 and report["seed"] == 4
     assert [row["seed"] for row in report["per_episode"]] == [4, 5]
     assert report["step_time_us"]["steps"] == sum(row["length"] for row in report["per_episode"])

@@ -11,17 +11,19 @@ from redundancy_gym.eval.video import record_episode, video_stride
 _PLANAR = "redundancy_gym/PlanarReach-v0"
 
 
-@pytest.mark.parametrize(("control_fps", "max_fps", "stride"),
-                         [(250.0, 50.0, 5), (100.0, 50.0, 2), (100.0, 25.0, 4), (250.0, 25.0, 10), (30.0, 50.0, 1),
-                          (60.0, 50.0, 2)])
+@pytest.mark.parametrize(
+    ("control_fps", "max_fps", "stride"),
+    [(250.0, 50.0, 5), (100.0, 50.0, 2), (100.0, 25.0, 4), (250.0, 25.0, 10), (30.0, 50.0, 1), (60.0, 50.0, 2)],
+)
 def test_video_stride(control_fps: float, max_fps: float, stride: int) -> None:
     assert video_stride(control_fps, max_fps) == stride
     assert max_fps / 2.0 < control_fps / stride <= max_fps or stride == 1
 
 
 def test_mp4_plays_in_real_time_at_the_reduced_rate(tmp_path) -> None:
-    path, summary = record_episode(_PLANAR, "clik", tmp_path / "planar.mp4", env_kwargs={"obstacle": False},
-                                   width=64, height=64, progress=False)
+    path, summary = record_episode(
+        _PLANAR, "clik", tmp_path / "planar.mp4", env_kwargs={"obstacle": False}, width=64, height=64, progress=False
+    )
     reader = imageio.get_reader(path)
     try:
         fps = reader.get_meta_data()["fps"]
@@ -34,8 +36,9 @@ def test_mp4_plays_in_real_time_at_the_reduced_rate(tmp_path) -> None:
 
 
 def test_gif_frame_time(tmp_path) -> None:
-    path, summary = record_episode(_PLANAR, "clik", tmp_path / "planar.gif", env_kwargs={"obstacle": False},
-                                   width=48, height=48, progress=True)
+    path, summary = record_episode(
+        _PLANAR, "clik", tmp_path / "planar.gif", env_kwargs={"obstacle": False}, width=48, height=48, progress=True
+    )
     with Image.open(path) as image:
         durations = []
         for k in range(image.n_frames):  # pillow merges identical frames, adding up their times

@@ -9,11 +9,23 @@ HUGE = 1e300
 NON_FINITE = st.sampled_from([float("nan"), float("inf"), float("-inf")])
 # ordinary magnitudes, plus the edge values
 SANE_FLOATS = st.floats(min_value=-10.0, max_value=10.0, allow_nan=False, allow_infinity=False)
-ANY_FLOATS = st.one_of(SANE_FLOATS, NON_FINITE, st.sampled_from([HUGE, -HUGE, 1e-300, 0.0, -0.0]),
-                       st.floats(allow_nan=True, allow_infinity=True))
-JUNK = st.one_of(st.none(), st.text(max_size=3), st.booleans(), st.just([]), st.just({}), st.just(object()),
-                 st.lists(st.integers(-3, 3), max_size=5), st.just(np.array(["a", "b", "c"])),
-                 st.just(1 + 2j))
+ANY_FLOATS = st.one_of(
+    SANE_FLOATS,
+    NON_FINITE,
+    st.sampled_from([HUGE, -HUGE, 1e-300, 0.0, -0.0]),
+    st.floats(allow_nan=True, allow_infinity=True),
+)
+JUNK = st.one_of(
+    st.none(),
+    st.text(max_size=3),
+    st.booleans(),
+    st.just([]),
+    st.just({}),
+    st.just(object()),
+    st.lists(st.integers(-3, 3), max_size=5),
+    st.just(np.array(["a", "b", "c"])),
+    st.just(1 + 2j),
+)
 
 
 def vectors(n: int, elements: st.SearchStrategy = SANE_FLOATS) -> st.SearchStrategy:

@@ -28,10 +28,11 @@ from .strategies import hostile_vectors, vectors
 def _planar(method: str) -> Clik:
     model = RobotModel.from_mjcf(PLANAR_ARM_XML)
     ball = Segment("ball", (PSS([0.7, 0.0, -0.12], 0.1),))
-    objectives = [JointLimitObjective.from_model(model, activation_distance=0.3),
-                  PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
-                  CollisionObjective(collision_model_from_mjcf(model, [ball]), activation_distance=0.15, slope=2.0,
-                                     weight=3.0)]
+    objectives = [
+        JointLimitObjective.from_model(model, activation_distance=0.3),
+        PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
+        CollisionObjective(collision_model_from_mjcf(model, [ball]), activation_distance=0.15, slope=2.0, weight=3.0),
+    ]
     return Clik(model, FramePositionTask(PLANAR_ARM_TCP, "xz"), method=method, objectives=objectives, period=0.01)
 
 
@@ -66,7 +67,8 @@ def test_clik_backends_agree_or_both_raise(cliks, data) -> None:
     model = clik.model
     lo, hi = model.lower_limits, model.upper_limits
     inside = st.lists(st.floats(-0.1, 1.1), min_size=model.nq, max_size=model.nq).map(
-        lambda u: lo + np.array(u) * (hi - lo))
+        lambda u: lo + np.array(u) * (hi - lo)
+    )
     q = data.draw(st.one_of(inside, vectors(model.nq), hostile_vectors(model.nq)), label="q")
     target = data.draw(st.one_of(vectors(dim), hostile_vectors(dim)), label="target")
     velocity = data.draw(st.one_of(st.none(), vectors(dim), hostile_vectors(dim)), label="target_velocity")

@@ -12,15 +12,16 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import redundancy_gym  # noqa: F401  (registers the ids)
-from redundancy_gym.envs import EnvConfigError, InvalidActionError
-from redundancy_gym.envs import agri_reach, biped_walk, planar_reach
+from redundancy_gym.envs import EnvConfigError, InvalidActionError, agri_reach, biped_walk, planar_reach
 from redundancy_gym.rendering_backend import RenderBackendError
 
 from .strategies import ANY_FLOATS, JUNK, vectors
 
-CONFIGS = {"redundancy_gym/PlanarReach-v0": planar_reach.default_config,
-           "redundancy_gym/AgriReach-v0": agri_reach.default_config,
-           "redundancy_gym/BipedWalk-v0": biped_walk.default_config}
+CONFIGS = {
+    "redundancy_gym/PlanarReach-v0": planar_reach.default_config,
+    "redundancy_gym/AgriReach-v0": agri_reach.default_config,
+    "redundancy_gym/BipedWalk-v0": biped_walk.default_config,
+}
 ENV_ERRORS = (EnvConfigError, RenderBackendError)
 
 
@@ -33,8 +34,10 @@ def mutations(value) -> st.SearchStrategy:
     elif isinstance(value, float):
         same = st.one_of(st.floats(-2 * abs(value) - 1, 2 * abs(value) + 1), ANY_FLOATS)
     elif isinstance(value, tuple):
-        same = st.one_of(st.lists(ANY_FLOATS, min_size=len(value), max_size=len(value)).map(tuple),
-                         st.lists(st.floats(-2.0, 2.0), min_size=0, max_size=len(value) + 1).map(tuple))
+        same = st.one_of(
+            st.lists(ANY_FLOATS, min_size=len(value), max_size=len(value)).map(tuple),
+            st.lists(st.floats(-2.0, 2.0), min_size=0, max_size=len(value) + 1).map(tuple),
+        )
     elif isinstance(value, str):
         same = st.one_of(st.sampled_from(["easy", "medium", "hard"]), st.text(max_size=5))
     else:  # None defaults: numbers or junk
@@ -46,7 +49,8 @@ def kwargs_for(env_id: str) -> st.SearchStrategy:
     defaults = CONFIGS[env_id]()
     keys = sorted(defaults)
     return st.lists(st.sampled_from(keys), min_size=1, max_size=3, unique=True).flatmap(
-        lambda chosen: st.fixed_dictionaries({k: mutations(defaults[k]) for k in chosen}))
+        lambda chosen: st.fixed_dictionaries({k: mutations(defaults[k]) for k in chosen})
+    )
 
 
 def _check_obs(env, obs) -> None:
@@ -90,13 +94,27 @@ def test_make_biped_walk(kwargs) -> None:
     _make_and_check("redundancy_gym/BipedWalk-v0", kwargs)
 
 
-@given(extra=st.dictionaries(st.text(min_size=1, max_size=6), st.integers(), min_size=1, max_size=2),
-       env_id=st.sampled_from(sorted(CONFIGS)))
+@given(
+    extra=st.dictionaries(st.text(min_size=1, max_size=6), st.integers(), min_size=1, max_size=2),
+    env_id=st.sampled_from(sorted(CONFIGS)),
+)
 def test_make_with_unknown_kwargs_raises(extra, env_id) -> None:
-    extra = {k: v for k, v in extra.items()
-             if k not in CONFIGS[env_id]() and k not in ("render_mode", "width", "height", "camera_name",
-                                                         "max_episode_steps", "disable_env_checker",
-                                                         "apply_api_compatibility", "autoreset")}
+    extra = {
+        k: v
+        for k, v in extra.items()
+        if k not in CONFIGS[env_id]()
+        and k
+        not in (
+            "render_mode",
+            "width",
+            "height",
+            "camera_name",
+            "max_episode_steps",
+            "disable_env_checker",
+            "apply_api_compatibility",
+            "autoreset",
+        )
+    }
     if not extra:
         return
     with pytest.raises((EnvConfigError, TypeError)):  # gymnasium's own wrappers may reject a kwarg first
@@ -114,11 +132,11 @@ def env(request):
 def actions(shape: tuple[int, ...]) -> st.SearchStrategy:
     n = int(np.prod(shape))
     return st.one_of(
-        vectors(n, st.floats(-1.0, 1.0)),                       # inside the bounds
-        vectors(n, st.floats(-1e6, 1e6)),                       # finite, outside
-        vectors(n, ANY_FLOATS),                                 # NaN, inf, huge
+        vectors(n, st.floats(-1.0, 1.0)),  # inside the bounds
+        vectors(n, st.floats(-1e6, 1e6)),  # finite, outside
+        vectors(n, ANY_FLOATS),  # NaN, inf, huge
         st.integers(0, n + 3).filter(lambda k: k != n).flatmap(vectors),  # wrong length
-        vectors(n).map(lambda a: a.reshape(1, -1)),             # wrong rank
+        vectors(n).map(lambda a: a.reshape(1, -1)),  # wrong rank
         vectors(n).map(lambda a: a.astype(np.float32)),
         st.lists(st.integers(-2, 2), min_size=n, max_size=n),
     )

@@ -25,8 +25,7 @@ def build(kind: str, pts: list, radius) -> object:
     return volume
 
 
-@given(kind=st.sampled_from(["PSS", "LSS", "TSS"]), pts=st.lists(points3(), min_size=3, max_size=3),
-       radius=radii())
+@given(kind=st.sampled_from(["PSS", "LSS", "TSS"]), pts=st.lists(points3(), min_size=3, max_size=3), radius=radii())
 def test_ssv_constructors_validate_or_raise(kind: str, pts: list, radius) -> None:
     try:
         build(kind, pts, radius)
@@ -35,9 +34,13 @@ def test_ssv_constructors_validate_or_raise(kind: str, pts: list, radius) -> Non
 
 
 volumes = st.builds(
-    lambda kind, pts, r: {"PSS": PSS, "LSS": LSS, "TSS": TSS}[kind](*pts[: {"PSS": 1, "LSS": 2, "TSS": 3}[kind]],
-                                                                    radius=r),
-    st.sampled_from(["PSS", "LSS", "TSS"]), st.lists(SANE_POINT, min_size=3, max_size=3), SANE_RADIUS)
+    lambda kind, pts, r: {"PSS": PSS, "LSS": LSS, "TSS": TSS}[kind](
+        *pts[: {"PSS": 1, "LSS": 2, "TSS": 3}[kind]], radius=r
+    ),
+    st.sampled_from(["PSS", "LSS", "TSS"]),
+    st.lists(SANE_POINT, min_size=3, max_size=3),
+    SANE_RADIUS,
+)
 
 
 @given(a=volumes, b=volumes)
@@ -53,8 +56,10 @@ def test_distance_is_finite_and_consistent(a, b) -> None:
     assert distance(b, a).distance == pytest.approx(d.distance, abs=1e-7 * max(1.0, gap))
 
 
-@given(a=st.one_of(volumes, st.none(), st.integers(), st.text(max_size=2)),
-       b=st.one_of(volumes, st.none(), st.just([0.0, 0.0, 0.0])))
+@given(
+    a=st.one_of(volumes, st.none(), st.integers(), st.text(max_size=2)),
+    b=st.one_of(volumes, st.none(), st.just([0.0, 0.0, 0.0])),
+)
 def test_distance_rejects_non_volumes(a, b) -> None:
     try:
         d = distance(a, b)
@@ -63,10 +68,12 @@ def test_distance_rejects_non_volumes(a, b) -> None:
     assert np.isfinite(d.distance)
 
 
-@given(vols=st.lists(volumes, min_size=1, max_size=8),
-       pairs=st.lists(st.tuples(st.integers(-2, 9), st.integers(-2, 9)), max_size=12),
-       moving=st.one_of(st.none(), st.integers(-2, 10), st.floats(allow_nan=True), st.text(max_size=1)),
-       moves=st.lists(vectors(3), min_size=1, max_size=3))
+@given(
+    vols=st.lists(volumes, min_size=1, max_size=8),
+    pairs=st.lists(st.tuples(st.integers(-2, 9), st.integers(-2, 9)), max_size=12),
+    moving=st.one_of(st.none(), st.integers(-2, 10), st.floats(allow_nan=True), st.text(max_size=1)),
+    moves=st.lists(vectors(3), min_size=1, max_size=3),
+)
 def test_pair_batch_matches_distance_or_raises(vols, pairs, moving, moves) -> None:
     ia = [p[0] for p in pairs]
     ib = [p[1] for p in pairs]

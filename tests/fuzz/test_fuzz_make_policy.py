@@ -14,9 +14,8 @@ from hypothesis import strategies as st
 
 import redundancy_gym
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.policies import PolicyError
+from redundancy_gym.policies import ClikPolicyConfig, PolicyError
 from redundancy_gym.policies.grasp_clik_policy import GraspClikConfig
-from redundancy_gym.policies import ClikPolicyConfig
 from redundancy_gym.policies.predictive_policy import PredictivePolicyConfig
 from redundancy_gym.policies.walking_policy import WalkingPolicyConfig
 
@@ -27,9 +26,13 @@ PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"
 # (env, policy name, options dataclass, whether one predict is cheap enough to run per example)
-CASES = [(PLANAR, "clik", ClikPolicyConfig, True), (AGRI, "clik", GraspClikConfig, True),
-         (PLANAR, "predictive", PredictivePolicyConfig, False), (AGRI, "global", PredictivePolicyConfig, False),
-         (BIPED, "walking", WalkingPolicyConfig, False)]
+CASES = [
+    (PLANAR, "clik", ClikPolicyConfig, True),
+    (AGRI, "clik", GraspClikConfig, True),
+    (PLANAR, "predictive", PredictivePolicyConfig, False),
+    (AGRI, "global", PredictivePolicyConfig, False),
+    (BIPED, "walking", WalkingPolicyConfig, False),
+]
 IDS = [f"{env.split('/')[1].split('-')[0]}-{name}" for env, name, _, _ in CASES]
 
 
@@ -58,9 +61,11 @@ def options(config) -> st.SearchStrategy:
     defaults = {f.name: _default(f) for f in fields(config)}
     keys = sorted(defaults)
     chosen = st.lists(st.sampled_from(keys), min_size=1, max_size=3, unique=True).flatmap(
-        lambda names: st.fixed_dictionaries({k: mutations(defaults[k]) for k in names}))
-    unknown = st.dictionaries(st.sampled_from(["speed", "gains", "Method", "horizon_s", "x"]),
-                              st.one_of(ANY_FLOATS, JUNK), max_size=1)
+        lambda names: st.fixed_dictionaries({k: mutations(defaults[k]) for k in names})
+    )
+    unknown = st.dictionaries(
+        st.sampled_from(["speed", "gains", "Method", "horizon_s", "x"]), st.one_of(ANY_FLOATS, JUNK), max_size=1
+    )
     return st.tuples(chosen, unknown).map(lambda t: {**t[1], **t[0]})
 
 
@@ -99,8 +104,10 @@ def test_random_policy_seed_is_valid_or_policy_error(envs, seed, env_id) -> None
     _act(env, obs, policy)
 
 
-@given(name=st.one_of(st.text(max_size=8), st.sampled_from(["CLIK", "clik ", "walk", "global2", "", "zip"])),
-       env_id=st.sampled_from([PLANAR, AGRI, BIPED]))
+@given(
+    name=st.one_of(st.text(max_size=8), st.sampled_from(["CLIK", "clik ", "walk", "global2", "", "zip"])),
+    env_id=st.sampled_from([PLANAR, AGRI, BIPED]),
+)
 def test_unknown_policy_name_is_a_policy_error(envs, name, env_id) -> None:
     env, _ = envs[env_id]
     if name in ("clik", "predictive", "global", "walking", "zero", "random") or name.endswith(".zip"):

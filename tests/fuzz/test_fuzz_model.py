@@ -27,7 +27,8 @@ def configurations(model: RobotModel) -> st.SearchStrategy:
     lo = np.where(np.isfinite(model.lower_limits), model.lower_limits, -10.0)
     hi = np.where(np.isfinite(model.upper_limits), model.upper_limits, 10.0)
     inside = st.lists(st.floats(0.0, 1.0), min_size=model.nq, max_size=model.nq).map(
-        lambda u: lo + np.array(u) * (hi - lo))
+        lambda u: lo + np.array(u) * (hi - lo)
+    )
     return st.one_of(inside, vectors(model.nq), hostile_vectors(model.nq))
 
 
@@ -45,9 +46,17 @@ def test_model_queries_are_finite_or_raise(model_and_frame, data) -> None:
     except ModelError:
         return
     _finite(checked)
-    _finite(model.frame_position(frame), model.frame_rotation(frame), model.frame_jacobian(frame),
-            model.frame_jacobian(frame, "translational"), model.com(), model.com_jacobian(), model.mass_matrix(),
-            model.clamp(checked), model.to_mujoco_qpos(checked))
+    _finite(
+        model.frame_position(frame),
+        model.frame_rotation(frame),
+        model.frame_jacobian(frame),
+        model.frame_jacobian(frame, "translational"),
+        model.com(),
+        model.com_jacobian(),
+        model.mass_matrix(),
+        model.clamp(checked),
+        model.to_mujoco_qpos(checked),
+    )
     assert model.frame_jacobian(frame).shape == (6, model.nv)
     qdot = data.draw(st.one_of(vectors(model.nv), hostile_vectors(model.nv)), label="qdot")
     dt = data.draw(st.one_of(st.floats(0.0, 0.1), st.floats(allow_nan=True, allow_infinity=True), JUNK), label="dt")

@@ -15,12 +15,22 @@ from redundancy_gym.policies import PolicyError
 
 from .strategies import ANY_FLOATS
 
-CASES = [("redundancy_gym/PlanarReach-v0", "clik"), ("redundancy_gym/PlanarReach-v0", "zero"),
-         ("redundancy_gym/PlanarReach-v0", "random"),
-         ("redundancy_gym/AgriReach-v0", "clik"),
-         ("redundancy_gym/AgriReach-v0", "zero"), ("redundancy_gym/BipedWalk-v0", "walking")]
-IDS = ["PlanarReach-clik", "PlanarReach-zero", "PlanarReach-random", "AgriReach-clik", "AgriReach-zero",
-       "BipedWalk-walking"]
+CASES = [
+    ("redundancy_gym/PlanarReach-v0", "clik"),
+    ("redundancy_gym/PlanarReach-v0", "zero"),
+    ("redundancy_gym/PlanarReach-v0", "random"),
+    ("redundancy_gym/AgriReach-v0", "clik"),
+    ("redundancy_gym/AgriReach-v0", "zero"),
+    ("redundancy_gym/BipedWalk-v0", "walking"),
+]
+IDS = [
+    "PlanarReach-clik",
+    "PlanarReach-zero",
+    "PlanarReach-random",
+    "AgriReach-clik",
+    "AgriReach-zero",
+    "BipedWalk-walking",
+]
 
 
 @pytest.fixture(scope="module")
@@ -75,8 +85,7 @@ def test_predict_is_finite_within_bounds_or_raises(setup, data) -> None:
     assert np.all(action >= env.action_space.low - 1e-6) and np.all(action <= env.action_space.high + 1e-6), action
 
 
-@pytest.mark.parametrize(("env_id", "name"), CASES,
-                         ids=IDS)
+@pytest.mark.parametrize(("env_id", "name"), CASES, ids=IDS)
 @pytest.mark.parametrize("observation", [{}, np.array(["a", "b", "c"])], ids=["dict", "strings"])
 def test_predict_with_non_numeric_observation_raises_policy_error(setup, observation) -> None:
     env, policy, _ = setup

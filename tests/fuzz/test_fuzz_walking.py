@@ -31,12 +31,14 @@ def numbers_like(value) -> st.SearchStrategy:
     if isinstance(value, int):  # (a preview of 10^6 steps is valid but plans 10^6 steps at every step: slow)
         return st.one_of(st.integers(-2, 12), st.just(0))
     # positive values from a tenth of the default up (a 1 ms step is valid but takes 10^4 replans per 10 s)
-    return st.one_of(st.floats(0.1 * abs(value), 3.0 * abs(value) + 0.1), st.floats(-abs(value) - 1.0, 0.0),
-                     HOSTILE, NO_NUMBERS)
+    return st.one_of(
+        st.floats(0.1 * abs(value), 3.0 * abs(value) + 0.1), st.floats(-abs(value) - 1.0, 0.0), HOSTILE, NO_NUMBERS
+    )
 
 
 CONFIGS = st.lists(st.sampled_from(sorted(DEFAULTS)), max_size=4, unique=True).flatmap(
-    lambda keys: st.fixed_dictionaries({k: numbers_like(DEFAULTS[k]) for k in keys}))
+    lambda keys: st.fixed_dictionaries({k: numbers_like(DEFAULTS[k]) for k in keys})
+)
 
 
 @given(kwargs=CONFIGS, speed=st.one_of(st.floats(0.0, 2.0), ANY_FLOATS))
@@ -56,18 +58,25 @@ def test_gait_config_is_valid_or_raises(kwargs, speed) -> None:
 
 def knots() -> st.SearchStrategy:
     """Strictly increasing knot times (sane gaps, or tiny / long ones) with a ZMP of one point each."""
-    gaps = st.lists(st.one_of(st.floats(0.05, 1.0), st.sampled_from([1e-9, 1e-3, 5.0, 30.0])), min_size=1,
-                    max_size=8)
-    return gaps.flatmap(lambda g: st.tuples(
-        st.just(np.concatenate([[0.0], np.cumsum(g)])),
-        st.lists(vectors(2, st.floats(-1.0, 1.0)), min_size=len(g) + 1, max_size=len(g) + 1).map(np.array)))
+    gaps = st.lists(st.one_of(st.floats(0.05, 1.0), st.sampled_from([1e-9, 1e-3, 5.0, 30.0])), min_size=1, max_size=8)
+    return gaps.flatmap(
+        lambda g: st.tuples(
+            st.just(np.concatenate([[0.0], np.cumsum(g)])),
+            st.lists(vectors(2, st.floats(-1.0, 1.0)), min_size=len(g) + 1, max_size=len(g) + 1).map(np.array),
+        )
+    )
 
 
 GRAVITY = st.one_of(st.just(9.81), st.floats(0.1, 100.0), EXTREME, NO_NUMBERS)
 
 
-@given(height=st.one_of(st.floats(0.1, 2.0), HOSTILE, EXTREME, NO_NUMBERS), gravity=GRAVITY,
-       plan=knots(), com=vectors(2, st.floats(-1.0, 1.0)), probes=st.lists(st.floats(0.0, 1e6), max_size=5))
+@given(
+    height=st.one_of(st.floats(0.1, 2.0), HOSTILE, EXTREME, NO_NUMBERS),
+    gravity=GRAVITY,
+    plan=knots(),
+    com=vectors(2, st.floats(-1.0, 1.0)),
+    probes=st.lists(st.floats(0.0, 1e6), max_size=5),
+)
 def test_dcm_plan_is_finite_and_ends_at_rest_or_raises(height, gravity, plan, com, probes) -> None:
     try:
         planner = DcmPlanner(height, gravity)
@@ -90,9 +99,12 @@ def test_dcm_plan_is_finite_and_ends_at_rest_or_raises(height, gravity, plan, co
     np.testing.assert_allclose(planner.dcm_at_knots(times, start)[0], com, atol=1e-6 * (1.0 + np.abs(start).max()))
 
 
-@given(kwargs=CONFIGS, speed=st.one_of(st.floats(0.0, 1.5), ANY_FLOATS),
-       com=st.one_of(vectors(2, st.floats(-0.05, 0.1)), vectors(2, ANY_FLOATS)),
-       steps=st.lists(st.floats(0.0, 0.5), min_size=1, max_size=12))
+@given(
+    kwargs=CONFIGS,
+    speed=st.one_of(st.floats(0.0, 1.5), ANY_FLOATS),
+    com=st.one_of(vectors(2, st.floats(-0.05, 0.1)), vectors(2, ANY_FLOATS)),
+    steps=st.lists(st.floats(0.0, 0.5), min_size=1, max_size=12),
+)
 def test_walking_pattern_is_finite_over_time_or_raises(kwargs, speed, com, steps) -> None:
     try:
         pattern = WalkingPattern(GaitConfig(**kwargs), FEET[0], FEET[1], com, speed)
@@ -108,10 +120,18 @@ def test_walking_pattern_is_finite_over_time_or_raises(kwargs, speed, com, steps
         assert s.feet[:, 2].min() >= pattern.ground - 1e-9
 
 
-@given(speed=st.floats(0.0, 1.0), start=st.floats(0.4, 3.0),
-       adjustments=st.lists(st.tuples(st.floats(0.0, 0.3), st.one_of(vectors(2, st.floats(-0.5, 0.5)),
-                                                                      vectors(2, ANY_FLOATS)),
-                                      st.one_of(st.floats(-0.2, 1.5), ANY_FLOATS)), max_size=4))
+@given(
+    speed=st.floats(0.0, 1.0),
+    start=st.floats(0.4, 3.0),
+    adjustments=st.lists(
+        st.tuples(
+            st.floats(0.0, 0.3),
+            st.one_of(vectors(2, st.floats(-0.5, 0.5)), vectors(2, ANY_FLOATS)),
+            st.one_of(st.floats(-0.2, 1.5), ANY_FLOATS),
+        ),
+        max_size=4,
+    ),
+)
 def test_step_adjustments_keep_the_pattern_finite_or_raise(speed, start, adjustments) -> None:
     """``adjust_step`` with any shift and timing, at any time: ControllerError, or a pattern that stays finite, keeps
     the swing foot's reference continuous and lands it on the adjusted foothold."""
@@ -138,9 +158,15 @@ def test_step_adjustments_keep_the_pattern_finite_or_raise(speed, start, adjustm
             assert np.all(np.isfinite(v))
 
 
-@given(speed=st.floats(0.0, 1.0), start=st.floats(0.4, 3.0),
-       errors=st.lists(st.tuples(st.floats(0.0, 0.2), st.one_of(vectors(2, st.floats(-1.0, 1.0)), vectors(2, ANY_FLOATS))),
-                       min_size=1, max_size=6))
+@given(
+    speed=st.floats(0.0, 1.0),
+    start=st.floats(0.4, 3.0),
+    errors=st.lists(
+        st.tuples(st.floats(0.0, 0.2), st.one_of(vectors(2, st.floats(-1.0, 1.0)), vectors(2, ANY_FLOATS))),
+        min_size=1,
+        max_size=6,
+    ),
+)
 def test_step_adjuster_keeps_the_pattern_finite_or_raises(speed, start, errors) -> None:
     """The step adjuster fed any measured DCM: ControllerError for a non-finite one, else a pattern that stays finite
     with every landing inside the reachable box around its stance foot."""

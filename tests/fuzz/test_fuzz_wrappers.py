@@ -15,9 +15,17 @@ from hypothesis import strategies as st
 import redundancy_gym  # noqa: F401  (registers the ids)
 from redundancy_gym.envs import InvalidActionError
 from redundancy_gym.registration import WRAPPED_ENV_IDS
-from redundancy_gym.wrappers import (NullspaceAction, NullspaceActionConfig, ResidualAction, ResidualActionConfig,
-                                     TaskSpaceAction, TaskSpaceActionConfig, WalkingCommandAction,
-                                     WalkingCommandActionConfig, WrapperError)
+from redundancy_gym.wrappers import (
+    NullspaceAction,
+    NullspaceActionConfig,
+    ResidualAction,
+    ResidualActionConfig,
+    TaskSpaceAction,
+    TaskSpaceActionConfig,
+    WalkingCommandAction,
+    WalkingCommandActionConfig,
+    WrapperError,
+)
 
 from .strategies import ANY_FLOATS, JUNK, hostile_vectors
 from .test_fuzz_envs import mutations
@@ -27,10 +35,14 @@ AGRI = "redundancy_gym/AgriReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"
 # (base env, wrapper, options dataclass, whether a reset and a step are cheap enough to run per example: the
 # walker's reset estimates its ZMP correction by rollouts, a second per new controller)
-CASES = [(PLANAR, TaskSpaceAction, TaskSpaceActionConfig, True), (AGRI, TaskSpaceAction, TaskSpaceActionConfig, True),
-         (PLANAR, NullspaceAction, NullspaceActionConfig, True), (AGRI, NullspaceAction, NullspaceActionConfig, True),
-         (PLANAR, ResidualAction, ResidualActionConfig, True),
-         (BIPED, WalkingCommandAction, WalkingCommandActionConfig, False)]
+CASES = [
+    (PLANAR, TaskSpaceAction, TaskSpaceActionConfig, True),
+    (AGRI, TaskSpaceAction, TaskSpaceActionConfig, True),
+    (PLANAR, NullspaceAction, NullspaceActionConfig, True),
+    (AGRI, NullspaceAction, NullspaceActionConfig, True),
+    (PLANAR, ResidualAction, ResidualActionConfig, True),
+    (BIPED, WalkingCommandAction, WalkingCommandActionConfig, False),
+]
 IDS = [f"{env.split('/')[1].split('-')[0]}-{cls.__name__}" for env, cls, _, _ in CASES]
 
 
@@ -55,7 +67,8 @@ def options(config) -> st.SearchStrategy:
         return mutations(defaults[name])
 
     chosen = st.lists(st.sampled_from(keys), min_size=1, max_size=3, unique=True).flatmap(
-        lambda names: st.fixed_dictionaries({k: mutate(k) for k in names}))
+        lambda names: st.fixed_dictionaries({k: mutate(k) for k in names})
+    )
     unknown = st.dictionaries(st.sampled_from(["speed", "Scale", "u", "gain"]), st.one_of(ANY_FLOATS, JUNK), max_size=1)
     return st.tuples(chosen, unknown).map(lambda t: {**t[1], **t[0]})
 

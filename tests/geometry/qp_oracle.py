@@ -33,7 +33,7 @@ def primitive_distance(pa: np.ndarray, pb: np.ndarray) -> tuple[float, np.ndarra
                 sol = np.linalg.lstsq(mat, y0 - x0, rcond=1e-14)[0]
             else:
                 sol = np.zeros(0)
-            alpha, beta = sol[: e.shape[1]], sol[e.shape[1]:]
+            alpha, beta = sol[: e.shape[1]], sol[e.shape[1] :]
             lam = np.concatenate([[1.0 - alpha.sum()], alpha])
             mu = np.concatenate([[1.0 - beta.sum()], beta])
             if lam.min() < -1e-12 or mu.min() < -1e-12:

@@ -18,8 +18,15 @@ def test_segments_and_pairs_from_the_planar_arm(planar_model: RobotModel) -> Non
     assert set(geometry.adjacent) == {("link1", "link2"), ("link2", "link3"), ("link3", "link4")}
     model = collision_model_from_mjcf(planar_model, [OBSTACLE])
     # non-adjacent robot pairs, then every link against the obstacle
-    assert model.pairs == (("link1", "link3"), ("link1", "link4"), ("link2", "link4"), ("link1", "obstacle"),
-                           ("link2", "obstacle"), ("link3", "obstacle"), ("link4", "obstacle"))
+    assert model.pairs == (
+        ("link1", "link3"),
+        ("link1", "link4"),
+        ("link2", "link4"),
+        ("link1", "obstacle"),
+        ("link2", "obstacle"),
+        ("link3", "obstacle"),
+        ("link4", "obstacle"),
+    )
     without_self = collision_model_from_mjcf(planar_model, [OBSTACLE], self_collision=False)
     assert without_self.num_pairs == 4
 
@@ -66,8 +73,11 @@ def test_distance_gradient_matches_finite_differences(planar_model: RobotModel, 
 
 def test_bounding_capsule_contains_its_volumes_and_skips_far_pairs() -> None:
     rng = np.random.default_rng(2)
-    volumes = (LSS([0, 0, 0], [0.3, 0, 0], 0.05), PSS([0.1, 0.1, 0], 0.02), TSS([0, 0, 0.1], [0.2, 0, 0.1],
-                                                                             [0, 0.1, 0.1], 0.01))
+    volumes = (
+        LSS([0, 0, 0], [0.3, 0, 0], 0.05),
+        PSS([0.1, 0.1, 0], 0.02),
+        TSS([0, 0, 0.1], [0.2, 0, 0.1], [0, 0.1, 0.1], 0.01),
+    )
     bound = bounding_lss(volumes)
     axis = LSS(*bound.points, radius=0.0)
     for v in volumes:  # every vertex ball of every volume lies inside the capsule
@@ -138,8 +148,10 @@ def test_layout_and_environment_volumes_describe_the_model(planar_model: RobotMo
     packed = PackedVolumes(vertices, radii, layout.kinds)
     for p in range(model.num_pairs):
         ks = range(layout.pair_starts[p], layout.pair_starts[p + 1])
-        best = min(volume_pair_distance(packed.vertices, packed.radii, packed.kinds, layout.volume_a[k],
-                                        layout.volume_b[k])[0] for k in ks)
+        best = min(
+            volume_pair_distance(packed.vertices, packed.radii, packed.kinds, layout.volume_a[k], layout.volume_b[k])[0]
+            for k in ks
+        )
         if state.exact[p]:
             assert best == pytest.approx(state.distance[p], abs=1e-12)
         else:  # skipped by its bounding capsule: the reported distance is a lower bound

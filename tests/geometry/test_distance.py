@@ -76,6 +76,7 @@ def test_batched_equals_single(rng: np.random.Generator) -> None:
 
 # --- named degenerate cases ------------------------------------------------------------------------------
 
+
 def test_zero_length_segments() -> None:
     point_like = LSS([0.2, 0.1, 0.3], [0.2, 0.1, 0.3], 0.05)
     check_pair(point_like, LSS([0, 0, 0], [1, 0, 0], 0.1))
@@ -123,9 +124,15 @@ def test_degenerate_triangles() -> None:
     collinear = TSS([0, 0, 0], [1, 0, 0], [0.4, 0, 0], 0.05)
     coincident = TSS([0.3, 0.3, 0.3], [0.3, 0.3, 0.3], [0.3, 0.3, 0.3], 0.05)
     two_equal = TSS([0, 0, 0], [0, 0, 0], [0, 1, 0], 0.05)
-    others = [PSS([0.5, 0.5, 0.2], 0.1), LSS([0.2, -1, 0.3], [0.2, 1, 0.3], 0.1),
-              TSS([0, 0, 0.5], [1, 1, 0.5], [0, 1, 0.5], 0.1), TSS([0.2, -1, -1], [0.2, 1, -1], [0.2, 0, 1], 0.0),
-              collinear, coincident, two_equal]
+    others = [
+        PSS([0.5, 0.5, 0.2], 0.1),
+        LSS([0.2, -1, 0.3], [0.2, 1, 0.3], 0.1),
+        TSS([0, 0, 0.5], [1, 1, 0.5], [0, 1, 0.5], 0.1),
+        TSS([0.2, -1, -1], [0.2, 1, -1], [0.2, 0, 1], 0.0),
+        collinear,
+        coincident,
+        two_equal,
+    ]
     for tri in (collinear, coincident, two_equal):
         for other in others:
             check_pair(tri, other)
@@ -162,8 +169,7 @@ def test_concentric_and_touching_spheres() -> None:
     touching = distance(PSS([0, 0, 0], 0.2), PSS([0.5, 0, 0], 0.3))
     assert touching.distance == pytest.approx(0.0, abs=1e-15)
     np.testing.assert_allclose(touching.normal, [1, 0, 0])
-    concentric_triangle = distance(TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], 0.1),
-                                   TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], 0.1))
+    concentric_triangle = distance(TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], 0.1), TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], 0.1))
     assert concentric_triangle.distance == pytest.approx(-0.2, abs=1e-15)
     assert np.all(np.isfinite(concentric_triangle.normal))
 
@@ -264,7 +270,7 @@ def test_flat_sphere_and_capsule_loops_hand_hard_cases_to_the_general_path(rng: 
     active[::7] = False
     batch.set_active(active)
     res = batch.compute()
-    for k, (a, b) in enumerate(zip(volumes[::2], volumes[1::2])):
+    for k, (a, b) in enumerate(zip(volumes[::2], volumes[1::2], strict=False)):
         if not active[k]:
             assert res.distance[k] == np.inf
             continue
@@ -318,7 +324,7 @@ def test_compute_near_equals_cull_then_compute_and_returns_the_minimum(rng: np.r
     batch = PairBatch(volumes, ia, ib, moving=6)
     reference = PairBatch(volumes, ia, ib)
     margin = 0.3
-    for step in range(3):
+    for _step in range(3):
         smallest = batch.compute_near(margin)
         near = batch.result.distance.copy()
         count = reference.cull(margin)
@@ -338,8 +344,12 @@ def test_attached_frames_place_segments_and_points(rng: np.random.Generator) -> 
 
     from redundancy_gym.geometry import PairBatch
 
-    volumes = [LSS([0, 0, 0], [0, 0, 1], 0.05), PSS([0, 0, 0], 0.04), LSS([1, 0, 0], [1, 1, 0], 0.03),
-               TSS([0, 1, 0], [1, 1, 1], [0, 1, 1], 0.01)]
+    volumes = [
+        LSS([0, 0, 0], [0, 0, 1], 0.05),
+        PSS([0, 0, 0], 0.04),
+        LSS([1, 0, 0], [1, 1, 0], 0.03),
+        TSS([0, 1, 0], [1, 1, 1], [0, 1, 1], 0.01),
+    ]
     batch = PairBatch(volumes, [0, 0, 1, 1], [2, 3, 2, 3], moving=2)
     positions = np.zeros((2, 3))
     rotations = np.zeros((2, 9))
@@ -409,6 +419,7 @@ def test_crossing_segments_off_the_grid_get_the_centroid_normal() -> None:
         assert ref.distance == pytest.approx(-0.1, abs=1e-9)
         np.testing.assert_allclose(ref.normal, expected, atol=1e-9)
         packed = PackedVolumes.from_volumes((a, b))
-        np.testing.assert_allclose(volume_pair_distance(packed.vertices, packed.radii, packed.kinds, 0, 1)[3],
-                                   expected, atol=1e-9)
+        np.testing.assert_allclose(
+            volume_pair_distance(packed.vertices, packed.radii, packed.kinds, 0, 1)[3], expected, atol=1e-9
+        )
         np.testing.assert_allclose(PairBatch((a, b), [0], [1]).compute().normal[0], expected, atol=1e-9)

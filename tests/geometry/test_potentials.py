@@ -38,8 +38,14 @@ def test_repulsive_and_monotone() -> None:
     assert np.all(pot.derivative(d[d < 0.3]) < 0)
 
 
-@pytest.mark.parametrize("kwargs", [dict(activation_distance=0.0), dict(activation_distance=0.1, slope=-1.0),
-                                    dict(activation_distance=0.1, switch_ratio=1.0)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(activation_distance=0.0),
+        dict(activation_distance=0.1, slope=-1.0),
+        dict(activation_distance=0.1, switch_ratio=1.0),
+    ],
+)
 def test_invalid_parameters(kwargs: dict) -> None:
     with pytest.raises(GeometryError):
         PiecewisePotential(**kwargs)
@@ -60,8 +66,9 @@ def test_h_c2_and_h_c3_derivatives_and_activation(cls: str) -> None:
     h = 1e-6
     np.testing.assert_allclose(val.slope, (pot.evaluate(d + h).value - pot.evaluate(d - h).value) / (2 * h), atol=1e-5)
     smooth = np.abs(d - 0.2) > 1e-3  # H_c2's curvature jumps at d_a
-    np.testing.assert_allclose(val.curvature[smooth],
-                               ((pot.evaluate(d + h).slope - pot.evaluate(d - h).slope) / (2 * h))[smooth], atol=1e-5)
+    np.testing.assert_allclose(
+        val.curvature[smooth], ((pot.evaluate(d + h).slope - pot.evaluate(d - h).slope) / (2 * h))[smooth], atol=1e-5
+    )
     assert np.all(val.value[d >= 0.2] == 0.0) and np.all(val.value[d < 0.2] > 0.0)
     assert np.all(np.diff(val.value) <= 0.0)  # repulsive: grows as the distance shrinks
     at = pot.evaluate(np.array([0.2 - 1e-9, 0.2]))

@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import redundancy_gym  # noqa: F401 - registers the ids
-from redundancy_gym.policies import PolicyError
 from redundancy_gym.envs import EnvConfigError
 from redundancy_gym.geometry import LSS, PSS, TSS, GeometryError, PackedVolumes, indexed_distances
+from redundancy_gym.policies import PolicyError
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -55,22 +55,30 @@ def test_width_as_a_string_is_rejected(env_id: str) -> None:
         gym.make(env_id, width="480")
 
 
-@pytest.mark.parametrize("env_id, kwargs, match", [
-    (PLANAR, {"duration": "2.0"}, r"duration must be a finite real number > 0.*'2.0'"),
-    (PLANAR, {"obstacle_radius": True}, r"obstacle_radius must be a finite real number in \[1e-06, 2\] \[m\], got True"),
-    (PLANAR, {"obstacle_center": ("0.7", "-0.12")}, r"obstacle_center must be .*real numbers"),
-    (PLANAR, {"frame_skip": 2.0}, r"frame_skip must be an int in \[1, 1000\], got 2.0"),
-    (PLANAR, {"height": 0}, r"height must be an int >= 1"),
-    (AGRI, {"observed_obstacles": True}, r"observed_obstacles must be an int >= 0"),
-    (AGRI, {"difficulty": "extreme"}, r"difficulty must be one of easy, medium, hard; got 'extreme'"),
-    (AGRI, {"fruits_per_stem": (1.5, 2)}, r"fruits_per_stem must be a \(low, high\) pair of ints"),
-    (AGRI, {"shoot_probability": 1.5}, r"shoot_probability must be a finite real number in \[0, 1\]"),
-    (AGRI, {"approach_elevation": (0.0, 90.0)}, r"approach_elevation must be a \(low, high\) pair .*\[0, 60\]"),
-    (BIPED, {"floor_friction": float("inf")}, r"floor_friction must be a finite real number > 0.*inf"),
-    (BIPED, {"target_speed": float("nan")}, r"target_speed must be a finite real number in \[0, 1\].*nan"),
-])
-def test_env_arguments_are_checked_by_type_finiteness_and_range(env_id: str, kwargs: dict[str, Any],
-                                                                 match: str) -> None:
+@pytest.mark.parametrize(
+    "env_id, kwargs, match",
+    [
+        (PLANAR, {"duration": "2.0"}, r"duration must be a finite real number > 0.*'2.0'"),
+        (
+            PLANAR,
+            {"obstacle_radius": True},
+            r"obstacle_radius must be a finite real number in \[1e-06, 2\] \[m\], got True",
+        ),
+        (PLANAR, {"obstacle_center": ("0.7", "-0.12")}, r"obstacle_center must be .*real numbers"),
+        (PLANAR, {"frame_skip": 2.0}, r"frame_skip must be an int in \[1, 1000\], got 2.0"),
+        (PLANAR, {"height": 0}, r"height must be an int >= 1"),
+        (AGRI, {"observed_obstacles": True}, r"observed_obstacles must be an int >= 0"),
+        (AGRI, {"difficulty": "extreme"}, r"difficulty must be one of easy, medium, hard; got 'extreme'"),
+        (AGRI, {"fruits_per_stem": (1.5, 2)}, r"fruits_per_stem must be a \(low, high\) pair of ints"),
+        (AGRI, {"shoot_probability": 1.5}, r"shoot_probability must be a finite real number in \[0, 1\]"),
+        (AGRI, {"approach_elevation": (0.0, 90.0)}, r"approach_elevation must be a \(low, high\) pair .*\[0, 60\]"),
+        (BIPED, {"floor_friction": float("inf")}, r"floor_friction must be a finite real number > 0.*inf"),
+        (BIPED, {"target_speed": float("nan")}, r"target_speed must be a finite real number in \[0, 1\].*nan"),
+    ],
+)
+def test_env_arguments_are_checked_by_type_finiteness_and_range(
+    env_id: str, kwargs: dict[str, Any], match: str
+) -> None:
     with pytest.raises(EnvConfigError, match=match):
         gym.make(env_id, **kwargs)
 
@@ -95,8 +103,11 @@ def test_biped_walk_target_speed_beyond_the_walker_is_rejected() -> None:
 
 def test_biped_walk_min_base_height_above_the_standing_pelvis_is_rejected(envs: dict[str, gym.Env]) -> None:
     """min_base_height=2.0 ended every episode at step 1 (the pelvis stands lower than that)."""
-    with pytest.raises(EnvConfigError, match=r"min_base_height must be a finite real number in \(0, 0\.9\d*\).*"
-                                             r"standing pelvis height.*got 2\.0"):
+    with pytest.raises(
+        EnvConfigError,
+        match=r"min_base_height must be a finite real number in \(0, 0\.9\d*\).*"
+        r"standing pelvis height.*got 2\.0",
+    ):
         gym.make(BIPED, min_base_height=2.0)
     from redundancy_gym.envs.biped_walk import STANDING_PELVIS_HEIGHT
 
@@ -128,19 +139,23 @@ def test_biped_walk_standing_still_is_no_success_at_walking_speed() -> None:
 
 
 # ---------------------------------------------------------------------------------------------- policy options
-@pytest.mark.parametrize("policy, env_id, option, value", [
-    ("clik", PLANAR, "posture_weight", float("nan")),
-    ("clik", PLANAR, "joint_limit_weight", float("nan")),
-    ("clik", PLANAR, "gain", "20"),
-    ("clik", AGRI, "max_speed", float("nan")),
-    ("clik", AGRI, "approach_speed", -0.1),
-    ("clik", AGRI, "max_turn_rate", float("nan")),
-    ("clik", AGRI, "min_duration", -1.0),
-    ("clik", AGRI, "max_speed", 0.0),  # ZeroDivisionError before
-    ("walking", BIPED, "self_collision_weight", float("nan")),
-])
-def test_policy_option_out_of_range_raises_naming_it(envs: dict[str, gym.Env], policy: str, env_id: str,
-                                                     option: str, value: Any) -> None:
+@pytest.mark.parametrize(
+    "policy, env_id, option, value",
+    [
+        ("clik", PLANAR, "posture_weight", float("nan")),
+        ("clik", PLANAR, "joint_limit_weight", float("nan")),
+        ("clik", PLANAR, "gain", "20"),
+        ("clik", AGRI, "max_speed", float("nan")),
+        ("clik", AGRI, "approach_speed", -0.1),
+        ("clik", AGRI, "max_turn_rate", float("nan")),
+        ("clik", AGRI, "min_duration", -1.0),
+        ("clik", AGRI, "max_speed", 0.0),  # ZeroDivisionError before
+        ("walking", BIPED, "self_collision_weight", float("nan")),
+    ],
+)
+def test_policy_option_out_of_range_raises_naming_it(
+    envs: dict[str, gym.Env], policy: str, env_id: str, option: str, value: Any
+) -> None:
     with pytest.raises(PolicyError, match=rf"^{option} must be .*got {value!r}"):
         redundancy_gym.make_policy(policy, envs[env_id], **{option: value})
 
@@ -159,28 +174,32 @@ def test_joint_limit_activation_names_joint_limit_activation(envs: dict[str, gym
         redundancy_gym.make_policy("clik", envs[AGRI], joint_limit_activation=0.0)
 
 
-@pytest.mark.parametrize("policy, env_id, option, value, match", [
-    ("clik", PLANAR, "self_collision", "no", r"self_collision must be a bool"),
-    ("clik", PLANAR, "method", 3, r"method must be one of pseudoinverse, dls, transpose; got 3"),
-    ("clik", PLANAR, "backend", "gpu", r"backend must be one of compiled, python; got 'gpu'"),
-    ("predictive", PLANAR, "iterations", 2.5, r"iterations must be an int >= 0"),
-    ("predictive", PLANAR, "augmented", 1, r"augmented must be a bool"),
-    ("predictive", PLANAR, "sample_time", float("inf"), r"sample_time must be None or a finite real number > 0"),
-    ("predictive", PLANAR, "descent", "newton", r"descent must be one of fletcher_reeves, .*; got 'newton'"),
-    ("walking", BIPED, "gamma", 0.0, r"gamma must be a finite real number > 0"),
-    ("walking", BIPED, "stabilizer", "yes", r"stabilizer must be a bool"),
-    ("walking", BIPED, "correction_iterations", -1, r"correction_iterations must be an int >= 0"),
-])
-def test_policy_options_are_checked_from_their_types(envs: dict[str, gym.Env], policy: str, env_id: str,
-                                                     option: str, value: Any, match: str) -> None:
+@pytest.mark.parametrize(
+    "policy, env_id, option, value, match",
+    [
+        ("clik", PLANAR, "self_collision", "no", r"self_collision must be a bool"),
+        ("clik", PLANAR, "method", 3, r"method must be one of pseudoinverse, dls, transpose; got 3"),
+        ("clik", PLANAR, "backend", "gpu", r"backend must be one of compiled, python; got 'gpu'"),
+        ("predictive", PLANAR, "iterations", 2.5, r"iterations must be an int >= 0"),
+        ("predictive", PLANAR, "augmented", 1, r"augmented must be a bool"),
+        ("predictive", PLANAR, "sample_time", float("inf"), r"sample_time must be None or a finite real number > 0"),
+        ("predictive", PLANAR, "descent", "newton", r"descent must be one of fletcher_reeves, .*; got 'newton'"),
+        ("walking", BIPED, "gamma", 0.0, r"gamma must be a finite real number > 0"),
+        ("walking", BIPED, "stabilizer", "yes", r"stabilizer must be a bool"),
+        ("walking", BIPED, "correction_iterations", -1, r"correction_iterations must be an int >= 0"),
+    ],
+)
+def test_policy_options_are_checked_from_their_types(
+    envs: dict[str, gym.Env], policy: str, env_id: str, option: str, value: Any, match: str
+) -> None:
     with pytest.raises(PolicyError, match=match):
         redundancy_gym.make_policy(policy, envs[env_id], **{option: value})
 
 
 def test_every_numeric_policy_option_has_a_range() -> None:
     """A new float or int option of a config class gets a range in policy_options.py, or this test says so."""
-    from redundancy_gym.policies.grasp_clik_policy import GraspClikConfig
     from redundancy_gym.policies import ClikPolicyConfig
+    from redundancy_gym.policies.grasp_clik_policy import GraspClikConfig
     from redundancy_gym.policies.options import option_rule
     from redundancy_gym.policies.predictive_policy import PredictivePolicyConfig
     from redundancy_gym.policies.walking_policy import WalkingPolicyConfig
@@ -189,8 +208,12 @@ def test_every_numeric_policy_option_has_a_range() -> None:
         for f in fields(config):
             rule = option_rule(config, f.name)
             assert rule is not None, f"{config.__name__}.{f.name} is not checked"
-            assert rule.has_range or rule.kind == "bool" or rule.kind == "str" and f.name in ("method", "backend",
-                "descent", "collision_avoidance"), f"{config.__name__}.{f.name} has no range (policy_options.py)"
+            assert (
+                rule.has_range
+                or rule.kind == "bool"
+                or rule.kind == "str"
+                and f.name in ("method", "backend", "descent", "collision_avoidance")
+            ), f"{config.__name__}.{f.name} has no range (policy_options.py)"
             rule.check(f.name, getattr(config(), f.name), PolicyError)  # the defaults pass their own rule
 
 
@@ -200,12 +223,15 @@ def test_pss_radius_as_a_string_is_rejected() -> None:
         PSS([0.0, 0.0, 0.0], radius="0.1")
 
 
-@pytest.mark.parametrize("make", [
-    lambda: LSS([0, 0, 0], [1, 0, 0], radius=np.nan),
-    lambda: TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], radius=True),
-    lambda: PSS(["0", "0", "0"], 0.1),
-    lambda: LSS([0, 0, 0], [np.inf, 0, 0], 0.1),
-])
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: LSS([0, 0, 0], [1, 0, 0], radius=np.nan),
+        lambda: TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], radius=True),
+        lambda: PSS(["0", "0", "0"], 0.1),
+        lambda: LSS([0, 0, 0], [np.inf, 0, 0], 0.1),
+    ],
+)
 def test_ssv_constructors_reject_non_numbers(make: Any) -> None:
     with pytest.raises(GeometryError):
         make()
@@ -231,12 +257,15 @@ def test_indexed_distances_with_a_nan_vertex_raise() -> None:
         indexed_distances(volumes, [0], [1])
 
 
-@pytest.mark.parametrize("radii, kinds, match", [
-    (np.array([0.1, -0.1]), np.array([0, 0]), r"radii must be finite and >= 0.*volume 1"),
-    (np.array([0.1, np.nan]), np.array([0, 0]), r"radii must be finite and >= 0"),
-    (np.array([0.1, 0.1]), np.array([0, 3]), r"kinds must be 0 \(PSS\), 1 \(LSS\) or 2 \(TSS\)"),
-    (np.array([0.1]), np.array([0, 0]), r"radii must have shape \(2,\)"),
-])
+@pytest.mark.parametrize(
+    "radii, kinds, match",
+    [
+        (np.array([0.1, -0.1]), np.array([0, 0]), r"radii must be finite and >= 0.*volume 1"),
+        (np.array([0.1, np.nan]), np.array([0, 0]), r"radii must be finite and >= 0"),
+        (np.array([0.1, 0.1]), np.array([0, 3]), r"kinds must be 0 \(PSS\), 1 \(LSS\) or 2 \(TSS\)"),
+        (np.array([0.1]), np.array([0, 0]), r"radii must have shape \(2,\)"),
+    ],
+)
 def test_packed_volumes_check_radii_and_kinds(radii: np.ndarray, kinds: np.ndarray, match: str) -> None:
     with pytest.raises(GeometryError, match=match):
         PackedVolumes(np.zeros((2, 3, 3)), radii, kinds.astype(np.int64))
@@ -275,8 +304,11 @@ def test_shared_checks_raise_the_callers_exception_naming_argument_value_and_ran
     assert v.check_range_pair("r", (1, 2), low=0.0, error=MyError) == (1.0, 2.0)
     assert v.check_range_pair("r", (1, 2), integer=True, error=MyError) == (1, 2)
     for bad in ((2.0, 1.0), (0.0,), ("1", "2"), (np.nan, 1.0), (-1.0, 1.0), 1.0):
-        with pytest.raises(MyError, match=r"r must be a \(low, high\) pair of finite real numbers with "
-                                          r"low <= high, both >= 0"):
+        with pytest.raises(
+            MyError,
+            match=r"r must be a \(low, high\) pair of finite real numbers with "
+            r"low <= high, both >= 0",
+        ):
             v.check_range_pair("r", bad, low=0.0, error=MyError)
     p = v.check_real_array("p", [1, 2], shape=(2,), error=MyError)
     assert p.dtype == np.float64 and p.tolist() == [1.0, 2.0]

@@ -49,7 +49,8 @@ def _on_the_line_of_the_outer_links(model: RobotModel, clik: Clik, q: np.ndarray
 
 @pytest.mark.parametrize("limit", ["lower", "upper"])
 def test_transpose_joint_on_its_limit_with_round_off_command_is_not_limited_in_either_backend(
-        planar: RobotModel, limit: str) -> None:
+    planar: RobotModel, limit: str
+) -> None:
     clik = Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz"), method="transpose")
     compiled = CompiledClik(clik)
     bound = planar.lower_limits[1] if limit == "lower" else planar.upper_limits[1]
@@ -84,10 +85,11 @@ def test_a_limit_acting_on_a_real_command_is_still_limited(planar: RobotModel) -
 @pytest.mark.parametrize("method", METHODS)
 @pytest.mark.parametrize("backend", ["python", "compiled"])
 @pytest.mark.parametrize("value", [1e300, -1e300, 1.5 * MAX_COORDINATE, 1e150])
-def test_huge_configuration_is_rejected_naming_q(planar: RobotModel, method: str, backend: str,
-                                                 value: float) -> None:
-    objectives = [JointLimitObjective.from_model(planar, activation_distance=0.3),
-                  PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1])]
+def test_huge_configuration_is_rejected_naming_q(planar: RobotModel, method: str, backend: str, value: float) -> None:
+    objectives = [
+        JointLimitObjective.from_model(planar, activation_distance=0.3),
+        PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
+    ]
     clik = Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz"), method=method, objectives=objectives)
     controller = CompiledClik(clik) if backend == "compiled" else clik
     with pytest.raises(ControllerError, match=r"^q must be finite, with every \|entry\| <= 1e\+06"):
@@ -99,8 +101,10 @@ def test_huge_configuration_is_rejected_naming_q(planar: RobotModel, method: str
 
 def test_huge_configuration_backends_agree_just_inside_the_accepted_range(planar: RobotModel) -> None:
     """At ``|q| = MAX_COORDINATE`` the gradients' round-off is still far below the command: both backends agree."""
-    objectives = [JointLimitObjective.from_model(planar, activation_distance=0.3),
-                  PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1])]
+    objectives = [
+        JointLimitObjective.from_model(planar, activation_distance=0.3),
+        PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
+    ]
     for method in METHODS:
         clik = Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz"), method=method, objectives=objectives)
         compiled = CompiledClik(clik)

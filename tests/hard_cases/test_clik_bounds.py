@@ -51,27 +51,43 @@ def _controller(clik: Clik, backend: str) -> Clik | CompiledClik:
 
 def _planar_clik(model: RobotModel, method: str = "dls", **kwargs) -> Clik:
     """The PlanarReach ``clik`` reference: DLS, K = 20, joint-limit objective."""
-    return Clik(model, FramePositionTask(PLANAR_ARM_TCP, "xz"), method=method, gain=20.0,
-                objectives=[JointLimitObjective.from_model(model, activation_distance=0.35)], **kwargs)
+    return Clik(
+        model,
+        FramePositionTask(PLANAR_ARM_TCP, "xz"),
+        method=method,
+        gain=20.0,
+        objectives=[JointLimitObjective.from_model(model, activation_distance=0.35)],
+        **kwargs,
+    )
 
 
 def _agri_clik(model: RobotModel, method: str = "dls", **kwargs) -> Clik:
     """The AgriReach ``clik`` reference's controller without the plant: DLS, K = 10, joint-limit objective."""
-    return Clik(model, FrameAxisTask(AGRI_ARM_TCP), method=method, gain=10.0,
-                objectives=[JointLimitObjective.from_model(model, activation_distance=0.2, weight=0.5)], **kwargs)
+    return Clik(
+        model,
+        FrameAxisTask(AGRI_ARM_TCP),
+        method=method,
+        gain=10.0,
+        objectives=[JointLimitObjective.from_model(model, activation_distance=0.2, weight=0.5)],
+        **kwargs,
+    )
 
 
 # ---------------------------------------------------------------------------------------------- item 3: NaN
-PLANAR_GOOD = {"q": np.array([0.3, -0.5, 0.4, 0.2]), "target": np.array([0.9, -0.2]),
-               "target_velocity": np.array([0.0, 0.1])}
+PLANAR_GOOD = {
+    "q": np.array([0.3, -0.5, 0.4, 0.2]),
+    "target": np.array([0.9, -0.2]),
+    "target_velocity": np.array([0.0, 0.1]),
+}
 
 
 @pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
 @pytest.mark.parametrize("argument", ["q", "target", "target_velocity"])
 @pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("method", METHODS)
-def test_non_finite_input_raises_naming_the_argument(planar: RobotModel, method: str, backend: str,
-                                                     argument: str, value: float) -> None:
+def test_non_finite_input_raises_naming_the_argument(
+    planar: RobotModel, method: str, backend: str, argument: str, value: float
+) -> None:
     controller = _controller(_planar_clik(planar, method), backend)
     inputs = {k: v.copy() for k, v in PLANAR_GOOD.items()}
     inputs[argument][1] = value
@@ -116,8 +132,13 @@ def test_frame_axis_task_non_finite_inputs_raise(agri: RobotModel, backend: str)
 def test_acceleration_clik_non_finite_input_raises(planar: RobotModel, argument: str) -> None:
     task = FramePositionTask(PLANAR_ARM_TCP, "xz")
     clik = AccelerationClik(planar, task)
-    inputs = {"q": np.array([0.3, -0.5, 0.4, 0.2]), "qdot": np.zeros(4), "target": np.array([0.9, -0.2]),
-              "target_velocity": np.zeros(2), "target_acceleration": np.zeros(2)}
+    inputs = {
+        "q": np.array([0.3, -0.5, 0.4, 0.2]),
+        "qdot": np.zeros(4),
+        "target": np.array([0.9, -0.2]),
+        "target_velocity": np.zeros(2),
+        "target_acceleration": np.zeros(2),
+    }
     inputs[argument][0] = np.nan
     with pytest.raises(ControllerError, match=rf"^{argument} must be finite"):
         clik.step(**inputs)
@@ -129,12 +150,14 @@ def test_robot_model_velocity_limits_come_from_the_mjcf_servos(planar: RobotMode
     np.testing.assert_array_equal(planar.velocity_limits, np.full(4, 3.0))
     np.testing.assert_array_equal(agri.velocity_limits, np.r_[1.0, np.full(8, 3.0)])  # lift [m/s], revolute
     assert np.all(np.isinf(RobotModel.from_mjcf(BIPED_XML).velocity_limits))  # position servos: none
-    np.testing.assert_array_equal(Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz")).max_joint_velocity,
-                                  planar.velocity_limits)
+    np.testing.assert_array_equal(
+        Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz")).max_joint_velocity, planar.velocity_limits
+    )
 
 
-def _closed_loop(controller: Clik | CompiledClik, model: RobotModel, q: np.ndarray, target: np.ndarray,
-                 steps: int = 3000) -> tuple[np.ndarray, np.ndarray, list[bool]]:
+def _closed_loop(
+    controller: Clik | CompiledClik, model: RobotModel, q: np.ndarray, target: np.ndarray, steps: int = 3000
+) -> tuple[np.ndarray, np.ndarray, list[bool]]:
     """Kinematic closed loop ``q += qdot dt``: every q and qdot, and the limited flags."""
     qs, qdots, limited = [], [], []
     for _ in range(steps):
@@ -148,12 +171,14 @@ def _closed_loop(controller: Clik | CompiledClik, model: RobotModel, q: np.ndarr
     return np.array(qs), np.array(qdots), limited
 
 
-def _assert_bounded(model: RobotModel, qs: np.ndarray, qdots: np.ndarray, limited: list[bool],
-                    vmax: np.ndarray) -> None:
+def _assert_bounded(
+    model: RobotModel, qs: np.ndarray, qdots: np.ndarray, limited: list[bool], vmax: np.ndarray
+) -> None:
     peak = np.abs(qdots).max(axis=0)
     assert np.all(peak <= vmax * (1 + TOL)), f"peak |qdot| {peak} above the limits {vmax}"
-    assert np.all(qs >= model.lower_limits - TOL) and np.all(qs <= model.upper_limits + TOL), \
+    assert np.all(qs >= model.lower_limits - TOL) and np.all(qs <= model.upper_limits + TOL), (
         "the commanded motion left the joint ranges"
+    )
     assert any(limited)
     assert np.max(peak / vmax) > 0.99  # the reference asked for more than the limits: they were active
 
@@ -182,8 +207,9 @@ def test_agri_unreachable_target_3m_away_keeps_speed_and_joint_limits(agri: Robo
 def test_without_a_period_joints_do_not_move_further_out(planar: RobotModel, backend: str) -> None:
     """No period known: a joint may overshoot a limit by one step (<= vmax dt) but never moves further out."""
     controller = _controller(_planar_clik(planar), backend)
-    qs, qdots, limited = _closed_loop(controller, planar, np.array([0.3, -0.5, 0.4, 0.2]), np.array([2.4, -1.8]),
-                                      steps=1500)
+    qs, qdots, limited = _closed_loop(
+        controller, planar, np.array([0.3, -0.5, 0.4, 0.2]), np.array([2.4, -1.8]), steps=1500
+    )
     vmax = planar.velocity_limits
     assert np.all(np.abs(qdots) <= vmax * (1 + TOL)) and any(limited)
     over = vmax * DT * (1 + TOL)
@@ -254,8 +280,15 @@ def test_joint_on_its_limit_gets_no_velocity_further_out(planar: RobotModel, bac
     target = planar.frame_position(PLANAR_ARM_TCP)[[0, 2]] + 0.05 * jacobian[:, 1] / np.linalg.norm(jacobian[:, 1])
     clik = _planar_clik(planar, max_joint_velocity=np.inf)
     problem = clik.build(q, target)
-    free = resolve(problem.jacobian, problem.velocity, clik.nullspace_gain * problem.gradient, clik.weights,
-                   method="dls", dls_threshold=clik.dls_threshold, dls_max_damping=clik.dls_max_damping).x
+    free = resolve(
+        problem.jacobian,
+        problem.velocity,
+        clik.nullspace_gain * problem.gradient,
+        clik.weights,
+        method="dls",
+        dls_threshold=clik.dls_threshold,
+        dls_max_damping=clik.dls_max_damping,
+    ).x
     assert free[1] > 0.1  # the reference folds joint 2 further
     for period in (None, DT):
         result = _controller(_planar_clik(planar, max_joint_velocity=np.inf, period=period), backend).step(q, target)
@@ -267,10 +300,13 @@ def test_joint_on_its_limit_gets_no_velocity_further_out(planar: RobotModel, bac
     assert result.limited and result.qdot[1] == pytest.approx(1e-4 / DT, rel=1e-9)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    *[(dict(max_joint_velocity=v), "max_joint_velocity") for v in (0.0, -1.0, np.nan, [1.0, 2.0], "fast", True)],
-    *[(dict(period=v), "period") for v in (0.0, -0.01, np.nan, np.inf, True, "0.01")],
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        *[(dict(max_joint_velocity=v), "max_joint_velocity") for v in (0.0, -1.0, np.nan, [1.0, 2.0], "fast", True)],
+        *[(dict(period=v), "period") for v in (0.0, -0.01, np.nan, np.inf, True, "0.01")],
+    ],
+)
 def test_invalid_bounds_raise(planar: RobotModel, kwargs: dict, match: str) -> None:
     with pytest.raises(ControllerError, match=match):
         Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz"), **kwargs)
@@ -282,8 +318,7 @@ def test_acceleration_clik_unreachable_target_keeps_speed_and_joint_limits(plana
     """Resolved-acceleration loop towards a target 3 m away: the next velocity stays within the speed limits and
     keeps q inside its ranges."""
     task = FramePositionTask(PLANAR_ARM_TCP, "xz")
-    clik = AccelerationClik(planar, task, method="dls", period=DT,
-                            objectives=[JointLimitObjective.from_model(planar)])
+    clik = AccelerationClik(planar, task, method="dls", period=DT, objectives=[JointLimitObjective.from_model(planar)])
     q, qdot = np.array([0.3, -0.5, 0.4, 0.2]), np.zeros(4)
     target = np.array([2.4, -1.8])
     vmax = planar.velocity_limits

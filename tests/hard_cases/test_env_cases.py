@@ -87,7 +87,7 @@ def test_unseeded_resets_after_a_seeded_reset_follow_the_generator(env_id: str) 
         for env in envs:
             first, _ = env.reset(seed=5)
             sequences.append([first] + [env.reset()[0] for _ in range(2)])
-        for a, b in zip(*sequences):
+        for a, b in zip(*sequences, strict=False):
             np.testing.assert_array_equal(a, b)
         assert not np.array_equal(sequences[0][0], sequences[0][1])
         assert not np.array_equal(sequences[0][1], sequences[0][2])

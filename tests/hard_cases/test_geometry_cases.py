@@ -38,8 +38,10 @@ def _brute_force(a, b) -> tuple[float, float]:
     how far the true minimum can lie below it (half the longest sample spacing of both cores)."""
     pa, pb = _samples(a), _samples(b)
     gaps = np.linalg.norm(pa[:, None, :] - pb[None, :, :], axis=2)
-    spacing = sum(max((np.linalg.norm(x - y) for x, y in itertools.combinations(v.points, 2)), default=0.0)
-                  for v in (a, b)) / GRID
+    spacing = (
+        sum(max((np.linalg.norm(x - y) for x, y in itertools.combinations(v.points, 2)), default=0.0) for v in (a, b))
+        / GRID
+    )
     return float(gaps.min()) - a.radius - b.radius, spacing
 
 
@@ -48,8 +50,9 @@ def _check_against_brute_force(a, b) -> None:
     upper, resolution = _brute_force(a, b)
     assert upper - resolution - 1e-12 <= result.distance <= upper + 1e-12, (result.distance, upper, resolution)
     # the witness points lie on the cores' surfaces and realize the distance
-    assert np.linalg.norm(result.point_b - result.point_a) - a.radius - b.radius == pytest.approx(result.distance,
-                                                                                                     abs=1e-12)
+    assert np.linalg.norm(result.point_b - result.point_a) - a.radius - b.radius == pytest.approx(
+        result.distance, abs=1e-12
+    )
     assert np.linalg.norm(result.normal) == pytest.approx(1.0, abs=1e-12)
     assert distance(b, a).distance == pytest.approx(result.distance, abs=1e-12)
 
@@ -58,13 +61,23 @@ ZERO_LENGTH_SEGMENT = LSS([0.2, 0.1, 0.3], [0.2, 0.1, 0.3], 0.05)
 COINCIDENT_TRIANGLE = TSS([0.3, -0.2, 0.1], [0.3, -0.2, 0.1], [0.3, -0.2, 0.1], 0.04)
 COLLINEAR_TRIANGLE = TSS([-0.2, 0.0, 0.0], [0.6, 0.0, 0.0], [0.1, 0.0, 0.0], 0.03)  # a flat "rectangle"'s diagonal
 TWO_EQUAL_VERTICES = TSS([0.0, 0.4, 0.0], [0.0, 0.4, 0.0], [0.5, 0.4, 0.3], 0.02)
-ZERO_RADIUS = {"PSS": PSS([0.1, 0.5, -0.2], 0.0), "LSS": LSS([-0.3, 0.2, 0.4], [0.4, 0.3, -0.1], 0.0),
-               "TSS": TSS([0.0, -0.5, 0.0], [0.5, -0.4, 0.1], [0.1, -0.3, 0.5], 0.0)}
-PARTNERS = {"sphere": PSS([0.4, 0.3, 0.2], 0.1), "segment": LSS([-0.5, -0.5, 0.5], [0.5, 0.6, -0.2], 0.05),
-            "triangle": TSS([-0.4, 0.2, -0.3], [0.5, 0.1, -0.2], [0.0, 0.5, 0.4], 0.02)}
-DEGENERATE = {"zero-length-segment": ZERO_LENGTH_SEGMENT, "coincident-triangle": COINCIDENT_TRIANGLE,
-              "collinear-triangle": COLLINEAR_TRIANGLE, "two-equal-vertices": TWO_EQUAL_VERTICES,
-              **{f"zero-radius-{k}": v for k, v in ZERO_RADIUS.items()}}
+ZERO_RADIUS = {
+    "PSS": PSS([0.1, 0.5, -0.2], 0.0),
+    "LSS": LSS([-0.3, 0.2, 0.4], [0.4, 0.3, -0.1], 0.0),
+    "TSS": TSS([0.0, -0.5, 0.0], [0.5, -0.4, 0.1], [0.1, -0.3, 0.5], 0.0),
+}
+PARTNERS = {
+    "sphere": PSS([0.4, 0.3, 0.2], 0.1),
+    "segment": LSS([-0.5, -0.5, 0.5], [0.5, 0.6, -0.2], 0.05),
+    "triangle": TSS([-0.4, 0.2, -0.3], [0.5, 0.1, -0.2], [0.0, 0.5, 0.4], 0.02),
+}
+DEGENERATE = {
+    "zero-length-segment": ZERO_LENGTH_SEGMENT,
+    "coincident-triangle": COINCIDENT_TRIANGLE,
+    "collinear-triangle": COLLINEAR_TRIANGLE,
+    "two-equal-vertices": TWO_EQUAL_VERTICES,
+    **{f"zero-radius-{k}": v for k, v in ZERO_RADIUS.items()},
+}
 
 
 @pytest.mark.parametrize("partner", sorted(PARTNERS))
@@ -81,8 +94,9 @@ def test_two_degenerate_volumes_match_the_brute_force_minimum(a: str, b: str) ->
 def test_collinear_triangle_is_the_segment_of_its_extreme_vertices() -> None:
     segment = LSS([-0.2, 0.0, 0.0], [0.6, 0.0, 0.0], 0.03)
     for partner in PARTNERS.values():
-        assert distance(COLLINEAR_TRIANGLE, partner).distance == pytest.approx(distance(segment, partner).distance,
-                                                                               abs=1e-14)
+        assert distance(COLLINEAR_TRIANGLE, partner).distance == pytest.approx(
+            distance(segment, partner).distance, abs=1e-14
+        )
 
 
 # ------------------------------------------------------------------------------------------- deep penetration
@@ -135,8 +149,11 @@ def test_parallel_segments_side_by_side_are_the_closed_form(gap: float) -> None:
 @pytest.mark.parametrize("kinds", [("PSS", "PSS"), ("LSS", "LSS"), ("LSS", "TSS"), ("TSS", "TSS")])
 def test_huge_and_tiny_coordinates_stay_finite_and_scale(scale: float, kinds: tuple[str, str]) -> None:
     """The same pair scaled by 1e-150 ... 1e150 has its distance scaled (no overflow or underflow to 0 / NaN)."""
-    shapes = {"PSS": lambda p, r: PSS(p[0], r), "LSS": lambda p, r: LSS(p[0], p[1], r),
-              "TSS": lambda p, r: TSS(p[0], p[1], p[2], r)}
+    shapes = {
+        "PSS": lambda p, r: PSS(p[0], r),
+        "LSS": lambda p, r: LSS(p[0], p[1], r),
+        "TSS": lambda p, r: TSS(p[0], p[1], p[2], r),
+    }
     pa = np.array([[0.0, 0.0, 0.0], [1.0, 0.2, 0.0], [0.2, 1.0, 0.1]])
     pb = np.array([[0.3, 0.4, 1.5], [1.2, 0.1, 1.1], [0.1, 0.9, 2.0]])
     a, b = shapes[kinds[0]](pa, 0.1), shapes[kinds[1]](pb, 0.2)
@@ -151,8 +168,9 @@ def test_far_from_the_origin_a_pair_keeps_its_distance() -> None:
     offset = np.array([3e7, -1e7, 2e7])
     a, b = LSS([0, 0, 0], [1, 0.1, 0], 0.05), TSS([0.2, 0.5, -0.1], [0.8, 0.6, 0.2], [0.5, 0.9, 0.0], 0.05)
     near = distance(a, b).distance
-    far = distance(LSS(a.points[0] + offset, a.points[1] + offset, 0.05),
-                   TSS(*(b.points + offset), radius=0.05)).distance
+    far = distance(
+        LSS(a.points[0] + offset, a.points[1] + offset, 0.05), TSS(*(b.points + offset), radius=0.05)
+    ).distance
     assert far == pytest.approx(near, abs=1e-8)  # ulp(3e7) ~ 4e-9
 
 
@@ -170,8 +188,11 @@ def test_non_finite_vertex_is_rejected_with_geometry_error(kind: str, vertex: in
 
 @pytest.mark.parametrize("radius", [np.nan, np.inf, -1e-12, -np.inf])
 def test_bad_radius_is_rejected_naming_the_radius(radius: float) -> None:
-    for make in (lambda r: PSS([0, 0, 0], r), lambda r: LSS([0, 0, 0], [1, 0, 0], r),
-                 lambda r: TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], r)):
+    for make in (
+        lambda r: PSS([0, 0, 0], r),
+        lambda r: LSS([0, 0, 0], [1, 0, 0], r),
+        lambda r: TSS([0, 0, 0], [1, 0, 0], [0, 1, 0], r),
+    ):
         with pytest.raises(GeometryError, match="radius"):
             make(radius)
 
@@ -196,8 +217,9 @@ def test_crossing_segments_and_a_point_over_a_face_keep_their_closed_form_at_eve
     over_face = distance(PSS([0.3 * s, 0.3 * s, 0.7 * s], 0.0), TSS([0, 0, 0], [s, 0, 0], [0, s, 0], 0.0))
     assert over_face.distance / s == pytest.approx(0.7, rel=1e-12)
     np.testing.assert_allclose(over_face.point_b / s, [0.3, 0.3, 0.0], atol=1e-12)
-    through = distance(LSS([0.2 * s, 0.2 * s, -s], [0.2 * s, 0.2 * s, s], 0.1 * s),
-                       TSS([0, 0, 0], [s, 0, 0], [0, s, 0], 0.05 * s))
+    through = distance(
+        LSS([0.2 * s, 0.2 * s, -s], [0.2 * s, 0.2 * s, s], 0.1 * s), TSS([0, 0, 0], [s, 0, 0], [0, s, 0], 0.05 * s)
+    )
     assert through.distance / s == pytest.approx(-0.15, rel=1e-12)
 
 
@@ -206,8 +228,11 @@ def test_crossing_segments_and_a_point_over_a_face_keep_their_closed_form_at_eve
 def test_subnormal_separation_is_finite_and_about_zero(gap: float, kinds: tuple[str, str]) -> None:
     """Volumes a subnormal distance apart (nightly fuzz: the power-of-two rescaling of tiny pairs overflowed to inf
     and gave NaN): the distance is finite and within a few subnormals of the gap."""
-    make = {"PSS": lambda o: PSS(o, 0.0), "LSS": lambda o: LSS(o, o + [0.0, 0.0, gap], 0.0),
-            "TSS": lambda o: TSS(o, o + [gap, 0.0, 0.0], o + [0.0, gap, 0.0], 0.0)}
+    make = {
+        "PSS": lambda o: PSS(o, 0.0),
+        "LSS": lambda o: LSS(o, o + [0.0, 0.0, gap], 0.0),
+        "TSS": lambda o: TSS(o, o + [gap, 0.0, 0.0], o + [0.0, gap, 0.0], 0.0),
+    }
     a = make[kinds[0]](np.zeros(3))
     b = make[kinds[1]](np.array([0.0, 0.0, 2.0 * gap]))
     result = distance(a, b)

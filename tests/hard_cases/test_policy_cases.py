@@ -27,15 +27,20 @@ def biped() -> tuple[gym.Env, np.ndarray]:
     env.close()
 
 
-@pytest.mark.parametrize("slot, index, value, match", [
-    ("base_linear_velocity", 0, np.nan, "velocity contains non-finite values"),
-    ("qdot", 3, np.inf, "velocity contains non-finite values"),
-    ("base_position", 0, np.nan, "configuration contains non-finite values"),
-    ("q", 5, -np.inf, "configuration contains non-finite values"),
-    ("base_quaternion", None, 0.0, "quaternion of qpos is zero"),
-], ids=["nan-base-velocity", "inf-joint-velocity", "nan-base-position", "inf-joint-angle", "zero-quaternion"])
-def test_walking_policy_invalid_robot_state_is_a_policy_error(biped, slot: str, index: int | None, value: float,
-                                                              match: str) -> None:
+@pytest.mark.parametrize(
+    "slot, index, value, match",
+    [
+        ("base_linear_velocity", 0, np.nan, "velocity contains non-finite values"),
+        ("qdot", 3, np.inf, "velocity contains non-finite values"),
+        ("base_position", 0, np.nan, "configuration contains non-finite values"),
+        ("q", 5, -np.inf, "configuration contains non-finite values"),
+        ("base_quaternion", None, 0.0, "quaternion of qpos is zero"),
+    ],
+    ids=["nan-base-velocity", "inf-joint-velocity", "nan-base-position", "inf-joint-angle", "zero-quaternion"],
+)
+def test_walking_policy_invalid_robot_state_is_a_policy_error(
+    biped, slot: str, index: int | None, value: float, match: str
+) -> None:
     env, obs = biped
     policy = redundancy_gym.make_policy("walking", env)
     layout = env.unwrapped.OBSERVATION_LAYOUT
@@ -93,17 +98,24 @@ def test_empty_batch_gives_no_actions() -> None:
         env.close()
 
 
-@pytest.mark.parametrize("name, kwargs, match", [
-    ("clik", {"gain": -1.0}, "gain"),
-    ("clik", {"dls_max_damping": 0.0}, r"^invalid option for the clik policy: dls_max_damping"),  # was ControllerError
-    ("clik", {"no_such_option": 1}, "no_such_option"),
-    ("predictive", {"horizon": 0.0}, "horizon"),
-    ("predictive", {"sample_time": 0.015}, "sample_time"),
-    ("predictive", {"descent": "newton"}, "descent"),
-    ("random", {"seed": "x"}, "seed"),
-    ("zero", {"gain": 1.0}, "gain"),
-    ("no_such_policy", {}, "no_such_policy"),
-])
+@pytest.mark.parametrize(
+    "name, kwargs, match",
+    [
+        ("clik", {"gain": -1.0}, "gain"),
+        (
+            "clik",
+            {"dls_max_damping": 0.0},
+            r"^invalid option for the clik policy: dls_max_damping",
+        ),  # was ControllerError
+        ("clik", {"no_such_option": 1}, "no_such_option"),
+        ("predictive", {"horizon": 0.0}, "horizon"),
+        ("predictive", {"sample_time": 0.015}, "sample_time"),
+        ("predictive", {"descent": "newton"}, "descent"),
+        ("random", {"seed": "x"}, "seed"),
+        ("zero", {"gain": 1.0}, "gain"),
+        ("no_such_policy", {}, "no_such_policy"),
+    ],
+)
 def test_make_policy_bad_options_name_the_option(name: str, kwargs: dict, match: str) -> None:
     env = gym.make(PLANAR)
     try:

@@ -10,7 +10,7 @@
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from typing import Any
 
 import gymnasium as gym
@@ -19,8 +19,8 @@ import pytest
 from numpy.typing import NDArray
 
 import redundancy_gym
-from redundancy_gym.policies import PolicyError
 from redundancy_gym.eval.evaluate import EpisodeSummary, evaluate
+from redundancy_gym.policies import PolicyError
 
 pytest.importorskip("stable_baselines3")
 from stable_baselines3.common.env_util import make_vec_env  # noqa: E402
@@ -31,9 +31,11 @@ AGRI = "redundancy_gym/AgriReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"
 SEED = 3
 N_ENVS = 4
-PAIRS = [(PLANAR, name) for name in ("zero", "random", "clik", "predictive", "global")] \
-    + [(AGRI, name) for name in ("zero", "random", "clik", "predictive", "global")] \
+PAIRS = (
+    [(PLANAR, name) for name in ("zero", "random", "clik", "predictive", "global")]
+    + [(AGRI, name) for name in ("zero", "random", "clik", "predictive", "global")]
     + [(BIPED, name) for name in ("zero", "random", "walking")]
+)
 
 
 def _make_policy(name: str, env: Any) -> Any:
@@ -41,7 +43,7 @@ def _make_policy(name: str, env: Any) -> Any:
     return redundancy_gym.make_policy(name, env, **({"seed": SEED} if name == "random" else {}))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _eval_episodes(env_id: str, name: str) -> tuple[EpisodeSummary, ...]:
     """``redundancy-gym eval ENV --policy NAME --episodes 4 --seed SEED``: seeds SEED ... SEED + 3."""
     return tuple(evaluate(env_id, name, episodes=N_ENVS, seed=SEED, progress=False).summaries)
@@ -68,8 +70,9 @@ def test_evaluate_policy_runs_every_reference_policy_like_eval(env_id: str, name
             if local["done"] and i not in first:
                 first[i] = (bool(info["is_success"]), int(info["episode"]["l"]), float(info["episode"]["r"]))
 
-        rewards, lengths = evaluate_policy(policy, venv, n_eval_episodes=n_envs, deterministic=True,
-                                           return_episode_rewards=True, callback=record)
+        rewards, lengths = evaluate_policy(
+            policy, venv, n_eval_episodes=n_envs, deterministic=True, return_episode_rewards=True, callback=record
+        )
     finally:
         venv.close()
     assert len(rewards) == len(lengths) == n_envs and sorted(first) == list(range(n_envs))
@@ -81,8 +84,9 @@ def test_evaluate_policy_runs_every_reference_policy_like_eval(env_id: str, name
     # Monitor rounds the return to 6 decimals; the walking reference re-estimates its ZMP correction per env
     # index here, where eval reuses the first episode's (the starts differ by the reset noise)
     tolerance = 1e-3 if name == "walking" else 1e-5
-    np.testing.assert_allclose([first[i][2] for i in range(n_envs)], [e.episode_return for e in expected],
-                               rtol=tolerance, atol=tolerance)
+    np.testing.assert_allclose(
+        [first[i][2] for i in range(n_envs)], [e.episode_return for e in expected], rtol=tolerance, atol=tolerance
+    )
 
 
 def test_make_policy_takes_the_dummy_vec_env_that_evaluate_policy_gets() -> None:
@@ -92,8 +96,12 @@ def test_make_policy_takes_the_dummy_vec_env_that_evaluate_policy_gets() -> None
     try:
         policy = redundancy_gym.make_policy("clik", venv)
         successes: list[bool] = []
-        evaluate_policy(policy, venv, n_eval_episodes=2, callback=lambda local, _: successes.append(
-            bool(local["info"]["is_success"])) if local["done"] else None)
+        evaluate_policy(
+            policy,
+            venv,
+            n_eval_episodes=2,
+            callback=lambda local, _: successes.append(bool(local["info"]["is_success"])) if local["done"] else None,
+        )
         assert successes == [True, True]
         with pytest.raises(PolicyError, match="VecEnv VecNormalize"):  # normalized observations are not the env's
             redundancy_gym.make_policy("clik", VecNormalize(venv))
@@ -101,8 +109,9 @@ def test_make_policy_takes_the_dummy_vec_env_that_evaluate_policy_gets() -> None
         venv.close()
 
 
-def _rollout(env: gym.Env, policy: Any, seed: int, steps: int | None = None
-             ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+def _rollout(
+    env: gym.Env, policy: Any, seed: int, steps: int | None = None
+) -> tuple[NDArray[np.float32], dict[str, Any]]:
     """The actions of an episode from ``reset(seed)`` driven by ``predict(obs)`` alone (no ``episode_start``), and
     the last info; ``steps`` ends it early (as a user's ``reset`` mid-episode would)."""
     obs, info = env.reset(seed=seed)
@@ -116,13 +125,18 @@ def _rollout(env: gym.Env, policy: Any, seed: int, steps: int | None = None
     return np.asarray(actions), info
 
 
-@pytest.mark.parametrize("env_id, name, max_steps", [
-    (PLANAR, "predictive", None),  # was: collides at 0.24 s (kept counting steps of the old episode)
-    (PLANAR, "global", None),      # was: misses the line by 0.87 m (followed the old plan's end)
-    (BIPED, "walking", 300),       # was: falls at 0.46 s (kept the old walking pattern); 1.2 s show it
-], ids=["planar-predictive", "planar-global", "biped-walking"])
-def test_a_policy_reused_without_episode_start_acts_as_a_fresh_one(env_id: str, name: str,
-                                                                   max_steps: int | None) -> None:
+@pytest.mark.parametrize(
+    "env_id, name, max_steps",
+    [
+        (PLANAR, "predictive", None),  # was: collides at 0.24 s (kept counting steps of the old episode)
+        (PLANAR, "global", None),  # was: misses the line by 0.87 m (followed the old plan's end)
+        (BIPED, "walking", 300),  # was: falls at 0.46 s (kept the old walking pattern); 1.2 s show it
+    ],
+    ids=["planar-predictive", "planar-global", "biped-walking"],
+)
+def test_a_policy_reused_without_episode_start_acts_as_a_fresh_one(
+    env_id: str, name: str, max_steps: int | None
+) -> None:
     env = gym.make(env_id, **({"max_episode_steps": max_steps} if max_steps else {}))
     try:
         reused = redundancy_gym.make_policy(name, env)
@@ -189,11 +203,15 @@ def _step(env: gym.Env, action: NDArray[np.float32], seed: int) -> tuple[NDArray
     return obs, False
 
 
-@pytest.mark.parametrize("env_id, name, steps", [
-    (AGRI, "clik", 120),          # plans a path and a collision model per episode, per scene
-    (PLANAR, "predictive", 120),  # receding horizon, warm-started
-    (BIPED, "walking", 150),      # walking pattern, stabilizer, IK
-], ids=["agri-clik", "planar-predictive", "biped-walking"])
+@pytest.mark.parametrize(
+    "env_id, name, steps",
+    [
+        (AGRI, "clik", 120),  # plans a path and a collision model per episode, per scene
+        (PLANAR, "predictive", 120),  # receding horizon, warm-started
+        (BIPED, "walking", 150),  # walking pattern, stabilizer, IK
+    ],
+    ids=["agri-clik", "planar-predictive", "biped-walking"],
+)
 def test_each_env_index_keeps_its_own_controller_state(env_id: str, name: str, steps: int) -> None:
     """Two envs on different seeds in one batch, env 1 reset mid-way on a third seed: the batch policy acts as
     two single policies do."""
@@ -206,7 +224,7 @@ def test_each_env_index_keeps_its_own_controller_state(env_id: str, name: str, s
         for t in range(steps):
             actions, _ = batched.predict(obs, episode_start=starts)
             for k, single in enumerate(singles):
-                np.testing.assert_array_equal(actions[k], single.predict(obs[k], episode_start=starts[k:k + 1])[0])
+                np.testing.assert_array_equal(actions[k], single.predict(obs[k], episode_start=starts[k : k + 1])[0])
             stepped = [_step(env, actions[k], SEED + 20 + k) for k, env in enumerate(envs)]
             obs = np.stack([o for o, _ in stepped])
             starts = np.array([done for _, done in stepped])

@@ -51,7 +51,7 @@ def test_horizon_of_one_sample(planar) -> None:
     result = pik.optimize(q0, wdot[100:101], DT, np.zeros((1, 4)), max_iterations=5)
     assert result.success and result.params.shape == (1, 4) and result.rollout.q.shape == (2, 4)
     assert np.all(np.isfinite(result.rollout.q)) and len(result.costs) == result.iterations + 1
-    assert all(b <= a for a, b in zip(result.costs, result.costs[1:]))  # the line search never raises the cost
+    assert all(b <= a for a, b in zip(result.costs, result.costs[1:], strict=False))  # the line search never raises the cost
     horizon = RecedingHorizon(pik, 1, DT)
     update = horizon.update(q0, wdot[100:101])
     assert update.u.shape == (4,) and np.all(np.isfinite(update.u)) and update.seconds >= 0.0
@@ -66,7 +66,7 @@ def test_long_horizon_of_2000_samples_stays_finite(planar) -> None:
     with np.errstate(over="ignore"):  # the Hamiltonian's squared norm may overflow: it only sets beta
         result = pik.optimize(q0, wdot, DT, np.zeros((2000, 4)), max_iterations=3)
     assert result.success and np.all(np.isfinite(result.rollout.q)) and np.isfinite(result.rollout.cost)
-    assert all(b <= a for a, b in zip(result.costs, result.costs[1:]))
+    assert all(b <= a for a, b in zip(result.costs, result.costs[1:], strict=False))
     assert result.status in ("converged", "max_iterations", "no_decrease")
 
 
@@ -92,11 +92,18 @@ def test_non_finite_optimize_input_raises(planar, argument: str) -> None:
         augmented.optimize(args["q0"], args["wdot"], DT, args["initial"], u_b=args["u_b"])
 
 
-@pytest.mark.parametrize("kwargs, match", [({"dt": np.nan}, "dt"), ({"dt": 0.0}, "dt"),
-                                           ({"max_iterations": -1}, "max_iterations"),
-                                           ({"max_iterations": 2.5}, "max_iterations"),
-                                           ({"method": "newton"}, "newton"), ({"step": 0.0}, "step"),
-                                           ({"tolerance": np.nan}, "tolerance")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"dt": np.nan}, "dt"),
+        ({"dt": 0.0}, "dt"),
+        ({"max_iterations": -1}, "max_iterations"),
+        ({"max_iterations": 2.5}, "max_iterations"),
+        ({"method": "newton"}, "newton"),
+        ({"step": 0.0}, "step"),
+        ({"tolerance": np.nan}, "tolerance"),
+    ],
+)
 def test_bad_optimize_options_raise_naming_them(planar, kwargs: dict, match: str) -> None:
     pik, q0, _ = planar
     args = {"dt": DT, **kwargs}
@@ -112,9 +119,15 @@ def test_non_finite_command_target_raises(planar, target: list, velocity: list) 
         pik.command(q0, np.zeros(4), target, velocity, 10.0)
 
 
-@pytest.mark.parametrize("kwargs, match", [({"velocity_weight": -1.0}, "velocity_weight"),
-                                           ({"damping": np.nan}, "damping"), ({"input_weight": np.inf}, "input_weight"),
-                                           ({"damping": "1e-6"}, "damping")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"velocity_weight": -1.0}, "velocity_weight"),
+        ({"damping": np.nan}, "damping"),
+        ({"input_weight": np.inf}, "input_weight"),
+        ({"damping": "1e-6"}, "damping"),
+    ],
+)
 def test_bad_constructor_arguments_raise_naming_them(kwargs: dict, match: str) -> None:
     model = RobotModel.from_mjcf(PLANAR_ARM_XML)
     with pytest.raises(ControllerError, match=match):
@@ -155,8 +168,10 @@ def test_predictive_policy_on_a_line_at_the_edge_of_the_reach_keeps_its_actions_
         env.close()
 
 
-@pytest.mark.parametrize("kwargs, match", [({"horizon": np.inf}, "horizon"), ({"iterations": -1}, "iterations"),
-                                           ({"sample_time": 0.0}, "sample_time")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [({"horizon": np.inf}, "horizon"), ({"iterations": -1}, "iterations"), ({"sample_time": 0.0}, "sample_time")],
+)
 def test_predictive_policy_bad_options_raise_naming_them(kwargs: dict, match: str) -> None:
     env = gym.make("redundancy_gym/PlanarReach-v0")
     try:

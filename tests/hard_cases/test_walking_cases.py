@@ -57,17 +57,25 @@ def test_fast_command_is_capped_at_the_longest_quickest_step() -> None:
     assert np.all(np.isfinite(s.com)) and np.all(np.isfinite(s.feet))
 
 
-@pytest.mark.parametrize("speed, t, match", [
-    (float("nan"), None, "speed"), (float("inf"), None, "speed"), (-0.1, None, "speed"),
-    (0.5, float("nan"), "time"), (0.5, -1e-9, "time"), (0.5, float("inf"), "time"),
-])
+@pytest.mark.parametrize(
+    "speed, t, match",
+    [
+        (float("nan"), None, "speed"),
+        (float("inf"), None, "speed"),
+        (-0.1, None, "speed"),
+        (0.5, float("nan"), "time"),
+        (0.5, -1e-9, "time"),
+        (0.5, float("inf"), "time"),
+    ],
+)
 def test_non_finite_or_negative_inputs_raise_naming_them(speed: float, t: float | None, match: str) -> None:
     with pytest.raises(ControllerError, match=match):
         WalkingPattern(GaitConfig(), FEET[0], FEET[1], COM, speed).sample(0.0 if t is None else t)
 
 
-@pytest.mark.parametrize("kwargs", [{"right_foot": [np.nan, -0.09, 0.0]}, {"com": [np.inf, 0.0]},
-                                    {"com": [0.0, 0.0, 0.0]}])
+@pytest.mark.parametrize(
+    "kwargs", [{"right_foot": [np.nan, -0.09, 0.0]}, {"com": [np.inf, 0.0]}, {"com": [0.0, 0.0, 0.0]}]
+)
 def test_bad_start_state_raises(kwargs: dict) -> None:
     args = {"right_foot": FEET[0], "left_foot": FEET[1], "com": COM, **kwargs}
     with pytest.raises(ControllerError):
@@ -79,9 +87,17 @@ def test_foot_of_two_entries_is_a_controller_error() -> None:
         WalkingPattern(GaitConfig(), FEET[0], [0.0, 0.09], COM, 0.5)
 
 
-@pytest.mark.parametrize("field, value", [("step_duration", float("nan")), ("com_height", 0.0),
-                                          ("double_support_ratio", 1.0), ("preview_steps", 1),
-                                          ("swing_pitch", 0.7), ("min_step_duration", 0.9)])
+@pytest.mark.parametrize(
+    "field, value",
+    [
+        ("step_duration", float("nan")),
+        ("com_height", 0.0),
+        ("double_support_ratio", 1.0),
+        ("preview_steps", 1),
+        ("swing_pitch", 0.7),
+        ("min_step_duration", 0.9),
+    ],
+)
 def test_gait_config_rejects_bad_values_naming_the_field(field: str, value: float) -> None:
     with pytest.raises(ControllerError, match=field):
         GaitConfig(**{field: value})
@@ -140,12 +156,15 @@ def test_dcm_plan_zmp_is_the_piecewise_linear_reference() -> None:
     np.testing.assert_allclose(plan.sample(0.0).velocity, 0.0, atol=1e-12)  # and starts from rest
 
 
-@pytest.mark.parametrize("times, zmp, match", [
-    ([0.0], [[0.0, 0.0]], ">= 2 knot times"),
-    ([0.0, 0.0], [[0.0, 0.0], [0.1, 0.0]], "increase strictly"),
-    ([0.0, np.nan], [[0.0, 0.0], [0.1, 0.0]], "finite"),
-    ([0.0, 1.0], [[0.0, 0.0], [np.inf, 0.0]], "finite"),
-])
+@pytest.mark.parametrize(
+    "times, zmp, match",
+    [
+        ([0.0], [[0.0, 0.0]], ">= 2 knot times"),
+        ([0.0, 0.0], [[0.0, 0.0], [0.1, 0.0]], "increase strictly"),
+        ([0.0, np.nan], [[0.0, 0.0], [0.1, 0.0]], "finite"),
+        ([0.0, 1.0], [[0.0, 0.0], [np.inf, 0.0]], "finite"),
+    ],
+)
 def test_dcm_planner_bad_knots_raise(times: list, zmp: list, match: str) -> None:
     with pytest.raises(ControllerError, match=match):
         DcmPlanner(0.9).plan(times, zmp, [0.0, 0.0])
@@ -157,8 +176,9 @@ def test_dcm_planner_bad_com_raises(com: list) -> None:
         DcmPlanner(0.9).plan([0.0, 1.0], [[0.0, 0.0], [0.1, 0.0]], com)
 
 
-@pytest.mark.parametrize("height, gravity", [(1.0, 8.8e-271), (1e300, 9.81)],
-                         ids=["vanishing-gravity", "huge-com-height"])
+@pytest.mark.parametrize(
+    "height, gravity", [(1.0, 8.8e-271), (1e300, 9.81)], ids=["vanishing-gravity", "huge-com-height"]
+)
 def test_dcm_planner_with_an_extreme_omega_is_rejected_or_finite(height: float, gravity: float) -> None:
     try:
         planner = DcmPlanner(height, gravity)
@@ -177,8 +197,7 @@ def test_start_zmp_of_a_vanishing_segment_raises_or_is_finite() -> None:
 
 def test_pattern_with_a_tiny_com_height_is_rejected_or_finite() -> None:
     try:
-        pattern = WalkingPattern(GaitConfig(com_height=3.6e-94, heel_toe_shift=0.0), FEET[0], FEET[1], [0.0, 0.0],
-                                 0.0)
+        pattern = WalkingPattern(GaitConfig(com_height=3.6e-94, heel_toe_shift=0.0), FEET[0], FEET[1], [0.0, 0.0], 0.0)
     except ControllerError:
         return
     assert np.all(np.isfinite(pattern.sample(0.5).com))
@@ -209,8 +228,15 @@ def test_whole_body_ik_towards_an_unreachable_com_is_limited_and_finite(biped: R
     controller.start(q, 0.5)
     ik = controller.ik
     ref = controller._reference(controller.pattern.sample(0.0), np.zeros(2), np.zeros(2))
-    far = WholeBodyReference(ref.com + [2.0, 0.0, 0.5], ref.com_velocity, ref.feet_position, ref.feet_rotation,
-                             ref.feet_velocity, ref.torso_rotation, ref.torso_angular_velocity)
+    far = WholeBodyReference(
+        ref.com + [2.0, 0.0, 0.5],
+        ref.com_velocity,
+        ref.feet_position,
+        ref.feet_rotation,
+        ref.feet_velocity,
+        ref.torso_rotation,
+        ref.torso_angular_velocity,
+    )
     biped.update(q)
     start_gap = np.linalg.norm(far.com - biped.com())
     for _ in range(150):
@@ -239,8 +265,15 @@ def test_whole_body_ik_non_finite_reference_raises(biped: RobotModel) -> None:
     q = standing(biped)
     controller.start(q, 0.5)
     ref = controller._reference(controller.pattern.sample(0.0), np.zeros(2), np.zeros(2))
-    bad = WholeBodyReference(ref.com + [np.nan, 0.0, 0.0], ref.com_velocity, ref.feet_position, ref.feet_rotation,
-                             ref.feet_velocity, ref.torso_rotation, ref.torso_angular_velocity)
+    bad = WholeBodyReference(
+        ref.com + [np.nan, 0.0, 0.0],
+        ref.com_velocity,
+        ref.feet_position,
+        ref.feet_rotation,
+        ref.feet_velocity,
+        ref.torso_rotation,
+        ref.torso_angular_velocity,
+    )
     with pytest.raises(ControllerError):
         controller.ik.step(q, bad, bad, controller.dt)
 

@@ -4,8 +4,8 @@ models directory with its record (a smoke budget: the shipped models use the fil
 import gymnasium as gym
 import pytest
 
-from redundancy_gym.learning.baselines import BASELINES_DIR, baselines, train_baseline
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.learning.baselines import BASELINES_DIR, baselines, train_baseline
 from redundancy_gym.learning.training_record import read_training_record
 from redundancy_gym.policies.shipped_models import env_slug
 from redundancy_gym.registration import BASE_ENV_IDS, WRAPPED_ENV_IDS, wrapped_env_id
@@ -16,10 +16,21 @@ ALL = baselines()
 def test_every_file_is_a_baseline_and_the_table_has_its_rows() -> None:
     names = {b.name for b in ALL}
     for env in ("planar_reach", "agri_reach"):  # the arms: raw joints, both arm wrappers, residual, cloning
-        assert {f"ppo-joint-{env}", f"ppo-nullspace-{env}", f"ppo-task_space-{env}", f"ppo-residual-{env}",
-                f"bc-joint-{env}"} <= names
-    assert {"ppo-joint-biped_walk", "ppo-walking_command-biped_walk", "ppo-residual-biped_walk",
-            "bc-joint-biped_walk", "ppo-joint-biped_obstacles", "bc-joint-biped_obstacles"} <= names
+        assert {
+            f"ppo-joint-{env}",
+            f"ppo-nullspace-{env}",
+            f"ppo-task_space-{env}",
+            f"ppo-residual-{env}",
+            f"bc-joint-{env}",
+        } <= names
+    assert {
+        "ppo-joint-biped_walk",
+        "ppo-walking_command-biped_walk",
+        "ppo-residual-biped_walk",
+        "bc-joint-biped_walk",
+        "ppo-joint-biped_obstacles",
+        "bc-joint-biped_obstacles",
+    } <= names
 
 
 @pytest.mark.parametrize("baseline", ALL, ids=lambda b: b.name)
@@ -54,8 +65,9 @@ def test_unknown_names_and_bad_files_are_named(tmp_path) -> None:
 
 def test_a_baseline_trains_into_a_models_directory_with_its_record(tmp_path) -> None:
     (baseline,) = baselines(["ppo-residual-planar_reach"])
-    path = train_baseline(baseline, work_dir=tmp_path / "work", tensorboard_log=None, models_dir=tmp_path / "models",
-                          steps=1, log=None)
+    path = train_baseline(
+        baseline, work_dir=tmp_path / "work", tensorboard_log=None, models_dir=tmp_path / "models", steps=1, log=None
+    )
     assert path == tmp_path / "models" / "ppo-residual-planar_reach.zip" and path.is_file()
     record = read_training_record(path)
     # one whole rollout of n_steps x n_envs (2048 x 4): PPO never stops inside one

@@ -31,21 +31,47 @@ def test_ppo_smoke_training_on_two_envs_prints_statistics_then_eval_loads_zip(tm
     """--steps and --n-envs default to the config's n_timesteps and n_envs; the run prints episode statistics."""
     zip_path = tmp_path / "ppo_planar.zip"
     config = _smoke_config(tmp_path, n_timesteps=512, n_envs=2, n_steps=128, batch_size=64, n_epochs=2)
-    assert main(["train", ENV_ID, "--algo", "ppo", "--out", str(zip_path), "--config", str(config), "--no-progress",
-                 "--print-every", "256", "--tensorboard", str(tmp_path / "tb")]) == 0
+    assert (
+        main(
+            [
+                "train",
+                ENV_ID,
+                "--algo",
+                "ppo",
+                "--out",
+                str(zip_path),
+                "--config",
+                str(config),
+                "--no-progress",
+                "--print-every",
+                "256",
+                "--tensorboard",
+                str(tmp_path / "tb"),
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert "512 steps, 2 env(s)" in out
     lines = out.splitlines()
     assert any(line.startswith("step 256/512") and "no episode finished yet" in line for line in lines)
     # PlanarReach episodes last 250 steps: each of the two envs has finished one by step 512
-    assert any(line.startswith("step 512/512") and "episodes     2" in line and "success 0%" in line
-               and "length 250" in line and "return -" in line for line in lines)
+    assert any(
+        line.startswith("step 512/512")
+        and "episodes     2" in line
+        and "success 0%" in line
+        and "length 250" in line
+        and "return -" in line
+        for line in lines
+    )
     summary = next(line for line in lines if line.startswith("trained 512 steps"))
     assert "2 episodes; last 2: return" in summary and "success" in summary and "length 250" in summary
     assert zip_path.is_file() and any((tmp_path / "tb").iterdir())
     report = tmp_path / "ppo_eval.json"
-    assert main(["eval", ENV_ID, "--policy", str(zip_path), "--episodes", "1", "--no-progress", "--json",
-                 str(report)]) == 0
+    assert (
+        main(["eval", ENV_ID, "--policy", str(zip_path), "--episodes", "1", "--no-progress", "--json", str(report)])
+        == 0
+    )
     data = json.loads(report.read_text())
     assert data["policy"] == str(zip_path) and data["episodes"] == 1 and data["step_time_us"]["median"] > 0
 
@@ -82,9 +108,11 @@ def test_configs_load_as_rl_zoo3_reads_them(path: Path) -> None:
 
 def test_load_config_reads_rl_zoo3_conventions(tmp_path) -> None:
     path = tmp_path / "c.yaml"
-    path.write_text("default:\n  policy: MlpPolicy\n  n_timesteps: !!float 2e4\n  learning_rate: lin_1e-3\n"
-                    "  train_freq: [1, episode]\n  policy_kwargs: \"dict(net_arch=[64, 64], activation_fn=nn.Tanh)\"\n"
-                    "  env_kwargs: {obstacle: false}\n")
+    path.write_text(
+        "default:\n  policy: MlpPolicy\n  n_timesteps: !!float 2e4\n  learning_rate: lin_1e-3\n"
+        '  train_freq: [1, episode]\n  policy_kwargs: "dict(net_arch=[64, 64], activation_fn=nn.Tanh)"\n'
+        "  env_kwargs: {obstacle: false}\n"
+    )
     config = load_config(path, ENV_ID)  # no section for the env: 'default', as rl-zoo3
     assert config.n_timesteps == 20000 and config.n_envs is None and config.env_kwargs == {"obstacle": False}
     lr = config.hyperparameters["learning_rate"]
@@ -93,13 +121,16 @@ def test_load_config_reads_rl_zoo3_conventions(tmp_path) -> None:
     assert config.hyperparameters["policy_kwargs"]["net_arch"] == [64, 64]
 
 
-@pytest.mark.parametrize("text, match", [
-    ("other/Env-v0:\n  n_timesteps: 1\n", "no section for redundancy_gym/PlanarReach-v0"),
-    (f"{ENV_ID}:\n  normalize: true\n", "normalize not supported"),
-    (f"{ENV_ID}:\n  env_wrapper: x.Y\n", "env_wrapper not supported"),
-    (f"{ENV_ID}:\n  learning_rate: exp_1e-3\n", "lin_"),
-    ("n_steps: 64\n", "put its keys under .redundancy_gym/PlanarReach-v0:"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("other/Env-v0:\n  n_timesteps: 1\n", "no section for redundancy_gym/PlanarReach-v0"),
+        (f"{ENV_ID}:\n  normalize: true\n", "normalize not supported"),
+        (f"{ENV_ID}:\n  env_wrapper: x.Y\n", "env_wrapper not supported"),
+        (f"{ENV_ID}:\n  learning_rate: exp_1e-3\n", "lin_"),
+        ("n_steps: 64\n", "put its keys under .redundancy_gym/PlanarReach-v0:"),
+    ],
+)
 def test_load_config_errors(tmp_path, text: str, match: str) -> None:
     path = tmp_path / "c.yaml"
     path.write_text(text)
@@ -112,9 +143,29 @@ def test_rl_zoo3_trains_on_our_config(tmp_path) -> None:
     rollout and update), and the model it saves is evaluated by redundancy-gym eval."""
     pytest.importorskip("rl_zoo3")
     env = {**os.environ, "MUJOCO_GL": "osmesa", "OMP_NUM_THREADS": "1"}
-    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", ENV_ID, "--gym-packages",
-               "redundancy_gym", "-conf", str(ROOT / "configs" / "ppo_planar_reach.yaml"), "-n", "256", "--seed", "0",
-               "--device", "cpu", "-f", str(tmp_path / "logs"), "-params", "n_steps:256"]
+    command = [
+        sys.executable,
+        "-m",
+        "rl_zoo3.train",
+        "--algo",
+        "ppo",
+        "--env",
+        ENV_ID,
+        "--gym-packages",
+        "redundancy_gym",
+        "-conf",
+        str(ROOT / "configs" / "ppo_planar_reach.yaml"),
+        "-n",
+        "256",
+        "--seed",
+        "0",
+        "--device",
+        "cpu",
+        "-f",
+        str(tmp_path / "logs"),
+        "-params",
+        "n_steps:256",
+    ]
     result = subprocess.run(command, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     models = list((tmp_path / "logs" / "ppo").glob("*/redundancy_gym-PlanarReach-v0.zip"))
@@ -127,11 +178,30 @@ def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, c
     the evaluation's best agent (the last goes beside it), and the record beside the .zip states steps and cost."""
     zip_path = tmp_path / "m.zip"
     config = _smoke_config(tmp_path, n_timesteps=1024, n_envs=2, n_steps=128, batch_size=64, n_epochs=1)
-    assert main(["train", ENV_ID, "--out", str(zip_path), "--config", str(config), "--no-progress",
-                 "--eval-freq", "512", "--eval-episodes", "1", "--checkpoint-freq", "512", "--keep", "best"]) == 0
+    assert (
+        main(
+            [
+                "train",
+                ENV_ID,
+                "--out",
+                str(zip_path),
+                "--config",
+                str(config),
+                "--no-progress",
+                "--eval-freq",
+                "512",
+                "--eval-episodes",
+                "1",
+                "--checkpoint-freq",
+                "512",
+                "--keep",
+                "best",
+            ]
+        )
+        == 0
+    )
     assert zip_path.is_file() and (tmp_path / "m_last.zip").is_file()
-    assert sorted(p.name for p in (tmp_path / "m_checkpoints").iterdir()) == ["ppo_1024_steps.zip",
-                                                                              "ppo_512_steps.zip"]
+    assert sorted(p.name for p in (tmp_path / "m_checkpoints").iterdir()) == ["ppo_1024_steps.zip", "ppo_512_steps.zip"]
     record = read_training_record(zip_path)
     assert record is not None and record.learner == "ppo" and record.env_id == ENV_ID
     assert record.env_steps == 1024 and record.seed == 0
@@ -144,8 +214,22 @@ def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, c
 
 def test_keep_best_needs_the_eval_callback(tmp_path, capsys) -> None:
     config = _smoke_config(tmp_path, n_timesteps=256, n_envs=1, n_steps=128)
-    assert main(["train", ENV_ID, "--out", str(tmp_path / "x.zip"), "--config", str(config), "--no-progress",
-                 "--keep", "best"]) == 2
+    assert (
+        main(
+            [
+                "train",
+                ENV_ID,
+                "--out",
+                str(tmp_path / "x.zip"),
+                "--config",
+                str(config),
+                "--no-progress",
+                "--keep",
+                "best",
+            ]
+        )
+        == 2
+    )
     assert "eval_freq" in capsys.readouterr().err
     with pytest.raises(EvalError, match="eval_freq must be an int >= 1"):
         train(ENV_ID, "ppo", 128, tmp_path / "y.zip", eval_freq=0)
@@ -160,8 +244,19 @@ def test_train_on_async_envs_gives_the_sync_agent(tmp_path) -> None:
     hyper = {"n_steps": 64, "batch_size": 64, "n_epochs": 1}
     paths = []
     for vec in ("sync", "async"):
-        paths.append(train(ENV_ID, "ppo", 128, tmp_path / f"{vec}.zip", n_envs=2, vec_env=vec, hyperparameters=hyper,
-                           progress_bar=False, log=None))
+        paths.append(
+            train(
+                ENV_ID,
+                "ppo",
+                128,
+                tmp_path / f"{vec}.zip",
+                n_envs=2,
+                vec_env=vec,
+                hyperparameters=hyper,
+                progress_bar=False,
+                log=None,
+            )
+        )
     a, b = (PPO.load(p, device="cpu") for p in paths)
     for x, y in zip(a.policy.parameters(), b.policy.parameters(), strict=True):
         np.testing.assert_array_equal(x.detach().numpy(), y.detach().numpy())

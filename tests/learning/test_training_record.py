@@ -21,8 +21,16 @@ def test_cpu_clock_counts_busy_time_not_sleep() -> None:
 
 def test_record_round_trip_beside_the_model(tmp_path) -> None:
     model = tmp_path / "ppo-joint-x.zip"
-    record = TrainingRecord(learner="ppo", env_id="redundancy_gym/PlanarReach-v0", env_steps=1000, wall_s=2.0,
-                            cpu_s=1.5, seed=3, settings={"schedule": object()}, result={"recent_success": 1.0})
+    record = TrainingRecord(
+        learner="ppo",
+        env_id="redundancy_gym/PlanarReach-v0",
+        env_steps=1000,
+        wall_s=2.0,
+        cpu_s=1.5,
+        seed=3,
+        settings={"schedule": object()},
+        result={"recent_success": 1.0},
+    )
     assert record.write(model) == tmp_path / "ppo-joint-x.json" == record_path(model)
     back = read_training_record(model)
     assert back is not None and back.env_steps == 1000 and back.cpu_s == 1.5 and back.seed == 3

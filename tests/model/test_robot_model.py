@@ -197,8 +197,13 @@ def test_clamp_limits_the_joints_and_leaves_a_floating_base_alone(planar_model: 
 
 def _random_biped_state(model: RobotModel, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     quaternion = rng.normal(size=4)
-    q = np.concatenate([rng.normal(size=3), quaternion / np.linalg.norm(quaternion),
-                        rng.uniform(model.lower_limits[7:], model.upper_limits[7:])])
+    q = np.concatenate(
+        [
+            rng.normal(size=3),
+            quaternion / np.linalg.norm(quaternion),
+            rng.uniform(model.lower_limits[7:], model.upper_limits[7:]),
+        ]
+    )
     return q, rng.normal(size=model.nv)
 
 
@@ -224,7 +229,7 @@ def test_measure_is_the_com_its_velocity_and_the_frame_placements_of_a_full_upda
         # the results are the caller's: another measurement leaves them as they are
         kept = [com.copy(), com_velocity.copy(), rotations.copy(), positions.copy()]
         biped.measure(*_random_biped_state(biped, rng), frames)
-        for a, b in zip(kept, (com, com_velocity, rotations, positions)):
+        for a, b in zip(kept, (com, com_velocity, rotations, positions), strict=False):
             np.testing.assert_array_equal(a, b)
     # frames as a list, no frames, and an unknown frame
     q, v = _random_biped_state(biped, rng)
@@ -255,9 +260,13 @@ def test_from_mujoco_state_normalizes_reorders_and_turns_the_base_velocity_into_
     np.testing.assert_array_equal(q[[0, 1, 2]], qpos[:3])
     np.testing.assert_array_equal(q[7:], qpos[7:])
     # the rotation of a unit quaternion (w, x, y, z), written out
-    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     np.testing.assert_allclose(v[:3], rotation.T @ qvel[:3], atol=1e-14)
     np.testing.assert_array_equal(v[3:], qvel[3:])
     np.testing.assert_array_equal(qpos, given[0])  # the inputs are left alone
@@ -355,8 +364,9 @@ def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
             np.testing.assert_allclose(terms.drift[k], drift[k], rtol=1e-12, atol=1e-12 * np.abs(drift[k]).max())
         np.testing.assert_allclose(terms.com, com, rtol=0.0, atol=1e-14)
         np.testing.assert_allclose(terms.centroidal, centroidal, rtol=0.0, atol=1e-12 * np.abs(centroidal).max())
-        np.testing.assert_allclose(terms.centroidal_drift, momentum_drift, rtol=0.0,
-                                   atol=1e-12 * np.abs(momentum_drift).max())
+        np.testing.assert_allclose(
+            terms.centroidal_drift, momentum_drift, rtol=0.0, atol=1e-12 * np.abs(momentum_drift).max()
+        )
         # the cache is at q: every frame and Jacobian, as after update(q)
         np.testing.assert_array_equal(biped.q, q)
         for frame in biped.frame_names[::7]:
@@ -375,8 +385,9 @@ def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
 
     np.testing.assert_allclose(terms.drift, (velocities(h) - velocities(-h)) / (2 * h), atol=1e-5)
     # a list of frames, and the errors of the separate queries
-    np.testing.assert_array_equal(biped.acceleration_terms(q, v, list(frames)).drift,
-                                  biped.acceleration_terms(q, v, frames).drift)
+    np.testing.assert_array_equal(
+        biped.acceleration_terms(q, v, list(frames)).drift, biped.acceleration_terms(q, v, frames).drift
+    )
     with pytest.raises(UnknownFrameError, match="nope"):
         biped.acceleration_terms(q, v, ("r_sole", "nope"))
     with pytest.raises(ModelError, match="velocity"):

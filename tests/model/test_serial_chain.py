@@ -75,8 +75,9 @@ def test_chain_checks_its_inputs() -> None:
 
 
 def _random_floating_configuration(model: RobotModel, rng: np.random.Generator) -> np.ndarray:
-    q = np.concatenate([rng.normal(size=3), rng.normal(size=4),
-                        rng.uniform(model.lower_limits[7:], model.upper_limits[7:])])
+    q = np.concatenate(
+        [rng.normal(size=3), rng.normal(size=4), rng.uniform(model.lower_limits[7:], model.upper_limits[7:])]
+    )
     q[3:7] /= np.linalg.norm(q[3:7])
     return q
 

@@ -3,8 +3,7 @@ import numpy as np
 import pytest
 
 import redundancy_gym
-from redundancy_gym.policies import PolicyError
-from redundancy_gym.policies import ClikPolicy, Policy
+from redundancy_gym.policies import ClikPolicy, Policy, PolicyError
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
 
@@ -41,10 +40,16 @@ def test_clik_policy_tracks_the_line() -> None:
     assert info["is_success"] and info["max_tracking_error"] <= 1e-3
 
 
-@pytest.mark.parametrize("name, kwargs, match", [
-    ("nope", {}, "clik, walking, predictive, global, zero, random"), ("clik", {"gian": 1}, "valid"), ("clik", {"method": "svd"}, "dls"),
-    ("zero", {"x": 1}, "no options"), ("missing.zip", {}, "not found"),
-])
+@pytest.mark.parametrize(
+    "name, kwargs, match",
+    [
+        ("nope", {}, "clik, walking, predictive, global, zero, random"),
+        ("clik", {"gian": 1}, "valid"),
+        ("clik", {"method": "svd"}, "dls"),
+        ("zero", {"x": 1}, "no options"),
+        ("missing.zip", {}, "not found"),
+    ],
+)
 def test_policy_errors(name: str, kwargs: dict, match: str) -> None:
     with pytest.raises(PolicyError, match=match):
         redundancy_gym.make_policy(name, gym.make(ENV_ID), **kwargs)

@@ -9,11 +9,10 @@ import pytest
 
 import redundancy_gym  # noqa: F401  (registers the env ids)
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.policies import PolicyError
-from redundancy_gym.policies import make_policy
-from redundancy_gym.policies.predictive_policy import TASK_DEFAULTS, PredictivePolicyConfig
 from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon
 from redundancy_gym.eval.evaluate import evaluate
+from redundancy_gym.policies import PolicyError, make_policy
+from redundancy_gym.policies.predictive_policy import TASK_DEFAULTS, PredictivePolicyConfig
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 AGRI = "redundancy_gym/AgriReach-v0"
@@ -21,8 +20,10 @@ AGRI = "redundancy_gym/AgriReach-v0"
 
 def test_planar_predictive_and_global_succeed_with_less_pseudoenergy_than_local_clik() -> None:
     """Fig. 5.31 on the default obstacle scene, two episodes: global <= predictive(1 s) < local CLIK."""
-    reports = {name: evaluate(PLANAR, name, episodes=2, seed=0, progress=False).to_json()
-               for name in ("clik", "predictive", "global")}
+    reports = {
+        name: evaluate(PLANAR, name, episodes=2, seed=0, progress=False).to_json()
+        for name in ("clik", "predictive", "global")
+    }
     for report in reports.values():
         assert report["success_rate"] == 1.0 and report["collision_rate"] == 0.0
     energy = {name: r["pseudoenergy"] for name, r in reports.items()}
@@ -31,8 +32,15 @@ def test_planar_predictive_and_global_succeed_with_less_pseudoenergy_than_local_
 
 
 def test_agri_predictive_runs_a_grasp_episode() -> None:
-    report = evaluate(AGRI, "predictive", episodes=1, seed=0, env_kwargs={"difficulty": "medium"},
-                      policy_kwargs={"horizon": 0.15}, progress=False).to_json()
+    report = evaluate(
+        AGRI,
+        "predictive",
+        episodes=1,
+        seed=0,
+        env_kwargs={"difficulty": "medium"},
+        policy_kwargs={"horizon": 0.15},
+        progress=False,
+    ).to_json()
     assert report["success_rate"] == 1.0 and report["collision_rate"] == 0.0
 
 
@@ -101,7 +109,7 @@ def test_a_sample_time_of_several_control_periods_replans_once_per_sample() -> N
             obs, *_ = env.step(action)
         assert len({id(u) for u in updates}) == 6
         for first in range(0, 30, 5):
-            within = np.array(inputs[first:first + 5])
+            within = np.array(inputs[first : first + 5])
             if augmented:
                 rate = updates[first].result.params[0]
                 assert np.allclose(np.diff(within, axis=0), policy.control_dt * rate, atol=1e-12)

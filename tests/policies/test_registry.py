@@ -8,9 +8,19 @@ import pytest
 from gymnasium import spaces
 
 import redundancy_gym  # noqa: F401  (registers the ids)
-from redundancy_gym.policies import (CAPABILITY_ATTRIBUTES, POLICY_NAMES, WRAPPER_NAMES, Implementation, PolicyError,
-                                     env_capabilities, make_policy, register, registered, supported_env_ids,
-                                     supported_policies)
+from redundancy_gym.policies import (
+    CAPABILITY_ATTRIBUTES,
+    POLICY_NAMES,
+    WRAPPER_NAMES,
+    Implementation,
+    PolicyError,
+    env_capabilities,
+    make_policy,
+    register,
+    registered,
+    supported_env_ids,
+    supported_policies,
+)
 from redundancy_gym.registration import WRAPPED_ENV_IDS
 from redundancy_gym.wrappers import WrapperError, make_wrapper
 
@@ -25,15 +35,18 @@ def test_every_name_is_registered_once_with_known_capabilities() -> None:
 
 
 def test_envs_declare_what_the_policies_read() -> None:
-    caps = {env_id: env_capabilities(gym.make(env_id)) for env_id in ("redundancy_gym/PlanarReach-v0",
-                                                                    "redundancy_gym/AgriReach-v0",
-                                                                    "redundancy_gym/BipedWalk-v0")}
+    caps = {
+        env_id: env_capabilities(gym.make(env_id))
+        for env_id in ("redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0", "redundancy_gym/BipedWalk-v0")
+    }
     assert caps["redundancy_gym/PlanarReach-v0"] >= {"tcp_tracking", "tcp_reference", "bounded_action"}
     assert "grasp_task" in caps["redundancy_gym/AgriReach-v0"]
     assert "biped" in caps["redundancy_gym/BipedWalk-v0"]
     assert supported_env_ids("walking") == ("redundancy_gym/BipedWalk-v0", "redundancy_gym/BipedObstacles-v0")
-    assert set(supported_env_ids("task_space", "wrapper")) == {"redundancy_gym/PlanarReach-v0",
-                                                               "redundancy_gym/AgriReach-v0"}
+    assert set(supported_env_ids("task_space", "wrapper")) == {
+        "redundancy_gym/PlanarReach-v0",
+        "redundancy_gym/AgriReach-v0",
+    }
 
 
 def test_a_wrapped_env_offers_no_reference_policy_that_would_misread_its_action() -> None:

@@ -10,8 +10,8 @@ import gymnasium as gym
 import pytest
 
 import redundancy_gym
-from redundancy_gym.learning.baselines import baselines
 from redundancy_gym.eval.evaluate import evaluate
+from redundancy_gym.learning.baselines import baselines
 from redundancy_gym.policies import PolicyError
 from redundancy_gym.policies.shipped_models import (
     SHIPPED_MODELS_DIR,
@@ -34,21 +34,27 @@ def test_every_baseline_has_its_model_and_training_record():
 
 def _rows() -> list[tuple[str, str, dict]]:
     table = json.loads(TABLE.read_text())
-    return [(key, label, row) for key, env in table["envs"].items() for label, row in env["rows"].items()
-            if row["kind"] == "learned"]
+    return [
+        (key, label, row)
+        for key, env in table["envs"].items()
+        for label, row in env["rows"].items()
+        if row["kind"] == "learned"
+    ]
 
 
 def test_the_table_has_a_row_for_every_shipped_model():
-    assert sorted(row["model"] for _, _, row in _rows()) == sorted(f"baselines/models/{stem}.zip"
-                                                                   for stem in shipped_models())
+    assert sorted(row["model"] for _, _, row in _rows()) == sorted(
+        f"baselines/models/{stem}.zip" for stem in shipped_models()
+    )
 
 
 @pytest.mark.parametrize("key, label, row", _rows(), ids=lambda v: v if isinstance(v, str) else "")
 def test_a_shipped_model_reproduces_its_table_row(key, label, row):
     recorded = row["report"]
     assert recorded["seed"] == 20000 and is_shipped_name(label)
-    report = evaluate(recorded["env"], label, episodes=3, seed=20000, env_kwargs=recorded["env_kwargs"],
-                      progress=False).to_json()
+    report = evaluate(
+        recorded["env"], label, episodes=3, seed=20000, env_kwargs=recorded["env_kwargs"], progress=False
+    ).to_json()
     for got, want in zip(report["per_episode"], recorded["per_episode"][:3], strict=True):
         assert got["seed"] == want["seed"] and got["length"] == want["length"]
         assert got["success"] == want["success"] and got["collision"] == want["collision"]
@@ -70,11 +76,17 @@ def test_a_model_runs_only_in_its_own_action_space():
     wrapped = gym.make("redundancy_gym/PlanarReach-Residual-v0")
     try:
         # same shapes (4 joint speeds), other meaning: a residual on the reference is not a joint speed
-        with pytest.raises(PolicyError, match="ppo-residual acts in the residual action space: evaluate it on "
-                                              "redundancy_gym/PlanarReach-Residual-v0"):
+        with pytest.raises(
+            PolicyError,
+            match="ppo-residual acts in the residual action space: evaluate it on "
+            "redundancy_gym/PlanarReach-Residual-v0",
+        ):
             redundancy_gym.make_policy("ppo-residual", raw)
-        with pytest.raises(PolicyError, match="bc-joint acts in the joint action space: evaluate it on "
-                                              "redundancy_gym/PlanarReach-v0 \\(the raw env\\)"):
+        with pytest.raises(
+            PolicyError,
+            match="bc-joint acts in the joint action space: evaluate it on "
+            "redundancy_gym/PlanarReach-v0 \\(the raw env\\)",
+        ):
             redundancy_gym.make_policy("bc-joint", wrapped)
         redundancy_gym.make_policy("ppo-residual", wrapped)
         redundancy_gym.make_policy("bc-joint", raw)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from redundancy_gym.controllers.ikd.biped_ikd import GRAVITY, BipedIkd, BipedIkdReference
-from redundancy_gym.studies import ikd_study
 from redundancy_gym.eval.exceptions import EvalError
+from redundancy_gym.studies import ikd_study
 from redundancy_gym.studies.ikd_study import (
     IkdStudyConfig,
     contact_wrench,
@@ -108,17 +108,27 @@ def test_central_differences_of_the_configurations_give_the_ikd_moment():
         sample, ahead = walk.samples[n], walk.samples[n + 1]
         twist = ikd_study._feet_twist(sample)
         reference = BipedIkdReference(
-            sample.feet.copy(), np.array([ikd_study._pitch(a) for a in sample.feet_pitch]), twist,
-            (ikd_study._feet_twist(ahead) - twist) / h, np.eye(3), np.zeros(3), np.zeros(3),
-            np.array([sample.com[2], 0.0, 0.0]), walk.ideal[n],
-            np.concatenate([sample.com[:2], sample.com_velocity[:2]]), walk.support[n])
+            sample.feet.copy(),
+            np.array([ikd_study._pitch(a) for a in sample.feet_pitch]),
+            twist,
+            (ikd_study._feet_twist(ahead) - twist) / h,
+            np.eye(3),
+            np.zeros(3),
+            np.zeros(3),
+            np.array([sample.com[2], 0.0, 0.0]),
+            walk.ideal[n],
+            np.concatenate([sample.com[:2], sample.com_velocity[:2]]),
+            walk.support[n],
+        )
         result = ikd.step(q, qdot, reference)
         realized.append(result.moment)
         qdot = qdot + h * result.qddot
         q = model.integrate(q, qdot, h)
         configurations.append(q.copy())
-    errors = [np.abs(ikd_study._differenced_wrench(model, configurations[n:n + 3], h)[1][:2] - realized[n]).max()
-              for n in range(1, 800)]
+    errors = [
+        np.abs(ikd_study._differenced_wrench(model, configurations[n : n + 3], h)[1][:2] - realized[n]).max()
+        for n in range(1, 800)
+    ]
     assert max(errors) < 0.5
 
 
@@ -128,15 +138,21 @@ def test_the_report_is_json_and_the_figures_are_written(study, report, tmp_path)
     path = write_ikd_study(study, tmp_path / "ikd.json")
     assert json.loads(path.read_text())["walk"]["periods"] == 2000
     written = plot_ikd_study(study, tmp_path)
-    assert [p.name for p in written] == ["ikd_fig_5_21.png", "ikd_fig_5_23.png", "ikd_fig_5_24.png",
-                                         "ikd_fig_5_27.png"]
+    assert [p.name for p in written] == ["ikd_fig_5_21.png", "ikd_fig_5_23.png", "ikd_fig_5_24.png", "ikd_fig_5_27.png"]
     assert all(p.stat().st_size > 10_000 for p in written)
     table = format_ikd_study(report)
     assert "fig. 5.27" in table and "ikd_hybrid" in table
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [({"speed": 0.0}, "speed"), ({"steps": 0}, "steps"),
-                                              ({"period": float("nan")}, "period"), ({"gains": (-1.0,)}, "gains")])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"speed": 0.0}, "speed"),
+        ({"steps": 0}, "steps"),
+        ({"period": float("nan")}, "period"),
+        ({"gains": (-1.0,)}, "gains"),
+    ],
+)
 def test_bad_settings_are_refused_by_name(kwargs, name):
     with pytest.raises(EvalError, match=name):
         IkdStudyConfig(**kwargs)

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from redundancy_gym.assets import AGRI_ARM_XML
-from redundancy_gym.studies.point_to_point import FIG_5_10, rollout_point_to_point
 from redundancy_gym.model import RobotModel
+from redundancy_gym.studies.point_to_point import FIG_5_10, rollout_point_to_point
 
 
 @pytest.fixture(scope="module")

@@ -10,8 +10,11 @@ import redundancy_gym
 from redundancy_gym.policies import make_policy
 from redundancy_gym.wrappers import ResidualAction, WrapperActionError, WrapperError
 
-CASES = [("redundancy_gym/PlanarReach-v0", "clik", {}), ("redundancy_gym/AgriReach-v0", "clik", {}),
-         ("redundancy_gym/BipedWalk-v0", "walking", {"max_episode_steps": 1000})]
+CASES = [
+    ("redundancy_gym/PlanarReach-v0", "clik", {}),
+    ("redundancy_gym/AgriReach-v0", "clik", {}),
+    ("redundancy_gym/BipedWalk-v0", "walking", {"max_episode_steps": 1000}),
+]
 
 
 def _reference_episode(env_id: str, policy: str, make_kwargs: dict, seed: int) -> tuple[list, list]:
@@ -28,7 +31,9 @@ def _reference_episode(env_id: str, policy: str, make_kwargs: dict, seed: int) -
             return actions, rewards
 
 
-@pytest.mark.parametrize("env_id, policy, make_kwargs", CASES, ids=lambda v: v.split("/")[-1] if isinstance(v, str) else "")
+@pytest.mark.parametrize(
+    "env_id, policy, make_kwargs", CASES, ids=lambda v: v.split("/")[-1] if isinstance(v, str) else ""
+)
 def test_zero_residual_is_the_reference_policy_bitwise(env_id: str, policy: str, make_kwargs: dict) -> None:
     wrapped_id = env_id.replace("-v0", "-Residual-v0")
     expected_actions, expected_rewards = _reference_episode(env_id, policy, make_kwargs, seed=11)
@@ -64,7 +69,7 @@ def test_observe_reference_appends_the_reference_action() -> None:
     raw, _ = base.reset(seed=3)
     assert obs.shape == (raw.size + 4,) and env.observation_space.contains(obs)
     expected, _ = make_policy("clik", base).predict(raw)
-    assert np.array_equal(obs[raw.size:], expected.astype(obs.dtype))
+    assert np.array_equal(obs[raw.size :], expected.astype(obs.dtype))
 
 
 def test_bad_options_and_actions_raise_naming_them() -> None:

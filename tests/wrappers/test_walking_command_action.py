@@ -71,8 +71,11 @@ def test_random_commands_changed_every_step_do_not_make_it_fall(seed: int) -> No
 def test_random_commands_held_for_a_step_do_not_make_it_fall(seed: int) -> None:
     rng = np.random.default_rng(seed)
     held = {}
-    fell, steps, _ = _walk(gym.make(ID), seed,
-                           lambda k: held[k // 200] if k // 200 in held else held.setdefault(k // 200, rng.uniform(-1, 1, 3)))
+    fell, steps, _ = _walk(
+        gym.make(ID),
+        seed,
+        lambda k: held[k // 200] if k // 200 in held else held.setdefault(k // 200, rng.uniform(-1, 1, 3)),
+    )
     assert not fell and steps == 2500  # 200 periods: 0.8 s
 
 
@@ -111,7 +114,7 @@ def test_a_held_command_reports_its_periods_together() -> None:
     periods = [single.step(action)[4] for _ in range(8)]
     for k in range(2):
         info = held.step(action)[4]
-        part = periods[4 * k:4 * k + 4]
+        part = periods[4 * k : 4 * k + 4]
         assert info["pseudoenergy"] == pytest.approx(sum(p["pseudoenergy"] for p in part), rel=1e-12)
         assert info["reward_speed"] == pytest.approx(sum(p["reward_speed"] for p in part), rel=1e-12)
         assert info["peak_joint_speed"] == max(p["peak_joint_speed"] for p in part)

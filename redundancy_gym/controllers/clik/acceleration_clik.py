@@ -11,8 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 from ...model import RobotModel
 from ..exceptions import ControllerError
 from ..objectives.objective import Objective, sum_objectives
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 from ..tasks.task import Task
+from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 
 __all__ = ["AccelerationClik", "AccelerationClikResult", "DriftTask"]
 
@@ -83,20 +83,36 @@ class AccelerationClik:
     :class:`ControllerError` naming the argument.
     """
 
-    def __init__(self, model: RobotModel, task: DriftTask, *, method: str = "pseudoinverse",
-                 stiffness: ArrayLike | float = 100.0, damping: ArrayLike | float = 20.0,
-                 weights: ArrayLike | float = 1.0, nullspace_gain: float = 1.0, nullspace_damping: float = 10.0,
-                 objectives: Sequence[Objective] = (), singular_threshold: float = 1e-6,
-                 dls_threshold: float = 0.05, dls_max_damping: float = 0.01,
-                 max_joint_velocity: ArrayLike | float | None = None, period: float | None = None) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        task: DriftTask,
+        *,
+        method: str = "pseudoinverse",
+        stiffness: ArrayLike | float = 100.0,
+        damping: ArrayLike | float = 20.0,
+        weights: ArrayLike | float = 1.0,
+        nullspace_gain: float = 1.0,
+        nullspace_damping: float = 10.0,
+        objectives: Sequence[Objective] = (),
+        singular_threshold: float = 1e-6,
+        dls_threshold: float = 0.05,
+        dls_max_damping: float = 0.01,
+        max_joint_velocity: ArrayLike | float | None = None,
+        period: float | None = None,
+    ) -> None:
         if method not in METHODS:
             raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
         if not hasattr(task, "drift"):
             raise ControllerError("the acceleration-level CLIK needs a task with drift(model, q, qdot)")
         self.kp = np.broadcast_to(np.asarray(stiffness, dtype=np.float64), (task.dim,)).copy()
         self.kd = np.broadcast_to(np.asarray(damping, dtype=np.float64), (task.dim,)).copy()
-        for name, value in (("stiffness", self.kp), ("damping", self.kd),
-                            ("nullspace_gain", nullspace_gain), ("nullspace_damping", nullspace_damping)):
+        for name, value in (
+            ("stiffness", self.kp),
+            ("damping", self.kd),
+            ("nullspace_gain", nullspace_gain),
+            ("nullspace_damping", nullspace_damping),
+        ):
             if not np.all(np.isfinite(value)) or np.any(np.asarray(value) < 0.0):
                 raise ControllerError(f"{name} must be finite and >= 0")
         self.model = model
@@ -111,8 +127,14 @@ class AccelerationClik:
         self.dls_max_damping = float(dls_max_damping)
         self.bounds = JointBounds(model, max_joint_velocity, period)
 
-    def step(self, q: ArrayLike, qdot: ArrayLike, target: ArrayLike, target_velocity: ArrayLike,
-             target_acceleration: ArrayLike) -> AccelerationClikResult:
+    def step(
+        self,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        target: ArrayLike,
+        target_velocity: ArrayLike,
+        target_acceleration: ArrayLike,
+    ) -> AccelerationClikResult:
         """Joint accelerations for the state ``(q, qdot)`` and the reference ``(w_d, wdot_d, wddot_d)``."""
         q = check_configuration(q, "q")  # shape checked by model.update inside task.drift
         qdot = check_finite(qdot, "qdot")
@@ -128,15 +150,33 @@ class AccelerationClik:
         acceleration = target_acceleration + self.kd * velocity_error + self.kp * error  # (5.19)
         value, gradient = sum_objectives(self.objectives, self.model, q)
         z = self.nullspace_gain * gradient + self.nullspace_damping * self.weights.apply(qdot)
-        res = resolve(jacobian, acceleration - drift, z, self.weights, method=self.method,
-                      singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,
-                      dls_max_damping=self.dls_max_damping)
+        res = resolve(
+            jacobian,
+            acceleration - drift,
+            z,
+            self.weights,
+            method=self.method,
+            singular_threshold=self.singular_threshold,
+            dls_threshold=self.dls_threshold,
+            dls_max_damping=self.dls_max_damping,
+        )
         qddot, limited = self.bound(res.x, q, qdot)
-        return AccelerationClikResult(qddot, error, velocity_error, float(np.linalg.norm(error)), res.sigma_min,
-                                      res.damping, value, res.success, res.status, limited)
+        return AccelerationClikResult(
+            qddot,
+            error,
+            velocity_error,
+            float(np.linalg.norm(error)),
+            res.sigma_min,
+            res.damping,
+            value,
+            res.success,
+            res.status,
+            limited,
+        )
 
-    def bound(self, qddot: NDArray[np.float64], q: NDArray[np.float64],
-              qdot: NDArray[np.float64]) -> tuple[NDArray[np.float64], bool]:
+    def bound(
+        self, qddot: NDArray[np.float64], q: NDArray[np.float64], qdot: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], bool]:
         """``(qddot, limited)``: the accelerations held to the speed limits and joint ranges (class docstring)."""
         bounds = self.bounds
         if not bounds.active:

@@ -11,8 +11,8 @@ from numpy.typing import ArrayLike, NDArray
 from ...model import RobotModel
 from ..exceptions import ControllerError
 from ..objectives.objective import Objective, sum_objectives
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 from ..tasks.task import Task
+from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
 
 __all__ = ["Clik", "ClikProblem", "ClikResult"]
 
@@ -100,11 +100,22 @@ class Clik:
             joint ranges. None (default): only joints at or beyond a limit are held.
     """
 
-    def __init__(self, model: RobotModel, task: Task, *, method: str = "pseudoinverse",
-                 gain: ArrayLike | float = 10.0, weights: ArrayLike | float = 1.0, nullspace_gain: float = 1.0,
-                 objectives: Sequence[Objective] = (), singular_threshold: float = 1e-6,
-                 dls_threshold: float = 0.05, dls_max_damping: float = 0.01,
-                 max_joint_velocity: ArrayLike | float | None = None, period: float | None = None) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        task: Task,
+        *,
+        method: str = "pseudoinverse",
+        gain: ArrayLike | float = 10.0,
+        weights: ArrayLike | float = 1.0,
+        nullspace_gain: float = 1.0,
+        objectives: Sequence[Objective] = (),
+        singular_threshold: float = 1e-6,
+        dls_threshold: float = 0.05,
+        dls_max_damping: float = 0.01,
+        max_joint_velocity: ArrayLike | float | None = None,
+        period: float | None = None,
+    ) -> None:
         if method not in METHODS:
             raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
         gain_arr = np.broadcast_to(np.asarray(gain, dtype=np.float64), (task.dim,)).copy()
@@ -112,8 +123,11 @@ class Clik:
             raise ControllerError("gain must be finite and >= 0")
         if not np.isfinite(nullspace_gain) or nullspace_gain < 0.0:
             raise ControllerError(f"nullspace_gain must be finite and >= 0, got {nullspace_gain!r}")
-        for name, value in (("singular_threshold", singular_threshold), ("dls_threshold", dls_threshold),
-                            ("dls_max_damping", dls_max_damping)):
+        for name, value in (
+            ("singular_threshold", singular_threshold),
+            ("dls_threshold", dls_threshold),
+            ("dls_max_damping", dls_max_damping),
+        ):
             if not np.isfinite(value) or value <= 0.0:
                 raise ControllerError(f"{name} must be finite and > 0, got {value!r}")
         for objective in objectives:
@@ -169,14 +183,35 @@ class Clik:
                 raise ControllerError(f"nullspace_input must be finite with shape ({self.model.nv},), got {u.shape}")
             wu = self.weights.apply(u)
             z = -wu if z is None else z - wu
-        res = resolve(problem.jacobian, problem.velocity, z, self.weights, method=self.method,
-                      singular_threshold=self.singular_threshold, dls_threshold=self.dls_threshold,
-                      dls_max_damping=self.dls_max_damping)
+        res = resolve(
+            problem.jacobian,
+            problem.velocity,
+            z,
+            self.weights,
+            method=self.method,
+            singular_threshold=self.singular_threshold,
+            dls_threshold=self.dls_threshold,
+            dls_max_damping=self.dls_max_damping,
+        )
         qdot, limited = self.bounds.apply(res.x, problem.q)
-        return ClikResult(qdot, problem.error, float(np.linalg.norm(problem.error)), res.sigma_min, res.damping,
-                          problem.objective, res.success, res.status, limited)
+        return ClikResult(
+            qdot,
+            problem.error,
+            float(np.linalg.norm(problem.error)),
+            res.sigma_min,
+            res.damping,
+            problem.objective,
+            res.success,
+            res.status,
+            limited,
+        )
 
-    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None,
-             nullspace_input: ArrayLike | None = None) -> ClikResult:
+    def step(
+        self,
+        q: ArrayLike,
+        target: ArrayLike,
+        target_velocity: ArrayLike | None = None,
+        nullspace_input: ArrayLike | None = None,
+    ) -> ClikResult:
         """``solve(build(q, target, target_velocity), nullspace_input)``."""
         return self.solve(self.build(q, target, target_velocity), nullspace_input)

@@ -21,30 +21,97 @@ from numpy.typing import NDArray
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...model.chain_kernels import chain_forward, chain_jacobian, place_frame
-from ..objectives.collision_kernels import close_pair_rows, collision_potential
 from ..kernels.buffers import BORROW, borrowed_float_field, borrowed_int_field, pack_fields
+from ..objectives.collision_kernels import close_pair_rows, collision_potential
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
-__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "METHOD_CODES", "SCALARS", "STATUS_NAMES", "clik_close_pairs",
-           "clik_fields", "clik_step", "clik_step_arrays", "pack_buffers"]
+__all__ = [
+    "DIMS",
+    "FLOAT_FIELDS",
+    "INT_FIELDS",
+    "METHOD_CODES",
+    "SCALARS",
+    "STATUS_NAMES",
+    "clik_close_pairs",
+    "clik_fields",
+    "clik_step",
+    "clik_step_arrays",
+    "pack_buffers",
+]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation", "placement_translation", "axis", "rotation", "position", "world_axis",
-    "task_rotation", "task_translation", "gain", "inverse_weights", "scalars",
-    "limit_lower", "limit_upper", "limit_parameters", "posture_reference", "posture_weights",
-    "segment_rotation", "segment_translation", "segment_center", "segment_radius", "segment_world_center",
-    "local", "vertices", "radii", "collision_parameters",
-    "inputs", "outputs", "jacobian6", "jacobian", "gradient", "scratch",
-    "max_velocity", "position_lower", "position_upper",
+    "placement_rotation",
+    "placement_translation",
+    "axis",
+    "rotation",
+    "position",
+    "world_axis",
+    "task_rotation",
+    "task_translation",
+    "gain",
+    "inverse_weights",
+    "scalars",
+    "limit_lower",
+    "limit_upper",
+    "limit_parameters",
+    "posture_reference",
+    "posture_weights",
+    "segment_rotation",
+    "segment_translation",
+    "segment_center",
+    "segment_radius",
+    "segment_world_center",
+    "local",
+    "vertices",
+    "radii",
+    "collision_parameters",
+    "inputs",
+    "outputs",
+    "jacobian6",
+    "jacobian",
+    "gradient",
+    "scratch",
+    "max_velocity",
+    "position_lower",
+    "position_upper",
 )
 INT_FIELDS: tuple[str, ...] = (
-    "dims", "parent", "joint_type", "q_index", "v_index", "task_rows", "segment_joint", "segment_starts", "kinds",
-    "segment_pairs", "pair_starts", "volume_a", "volume_b", "position_q_index", "position_v_index",
+    "dims",
+    "parent",
+    "joint_type",
+    "q_index",
+    "v_index",
+    "task_rows",
+    "segment_joint",
+    "segment_starts",
+    "kinds",
+    "segment_pairs",
+    "pair_starts",
+    "volume_a",
+    "volume_b",
+    "position_q_index",
+    "position_v_index",
 )
 # entries of the "dims" field
-DIMS: tuple[str, ...] = ("joints", "nv", "nq", "task_dim", "limit_objectives", "posture_objectives", "segments",
-                         "volumes", "pairs", "volume_pairs", "task_kind", "task_joint", "task_axis", "method",
-                         "collision", "objectives", "bounded_joints")
+DIMS: tuple[str, ...] = (
+    "joints",
+    "nv",
+    "nq",
+    "task_dim",
+    "limit_objectives",
+    "posture_objectives",
+    "segments",
+    "volumes",
+    "pairs",
+    "volume_pairs",
+    "task_kind",
+    "task_joint",
+    "task_axis",
+    "method",
+    "collision",
+    "objectives",
+    "bounded_joints",
+)
 METHOD_CODES: dict[str, int] = {"pseudoinverse": 0, "dls": 1, "transpose": 2}
 STATUS_NAMES: tuple[str, ...] = ("ok", "damped", "singular")
 SCRATCH_SIZE = 160
@@ -56,15 +123,59 @@ STEPPED = 7  # index of the stepped flag among the extra outputs
 SCALARS: tuple[str, ...] = ("nullspace_gain", "singular_threshold", "dls_threshold", "dls_max_damping", "period")
 
 _NF = len(FLOAT_FIELDS)
-(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS, _F_TASK_ROTATION,
- _F_TASK_TRANSLATION, _F_GAIN, _F_INVERSE_WEIGHTS, _F_SCALARS, _F_LIMIT_LOWER, _F_LIMIT_UPPER, _F_LIMIT_PARAMETERS,
- _F_POSTURE_REFERENCE, _F_POSTURE_WEIGHTS, _F_SEGMENT_ROTATION, _F_SEGMENT_TRANSLATION, _F_SEGMENT_CENTER,
- _F_SEGMENT_RADIUS, _F_SEGMENT_WORLD_CENTER, _F_LOCAL, _F_VERTICES, _F_RADII, _F_COLLISION_PARAMETERS, _F_INPUTS,
- _F_OUTPUTS, _F_JACOBIAN6, _F_JACOBIAN, _F_GRADIENT, _F_SCRATCH, _F_MAX_VELOCITY, _F_POSITION_LOWER,
- _F_POSITION_UPPER) = range(_NF)
-(_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_TASK_ROWS, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
- _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B, _I_POSITION_Q_INDEX,
- _I_POSITION_V_INDEX) = range(_NF, _NF + len(INT_FIELDS))
+(
+    _F_PLACEMENT_ROTATION,
+    _F_PLACEMENT_TRANSLATION,
+    _F_AXIS,
+    _F_ROTATION,
+    _F_POSITION,
+    _F_WORLD_AXIS,
+    _F_TASK_ROTATION,
+    _F_TASK_TRANSLATION,
+    _F_GAIN,
+    _F_INVERSE_WEIGHTS,
+    _F_SCALARS,
+    _F_LIMIT_LOWER,
+    _F_LIMIT_UPPER,
+    _F_LIMIT_PARAMETERS,
+    _F_POSTURE_REFERENCE,
+    _F_POSTURE_WEIGHTS,
+    _F_SEGMENT_ROTATION,
+    _F_SEGMENT_TRANSLATION,
+    _F_SEGMENT_CENTER,
+    _F_SEGMENT_RADIUS,
+    _F_SEGMENT_WORLD_CENTER,
+    _F_LOCAL,
+    _F_VERTICES,
+    _F_RADII,
+    _F_COLLISION_PARAMETERS,
+    _F_INPUTS,
+    _F_OUTPUTS,
+    _F_JACOBIAN6,
+    _F_JACOBIAN,
+    _F_GRADIENT,
+    _F_SCRATCH,
+    _F_MAX_VELOCITY,
+    _F_POSITION_LOWER,
+    _F_POSITION_UPPER,
+) = range(_NF)
+(
+    _I_DIMS,
+    _I_PARENT,
+    _I_JOINT_TYPE,
+    _I_Q_INDEX,
+    _I_V_INDEX,
+    _I_TASK_ROWS,
+    _I_SEGMENT_JOINT,
+    _I_SEGMENT_STARTS,
+    _I_KINDS,
+    _I_SEGMENT_PAIRS,
+    _I_PAIR_STARTS,
+    _I_VOLUME_A,
+    _I_VOLUME_B,
+    _I_POSITION_Q_INDEX,
+    _I_POSITION_V_INDEX,
+) = range(_NF, _NF + len(INT_FIELDS))
 
 # return codes of clik_step
 OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
@@ -73,8 +184,9 @@ OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
 _JIT = BORROW
 
 
-def pack_buffers(floats: Mapping[str, NDArray[np.float64]],
-                 ints: Mapping[str, NDArray[np.int64]]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def pack_buffers(
+    floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, NDArray[np.int64]]
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The kernel's two buffers from every field of :data:`FLOAT_FIELDS` and :data:`INT_FIELDS` (flattened)."""
     return pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
 
@@ -157,14 +269,31 @@ def _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, q_
     """:func:`~.collision_kernels.collision_potential` on the buffer's collision fields."""
     ns, nvol, npairs = dims[6], dims[7], dims[8]
     return collision_potential(
-        _iv(i, _I_SEGMENT_JOINT), _iv(i, _I_SEGMENT_STARTS), _iv(i, _I_KINDS),
-        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)), _iv(i, _I_PAIR_STARTS), _iv(i, _I_VOLUME_A),
-        _iv(i, _I_VOLUME_B), _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
-        _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)), _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
-        _fv(f, i, _F_SEGMENT_RADIUS), _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
-        _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3)), _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-        _fv(f, i, _F_RADII), _fv(f, i, _F_COLLISION_PARAMETERS), parent, joint_type, v_index, q_rotation, position,
-        world_axis, gradient, scratch)
+        _iv(i, _I_SEGMENT_JOINT),
+        _iv(i, _I_SEGMENT_STARTS),
+        _iv(i, _I_KINDS),
+        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
+        _iv(i, _I_PAIR_STARTS),
+        _iv(i, _I_VOLUME_A),
+        _iv(i, _I_VOLUME_B),
+        _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
+        _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)),
+        _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
+        _fv(f, i, _F_SEGMENT_RADIUS),
+        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
+        _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3)),
+        _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
+        _fv(f, i, _F_RADII),
+        _fv(f, i, _F_COLLISION_PARAMETERS),
+        parent,
+        joint_type,
+        v_index,
+        q_rotation,
+        position,
+        world_axis,
+        gradient,
+        scratch,
+    )
 
 
 @njit(**_JIT)
@@ -174,29 +303,51 @@ def clik_close_pairs(f, i, limit, distances, rows):
     dims = _iv(i, _I_DIMS)
     nj, ns, nvol, npairs = dims[0], dims[6], dims[7], dims[8]
     return close_pair_rows(
-        _iv(i, _I_SEGMENT_JOINT), _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)), _iv(i, _I_PAIR_STARTS),
-        _iv(i, _I_VOLUME_A), _iv(i, _I_VOLUME_B), _fv(f, i, _F_SEGMENT_RADIUS),
-        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)), _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-        _fv(f, i, _F_RADII), _iv(i, _I_KINDS), _iv(i, _I_PARENT), _iv(i, _I_JOINT_TYPE), _iv(i, _I_V_INDEX),
-        _fv(f, i, _F_ROTATION).reshape((nj, 3, 3)), _fv(f, i, _F_POSITION).reshape((nj, 3)),
-        _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3)), limit, distances, rows)
+        _iv(i, _I_SEGMENT_JOINT),
+        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
+        _iv(i, _I_PAIR_STARTS),
+        _iv(i, _I_VOLUME_A),
+        _iv(i, _I_VOLUME_B),
+        _fv(f, i, _F_SEGMENT_RADIUS),
+        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
+        _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
+        _fv(f, i, _F_RADII),
+        _iv(i, _I_KINDS),
+        _iv(i, _I_PARENT),
+        _iv(i, _I_JOINT_TYPE),
+        _iv(i, _I_V_INDEX),
+        _fv(f, i, _F_ROTATION).reshape((nj, 3, 3)),
+        _fv(f, i, _F_POSITION).reshape((nj, 3)),
+        _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3)),
+        limit,
+        distances,
+        rows,
+    )
 
 
 @njit(**_JIT)
-def _task(f, i, dims, has_velocity, q_rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac,
-          scratch):
+def _task(
+    f, i, dims, has_velocity, q_rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac, scratch
+):
     """Task error, Jacobian and effective velocity ``wdot_d + K e`` (5.5); returns a clik_step code."""
     nv, m, kind, joint, ax = dims[1], dims[3], dims[10], dims[11], dims[12]
     nq = dims[2]
     inputs = _fv(f, i, _F_INPUTS)
-    target = inputs[nq:nq + 6]
-    velocity = inputs[nq + 6:nq + 12]
+    target = inputs[nq : nq + 6]
+    velocity = inputs[nq + 6 : nq + 12]
     gain = _fv(f, i, _F_GAIN)
     jac6 = _fv(f, i, _F_JACOBIAN6).reshape((6, nv))
     rot = scratch[12:21].reshape((3, 3))
     pos = scratch[21:24]
-    place_frame(q_rotation, position, joint, _fv(f, i, _F_TASK_ROTATION).reshape((3, 3)),
-                _fv(f, i, _F_TASK_TRANSLATION), rot, pos)
+    place_frame(
+        q_rotation,
+        position,
+        joint,
+        _fv(f, i, _F_TASK_ROTATION).reshape((3, 3)),
+        _fv(f, i, _F_TASK_TRANSLATION),
+        rot,
+        pos,
+    )
     chain_jacobian(parent, joint_type, v_index, q_rotation, position, world_axis, joint, pos[0], pos[1], pos[2], jac6)
     width = 6 if kind == 1 else m
     for k in range(width):
@@ -343,18 +494,28 @@ def _step(f, i, has_velocity, has_input):
     rotation = _fv(f, i, _F_ROTATION).reshape((nj, 3, 3))
     position = _fv(f, i, _F_POSITION).reshape((nj, 3))
     world_axis = _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(parent, _fv(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-                  _fv(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)), _fv(f, i, _F_AXIS).reshape((nj, 3)),
-                  joint_type, _iv(i, _I_Q_INDEX), q, rotation, position, world_axis)
+    chain_forward(
+        parent,
+        _fv(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
+        _fv(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
+        _fv(f, i, _F_AXIS).reshape((nj, 3)),
+        joint_type,
+        _iv(i, _I_Q_INDEX),
+        q,
+        rotation,
+        position,
+        world_axis,
+    )
     scratch = _fv(f, i, _F_SCRATCH)
     outputs = _fv(f, i, _F_OUTPUTS)
     x = outputs[:nv]
-    error = outputs[nv:nv + m]
-    extra = outputs[nv + m:]
+    error = outputs[nv : nv + m]
+    extra = outputs[nv + m :]
     rhs = scratch[24:30]
     jac = _fv(f, i, _F_JACOBIAN).reshape((m, nv))
-    code = _task(f, i, dims, has_velocity, rotation, position, world_axis, parent, joint_type, v_index, error, rhs,
-                 jac, scratch)
+    code = _task(
+        f, i, dims, has_velocity, rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac, scratch
+    )
     if code != OK:
         return code
     # nullspace objectives: H and (dH/dq)^T
@@ -380,8 +541,9 @@ def _step(f, i, has_velocity, has_input):
             gradient[k] += pw[o * nq + k] * delta
     smallest = np.inf
     if collision:
-        h, smallest = _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, rotation, gradient,
-                                 scratch)
+        h, smallest = _collision(
+            f, i, dims, parent, joint_type, v_index, position, world_axis, rotation, gradient, scratch
+        )
         value += h
     # weighted minimum norm with nullspace vector z = alpha dH/dq (Algorithm 10, (5.14), (5.22))
     scalars = _fv(f, i, _F_SCALARS)
@@ -431,7 +593,7 @@ def _step(f, i, has_velocity, has_input):
         extra[1], extra[2], extra[4] = sigma, 0.0, 2.0
         return OK
     # z = alpha dH/dq - W u: the nullspace term -N W^-1 z is the objectives' descent plus N u (5.100)
-    u = inputs[nq + 12:nq + 12 + nv]
+    u = inputs[nq + 12 : nq + 12 + nv]
     if has_input:
         for k in range(nv):
             if not np.isfinite(u[k]):

@@ -7,6 +7,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import PackedVolumes
 from ...model import ModelError
+from ..exceptions import ControllerError
+from ..kernels.buffers import buffer_view, compiled_entry_point
+from ..objectives.collision_kernels import bounding_spheres, collision_fields
+from ..objectives.collision_objective import CollisionObjective
+from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.posture_objective import PostureObjective
+from ..tasks.frame_axis_task import FrameAxisTask
+from ..tasks.frame_position_task import FramePositionTask
 from .clik import Clik, ClikResult
 from .clik_kernels import (
     BAD_CONFIGURATION,
@@ -27,14 +35,6 @@ from .clik_kernels import (
     clik_step_arrays,
     pack_buffers,
 )
-from ..objectives.collision_kernels import bounding_spheres, collision_fields
-from ..objectives.collision_objective import CollisionObjective
-from ..exceptions import ControllerError
-from ..kernels.buffers import buffer_view, compiled_entry_point
-from ..tasks.frame_axis_task import FrameAxisTask
-from ..tasks.frame_position_task import FramePositionTask
-from ..objectives.joint_limit_objective import JointLimitObjective
-from ..objectives.posture_objective import PostureObjective
 from .redundancy_resolution import as_float_array, check_configuration, check_finite
 
 __all__ = ["CompiledClik"]
@@ -84,14 +84,18 @@ class CompiledClik:
             raise ControllerError(f"CompiledClik compiles a Clik, got {type(clik).__name__}")
         task = clik.task
         if not isinstance(task, SUPPORTED_TASKS):
-            raise ControllerError(f"CompiledClik supports the tasks {', '.join(t.__name__ for t in SUPPORTED_TASKS)}"
-                                  f", got {type(task).__name__}")
+            raise ControllerError(
+                f"CompiledClik supports the tasks {', '.join(t.__name__ for t in SUPPORTED_TASKS)}"
+                f", got {type(task).__name__}"
+            )
         if clik.weights.diagonal is None:
             raise ControllerError("CompiledClik supports diagonal weights only; use Clik for a full W")
         unknown = [type(o).__name__ for o in clik.objectives if not isinstance(o, SUPPORTED_OBJECTIVES)]
         if unknown:
-            raise ControllerError(f"CompiledClik supports the objectives "
-                                  f"{', '.join(o.__name__ for o in SUPPORTED_OBJECTIVES)}, got {', '.join(unknown)}")
+            raise ControllerError(
+                f"CompiledClik supports the objectives "
+                f"{', '.join(o.__name__ for o in SUPPORTED_OBJECTIVES)}, got {', '.join(unknown)}"
+            )
         collisions = [o for o in clik.objectives if isinstance(o, CollisionObjective)]
         if len(collisions) > 1:
             raise ControllerError("CompiledClik supports at most one CollisionObjective")
@@ -113,36 +117,71 @@ class CompiledClik:
                 raise ControllerError(f"posture objective has {o.reference.size} joints, the model {nq}")
         self.collision: CollisionObjective | None = collisions[0] if collisions else None
         floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
-            "axis": chain.axis, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)), "task_rotation": frame_rotation, "task_translation": frame_translation,
-            "gain": clik.gain, "inverse_weights": 1.0 / clik.weights.diagonal,
-            "scalars": np.array([clik.nullspace_gain, clik.singular_threshold, clik.dls_threshold,
-                                 clik.dls_max_damping, clik.bounds.period or 0.0]),
-            "limit_lower": np.array([o.lower for o in limits]), "limit_upper": np.array([o.upper for o in limits]),
-            "limit_parameters": np.array([(o.potential.activation_distance, o.potential.slope,
-                                           o.potential.switch_ratio, o.weight) for o in limits]),
+            "placement_rotation": chain.placement_rotation,
+            "placement_translation": chain.placement_translation,
+            "axis": chain.axis,
+            "rotation": np.zeros((nj, 3, 3)),
+            "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)),
+            "task_rotation": frame_rotation,
+            "task_translation": frame_translation,
+            "gain": clik.gain,
+            "inverse_weights": 1.0 / clik.weights.diagonal,
+            "scalars": np.array(
+                [
+                    clik.nullspace_gain,
+                    clik.singular_threshold,
+                    clik.dls_threshold,
+                    clik.dls_max_damping,
+                    clik.bounds.period or 0.0,
+                ]
+            ),
+            "limit_lower": np.array([o.lower for o in limits]),
+            "limit_upper": np.array([o.upper for o in limits]),
+            "limit_parameters": np.array(
+                [
+                    (o.potential.activation_distance, o.potential.slope, o.potential.switch_ratio, o.weight)
+                    for o in limits
+                ]
+            ),
             "posture_reference": np.array([o.reference for o in postures]),
             "posture_weights": np.array([o.weights for o in postures]),
-            "inputs": np.zeros(nq + 12 + nv), "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
-            "jacobian6": np.zeros((6, nv)), "jacobian": np.zeros((m, nv)), "gradient": np.zeros(nv),
+            "inputs": np.zeros(nq + 12 + nv),
+            "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
+            "jacobian6": np.zeros((6, nv)),
+            "jacobian": np.zeros((m, nv)),
+            "gradient": np.zeros(nv),
             "scratch": np.zeros(SCRATCH_SIZE),
-            "max_velocity": clik.bounds.max_velocity, "position_lower": clik.bounds.lower,
+            "max_velocity": clik.bounds.max_velocity,
+            "position_lower": clik.bounds.lower,
             "position_upper": clik.bounds.upper,
         }
         ints: dict[str, NDArray[np.int64]] = {
-            "parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index,
+            "parent": chain.parent,
+            "joint_type": chain.joint_type,
+            "q_index": chain.q_index,
             "v_index": chain.v_index,
             "task_rows": task.rows if isinstance(task, FramePositionTask) else np.zeros(0, dtype=np.int64),
-            "position_q_index": clik.bounds.q_index, "position_v_index": clik.bounds.v_index,
+            "position_q_index": clik.bounds.q_index,
+            "position_v_index": clik.bounds.v_index,
         }
         counts = self._collision_fields(floats, ints)
-        dims = {"joints": nj, "nv": nv, "nq": nq, "task_dim": m, "limit_objectives": len(limits),
-                "posture_objectives": len(postures), **counts,
-                "task_kind": 1 if isinstance(task, FrameAxisTask) else 0, "task_joint": joint,
-                "task_axis": task.axis if isinstance(task, FrameAxisTask) else 0,
-                "method": METHOD_CODES[clik.method], "collision": int(self.collision is not None),
-                "objectives": int(bool(clik.objectives)), "bounded_joints": int(clik.bounds.q_index.size)}
+        dims = {
+            "joints": nj,
+            "nv": nv,
+            "nq": nq,
+            "task_dim": m,
+            "limit_objectives": len(limits),
+            "posture_objectives": len(postures),
+            **counts,
+            "task_kind": 1 if isinstance(task, FrameAxisTask) else 0,
+            "task_joint": joint,
+            "task_axis": task.axis if isinstance(task, FrameAxisTask) else 0,
+            "method": METHOD_CODES[clik.method],
+            "collision": int(self.collision is not None),
+            "objectives": int(bool(clik.objectives)),
+            "bounded_joints": int(clik.bounds.q_index.size),
+        }
         ints["dims"] = np.array([dims[name] for name in DIMS], dtype=np.int64)
         self._f, self._i = pack_buffers(floats, ints)
         self._inputs = self._field("inputs")
@@ -152,7 +191,8 @@ class CompiledClik:
         self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
         # q, target and velocity in any layout (a strided view of an observation is read as it is)
         self._array_kernel = compiled_entry_point(
-            clik_step_arrays, "int64(float64[::1], int64[::1], float64[:], float64[:], float64[:], boolean)")
+            clik_step_arrays, "int64(float64[::1], int64[::1], float64[:], float64[:], float64[:], boolean)"
+        )
         self._close_pairs = clik_close_pairs
         self._pair_distances = np.zeros(8)
         self._pair_rows = np.zeros((8, nv))
@@ -162,15 +202,32 @@ class CompiledClik:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""
         return buffer_view(self._f, self._i, FLOAT_FIELDS, name)
 
-    def _collision_fields(self, floats: dict[str, NDArray[np.float64]],
-                          ints: dict[str, NDArray[np.int64]]) -> dict[str, int]:
+    def _collision_fields(
+        self, floats: dict[str, NDArray[np.float64]], ints: dict[str, NDArray[np.int64]]
+    ) -> dict[str, int]:
         """The collision model's segments, volumes and pairs into the kernel fields; returns their counts."""
         if self.collision is None:
-            for name in ("segment_rotation", "segment_translation", "segment_center", "segment_radius",
-                         "segment_world_center", "local", "vertices", "radii", "collision_parameters"):
+            for name in (
+                "segment_rotation",
+                "segment_translation",
+                "segment_center",
+                "segment_radius",
+                "segment_world_center",
+                "local",
+                "vertices",
+                "radii",
+                "collision_parameters",
+            ):
                 floats[name] = np.zeros(0)
-            for name in ("segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a",
-                         "volume_b"):
+            for name in (
+                "segment_joint",
+                "segment_starts",
+                "kinds",
+                "segment_pairs",
+                "pair_starts",
+                "volume_a",
+                "volume_b",
+            ):
                 ints[name] = np.zeros(0, dtype=np.int64)
             return {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
         fields = collision_fields(self.collision, self.model)
@@ -202,7 +259,7 @@ class CompiledClik:
         self._field("segment_center")[:] = centers.reshape(-1)
         self._field("segment_radius")[:] = bounds
         world = self._field("segment_world_center").reshape(-1, 3)
-        world[self._robot_segments:] = centers[self._robot_segments:]
+        world[self._robot_segments :] = centers[self._robot_segments :]
         vertices = self._field("vertices").reshape(-1, 3, 3)
         for s, rotation, translation in self._world_fixed:
             sl = slice(layout.segment_starts[s], layout.segment_starts[s + 1])
@@ -229,13 +286,27 @@ class CompiledClik:
         """The :class:`ClikResult` of the last step's ``outputs`` (or of a copy of them, ``outputs``)."""
         out = self._outputs if outputs is None else outputs
         nv, m = self._nv, self._m
-        norm, sigma, damping, value, status, _, limited, _ = out[nv + m:].tolist()
+        norm, sigma, damping, value, status, _, limited, _ = out[nv + m :].tolist()
         name = STATUS_NAMES[int(status)]
-        return ClikResult(out[:nv].copy(), out[nv:nv + m].copy(), norm, sigma, damping, value, name != "singular",
-                          name, limited != 0.0)
+        return ClikResult(
+            out[:nv].copy(),
+            out[nv : nv + m].copy(),
+            norm,
+            sigma,
+            damping,
+            value,
+            name != "singular",
+            name,
+            limited != 0.0,
+        )
 
-    def step(self, q: ArrayLike, target: ArrayLike, target_velocity: ArrayLike | None = None,
-             nullspace_input: ArrayLike | None = None) -> ClikResult:
+    def step(
+        self,
+        q: ArrayLike,
+        target: ArrayLike,
+        target_velocity: ArrayLike | None = None,
+        nullspace_input: ArrayLike | None = None,
+    ) -> ClikResult:
         """:meth:`Clik.step` (same arguments, same result to round-off) in one kernel call."""
         if self.collision is not None and self.collision.collision_model.version != self._version:
             self._refresh_environment()
@@ -243,8 +314,9 @@ class CompiledClik:
         q = _vector(q, "q", self._nq, ModelError)
         target = _vector(target, "target", width, ControllerError)
         has_velocity = target_velocity is not None
-        velocity = _vector(target_velocity, "target_velocity", width, ControllerError) if has_velocity else \
-            self._no_velocity
+        velocity = (
+            _vector(target_velocity, "target_velocity", width, ControllerError) if has_velocity else self._no_velocity
+        )
         if nullspace_input is None:  # the common step: the arrays go straight to the kernel
             code = self._array_kernel(self._f, self._i, q, target, velocity, has_velocity)
         else:
@@ -253,32 +325,38 @@ class CompiledClik:
             self._raise(code, q, target, target_velocity)
         return self.result()
 
-    def _step_with_input(self, q: NDArray[np.float64], target: NDArray[np.float64],
-                         velocity: NDArray[np.float64], has_velocity: bool, nullspace_input: ArrayLike) -> int:
+    def _step_with_input(
+        self,
+        q: NDArray[np.float64],
+        target: NDArray[np.float64],
+        velocity: NDArray[np.float64],
+        has_velocity: bool,
+        nullspace_input: ArrayLike,
+    ) -> int:
         """The kernel call of a step with a nullspace input ``u`` (5.100); returns its code."""
         nq, width, nv = self._nq, self._width, self._nv
         inputs = self._inputs
         inputs[:nq] = q
-        inputs[nq:nq + width] = target
+        inputs[nq : nq + width] = target
         if has_velocity:
-            inputs[nq + 6:nq + 6 + width] = velocity
+            inputs[nq + 6 : nq + 6 + width] = velocity
         if getattr(nullspace_input, "shape", None) != (nv,):  # an array of nv is the fast path
             try:
                 nullspace_input = np.asarray(nullspace_input, dtype=np.float64)
             except (TypeError, ValueError):
                 nullspace_input = np.zeros(0)
             if nullspace_input.shape != (nv,):
-                raise ControllerError(f"nullspace_input must be finite with shape ({nv},), got "
-                                      f"{nullspace_input.shape}")
+                raise ControllerError(f"nullspace_input must be finite with shape ({nv},), got {nullspace_input.shape}")
         try:  # the kernel checks finiteness (BAD_INPUT)
-            inputs[nq + 12:nq + 12 + nv] = nullspace_input
+            inputs[nq + 12 : nq + 12 + nv] = nullspace_input
         except (TypeError, ValueError) as exc:  # an array of strings or objects
             raise ControllerError("nullspace_input must be an array of finite numbers") from exc
         return int(self._kernel(self._f, self._i, has_velocity, True))
 
     @staticmethod
-    def _raise(code: int, q: NDArray[np.float64], target: NDArray[np.float64],
-               target_velocity: ArrayLike | None) -> None:
+    def _raise(
+        code: int, q: NDArray[np.float64], target: NDArray[np.float64], target_velocity: ArrayLike | None
+    ) -> None:
         """The :class:`ControllerError` of a kernel return code, worded as :meth:`Clik.step` words it."""
         if code == BAD_CONFIGURATION:
             check_configuration(q, "q")

@@ -21,8 +21,18 @@ from ...model import RobotModel
 from ...validation import as_real_array
 from ..exceptions import ControllerError
 
-__all__ = ["JointBounds", "MAX_COORDINATE", "Method", "METHODS", "Resolution", "WeightMatrix", "all_finite",
-           "check_configuration", "check_finite", "resolve"]
+__all__ = [
+    "JointBounds",
+    "MAX_COORDINATE",
+    "Method",
+    "METHODS",
+    "Resolution",
+    "WeightMatrix",
+    "all_finite",
+    "check_configuration",
+    "check_finite",
+    "resolve",
+]
 
 Method = Literal["pseudoinverse", "dls", "transpose"]
 METHODS: tuple[str, ...] = ("pseudoinverse", "dls", "transpose")
@@ -65,8 +75,10 @@ def check_configuration(q: ArrayLike, name: str = "q") -> NDArray[np.float64]:
     :data:`MAX_COORDINATE` in magnitude."""
     arr = as_float_array(q, name)
     if not all_finite(arr) or not bool(np.all(np.abs(arr) <= MAX_COORDINATE)):
-        raise ControllerError(f"{name} must be finite, with every |entry| <= {MAX_COORDINATE:g} [rad or m], got "
-                              f"{np.array2string(arr, threshold=12)}")
+        raise ControllerError(
+            f"{name} must be finite, with every |entry| <= {MAX_COORDINATE:g} [rad or m], got "
+            f"{np.array2string(arr, threshold=12)}"
+        )
     return arr
 
 
@@ -90,8 +102,9 @@ class JointBounds:
             at or beyond a limit are held).
     """
 
-    def __init__(self, model: RobotModel, max_joint_velocity: ArrayLike | float | None = None,
-                 period: float | None = None) -> None:
+    def __init__(
+        self, model: RobotModel, max_joint_velocity: ArrayLike | float | None = None, period: float | None = None
+    ) -> None:
         nv = model.nv
         if max_joint_velocity is None:
             limits = np.asarray(model.velocity_limits, dtype=np.float64)
@@ -101,13 +114,18 @@ class JointBounds:
                     raise TypeError
                 limits = np.broadcast_to(np.asarray(max_joint_velocity, dtype=np.float64), (nv,)).copy()
             except (TypeError, ValueError):
-                raise ControllerError(f"max_joint_velocity must be a number or {nv} numbers [rad/s or m/s], got "
-                                      f"{max_joint_velocity!r}") from None
+                raise ControllerError(
+                    f"max_joint_velocity must be a number or {nv} numbers [rad/s or m/s], got {max_joint_velocity!r}"
+                ) from None
         if limits.shape != (nv,) or np.any(np.isnan(limits)) or np.any(limits <= 0.0):
             raise ControllerError(f"max_joint_velocity must be > 0 (inf for none) with {nv} entries, got {limits}")
         if period is not None:
-            if isinstance(period, bool) or not isinstance(period, (int, float, np.floating, np.integer)) \
-                    or not math.isfinite(period) or period <= 0.0:
+            if (
+                isinstance(period, bool)
+                or not isinstance(period, (int, float, np.floating, np.integer))
+                or not math.isfinite(period)
+                or period <= 0.0
+            ):
                 raise ControllerError(f"period must be a finite number > 0 [s] or None, got {period!r}")
             period = float(period)
         self.max_velocity = limits
@@ -131,7 +149,7 @@ class JointBounds:
         self.lower = np.array(lower, dtype=np.float64)
         self.upper = np.array(upper, dtype=np.float64)
         self.active = self.has_velocity_limits or self.q_index.size > 0
-        self._joints = list(zip(q_index, v_index, lower, upper))
+        self._joints = list(zip(q_index, v_index, lower, upper, strict=False))
         self._max_velocity = limits.tolist()
 
     def velocity_range(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -139,8 +157,7 @@ class JointBounds:
         pushing out of its range; both contain zero."""
         qk = q[self.q_index]
         if self.period is not None:
-            return (np.minimum((self.lower - qk) / self.period, 0.0),
-                    np.maximum((self.upper - qk) / self.period, 0.0))
+            return (np.minimum((self.lower - qk) / self.period, 0.0), np.maximum((self.upper - qk) / self.period, 0.0))
         return np.where(qk > self.lower, -np.inf, 0.0), np.where(qk < self.upper, np.inf, 0.0)
 
     def apply(self, qdot: NDArray[np.float64], q: NDArray[np.float64]) -> tuple[NDArray[np.float64], bool]:
@@ -169,9 +186,9 @@ class JointBounds:
                 changed = True
                 limited = limited or abs(bounded - v) > tolerance
         if self.has_velocity_limits:
-            peak = max([abs(v) / m for v, m in zip(x, self._max_velocity)])
+            peak = max([abs(v) / m for v, m in zip(x, self._max_velocity, strict=False)])
             if peak > 1.0:
-                x = [min(max(v / peak, -m), m) for v, m in zip(x, self._max_velocity)]
+                x = [min(max(v / peak, -m), m) for v, m in zip(x, self._max_velocity, strict=False)]
                 changed = limited = True
         return (np.array(x, dtype=np.float64) if changed else qdot), limited
 
@@ -217,7 +234,9 @@ class WeightMatrix:
                 raise ControllerError("the weight matrix must be positive definite") from None
             self.diagonal = None
         else:
-            raise ControllerError(f"weights must be a scalar, a vector of length {n} or an {n}x{n} matrix, got {w.shape}")
+            raise ControllerError(
+                f"weights must be a scalar, a vector of length {n} or an {n}x{n} matrix, got {w.shape}"
+            )
         self.n = n
 
     def apply(self, v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -234,9 +253,17 @@ class WeightMatrix:
         return np.linalg.solve(self._factor.T, y)
 
 
-def resolve(jacobian: NDArray[np.float64], rhs: NDArray[np.float64], z: NDArray[np.float64] | None,
-            weights: WeightMatrix, *, method: str = "pseudoinverse", singular_threshold: float = 1e-6,
-            dls_threshold: float = 0.05, dls_max_damping: float = 0.01) -> Resolution:
+def resolve(
+    jacobian: NDArray[np.float64],
+    rhs: NDArray[np.float64],
+    z: NDArray[np.float64] | None,
+    weights: WeightMatrix,
+    *,
+    method: str = "pseudoinverse",
+    singular_threshold: float = 1e-6,
+    dls_threshold: float = 0.05,
+    dls_max_damping: float = 0.01,
+) -> Resolution:
     """Solve ``J x = rhs`` for the weighted-minimum-norm ``x`` with nullspace vector ``z``.
 
     Args:

@@ -8,11 +8,24 @@ from .error_compensation import ErrorCompensation, ErrorCompensationOutput
 from .general_ikd import WEIGHTINGS, GeneralIkd, GeneralIkdResult
 from .plan_stabilizer import PlanStabilizer, PlanStabilizerOutput
 
-__all__ = ["WEIGHTINGS", "BipedIkd", "BipedIkdReference", "BipedIkdResult", "ErrorCompensation",
-           "ErrorCompensationOutput", "GeneralIkd", "GeneralIkdResult",
-           "PlanStabilizer", "PlanStabilizerOutput"]
+__all__ = [
+    "WEIGHTINGS",
+    "BipedIkd",
+    "BipedIkdReference",
+    "BipedIkdResult",
+    "ErrorCompensation",
+    "ErrorCompensationOutput",
+    "GeneralIkd",
+    "GeneralIkdResult",
+    "PlanStabilizer",
+    "PlanStabilizerOutput",
+]
 
 # the walking IKD (a walking controller's IK) moved to redundancy_gym.controllers.walking in 0.2, so that ikd/ and
 # walking/ no longer import each other (the old names warn and go in 0.3)
-__getattr__ = forward_attributes(__name__, dict.fromkeys(("WalkingIkd", "WalkingIkdConfig", "WalkingIkdStep"),
-                                                         "redundancy_gym.controllers.walking.walking_ikd"))
+__getattr__ = forward_attributes(
+    __name__,
+    dict.fromkeys(
+        ("WalkingIkd", "WalkingIkdConfig", "WalkingIkdStep"), "redundancy_gym.controllers.walking.walking_ikd"
+    ),
+)

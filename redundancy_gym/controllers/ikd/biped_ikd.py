@@ -12,12 +12,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry.potentials import PiecewisePotential, piecewise_potential_kernel
 from ...model import AccelerationTerms, RobotModel
-from ..objectives.actuated_objective import ActuatedObjective
+from ..clik.redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
 from ..exceptions import ControllerError
+from ..kernels.linalg import rotation_error_into
+from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
 from ..objectives.objective import Objective, sum_objectives
-from ..clik.redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
-from ..kernels.linalg import rotation_error_into
 
 __all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
 
@@ -118,16 +118,34 @@ class BipedIkd:
         objective_gain: their gain [1/s^2 per unit of ``H``'s gradient].
     """
 
-    def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
-                 torso_frame: str = "imu", stiffness: float = 400.0, damping: float = 34.0,
-                 self_motion_damping: float = 10.0, posture_stiffness: float = 25.0, posture: ArrayLike | None = None,
-                 weights: ArrayLike | float = 1.0, singular_threshold: float = 1e-6, moment_gain: float = 0.0,
-                 period: float = 0.001, objectives: Sequence[Objective] = (), objective_gain: float = 100.0) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        *,
+        feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+        torso_frame: str = "imu",
+        stiffness: float = 400.0,
+        damping: float = 34.0,
+        self_motion_damping: float = 10.0,
+        posture_stiffness: float = 25.0,
+        posture: ArrayLike | None = None,
+        weights: ArrayLike | float = 1.0,
+        singular_threshold: float = 1e-6,
+        moment_gain: float = 0.0,
+        period: float = 0.001,
+        objectives: Sequence[Objective] = (),
+        objective_gain: float = 100.0,
+    ) -> None:
         if not model.floating_base:
             raise ControllerError(f"biped IKD needs a floating-base model, {model.source} has a fixed base")
-        for name, value in (("stiffness", stiffness), ("damping", damping),
-                            ("self_motion_damping", self_motion_damping), ("posture_stiffness", posture_stiffness),
-                            ("moment_gain", moment_gain), ("objective_gain", objective_gain)):
+        for name, value in (
+            ("stiffness", stiffness),
+            ("damping", damping),
+            ("self_motion_damping", self_motion_damping),
+            ("posture_stiffness", posture_stiffness),
+            ("moment_gain", moment_gain),
+            ("objective_gain", objective_gain),
+        ):
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         self.model = model
@@ -164,9 +182,21 @@ class BipedIkd:
         stabilize = reference.com_plan is not None and self.moment_gain > 0.0
         plan = _NO_PLAN if reference.com_plan is None else reference.com_plan
         support = _NO_SUPPORT if reference.support is None else reference.support
-        arrays = (q, qdot, reference.feet_position, reference.feet_rotation, reference.feet_velocity,
-                  reference.feet_acceleration, reference.torso_rotation, reference.torso_angular_velocity,
-                  reference.torso_angular_acceleration, reference.com_height, reference.moment, plan, support)
+        arrays = (
+            q,
+            qdot,
+            reference.feet_position,
+            reference.feet_rotation,
+            reference.feet_velocity,
+            reference.feet_acceleration,
+            reference.torso_rotation,
+            reference.torso_angular_velocity,
+            reference.torso_angular_acceleration,
+            reference.com_height,
+            reference.moment,
+            plan,
+            support,
+        )
         fast = False
         # numba's TypeError for other types costs some 100 us, so lists and other dtypes are not offered to it
         if all([type(a) is np.ndarray and a.dtype == _FLOAT64 for a in arrays]):
@@ -202,17 +232,46 @@ class BipedIkd:
         else:
             weights, inverse_weights = diagonal, _NO_INVERSE
         qddot, com_acceleration, moment, residual, sigma_min, ok = _solve(
-            qdot, terms.rotation, terms.position, terms.jacobian, terms.drift, terms.com, terms.centroidal,
-            terms.centroidal_drift, ref.feet_position, ref.feet_rotation, ref.feet_velocity, ref.feet_acceleration,
-            ref.torso_rotation, ref.torso_angular_velocity, ref.torso_angular_acceleration, ref.com_height,
-            ref.moment, plan, support, offset, weights, inverse_weights, self.kp, self.kd, self.mass,
-            self.com_stiffness, self.com_damping, self.self_motion_damping, stiffness,
-            self.singular_threshold, stabilize, reference.support is not None, has_posture, diagonal is not None)
+            qdot,
+            terms.rotation,
+            terms.position,
+            terms.jacobian,
+            terms.drift,
+            terms.com,
+            terms.centroidal,
+            terms.centroidal_drift,
+            ref.feet_position,
+            ref.feet_rotation,
+            ref.feet_velocity,
+            ref.feet_acceleration,
+            ref.torso_rotation,
+            ref.torso_angular_velocity,
+            ref.torso_angular_acceleration,
+            ref.com_height,
+            ref.moment,
+            plan,
+            support,
+            offset,
+            weights,
+            inverse_weights,
+            self.kp,
+            self.kd,
+            self.mass,
+            self.com_stiffness,
+            self.com_damping,
+            self.self_motion_damping,
+            stiffness,
+            self.singular_threshold,
+            stabilize,
+            reference.support is not None,
+            has_posture,
+            diagonal is not None,
+        )
         return BipedIkdResult(qddot, com_acceleration, residual, sigma_min, ok, "ok" if ok else "singular", moment)
 
-    def _checked(self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference, stabilize: bool
-                 ) -> tuple[NDArray[np.float64], NDArray[np.float64], BipedIkdReference, NDArray[np.float64],
-                            NDArray[np.float64]]:
+    def _checked(
+        self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference, stabilize: bool
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], BipedIkdReference, NDArray[np.float64], NDArray[np.float64]]:
         """``(q, qdot, reference, plan, support)`` checked (:class:`ControllerError` naming the first bad input)
         and as float64 C arrays of the documented shapes: a row given with another shape is broadcast to its
         shape as NumPy would; the plan and the support box are placeholders where they are not used."""
@@ -243,12 +302,17 @@ class BipedIkd:
             _rows(reference.torso_rotation, 3, (3,), "torso_rotation", broadcast=False),
             _rows([reference.torso_angular_velocity], 1, (3,), "torso_angular_velocity")[0],
             _rows([reference.torso_angular_acceleration], 1, (3,), "torso_angular_acceleration")[0],
-            np.array(height), np.array(moment), plan if stabilize else None, None)
+            np.array(height),
+            np.array(moment),
+            plan if stabilize else None,
+            None,
+        )
         return np.array(q), np.array(qdot), checked, np.array(plan), np.array(support)
 
 
-def _rows(value: ArrayLike, count: int, shape: tuple[int, ...], name: str, broadcast: bool = True
-          ) -> NDArray[np.float64]:
+def _rows(
+    value: ArrayLike, count: int, shape: tuple[int, ...], name: str, broadcast: bool = True
+) -> NDArray[np.float64]:
     """``value``'s first ``count`` rows (the ones the step reads), each broadcast to ``shape`` (or required to have
     it), as one float64 C array (``count``, ``*shape``)."""
     try:
@@ -273,8 +337,9 @@ _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
 
 
-def _joint_limits(objectives: tuple[Objective, ...], nq: int, nv: int
-                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float] | None:
+def _joint_limits(
+    objectives: tuple[Objective, ...], nq: int, nv: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float] | None:
     """``(lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight)`` when ``objectives``
     are exactly one :class:`ActuatedObjective` of a :class:`JointLimitObjective` (with its
     :class:`PiecewisePotential`) whose limits fit the actuated joints, read at each call (so a changed objective
@@ -291,32 +356,86 @@ def _joint_limits(objectives: tuple[Objective, ...], nq: int, nv: int
     lower, upper = limit.lower, limit.upper
     base_nq, base_nv = actuated._nq, actuated._nv
     n = nq - base_nq
-    if (type(potential) is not PiecewisePotential or nv - base_nv != n or type(lower) is not np.ndarray
-            or type(upper) is not np.ndarray or lower.dtype != _FLOAT64 or upper.dtype != _FLOAT64
-            or lower.shape != (n,) or upper.shape != (n,)):
+    if (
+        type(potential) is not PiecewisePotential
+        or nv - base_nv != n
+        or type(lower) is not np.ndarray
+        or type(upper) is not np.ndarray
+        or lower.dtype != _FLOAT64
+        or upper.dtype != _FLOAT64
+        or lower.shape != (n,)
+        or upper.shape != (n,)
+    ):
         return None
-    return (lower, upper, base_nq, base_nv, float(potential.activation_distance), float(potential.slope),
-            float(potential.switch_ratio), float(limit.weight))
+    return (
+        lower,
+        upper,
+        base_nq,
+        base_nv,
+        float(potential.activation_distance),
+        float(potential.slope),
+        float(potential.switch_ratio),
+        float(limit.weight),
+    )
 
 
-def _limit_offset(q: NDArray[np.float64], offset: NDArray[np.float64], lower: NDArray[np.float64],
-                  upper: NDArray[np.float64], base_nq: int, base_nv: int, activation_distance: float, slope: float,
-                  switch_ratio: float, weight: float, gain: float, stiffness: float, has_posture: bool
-                  ) -> NDArray[np.float64] | None:
+def _limit_offset(
+    q: NDArray[np.float64],
+    offset: NDArray[np.float64],
+    lower: NDArray[np.float64],
+    upper: NDArray[np.float64],
+    base_nq: int,
+    base_nv: int,
+    activation_distance: float,
+    slope: float,
+    switch_ratio: float,
+    weight: float,
+    gain: float,
+    stiffness: float,
+    has_posture: bool,
+) -> NDArray[np.float64] | None:
     """``(stiffness offset if has_posture else 0) + gain dH/dq`` of the joint-limit objective (5.58)
     (:class:`JointLimitObjective` on the joints after the base's, as :class:`ActuatedObjective` evaluates it),
     the same arithmetic as :func:`sum_objectives` and the objective's; None where a distance to a limit is not
     finite (the objective raises its error there)."""
     out = np.empty(offset.shape[0])
-    if not _limit_offset_into(q, offset, lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio,
-                              weight, gain, stiffness, has_posture, out):
+    if not _limit_offset_into(
+        q,
+        offset,
+        lower,
+        upper,
+        base_nq,
+        base_nv,
+        activation_distance,
+        slope,
+        switch_ratio,
+        weight,
+        gain,
+        stiffness,
+        has_posture,
+        out,
+    ):
         return None
     return out
 
 
 @njit(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **_JIT)
-def _limit_offset_into(q, offset, lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight,
-                       gain, stiffness, has_posture, out):  # pragma: no cover - compiled
+def _limit_offset_into(
+    q,
+    offset,
+    lower,
+    upper,
+    base_nq,
+    base_nv,
+    activation_distance,
+    slope,
+    switch_ratio,
+    weight,
+    gain,
+    stiffness,
+    has_posture,
+    out,
+):  # pragma: no cover - compiled
     """:func:`_limit_offset` into ``out`` (nv); False (``out`` unfinished) at a non-finite distance."""
     for c in range(base_nv):  # the base's gradient entries are zeros
         out[c] = (stiffness * offset[c] if has_posture else 0.0) + gain * 0.0
@@ -333,14 +452,40 @@ def _limit_offset_into(q, offset, lower, upper, base_nq, base_nv, activation_dis
 
 
 @njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **_JIT)
-def _valid(q, qdot, feet_position, feet_rotation, feet_velocity, feet_acceleration, torso_rotation,
-           torso_velocity, torso_acceleration, height, moment, plan, support, nq, nv, max_coordinate
-           ):  # pragma: no cover - compiled
+def _valid(
+    q,
+    qdot,
+    feet_position,
+    feet_rotation,
+    feet_velocity,
+    feet_acceleration,
+    torso_rotation,
+    torso_velocity,
+    torso_acceleration,
+    height,
+    moment,
+    plan,
+    support,
+    nq,
+    nv,
+    max_coordinate,
+):  # pragma: no cover - compiled
     """Whether the inputs have the documented shapes and are finite, ``|q|`` within ``max_coordinate``."""
-    if (q.shape[0] != nq or qdot.shape[0] != nv or feet_position.shape != (2, 3) or feet_rotation.shape != (2, 3, 3)
-            or feet_velocity.shape != (2, 6) or feet_acceleration.shape != (2, 6) or torso_rotation.shape != (3, 3)
-            or torso_velocity.shape[0] != 3 or torso_acceleration.shape[0] != 3 or height.shape[0] != 3
-            or moment.shape[0] != 2 or plan.shape[0] != 4 or support.shape != (2, 2)):
+    if (
+        q.shape[0] != nq
+        or qdot.shape[0] != nv
+        or feet_position.shape != (2, 3)
+        or feet_rotation.shape != (2, 3, 3)
+        or feet_velocity.shape != (2, 6)
+        or feet_acceleration.shape != (2, 6)
+        or torso_rotation.shape != (3, 3)
+        or torso_velocity.shape[0] != 3
+        or torso_acceleration.shape[0] != 3
+        or height.shape[0] != 3
+        or moment.shape[0] != 2
+        or plan.shape[0] != 4
+        or support.shape != (2, 2)
+    ):
         return False
     for x in q:
         if not abs(x) <= max_coordinate:
@@ -348,8 +493,15 @@ def _valid(q, qdot, feet_position, feet_rotation, feet_velocity, feet_accelerati
     total = 0.0  # NaN and inf survive a sum (an overflowing sum of finite entries takes the general checks)
     for x in qdot:
         total += x
-    for a in (feet_position, feet_velocity, feet_acceleration, torso_rotation, support, feet_rotation[0],
-              feet_rotation[1]):
+    for a in (
+        feet_position,
+        feet_velocity,
+        feet_acceleration,
+        torso_rotation,
+        support,
+        feet_rotation[0],
+        feet_rotation[1],
+    ):
         for row in a:
             for x in row:
                 total += x
@@ -359,14 +511,81 @@ def _valid(q, qdot, feet_position, feet_rotation, feet_velocity, feet_accelerati
     return np.isfinite(total)
 
 
-@njit(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(_V, _T, _M, _T, _M, _V, _M, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V,
-                                                  _V, _M, _V, _V, _M, _F, _F, _F, _F, _F, _F, _F, _F, _B, _B, _B, _B),
-      **_JIT)
-def _solve(qdot, rotation, position, jacobian, drift, com, centroidal, centroidal_drift, feet_position, feet_rotation,
-           feet_velocity, feet_acceleration, torso_rotation, torso_velocity, torso_acceleration, height, moment, plan,
-           support, offset, weights, inverse_weights, kp, kd, mass, com_stiffness, com_damping, self_motion_damping,
-           posture_stiffness, singular_threshold, stabilize, saturate, has_posture,
-           diagonal):  # pragma: no cover - compiled
+@njit(
+    types.Tuple((_CV, _CV, _CV, _F, _F, _B))(
+        _V,
+        _T,
+        _M,
+        _T,
+        _M,
+        _V,
+        _M,
+        _V,
+        _M,
+        _T,
+        _M,
+        _M,
+        _M,
+        _V,
+        _V,
+        _V,
+        _V,
+        _V,
+        _M,
+        _V,
+        _V,
+        _M,
+        _F,
+        _F,
+        _F,
+        _F,
+        _F,
+        _F,
+        _F,
+        _F,
+        _B,
+        _B,
+        _B,
+        _B,
+    ),
+    **_JIT,
+)
+def _solve(
+    qdot,
+    rotation,
+    position,
+    jacobian,
+    drift,
+    com,
+    centroidal,
+    centroidal_drift,
+    feet_position,
+    feet_rotation,
+    feet_velocity,
+    feet_acceleration,
+    torso_rotation,
+    torso_velocity,
+    torso_acceleration,
+    height,
+    moment,
+    plan,
+    support,
+    offset,
+    weights,
+    inverse_weights,
+    kp,
+    kd,
+    mass,
+    com_stiffness,
+    com_damping,
+    self_motion_damping,
+    posture_stiffness,
+    singular_threshold,
+    stabilize,
+    saturate,
+    has_posture,
+    diagonal,
+):  # pragma: no cover - compiled
     """``(qddot, com_acceleration, moment, residual, sigma_min, ok)`` of :meth:`BipedIkd.step` from the model's terms
     (rows: right sole, left sole, torso) and the checked reference.
 

@@ -74,10 +74,25 @@ class ErrorCompensation:
         gravity: ``g`` [m/s^2].
     """
 
-    def __init__(self, mass: float, com_height: float, period: float, *, gain: float = 3200.0, lead: float = 0.2,
-                 lag: float = 0.02, max_moment: float | None = None, gravity: float = GRAVITY) -> None:
-        for name, value, unit in (("mass", mass, "kg"), ("com_height", com_height, "m"), ("period", period, "s"),
-                                  ("lag", lag, "s"), ("gravity", gravity, "m/s^2")):
+    def __init__(
+        self,
+        mass: float,
+        com_height: float,
+        period: float,
+        *,
+        gain: float = 3200.0,
+        lead: float = 0.2,
+        lag: float = 0.02,
+        max_moment: float | None = None,
+        gravity: float = GRAVITY,
+    ) -> None:
+        for name, value, unit in (
+            ("mass", mass, "kg"),
+            ("com_height", com_height, "m"),
+            ("period", period, "s"),
+            ("lag", lag, "s"),
+            ("gravity", gravity, "m/s^2"),
+        ):
             if not _real(value) or not math.isfinite(value) or value <= 0.0:
                 raise ControllerError(f"{name} must be finite and > 0 [{unit}], got {value!r}")
         for name, value, unit in (("gain", gain, "N m/m"), ("lead", lead, "s")):
@@ -132,8 +147,9 @@ class ErrorCompensation:
         if self.max_moment is not None:
             control = np.clip(output, -self.max_moment, self.max_moment)
             saturated = bool(np.any(control != output))
-        result = ErrorCompensationOutput(d.copy(), self.offset_rate.copy(), np.array([control[1], -control[0]]),
-                                         saturated)
+        result = ErrorCompensationOutput(
+            d.copy(), self.offset_rate.copy(), np.array([control[1], -control[0]]), saturated
+        )
         # m z_c d'' = m g d + e - u_c, the input held: D = d + (e - u_c) / (m g) obeys D'' = omega^2 D
         shift = (error - control) / (self.mass * self.gravity)
         w, c, s = self.omega, self._cosh, self._sinh

@@ -24,8 +24,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..clik.acceleration_clik import DriftTask
-from ..exceptions import ControllerError
 from ..clik.redundancy_resolution import METHODS, WeightMatrix, check_configuration, check_finite, resolve
+from ..exceptions import ControllerError
 
 __all__ = ["WEIGHTINGS", "GeneralIkd", "GeneralIkdResult"]
 
@@ -117,14 +117,27 @@ class GeneralIkd:
         ControllerError: bad indices, shapes or gains (naming the argument).
     """
 
-    def __init__(self, model: RobotModel, task: DriftTask, *, known_forces: Sequence[int],
-                 force_map: ArrayLike | None = None, known_task: Sequence[int] | None = None,
-                 stiffness: ArrayLike | float = 0.0, damping: ArrayLike | float = 0.0,
-                 force_weights: ArrayLike | float = 1.0, task_weights: ArrayLike | float = 1.0,
-                 weighting: str = "acceleration",
-                 method: str = "pseudoinverse", singular_threshold: float = 1e-9, dls_threshold: float = 1e-3,
-                 dls_max_damping: float = 1e-6, self_motion_damping: ArrayLike | float | None = None,
-                 posture_stiffness: ArrayLike | float = 0.0, posture: ArrayLike | None = None) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        task: DriftTask,
+        *,
+        known_forces: Sequence[int],
+        force_map: ArrayLike | None = None,
+        known_task: Sequence[int] | None = None,
+        stiffness: ArrayLike | float = 0.0,
+        damping: ArrayLike | float = 0.0,
+        force_weights: ArrayLike | float = 1.0,
+        task_weights: ArrayLike | float = 1.0,
+        weighting: str = "acceleration",
+        method: str = "pseudoinverse",
+        singular_threshold: float = 1e-9,
+        dls_threshold: float = 1e-3,
+        dls_max_damping: float = 1e-6,
+        self_motion_damping: ArrayLike | float | None = None,
+        posture_stiffness: ArrayLike | float = 0.0,
+        posture: ArrayLike | None = None,
+    ) -> None:
         if method not in METHODS or method == "transpose":
             raise ControllerError(f"unknown method {method!r}; valid methods: pseudoinverse, dls")
         if not hasattr(task, "drift"):
@@ -135,8 +148,9 @@ class GeneralIkd:
         else:
             w_lambda = check_finite(force_map, "force_map")
             if w_lambda.ndim != 2 or w_lambda.shape[0] != nv:
-                raise ControllerError(f"force_map must be an nv x n_lambda matrix with nv = {nv}, got shape "
-                                      f"{w_lambda.shape}")
+                raise ControllerError(
+                    f"force_map must be an nv x n_lambda matrix with nv = {nv}, got shape {w_lambda.shape}"
+                )
         n_lambda = w_lambda.shape[1]
         self.known_forces = _indices("known_forces", known_forces, n_lambda)
         self.unknown_forces = np.setdiff1d(np.arange(n_lambda), self.known_forces)
@@ -181,8 +195,15 @@ class GeneralIkd:
         self.dls_threshold = float(dls_threshold)
         self.dls_max_damping = float(dls_max_damping)
 
-    def step(self, q: ArrayLike, qdot: ArrayLike, known_forces: ArrayLike, target: ArrayLike,
-             target_velocity: ArrayLike, target_acceleration: ArrayLike) -> GeneralIkdResult:
+    def step(
+        self,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        known_forces: ArrayLike,
+        target: ArrayLike,
+        target_velocity: ArrayLike,
+        target_acceleration: ArrayLike,
+    ) -> GeneralIkdResult:
         """Generalized accelerations and the unknown forces at ``(q, qdot)`` for the prescribed ``lambda_k``
         (``known_forces``) and the known task rows' reference ``(w_kd, wdot_kd, wddot_kd)``."""
         model = self.model
@@ -195,8 +216,11 @@ class GeneralIkd:
         if lam_k.shape != (self.known_forces.size,):
             raise ControllerError(f"known_forces must have shape ({self.known_forces.size},), got {lam_k.shape}")
         references = []
-        for name, value in (("target", target), ("target_velocity", target_velocity),
-                            ("target_acceleration", target_acceleration)):
+        for name, value in (
+            ("target", target),
+            ("target_velocity", target_velocity),
+            ("target_acceleration", target_acceleration),
+        ):
             value = check_finite(value, name)
             if value.shape != (n_known,):
                 raise ControllerError(f"{name} must have shape ({n_known},) (the known task rows), got {value.shape}")
@@ -234,16 +258,35 @@ class GeneralIkd:
                 hold = hold - self.posture_stiffness * model.difference(self.posture, q)
             preferred[:n_u] = (self.force_map.T @ hold)[self.unknown_forces]
             z = -weights.apply(preferred)
-        res = resolve(g, -f, z, weights, method=self.method, singular_threshold=self.singular_threshold,
-                      dls_threshold=self.dls_threshold, dls_max_damping=self.dls_max_damping)
+        res = resolve(
+            g,
+            -f,
+            z,
+            weights,
+            method=self.method,
+            singular_threshold=self.singular_threshold,
+            dls_threshold=self.dls_threshold,
+            dls_max_damping=self.dls_max_damping,
+        )
         forces = np.zeros(self.force_map.shape[1])
         forces[self.known_forces] = lam_k
         if not res.success:
-            return GeneralIkdResult(np.zeros(model.nv), forces, np.zeros(n_u), np.zeros(self.free_task.size),
-                                    wddot_k, float(np.linalg.norm(f)), res.sigma_min, res.damping, False, res.status)
+            return GeneralIkdResult(
+                np.zeros(model.nv),
+                forces,
+                np.zeros(n_u),
+                np.zeros(self.free_task.size),
+                wddot_k,
+                float(np.linalg.norm(f)),
+                res.sigma_min,
+                res.damping,
+                False,
+                res.status,
+            )
         lam_u, wddot_u = res.x[:n_u], res.x[n_u:]
         forces[self.unknown_forces] = lam_u
         qddot = minv_w @ forces - minv_h  # (5.92) solved for qddot
         residual = float(np.linalg.norm(g @ res.x + f))
-        return GeneralIkdResult(qddot, forces, lam_u, wddot_u, wddot_k, residual, res.sigma_min, res.damping, True,
-                                res.status)
+        return GeneralIkdResult(
+            qddot, forces, lam_u, wddot_u, wddot_k, residual, res.sigma_min, res.damping, True, res.status
+        )

@@ -99,16 +99,20 @@ class PlanStabilizer:
         falling = ramp_integral(t1 - rise, t1, up=False)
         return rising + flat + falling
 
-    def replan(self, t: float, com_deviation: ArrayLike, com_velocity_deviation: ArrayLike,
-               double_support: tuple[float, float]) -> NDArray[np.float64]:
+    def replan(
+        self, t: float, com_deviation: ArrayLike, com_velocity_deviation: ArrayLike, double_support: tuple[float, float]
+    ) -> NDArray[np.float64]:
         """Restart the plan at ``t`` [s] from the IKD's CoM deviation from the original plan (``com_deviation``
         [m], ``com_velocity_deviation`` [m/s], horizontal) and plan the ZMP modification over ``double_support``
         ``(t_0, t_1)`` [s] (``t < t_1``; a window already begun starts at ``t``). Returns the amplitude ``a`` [m]
         (x, y)."""
         deviation = np.asarray(com_deviation, dtype=np.float64)
         rate = np.asarray(com_velocity_deviation, dtype=np.float64)
-        if deviation.shape != (2,) or rate.shape != (2,) or not (np.all(np.isfinite(deviation))
-                                                                   and np.all(np.isfinite(rate))):
+        if (
+            deviation.shape != (2,)
+            or rate.shape != (2,)
+            or not (np.all(np.isfinite(deviation)) and np.all(np.isfinite(rate)))
+        ):
             raise ControllerError("com_deviation and com_velocity_deviation must be finite (x, y)")
         t0, t1 = (float(v) for v in double_support)
         if not (math.isfinite(t) and math.isfinite(t0) and t < t1 < math.inf and t0 < t1):
@@ -125,8 +129,9 @@ class PlanStabilizer:
         """The modification over ``[t, t + dt]`` and the restarted plan's deviation at ``t``; then moves the
         deviation to ``t + dt`` (exact LIPM solution with the ZMP shift held at the period's mid-point value)."""
         shift_x, shift_y, offset_x, offset_y, rate_x, rate_y = self._advance(t, dt)
-        return PlanStabilizerOutput(np.array([shift_x, shift_y]), np.array([offset_x, offset_y]),
-                                    np.array([rate_x, rate_y]))
+        return PlanStabilizerOutput(
+            np.array([shift_x, shift_y]), np.array([offset_x, offset_y]), np.array([rate_x, rate_y])
+        )
 
     def _advance(self, t: float, dt: float) -> tuple[float, float, float, float, float, float]:
         """:meth:`advance` as plain floats ``(zmp_shift, com_offset, com_offset_rate)`` (x, y each): the same

@@ -18,8 +18,16 @@ from numpy.typing import NDArray
 
 from ...geometry.ssv_kernels import BORROW as _GEOMETRY_BORROW
 
-__all__ = ["BORROW", "borrowed_float_field", "borrowed_int_field", "buffer_view", "compiled_entry_point", "float_field",
-           "int_field", "pack_fields"]
+__all__ = [
+    "BORROW",
+    "borrowed_float_field",
+    "borrowed_int_field",
+    "buffer_view",
+    "compiled_entry_point",
+    "float_field",
+    "int_field",
+    "pack_fields",
+]
 
 BORROW: dict[str, Any] = _GEOMETRY_BORROW
 """numba options of a fused kernel that only borrows arrays (never allocates, keeps or returns one to a caller
@@ -29,8 +37,12 @@ view taken, a few hundred per CLIK step: the AgriReach CLIK kernel took 9.1 us w
 (2-core machine shared with other processes)."""
 
 
-def pack_fields(floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, NDArray[np.int64]],
-                float_fields: Sequence[str], int_fields: Sequence[str]) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+def pack_fields(
+    floats: Mapping[str, NDArray[np.float64]],
+    ints: Mapping[str, NDArray[np.int64]],
+    float_fields: Sequence[str],
+    int_fields: Sequence[str],
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
     """The two buffers holding every field of ``float_fields`` and ``int_fields`` (flattened, in that order)."""
     header = 2 * (len(float_fields) + len(int_fields))
     fsizes = [np.asarray(floats[name]).size for name in float_fields]
@@ -38,24 +50,25 @@ def pack_fields(floats: Mapping[str, NDArray[np.float64]], ints: Mapping[str, ND
     f = np.zeros(max(sum(fsizes), 1))
     i = np.zeros(header + sum(isizes), dtype=np.int64)
     offset = 0
-    for k, (name, size) in enumerate(zip(float_fields, fsizes)):
+    for k, (name, size) in enumerate(zip(float_fields, fsizes, strict=False)):
         i[2 * k], i[2 * k + 1] = offset, size
-        f[offset:offset + size] = np.asarray(floats[name], dtype=np.float64).reshape(-1)
+        f[offset : offset + size] = np.asarray(floats[name], dtype=np.float64).reshape(-1)
         offset += size
     offset = header
-    for k, (name, size) in enumerate(zip(int_fields, isizes), start=len(float_fields)):
+    for k, (name, size) in enumerate(zip(int_fields, isizes, strict=False), start=len(float_fields)):
         i[2 * k], i[2 * k + 1] = offset, size
-        i[offset:offset + size] = np.asarray(ints[name], dtype=np.int64).reshape(-1)
+        i[offset : offset + size] = np.asarray(ints[name], dtype=np.int64).reshape(-1)
         offset += size
     return f, i
 
 
-def buffer_view(f: NDArray[np.float64], i: NDArray[np.int64], float_fields: Sequence[str],
-                name: str) -> NDArray[np.float64]:
+def buffer_view(
+    f: NDArray[np.float64], i: NDArray[np.int64], float_fields: Sequence[str], name: str
+) -> NDArray[np.float64]:
     """The view of float field ``name`` of a packed buffer (writes reach the kernel)."""
     k = float_fields.index(name)
     offset, size = int(i[2 * k]), int(i[2 * k + 1])
-    return f[offset:offset + size]
+    return f[offset : offset + size]
 
 
 def compiled_entry_point(kernel: Any, signature: str) -> Callable[..., Any]:
@@ -70,14 +83,14 @@ def compiled_entry_point(kernel: Any, signature: str) -> Callable[..., Any]:
 def float_field(f, i, k):  # pragma: no cover - compiled
     """View of float field ``k`` (its index in the float field list)."""
     o = i[2 * k]
-    return f[o:o + i[2 * k + 1]]
+    return f[o : o + i[2 * k + 1]]
 
 
 @njit(cache=True)
 def int_field(i, k):  # pragma: no cover - compiled
     """View of int field ``k`` (the number of float fields plus its index in the int field list)."""
     o = i[2 * k]
-    return i[o:o + i[2 * k + 1]]
+    return i[o : o + i[2 * k + 1]]
 
 
 # inlined into the caller's IR: a function compiled without reference counting cannot return a view
@@ -86,11 +99,11 @@ def borrowed_float_field(f, i, k):  # pragma: no cover - compiled
     """:func:`float_field` for kernels compiled with :data:`BORROW` (the view is not reference counted, so it
     must not outlive the call, nor be returned to a kernel that counts references)."""
     o = i[2 * k]
-    return f[o:o + i[2 * k + 1]]
+    return f[o : o + i[2 * k + 1]]
 
 
 @njit(inline="always", **BORROW)
 def borrowed_int_field(i, k):  # pragma: no cover - compiled
     """:func:`int_field` for kernels compiled with :data:`BORROW`."""
     o = i[2 * k]
-    return i[o:o + i[2 * k + 1]]
+    return i[o : o + i[2 * k + 1]]

@@ -28,5 +28,5 @@ class ActuatedObjective:
 
     def evaluate(self, model: RobotModel | None, q: NDArray[np.float64]) -> ObjectiveValue:
         """Value and gradient (length nv) at the full configuration ``q``."""
-        value, gradient = self.objective.evaluate(model, np.asarray(q, dtype=np.float64)[self._nq:])
+        value, gradient = self.objective.evaluate(model, np.asarray(q, dtype=np.float64)[self._nq :])
         return ObjectiveValue(value, np.concatenate([np.zeros(self._nv), gradient]))

@@ -17,8 +17,8 @@ from ...geometry.potentials import piecewise_potential_kernel
 from ...geometry.ssv_kernels import volume_pair_distance
 from ...model import RobotModel
 from ...model.chain_kernels import chain_jacobian_transpose_times, place_frame
-from .collision_objective import CollisionObjective
 from ..kernels.buffers import BORROW
+from .collision_objective import CollisionObjective
 
 __all__ = ["CollisionFields", "bounding_spheres", "collision_fields", "collision_potential", "close_pair_rows"]
 
@@ -50,9 +50,32 @@ def _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, 
 
 
 @njit(**_JIT)
-def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b, seg_rot, seg_pos,
-                        seg_center, seg_radius, seg_world, local, vertices, radii, params, parent, joint_type,
-                        v_index, rotation, position, world_axis, gradient, scratch):
+def collision_potential(
+    seg_joint,
+    seg_starts,
+    kinds,
+    seg_pairs,
+    pair_starts,
+    vol_a,
+    vol_b,
+    seg_rot,
+    seg_pos,
+    seg_center,
+    seg_radius,
+    seg_world,
+    local,
+    vertices,
+    radii,
+    params,
+    parent,
+    joint_type,
+    v_index,
+    rotation,
+    position,
+    world_axis,
+    gradient,
+    scratch,
+):
     """Place the robot volumes, then ``H_c`` (5.49) and its gradient (5.61) over the pairs within ``d_a``:
     ``(value, smallest distance computed)``; the gradient is added to ``gradient`` (nv).
 
@@ -74,20 +97,23 @@ def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vo
             continue
         place_frame(rotation, position, jnt, seg_rot[s], seg_pos[s], rot, pos)
         for r in range(3):
-            seg_world[s, r] = pos[r] + rot[r, 0] * seg_center[s, 0] + rot[r, 1] * seg_center[s, 1] \
-                + rot[r, 2] * seg_center[s, 2]
+            seg_world[s, r] = (
+                pos[r] + rot[r, 0] * seg_center[s, 0] + rot[r, 1] * seg_center[s, 1] + rot[r, 2] * seg_center[s, 2]
+            )
         for v in range(seg_starts[s], seg_starts[s + 1]):
             for k in range(3):
                 for r in range(3):
-                    vertices[v, k, r] = pos[r] + rot[r, 0] * local[v, k, 0] + rot[r, 1] * local[v, k, 1] \
-                        + rot[r, 2] * local[v, k, 2]
+                    vertices[v, k, r] = (
+                        pos[r] + rot[r, 0] * local[v, k, 0] + rot[r, 1] * local[v, k, 1] + rot[r, 2] * local[v, k, 2]
+                    )
     value = 0.0
     smallest = np.inf
     for p in range(npairs):
         a = seg_pairs[p, 0]
         b = seg_pairs[p, 1]
-        best, best_pa, best_pb, best_n = _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world,
-                                                          vertices, radii, kinds, da)
+        best, best_pa, best_pb, best_n = _closest_volumes(
+            p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds, da
+        )
         if best == np.inf:
             continue
         smallest = min(smallest, best)
@@ -97,21 +123,66 @@ def collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vo
         value += weight * h
         # dd/dq = n^T (J_b(p_b) - J_a(p_a)) (5.61)
         if seg_joint[b] >= 0:
-            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[b],
-                                           best_pb[0], best_pb[1], best_pb[2], best_n[0], best_n[1], best_n[2],
-                                           weight * dh, gradient)
+            chain_jacobian_transpose_times(
+                parent,
+                joint_type,
+                v_index,
+                rotation,
+                position,
+                world_axis,
+                seg_joint[b],
+                best_pb[0],
+                best_pb[1],
+                best_pb[2],
+                best_n[0],
+                best_n[1],
+                best_n[2],
+                weight * dh,
+                gradient,
+            )
         if seg_joint[a] >= 0:
-            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[a],
-                                           best_pa[0], best_pa[1], best_pa[2], best_n[0], best_n[1], best_n[2],
-                                           -weight * dh, gradient)
+            chain_jacobian_transpose_times(
+                parent,
+                joint_type,
+                v_index,
+                rotation,
+                position,
+                world_axis,
+                seg_joint[a],
+                best_pa[0],
+                best_pa[1],
+                best_pa[2],
+                best_n[0],
+                best_n[1],
+                best_n[2],
+                -weight * dh,
+                gradient,
+            )
     return value, smallest
 
 
-
-
 @njit(**_JIT)
-def close_pair_rows(seg_joint, seg_pairs, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds,
-                    parent, joint_type, v_index, rotation, position, world_axis, limit, distances, rows):
+def close_pair_rows(
+    seg_joint,
+    seg_pairs,
+    pair_starts,
+    vol_a,
+    vol_b,
+    seg_radius,
+    seg_world,
+    vertices,
+    radii,
+    kinds,
+    parent,
+    joint_type,
+    v_index,
+    rotation,
+    position,
+    world_axis,
+    limit,
+    distances,
+    rows,
+):
     """Distances and ``dd/dq = n^T (J_b(p_b) - J_a(p_a))`` rows (5.61) of the pairs nearer than ``limit``, at the
     placement that :func:`collision_potential` last left in ``vertices`` and ``seg_world`` (and the kinematics in
     ``rotation``, ``position``, ``world_axis``); returns how many. At most ``rows.shape[0]`` pairs are kept: the
@@ -121,8 +192,9 @@ def close_pair_rows(seg_joint, seg_pairs, pair_starts, vol_a, vol_b, seg_radius,
     for p in range(seg_pairs.shape[0]):
         a = seg_pairs[p, 0]
         b = seg_pairs[p, 1]
-        best, best_pa, best_pb, best_n = _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world,
-                                                          vertices, radii, kinds, limit)
+        best, best_pa, best_pb, best_n = _closest_volumes(
+            p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds, limit
+        )
         if not best < limit:
             continue
         slot = count
@@ -138,13 +210,41 @@ def close_pair_rows(seg_joint, seg_pairs, pair_starts, vol_a, vol_b, seg_radius,
         distances[slot] = best
         rows[slot, :] = 0.0
         if seg_joint[b] >= 0:
-            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[b],
-                                           best_pb[0], best_pb[1], best_pb[2], best_n[0], best_n[1], best_n[2],
-                                           1.0, rows[slot])
+            chain_jacobian_transpose_times(
+                parent,
+                joint_type,
+                v_index,
+                rotation,
+                position,
+                world_axis,
+                seg_joint[b],
+                best_pb[0],
+                best_pb[1],
+                best_pb[2],
+                best_n[0],
+                best_n[1],
+                best_n[2],
+                1.0,
+                rows[slot],
+            )
         if seg_joint[a] >= 0:
-            chain_jacobian_transpose_times(parent, joint_type, v_index, rotation, position, world_axis, seg_joint[a],
-                                           best_pa[0], best_pa[1], best_pa[2], best_n[0], best_n[1], best_n[2],
-                                           -1.0, rows[slot])
+            chain_jacobian_transpose_times(
+                parent,
+                joint_type,
+                v_index,
+                rotation,
+                position,
+                world_axis,
+                seg_joint[a],
+                best_pa[0],
+                best_pa[1],
+                best_pa[2],
+                best_n[0],
+                best_n[1],
+                best_n[2],
+                -1.0,
+                rows[slot],
+            )
     return count
 
 
@@ -170,13 +270,14 @@ class CollisionFields(NamedTuple):
     robot_segments: int
 
 
-def bounding_spheres(local: NDArray[np.float64], kinds: NDArray[np.int64], radii: NDArray[np.float64],
-                     starts: NDArray[np.int64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def bounding_spheres(
+    local: NDArray[np.float64], kinds: NDArray[np.int64], radii: NDArray[np.float64], starts: NDArray[np.int64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per segment a sphere (centre in the segment's coordinates, radius) holding all its volumes."""
     n = starts.size - 1
     centers, bounds = np.zeros((n, 3)), np.zeros(n)
     for s in range(n):
-        points = np.concatenate([local[v, :kinds[v] + 1] for v in range(starts[s], starts[s + 1])])
+        points = np.concatenate([local[v, : kinds[v] + 1] for v in range(starts[s], starts[s + 1])])
         reach = np.concatenate([np.full(kinds[v] + 1, radii[v]) for v in range(starts[s], starts[s + 1])])
         centers[s] = points.mean(axis=0)
         # a small relative margin so that rounding never culls a pair that is within reach
@@ -208,16 +309,29 @@ def collision_fields(collision: CollisionObjective, model: RobotModel) -> Collis
     floats = {
         "segment_rotation": np.array(rotations).reshape(ns, 3, 3),
         "segment_translation": np.array(translations).reshape(ns, 3),
-        "segment_center": np.zeros((ns, 3)), "segment_radius": np.zeros(ns),
-        "segment_world_center": np.zeros((ns, 3)), "local": layout.local, "vertices": layout.local.copy(),
+        "segment_center": np.zeros((ns, 3)),
+        "segment_radius": np.zeros(ns),
+        "segment_world_center": np.zeros((ns, 3)),
+        "local": layout.local,
+        "vertices": layout.local.copy(),
         "radii": layout.radii,
-        "collision_parameters": np.array([potential.activation_distance, potential.slope, potential.switch_ratio,
-                                          collision.weight]),
+        "collision_parameters": np.array(
+            [potential.activation_distance, potential.slope, potential.switch_ratio, collision.weight]
+        ),
     }
-    ints = {"segment_joint": np.array(joints, dtype=np.int64), "segment_starts": layout.segment_starts,
-            "kinds": layout.kinds, "segment_pairs": layout.segment_pairs, "pair_starts": layout.pair_starts,
-            "volume_a": layout.volume_a, "volume_b": layout.volume_b}
-    counts = {"segments": ns, "volumes": len(layout.kinds), "pairs": len(layout.segment_pairs),
-              "volume_pairs": len(layout.volume_a)}
-    return CollisionFields(floats, ints, counts, tuple(world_fixed), layout,
-                           sum(f is not None for f in layout.frames))
+    ints = {
+        "segment_joint": np.array(joints, dtype=np.int64),
+        "segment_starts": layout.segment_starts,
+        "kinds": layout.kinds,
+        "segment_pairs": layout.segment_pairs,
+        "pair_starts": layout.pair_starts,
+        "volume_a": layout.volume_a,
+        "volume_b": layout.volume_b,
+    }
+    counts = {
+        "segments": ns,
+        "volumes": len(layout.kinds),
+        "pairs": len(layout.segment_pairs),
+        "volume_pairs": len(layout.volume_a),
+    }
+    return CollisionFields(floats, ints, counts, tuple(world_fixed), layout, sum(f is not None for f in layout.frames))

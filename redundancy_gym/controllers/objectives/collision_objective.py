@@ -29,8 +29,15 @@ class CollisionObjective:
         weight: scale of the objective, >= 0.
     """
 
-    def __init__(self, collision_model: CollisionModel, *, activation_distance: float = 0.1, slope: float = 1.0,
-                 switch_ratio: float = 0.5, weight: float = 1.0) -> None:
+    def __init__(
+        self,
+        collision_model: CollisionModel,
+        *,
+        activation_distance: float = 0.1,
+        slope: float = 1.0,
+        switch_ratio: float = 0.5,
+        weight: float = 1.0,
+    ) -> None:
         if not isinstance(collision_model, CollisionModel):
             raise ControllerError(f"collision_model must be a CollisionModel, got {type(collision_model).__name__}")
         if not np.isfinite(weight) or weight < 0.0:

@@ -29,12 +29,22 @@ class JointLimitObjective:
         weight: scale of the whole objective, >= 0.
     """
 
-    def __init__(self, lower: ArrayLike, upper: ArrayLike, *, activation_distance: float = 0.35,
-                 slope: float = 1.0, switch_ratio: float = 0.5, weight: float = 1.0) -> None:
+    def __init__(
+        self,
+        lower: ArrayLike,
+        upper: ArrayLike,
+        *,
+        activation_distance: float = 0.35,
+        slope: float = 1.0,
+        switch_ratio: float = 0.5,
+        weight: float = 1.0,
+    ) -> None:
         self.lower = np.asarray(lower, dtype=np.float64).copy()
         self.upper = np.asarray(upper, dtype=np.float64).copy()
         if self.lower.shape != self.upper.shape or self.lower.ndim != 1:
-            raise ControllerError(f"lower and upper must be 1-D of equal length, got {self.lower.shape}, {self.upper.shape}")
+            raise ControllerError(
+                f"lower and upper must be 1-D of equal length, got {self.lower.shape}, {self.upper.shape}"
+            )
         if np.any(self.lower >= self.upper):
             raise ControllerError("every lower limit must be below its upper limit")
         if not np.isfinite(weight) or weight < 0.0:

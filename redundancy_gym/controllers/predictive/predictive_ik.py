@@ -23,15 +23,25 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ...validation import check_real
+from ..clik.redundancy_resolution import as_float_array
+from ..exceptions import ControllerError
 from ..objectives.collision_kernels import bounding_spheres, collision_fields
 from ..objectives.collision_objective import CollisionObjective
-from ..exceptions import ControllerError
+from ..objectives.joint_limit_objective import JointLimitObjective
 from ..tasks.frame_axis_task import FrameAxisTask
 from ..tasks.frame_position_task import FramePositionTask
-from ..objectives.joint_limit_objective import JointLimitObjective
-from .predictive_kernels import (METHODS, OVERFLOW, SINGULAR, SLOTS, STATUS, pik_command, pik_gradient,
-                                 pik_optimize, pik_rollout, slot_size)
-from ..clik.redundancy_resolution import as_float_array
+from .predictive_kernels import (
+    METHODS,
+    OVERFLOW,
+    SINGULAR,
+    SLOTS,
+    STATUS,
+    pik_command,
+    pik_gradient,
+    pik_optimize,
+    pik_rollout,
+    slot_size,
+)
 
 __all__ = ["DESCENT_METHODS", "PredictiveIk", "PredictiveResult", "PredictiveRollout"]
 
@@ -71,8 +81,10 @@ class PredictiveRollout(NamedTuple):
         q = np.asarray(q, dtype=np.float64)
         steps = self.u.shape[0]
         if k < 0 or q.shape != self.q.shape[1:] or not 0.0 <= fraction < 1.0:
-            raise ControllerError(f"k must be >= 0, fraction in [0, 1) and q of shape {self.q.shape[1:]}, got {k!r}, "
-                                  f"{fraction!r} and {q.shape}")
+            raise ControllerError(
+                f"k must be >= 0, fraction in [0, 1) and q of shape {self.q.shape[1:]}, got {k!r}, "
+                f"{fraction!r} and {q.shape}"
+            )
         if k >= steps:
             return gain * (self.q[-1] - q)
         planned = self.q[k] + fraction * (self.q[k + 1] - self.q[k])
@@ -120,18 +132,32 @@ class PredictiveIk:
         damping: ``rho`` in ``J# = J^T (J J^T + rho I)^-1`` (keeps the prediction finite near singularities).
     """
 
-    def __init__(self, model: RobotModel, task: FramePositionTask | FrameAxisTask, *, velocity_weight: float = 1.0,
-                 joint_limits: JointLimitObjective | None = None, collision: CollisionObjective | None = None,
-                 augmented: bool = False, input_weight: float = 0.0, damping: float = 1e-6) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        task: FramePositionTask | FrameAxisTask,
+        *,
+        velocity_weight: float = 1.0,
+        joint_limits: JointLimitObjective | None = None,
+        collision: CollisionObjective | None = None,
+        augmented: bool = False,
+        input_weight: float = 0.0,
+        damping: float = 1e-6,
+    ) -> None:
         if model.floating_base:
             raise ControllerError("PredictiveIk needs a fixed-base model")
         velocity_weight, input_weight, damping = (
             check_real(name, value, low=0.0, error=ControllerError)
-            for name, value in (("velocity_weight", velocity_weight), ("input_weight", input_weight),
-                                ("damping", damping)))
+            for name, value in (
+                ("velocity_weight", velocity_weight),
+                ("input_weight", input_weight),
+                ("damping", damping),
+            )
+        )
         if not isinstance(task, (FramePositionTask, FrameAxisTask)):
-            raise ControllerError(f"PredictiveIk supports FramePositionTask and FrameAxisTask, got "
-                                  f"{type(task).__name__}")
+            raise ControllerError(
+                f"PredictiveIk supports FramePositionTask and FrameAxisTask, got {type(task).__name__}"
+            )
         chain = model.serial_chain()
         self.model, self.task = model, task
         self.n = model.nv
@@ -153,8 +179,16 @@ class PredictiveIk:
             raise ControllerError(f"the joint-limit objective has {joint_limits.lower.size} joints, the model {self.n}")
         lower = joint_limits.lower if joint_limits else np.zeros(self.n)
         upper = joint_limits.upper if joint_limits else np.ones(self.n)
-        potential = (joint_limits.potential.activation_distance, joint_limits.potential.slope,
-                     joint_limits.potential.switch_ratio, joint_limits.weight) if joint_limits else (1.0, 1.0, 0.5, 0.0)
+        potential = (
+            (
+                joint_limits.potential.activation_distance,
+                joint_limits.potential.slope,
+                joint_limits.potential.switch_ratio,
+                joint_limits.weight,
+            )
+            if joint_limits
+            else (1.0, 1.0, 0.5, 0.0)
+        )
         self._objective_f = np.concatenate([[self.damping, self.velocity_weight], lower, upper, potential])
         self._collision_setup()
 
@@ -162,21 +196,50 @@ class PredictiveIk:
     def _collision_setup(self) -> None:
         if self.collision is None:
             empty_i, empty_f = np.zeros(0, dtype=np.int64), np.zeros(0)
-            self._coll_i = (empty_i, np.zeros(1, dtype=np.int64), empty_i, np.zeros((0, 2), dtype=np.int64),
-                            np.zeros(1, dtype=np.int64), empty_i, empty_i)
-            self._coll_f = (np.zeros((0, 3, 3)), np.zeros((0, 3)), np.zeros((0, 3)), empty_f, np.zeros((0, 3)),
-                            np.zeros((0, 3, 3)), np.zeros((0, 3, 3)), empty_f)
+            self._coll_i = (
+                empty_i,
+                np.zeros(1, dtype=np.int64),
+                empty_i,
+                np.zeros((0, 2), dtype=np.int64),
+                np.zeros(1, dtype=np.int64),
+                empty_i,
+                empty_i,
+            )
+            self._coll_f = (
+                np.zeros((0, 3, 3)),
+                np.zeros((0, 3)),
+                np.zeros((0, 3)),
+                empty_f,
+                np.zeros((0, 3)),
+                np.zeros((0, 3, 3)),
+                np.zeros((0, 3, 3)),
+                empty_f,
+            )
             self._coll_p = np.zeros(4)
             return
         fields = collision_fields(self.collision, self.model)
         f, i = fields.floats, fields.ints
         ns, nvol = fields.counts["segments"], fields.counts["volumes"]
         self._fields = fields
-        self._coll_i = (i["segment_joint"], i["segment_starts"], i["kinds"],
-                        i["segment_pairs"].reshape(-1, 2), i["pair_starts"], i["volume_a"], i["volume_b"])
-        self._coll_f = (f["segment_rotation"].reshape(ns, 3, 3), f["segment_translation"].reshape(ns, 3),
-                        f["segment_center"].reshape(ns, 3), f["segment_radius"], f["segment_world_center"].reshape(ns, 3),
-                        f["local"].reshape(nvol, 3, 3), f["vertices"].reshape(nvol, 3, 3), f["radii"].copy())
+        self._coll_i = (
+            i["segment_joint"],
+            i["segment_starts"],
+            i["kinds"],
+            i["segment_pairs"].reshape(-1, 2),
+            i["pair_starts"],
+            i["volume_a"],
+            i["volume_b"],
+        )
+        self._coll_f = (
+            f["segment_rotation"].reshape(ns, 3, 3),
+            f["segment_translation"].reshape(ns, 3),
+            f["segment_center"].reshape(ns, 3),
+            f["segment_radius"],
+            f["segment_world_center"].reshape(ns, 3),
+            f["local"].reshape(nvol, 3, 3),
+            f["vertices"].reshape(nvol, 3, 3),
+            f["radii"].copy(),
+        )
         self._coll_p = f["collision_parameters"]
         self._version = -1
         self._refresh_environment()
@@ -199,7 +262,7 @@ class PredictiveIk:
         centers, bounds = bounding_spheres(placed, layout.kinds, radii, layout.segment_starts)
         center[:] = centers
         radius[:] = bounds
-        world[fields.robot_segments:] = centers[fields.robot_segments:]
+        world[fields.robot_segments :] = centers[fields.robot_segments :]
         for s, rotation, translation in fields.world_fixed:
             sl = slice(layout.segment_starts[s], layout.segment_starts[s + 1])
             vertices[sl] = layout.local[sl] @ rotation.T + translation
@@ -226,26 +289,34 @@ class PredictiveIk:
             raise ControllerError(f"u_b must be finite with shape ({self.n},), got {np.array2string(start)}")
         return np.ascontiguousarray(start)
 
-    def _check(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float
-               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def _check(
+        self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         q0 = np.ascontiguousarray(as_float_array(q0, "q0"))
         params = np.ascontiguousarray(as_float_array(params, "the inputs"))
         wdot = np.ascontiguousarray(as_float_array(wdot, "wdot"))
         if q0.shape != (self.n,) or params.ndim != 2 or params.shape[1] != self.n or params.shape[0] < 1:
-            raise ControllerError(f"q0 must have shape ({self.n},) and the inputs (N, {self.n}), got {q0.shape} and "
-                                  f"{params.shape}")
+            raise ControllerError(
+                f"q0 must have shape ({self.n},) and the inputs (N, {self.n}), got {q0.shape} and {params.shape}"
+            )
         if wdot.shape != (params.shape[0], 6):
-            raise ControllerError(f"wdot must have shape ({params.shape[0]}, 6) (task velocity rows first), got "
-                                  f"{wdot.shape}")
+            raise ControllerError(
+                f"wdot must have shape ({params.shape[0]}, 6) (task velocity rows first), got {wdot.shape}"
+            )
         if not (np.all(np.isfinite(q0)) and np.all(np.isfinite(params)) and np.all(np.isfinite(wdot))):
             raise ControllerError("q0, the inputs and wdot must be finite")
-        if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.integer, np.floating)) \
-                or not np.isfinite(dt) or dt <= 0.0:
+        if (
+            isinstance(dt, (bool, np.bool_))
+            or not isinstance(dt, (int, float, np.integer, np.floating))
+            or not np.isfinite(dt)
+            or dt <= 0.0
+        ):
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         return q0, params, wdot
 
-    def rollout(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float,
-                u_b: ArrayLike | None = None) -> PredictiveRollout:
+    def rollout(
+        self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float, u_b: ArrayLike | None = None
+    ) -> PredictiveRollout:
         """Forward integration (5.112) and the cost (5.130) for the decision variables ``params`` (N, n).
 
         ``wdot`` (N, 6) is the task velocity at each sample: the task's rows for a :class:`FramePositionTask`
@@ -253,34 +324,64 @@ class PredictiveIk:
         """
         roll = self._rollout(*self._check(q0, params, wdot, dt), dt, u_b)
         if not (np.isfinite(roll.cost) and np.all(np.isfinite(roll.q)) and np.all(np.isfinite(roll.qdot))):
-            raise ControllerError(f"the rollout overflowed (cost {roll.cost!r}): the inputs, u_b or wdot are too "
-                                  "large")
+            raise ControllerError(f"the rollout overflowed (cost {roll.cost!r}): the inputs, u_b or wdot are too large")
         return roll
 
-    def _rollout(self, q0: NDArray[np.float64], params: NDArray[np.float64], wdot: NDArray[np.float64], dt: float,
-                 u_b: ArrayLike | None) -> PredictiveRollout:
+    def _rollout(
+        self,
+        q0: NDArray[np.float64],
+        params: NDArray[np.float64],
+        wdot: NDArray[np.float64],
+        dt: float,
+        u_b: ArrayLike | None,
+    ) -> PredictiveRollout:
         """:meth:`rollout` of checked arrays; an overflowing rollout comes back with its infinite cost (the line
         search of :meth:`optimize` rejects it like any step that does not decrease the cost)."""
         self._refresh_environment()
         u = np.ascontiguousarray(self.inputs(params, dt, u_b))
         steps = params.shape[0]
         q, qdot, terms = np.empty((steps + 1, self.n)), np.empty((steps, self.n)), np.zeros(3)
-        ok = pik_rollout(self._chain_f, self._chain_i, self._task_i, self._task_f, self._objective_f, self._coll_i,
-                         self._coll_f, self._coll_p, self.collision is not None, q0, u, wdot, float(dt), q, qdot,
-                         terms)
+        ok = pik_rollout(
+            self._chain_f,
+            self._chain_i,
+            self._task_i,
+            self._task_f,
+            self._objective_f,
+            self._coll_i,
+            self._coll_f,
+            self._coll_p,
+            self.collision is not None,
+            q0,
+            u,
+            wdot,
+            float(dt),
+            q,
+            qdot,
+            terms,
+        )
         if not ok:
             raise ControllerError("J J^T + rho I is singular along the rollout; raise damping")
         rate = dt * self.input_weight * float(np.sum(params * params)) if self.augmented else 0.0
-        parts = {"velocity": float(terms[0]), "joint_limits": float(terms[1]), "collision": float(terms[2]),
-                 "input_rate": rate}
+        parts = {
+            "velocity": float(terms[0]),
+            "joint_limits": float(terms[1]),
+            "collision": float(terms[2]),
+            "input_rate": rate,
+        }
         cost = float(terms.sum()) + rate
         if not np.isfinite(cost) or not (np.all(np.isfinite(q)) and np.all(np.isfinite(qdot))):
             cost = np.inf
         return PredictiveRollout(q, qdot, u, cost, parts)
 
-    def gradient(self, q0: ArrayLike, params: ArrayLike, wdot: ArrayLike, dt: float,
-                 u_b: ArrayLike | None = None, rollout: PredictiveRollout | None = None
-                 ) -> tuple[PredictiveRollout, NDArray[np.float64]]:
+    def gradient(
+        self,
+        q0: ArrayLike,
+        params: ArrayLike,
+        wdot: ArrayLike,
+        dt: float,
+        u_b: ArrayLike | None = None,
+        rollout: PredictiveRollout | None = None,
+    ) -> tuple[PredictiveRollout, NDArray[np.float64]]:
         """The rollout and the exact gradient ``dPhi/dparams`` (N, n) by the adjoint (5.113), (5.119), (A.53)-(A.63).
 
         ``rollout`` may be the :meth:`rollout` of the same arguments, done already (it is not done again).
@@ -289,9 +390,23 @@ class PredictiveIk:
         params = np.ascontiguousarray(params, dtype=np.float64)
         wdot = np.ascontiguousarray(wdot, dtype=np.float64)
         grad_u, lam0 = np.empty_like(roll.u), np.empty(self.n)
-        ok = pik_gradient(self._chain_f, self._chain_i, self._task_i, self._task_f, self._objective_f, self._coll_i,
-                          self._coll_f, self._coll_p, self.collision is not None, roll.q, roll.u, wdot, float(dt),
-                          grad_u, lam0)
+        ok = pik_gradient(
+            self._chain_f,
+            self._chain_i,
+            self._task_i,
+            self._task_f,
+            self._objective_f,
+            self._coll_i,
+            self._coll_f,
+            self._coll_p,
+            self.collision is not None,
+            roll.q,
+            roll.u,
+            wdot,
+            float(dt),
+            grad_u,
+            lam0,
+        )
         if not ok:
             raise ControllerError("J J^T + rho I is singular along the rollout; raise damping")
         if not self.augmented:
@@ -301,8 +416,9 @@ class PredictiveIk:
         tail[:-1] = np.cumsum(grad_u[:0:-1], axis=0)[::-1]
         return roll, dt * tail + 2.0 * dt * self.input_weight * params
 
-    def command(self, q: ArrayLike, u: ArrayLike, target: ArrayLike, target_velocity: ArrayLike,
-                gain: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def command(
+        self, q: ArrayLike, u: ArrayLike, target: ArrayLike, target_velocity: ArrayLike, gain: float
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(qdot, e)``: the CLIK command ``J# (wdot + K e) + N u`` at ``q`` with the nullspace input ``u``
         (5.5), (5.100), and the task error ``e``.
 
@@ -314,13 +430,21 @@ class PredictiveIk:
         width = self.m if isinstance(self.task, FramePositionTask) else 6
         target = as_float_array(target, "target")
         velocity = as_float_array(target_velocity, "target_velocity")
-        if isinstance(gain, (bool, np.bool_)) or not isinstance(gain, (int, float, np.integer, np.floating)) \
-                or not np.isfinite(gain) or gain < 0.0:
+        if (
+            isinstance(gain, (bool, np.bool_))
+            or not isinstance(gain, (int, float, np.integer, np.floating))
+            or not np.isfinite(gain)
+            or gain < 0.0
+        ):
             raise ControllerError(f"gain must be finite and >= 0, got {gain!r}")
         if q.shape != (self.n,) or u.shape != (self.n,) or target.shape != (width,) or velocity.shape != (width,):
             raise ControllerError(f"q and u must have shape ({self.n},), the target and its velocity ({width},)")
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(u)) and np.all(np.isfinite(target))
-                and np.all(np.isfinite(velocity))):
+        if not (
+            np.all(np.isfinite(q))
+            and np.all(np.isfinite(u))
+            and np.all(np.isfinite(target))
+            and np.all(np.isfinite(velocity))
+        ):
             raise ControllerError("q, u, the target and its velocity must be finite")
         if width == 6 and not np.linalg.norm(target[3:]) > 1e-9:
             raise ControllerError("the target axis must not be zero")
@@ -329,15 +453,38 @@ class PredictiveIk:
         padded = np.zeros(6)
         padded[:width] = target
         qdot, error = np.empty(self.n), np.empty(self.m)
-        if not pik_command(self._chain_f, self._chain_i, self._task_i, self._task_f, self.damping, q, u, wdot, padded,
-                           float(gain), qdot, error):
+        if not pik_command(
+            self._chain_f,
+            self._chain_i,
+            self._task_i,
+            self._task_f,
+            self.damping,
+            q,
+            u,
+            wdot,
+            padded,
+            float(gain),
+            qdot,
+            error,
+        ):
             raise ControllerError("J J^T + rho I is singular; raise damping")
         return qdot, error
 
     # ------------------------------------------------------------------ algorithm 11
-    def optimize(self, q0: ArrayLike, wdot: ArrayLike, dt: float, initial: ArrayLike, *, u_b: ArrayLike | None = None,
-                 max_iterations: int = 20, tolerance: float = 1e-4, method: str = "fletcher_reeves",
-                 step: float = 1.0, compiled: bool = False) -> PredictiveResult:
+    def optimize(
+        self,
+        q0: ArrayLike,
+        wdot: ArrayLike,
+        dt: float,
+        initial: ArrayLike,
+        *,
+        u_b: ArrayLike | None = None,
+        max_iterations: int = 20,
+        tolerance: float = 1e-4,
+        method: str = "fletcher_reeves",
+        step: float = 1.0,
+        compiled: bool = False,
+    ) -> PredictiveResult:
         """Algorithm 11 from the initial decision variables ``initial`` (N, n).
 
         Args:
@@ -366,8 +513,9 @@ class PredictiveIk:
         if not np.isfinite(step) or step <= 0.0 or not np.isfinite(tolerance) or tolerance < 0.0:
             raise ControllerError(f"step must be > 0 and tolerance >= 0, got {step!r}, {tolerance!r}")
         if compiled:
-            return self._optimize_compiled(q0, wdot, dt, initial, u_b, int(max_iterations), float(tolerance), method,
-                                           float(step))
+            return self._optimize_compiled(
+                q0, wdot, dt, initial, u_b, int(max_iterations), float(tolerance), method, float(step)
+            )
         roll, grad = self.gradient(q0, initial, wdot, dt, u_b)
         q0, params, wdot = self._check(q0, initial, wdot, dt)
         params = params.copy()
@@ -378,7 +526,7 @@ class PredictiveIk:
         alpha = float(step)
         status = "max_iterations"
         rollouts = 1
-        for j in range(max_iterations):
+        for _j in range(max_iterations):
             slope = float(np.sum(grad * direction))
             if not slope < 0.0:  # not a descent direction (round-off): restart along the gradient
                 direction = -hamiltonian
@@ -427,9 +575,18 @@ class PredictiveIk:
             previous_norm = norm
         return PredictiveResult(params, roll, tuple(costs), len(costs) - 1, status, True, alpha, rollouts)
 
-    def _optimize_compiled(self, q0: ArrayLike, wdot: ArrayLike, dt: float, initial: ArrayLike,
-                           u_b: ArrayLike | None, max_iterations: int, tolerance: float, method: str,
-                           step: float) -> PredictiveResult:
+    def _optimize_compiled(
+        self,
+        q0: ArrayLike,
+        wdot: ArrayLike,
+        dt: float,
+        initial: ArrayLike,
+        u_b: ArrayLike | None,
+        max_iterations: int,
+        tolerance: float,
+        method: str,
+        step: float,
+    ) -> PredictiveResult:
         """:meth:`optimize` (its options checked already) in one call of :func:`.predictive_kernels.pik_optimize`."""
         q0, params, wdot = self._check(q0, initial, wdot, dt)
         start = self._start(u_b) if self.augmented else np.zeros(self.n)
@@ -442,16 +599,49 @@ class PredictiveIk:
         costs = np.empty(max_iterations + 1)
         out = (np.empty((steps, n)), np.empty((steps, n)), np.empty((steps + 1, n)), np.empty((steps, n)), np.empty(4))
         code, iterations, alpha, rollouts = pik_optimize(
-            self._chain_f, self._chain_i, self._task_i, self._task_f, self._objective_f, self._coll_i, self._coll_f,
-            self._coll_p, self.collision is not None, q0, wdot, float(dt), self.augmented, start, self.input_weight,
-            params, max_iterations, tolerance, METHODS.index(method), step, self._work, costs, *out)
+            self._chain_f,
+            self._chain_i,
+            self._task_i,
+            self._task_f,
+            self._objective_f,
+            self._coll_i,
+            self._coll_f,
+            self._coll_p,
+            self.collision is not None,
+            q0,
+            wdot,
+            float(dt),
+            self.augmented,
+            start,
+            self.input_weight,
+            params,
+            max_iterations,
+            tolerance,
+            METHODS.index(method),
+            step,
+            self._work,
+            costs,
+            *out,
+        )
         if code == SINGULAR:
             raise ControllerError("J J^T + rho I is singular along the rollout; raise damping")
         if code == OVERFLOW:
             raise ControllerError("the rollout overflowed (cost inf): the inputs, u_b or wdot are too large")
         params_out, u, q, qdot, terms = out
-        parts = {"velocity": float(terms[0]), "joint_limits": float(terms[1]), "collision": float(terms[2]),
-                 "input_rate": float(terms[3])}
+        parts = {
+            "velocity": float(terms[0]),
+            "joint_limits": float(terms[1]),
+            "collision": float(terms[2]),
+            "input_rate": float(terms[3]),
+        }
         rollout = PredictiveRollout(q, qdot, u, float(costs[iterations]), parts)
-        return PredictiveResult(params_out, rollout, tuple(costs[:iterations + 1].tolist()), int(iterations),
-                                STATUS[code], True, float(alpha), int(rollouts))
+        return PredictiveResult(
+            params_out,
+            rollout,
+            tuple(costs[: iterations + 1].tolist()),
+            int(iterations),
+            STATUS[code],
+            True,
+            float(alpha),
+            int(rollouts),
+        )

@@ -35,11 +35,24 @@ from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian
-from ..objectives.collision_kernels import collision_potential
 from ..kernels.buffers import BORROW
+from ..objectives.collision_kernels import collision_potential
 
-__all__ = ["CONVERGED", "MAX_ITERATIONS", "METHODS", "NO_DECREASE", "OVERFLOW", "SINGULAR", "SLOTS", "STATUS",
-           "pik_command", "pik_gradient", "pik_optimize", "pik_rollout", "slot_size"]
+__all__ = [
+    "CONVERGED",
+    "MAX_ITERATIONS",
+    "METHODS",
+    "NO_DECREASE",
+    "OVERFLOW",
+    "SINGULAR",
+    "SLOTS",
+    "STATUS",
+    "pik_command",
+    "pik_gradient",
+    "pik_optimize",
+    "pik_rollout",
+    "slot_size",
+]
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 # The per-sample functions (and the forward and adjoint passes over a slot) only borrow their arrays: compiled
@@ -57,8 +70,9 @@ def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_a
     placement_rotation, placement_translation, axis = chain_f
     parent, joint_type, q_index, v_index = chain_i
     kind, joint, tool_axis = task_i[0], task_i[1], task_i[2]
-    chain_forward(parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation,
-                  position, world_axis)
+    chain_forward(
+        parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation, position, world_axis
+    )
     # the task frame M_joint * (R_local, p_local) (place_frame's arithmetic)
     for r in range(3):
         if joint < 0:
@@ -66,13 +80,21 @@ def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_a
             for c in range(3):
                 frame[3 * r + c] = task_f[3 * r + c]
             continue
-        frame[9 + r] = (position[joint, r] + rotation[joint, r, 0] * task_f[9] + rotation[joint, r, 1] * task_f[10]
-                        + rotation[joint, r, 2] * task_f[11])
+        frame[9 + r] = (
+            position[joint, r]
+            + rotation[joint, r, 0] * task_f[9]
+            + rotation[joint, r, 1] * task_f[10]
+            + rotation[joint, r, 2] * task_f[11]
+        )
         for c in range(3):
-            frame[3 * r + c] = (rotation[joint, r, 0] * task_f[c] + rotation[joint, r, 1] * task_f[3 + c]
-                                + rotation[joint, r, 2] * task_f[6 + c])
-    chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, joint, frame[9], frame[10], frame[11],
-                   jac6)
+            frame[3 * r + c] = (
+                rotation[joint, r, 0] * task_f[c]
+                + rotation[joint, r, 1] * task_f[3 + c]
+                + rotation[joint, r, 2] * task_f[6 + c]
+            )
+    chain_jacobian(
+        parent, joint_type, v_index, rotation, position, world_axis, joint, frame[9], frame[10], frame[11], jac6
+    )
     n = jac.shape[1]
     if kind == 0:
         for r in range(jac.shape[0]):
@@ -175,17 +197,39 @@ def _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, 
     seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
     seg_rot, seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii = coll_f
     parent, joint_type, _, v_index = chain_i
-    value, _ = collision_potential(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b, seg_rot,
-                                   seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii, coll_p,
-                                   parent, joint_type, v_index, rotation, position, world_axis, gradient, scratch)
+    value, _ = collision_potential(
+        seg_joint,
+        seg_starts,
+        kinds,
+        seg_pairs,
+        pair_starts,
+        vol_a,
+        vol_b,
+        seg_rot,
+        seg_pos,
+        seg_center,
+        seg_radius,
+        seg_world,
+        local,
+        vertices,
+        radii,
+        coll_p,
+        parent,
+        joint_type,
+        v_index,
+        rotation,
+        position,
+        world_axis,
+        gradient,
+        scratch,
+    )
     return value
 
 
 @njit(**_JIT)
 def _vjp_scratch(nj):
     """The work arrays of :func:`_vjp` for a chain of ``nj`` joints: the path, suffix sums, ``dv``, ``dw``."""
-    return (np.empty(nj, dtype=np.int64), np.empty((nj + 1, 2, 3)), np.empty((nj + 1, 2, 3)), np.empty(3),
-            np.empty(3))
+    return (np.empty(nj, dtype=np.int64), np.empty((nj + 1, 2, 3)), np.empty((nj + 1, 2, 3)), np.empty(3), np.empty(3))
 
 
 @njit(**BORROW)
@@ -281,8 +325,9 @@ def _vjp(chain_i, task_i, position, world_axis, frame, wdot, y, a1, mu, a2, out,
             for t in range(2):  # d(u . omega_d)/dq_j of the feedforward
                 col = (tool_axis + 1 + t) % 3
                 ux, uy, uz = frame[col], frame[3 + col], frame[6 + col]
-                acc += mu[3 + t] * ((zy * uz - zz * uy) * wdot[3] + (zz * ux - zx * uz) * wdot[4]
-                                    + (zx * uy - zy * ux) * wdot[5])
+                acc += mu[3 + t] * (
+                    (zy * uz - zz * uy) * wdot[3] + (zz * ux - zx * uz) * wdot[4] + (zx * uy - zy * ux) * wdot[5]
+                )
         out[c] += acc
 
 
@@ -291,13 +336,40 @@ def _workspace(chain_i, task_i, n):
     """Task size and the per-step arrays: joint frames, Jacobians, task velocity, frame, ``A``, its factor, ``y``."""
     m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
     nj = chain_i[0].shape[0]
-    return (m, np.empty((nj, 3, 3)), np.empty((nj, 3)), np.empty((nj, 3)), np.empty((6, n)), np.empty((m, n)),
-            np.empty(m), np.empty(12), np.empty((m, m)), np.zeros((m, m)), np.empty(m))
+    return (
+        m,
+        np.empty((nj, 3, 3)),
+        np.empty((nj, 3)),
+        np.empty((nj, 3)),
+        np.empty((6, n)),
+        np.empty((m, n)),
+        np.empty(m),
+        np.empty(12),
+        np.empty((m, m)),
+        np.zeros((m, m)),
+        np.empty(m),
+    )
 
 
 @njit(**_JIT)
-def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, u, wdot, dt,
-                q_out, qdot_out, cost_out):
+def pik_rollout(
+    chain_f,
+    chain_i,
+    task_i,
+    task_f,
+    objective_f,
+    coll_i,
+    coll_f,
+    coll_p,
+    collision,
+    q0,
+    u,
+    wdot,
+    dt,
+    q_out,
+    qdot_out,
+    cost_out,
+):
     """Integrate (5.112) from ``q0`` under the inputs ``u`` (N x n) and references ``wdot`` (N x 6) into
     ``q_out`` (N + 1 x n) and ``qdot_out`` (N x n); the cost terms (velocity, joint limits, collision) into
     ``cost_out`` (3). ``objective_f`` is ``[rho, w_v, lower (n), upper (n), d_a, slope, ratio, weight]``.
@@ -305,7 +377,7 @@ def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, c
     steps, n = u.shape
     m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
-    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    lower, upper, lp = objective_f[2 : 2 + n], objective_f[2 + n : 2 + 2 * n], objective_f[2 + 2 * n : 6 + 2 * n]
     scratch, dummy = np.empty(16), np.zeros(n)
     cost_out[:] = 0.0
     q_out[0, :] = q0
@@ -321,21 +393,23 @@ def pik_rollout(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, c
         cost_out[0] += dt * wv * speed
         cost_out[1] += dt * _limits(q, lower, upper, lp, dummy)
         if collision:
-            cost_out[2] += dt * _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, dummy,
-                                           scratch)
+            cost_out[2] += dt * _collision(
+                coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, dummy, scratch
+            )
     return True
 
 
 @njit(**_JIT)
-def pik_gradient(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q_traj, u, wdot,
-                 dt, grad_u, lam0):
+def pik_gradient(
+    chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q_traj, u, wdot, dt, grad_u, lam0
+):
     """The adjoint recursion (5.113), (5.115) backward along ``q_traj`` (from :func:`pik_rollout`): the exact
     gradient of the cost with respect to every ``u_k`` into ``grad_u`` (N x n), and ``lambda_0`` into ``lam0``.
     Returns False when ``J J^T + rho I`` is not positive definite somewhere."""
     steps, n = u.shape
     m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
-    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    lower, upper, lp = objective_f[2 : 2 + n], objective_f[2 + n : 2 + 2 * n], objective_f[2 + 2 * n : 6 + 2 * n]
     mu = np.empty(m)
     qdot, v, nv, grad_q, scratch = np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(16)
     vjp_scratch = _vjp_scratch(rotation.shape[0])
@@ -428,29 +502,29 @@ def _slot(work, index, steps, n, nj, m):
     joint origins and world axes (N, nj, 3), the task frame (N, 12), the task Jacobian (N, m, n), ``y`` (N, m) and
     the Cholesky factor of ``J J^T + rho I`` (N, m, m)."""
     size = slot_size(steps, n, nj, m)
-    w = work[index * size:(index + 1) * size]
+    w = work[index * size : (index + 1) * size]
     o = 0
-    params = w[o:o + steps * n].reshape((steps, n))
+    params = w[o : o + steps * n].reshape((steps, n))
     o += steps * n
-    u = w[o:o + steps * n].reshape((steps, n))
+    u = w[o : o + steps * n].reshape((steps, n))
     o += steps * n
-    q = w[o:o + (steps + 1) * n].reshape((steps + 1, n))
+    q = w[o : o + (steps + 1) * n].reshape((steps + 1, n))
     o += (steps + 1) * n
-    qdot = w[o:o + steps * n].reshape((steps, n))
+    qdot = w[o : o + steps * n].reshape((steps, n))
     o += steps * n
-    grad_h = w[o:o + steps * n].reshape((steps, n))
+    grad_h = w[o : o + steps * n].reshape((steps, n))
     o += steps * n
-    position = w[o:o + steps * nj * 3].reshape((steps, nj, 3))
+    position = w[o : o + steps * nj * 3].reshape((steps, nj, 3))
     o += steps * nj * 3
-    world_axis = w[o:o + steps * nj * 3].reshape((steps, nj, 3))
+    world_axis = w[o : o + steps * nj * 3].reshape((steps, nj, 3))
     o += steps * nj * 3
-    frame = w[o:o + steps * 12].reshape((steps, 12))
+    frame = w[o : o + steps * 12].reshape((steps, 12))
     o += steps * 12
-    jac = w[o:o + steps * m * n].reshape((steps, m, n))
+    jac = w[o : o + steps * m * n].reshape((steps, m, n))
     o += steps * m * n
-    y = w[o:o + steps * m].reshape((steps, m))
+    y = w[o : o + steps * m].reshape((steps, m))
     o += steps * m
-    low = w[o:o + steps * m * m].reshape((steps, m, m))
+    low = w[o : o + steps * m * m].reshape((steps, m, m))
     return params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low
 
 
@@ -462,8 +536,32 @@ def _total(terms):
 
 
 @njit(**BORROW)
-def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot, dt,
-                  augmented, u_b, input_weight, slot, limit, terms, rotation, jac6, b, a, scratch, running):
+def _rollout_slot(
+    chain_f,
+    chain_i,
+    task_i,
+    task_f,
+    objective_f,
+    coll_i,
+    coll_f,
+    coll_p,
+    collision,
+    q0,
+    wdot,
+    dt,
+    augmented,
+    u_b,
+    input_weight,
+    slot,
+    limit,
+    terms,
+    rotation,
+    jac6,
+    b,
+    a,
+    scratch,
+    running,
+):
     """:func:`pik_rollout` of the slot's ``params`` (the inputs ``u`` formed from them when ``augmented``:
     ``u_k = u_b + dt sum_{l<k} udot_l`` (5.121)), keeping each sample's kinematics and potential gradient in the
     slot for :func:`_adjoint_slot`; the cost terms into ``terms`` (4).
@@ -476,7 +574,7 @@ def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
     params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low = slot
     steps, n = params.shape
     rho, wv = objective_f[0], objective_f[1]
-    lower, upper, lp = objective_f[2:2 + n], objective_f[2 + n:2 + 2 * n], objective_f[2 + 2 * n:6 + 2 * n]
+    lower, upper, lp = objective_f[2 : 2 + n], objective_f[2 + n : 2 + 2 * n], objective_f[2 + 2 * n : 6 + 2 * n]
     may_stop = lp[3] >= 0.0 and (not collision or coll_p[3] >= 0.0)
     rate = 0.0
     if augmented:
@@ -501,8 +599,21 @@ def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
         q[0, i] = q0[i]
     for k in range(steps):
         qk = q[k]
-        _task(chain_f, chain_i, task_i, task_f, qk, wdot[k], rotation, position[k], world_axis[k], jac6, jac[k], b,
-              frame[k])
+        _task(
+            chain_f,
+            chain_i,
+            task_i,
+            task_f,
+            qk,
+            wdot[k],
+            rotation,
+            position[k],
+            world_axis[k],
+            jac6,
+            jac[k],
+            b,
+            frame[k],
+        )
         if not _velocity(jac[k], b, u[k], rho, a, low[k], y[k], qdot[k]):
             return SINGULAR
         speed = 0.0
@@ -519,8 +630,9 @@ def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
         terms[0] += dt * wv * speed
         terms[1] += dt * _limits(qk, lower, upper, lp, g)
         if collision:
-            terms[2] += dt * _collision(coll_i, coll_f, coll_p, chain_i, rotation, position[k], world_axis[k], g,
-                                        scratch)
+            terms[2] += dt * _collision(
+                coll_i, coll_f, coll_p, chain_i, rotation, position[k], world_axis[k], g, scratch
+            )
         if may_stop and _total(terms) > limit:
             return _ABOVE
     if not np.isfinite(_total(terms)):
@@ -529,8 +641,9 @@ def _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
 
 
 @njit(**BORROW)
-def _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q,
-                  vjp_scratch):
+def _adjoint_slot(
+    chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q, vjp_scratch
+):
     """:func:`pik_gradient` from the kinematics a :func:`_rollout_slot` kept: the adjoint recursion (5.113),
     (5.115) backward, the gradient with respect to the slot's ``params`` into ``grad`` (N, n). When ``augmented``
     it is the gradient with respect to ``udot``: ``u_k`` depends on ``udot_l`` for ``l < k`` (5.121), so the
@@ -557,8 +670,7 @@ def _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, 
             nv[i] = acc
             grad[k, i] = dt * acc
             grad_q[i] = grad_h[k, i]
-        _vjp(chain_i, task_i, position[k], world_axis[k], frame[k], wdot[k], y[k], nv, mu, qdot[k], grad_q,
-             vjp_scratch)
+        _vjp(chain_i, task_i, position[k], world_axis[k], frame[k], wdot[k], y[k], nv, mu, qdot[k], grad_q, vjp_scratch)
         for i in range(n):
             lam[i] += dt * grad_q[i]
     if not augmented:
@@ -574,9 +686,35 @@ def _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, 
 
 
 @njit(**_JIT)
-def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot, dt,
-                 augmented, u_b, input_weight, initial, max_iterations, tolerance, method, step, work, costs,
-                 params_out, u_out, q_out, qdot_out, terms_out):
+def pik_optimize(
+    chain_f,
+    chain_i,
+    task_i,
+    task_f,
+    objective_f,
+    coll_i,
+    coll_f,
+    coll_p,
+    collision,
+    q0,
+    wdot,
+    dt,
+    augmented,
+    u_b,
+    input_weight,
+    initial,
+    max_iterations,
+    tolerance,
+    method,
+    step,
+    work,
+    costs,
+    params_out,
+    u_out,
+    q_out,
+    qdot_out,
+    terms_out,
+):
     """Algorithm 11 in one call: ``PredictiveIk.optimize``'s Python loop (the same descent directions, Armijo
     backtracking, parabolic step and stopping rules) on the compiled rollout and adjoint.
 
@@ -608,15 +746,39 @@ def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
     cur, trial, other = 0, 1, 2
     slot = _slot(work, cur, steps, n, nj, m)
     slot[0][:, :] = initial
-    code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0, wdot,
-                         dt, augmented, u_b, input_weight, slot, np.inf, terms[cur], rotation, jac6, b, a, scratch,
-                         running)
+    code = _rollout_slot(
+        chain_f,
+        chain_i,
+        task_i,
+        task_f,
+        objective_f,
+        coll_i,
+        coll_f,
+        coll_p,
+        collision,
+        q0,
+        wdot,
+        dt,
+        augmented,
+        u_b,
+        input_weight,
+        slot,
+        np.inf,
+        terms[cur],
+        rotation,
+        jac6,
+        b,
+        a,
+        scratch,
+        running,
+    )
     rollouts = 1
     if code != _OK:
         return code, 0, step, rollouts
     cost = _total(terms[cur])
-    _adjoint_slot(chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q,
-                  vjp_scratch)
+    _adjoint_slot(
+        chain_i, task_i, slot, wdot, dt, wv, augmented, input_weight, grad, lam, v, nv, mu, grad_q, vjp_scratch
+    )
     costs[0] = cost
     previous_norm = 0.0
     for k in range(steps):
@@ -653,9 +815,32 @@ def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
                 for i in range(n):
                     candidate[k, i] = current[k, i] + alpha * direction[k, i]
             threshold = cost + 1e-4 * alpha * slope
-            code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q0,
-                                 wdot, dt, augmented, u_b, input_weight, slot, threshold, terms[trial], rotation, jac6,
-                                 b, a, scratch, running)
+            code = _rollout_slot(
+                chain_f,
+                chain_i,
+                task_i,
+                task_f,
+                objective_f,
+                coll_i,
+                coll_f,
+                coll_p,
+                collision,
+                q0,
+                wdot,
+                dt,
+                augmented,
+                u_b,
+                input_weight,
+                slot,
+                threshold,
+                terms[trial],
+                rotation,
+                jac6,
+                b,
+                a,
+                scratch,
+                running,
+            )
             rollouts += 1
             if code == SINGULAR:
                 return SINGULAR, iterations, alpha, rollouts
@@ -678,9 +863,32 @@ def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
                 for k in range(steps):
                     for i in range(n):
                         candidate[k, i] = current[k, i] + best * direction[k, i]
-                code = _rollout_slot(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision,
-                                     q0, wdot, dt, augmented, u_b, input_weight, slot, trial_cost, terms[other],
-                                     rotation, jac6, b, a, scratch, running)
+                code = _rollout_slot(
+                    chain_f,
+                    chain_i,
+                    task_i,
+                    task_f,
+                    objective_f,
+                    coll_i,
+                    coll_f,
+                    coll_p,
+                    collision,
+                    q0,
+                    wdot,
+                    dt,
+                    augmented,
+                    u_b,
+                    input_weight,
+                    slot,
+                    trial_cost,
+                    terms[other],
+                    rotation,
+                    jac6,
+                    b,
+                    a,
+                    scratch,
+                    running,
+                )
                 rollouts += 1
                 if code == SINGULAR:
                     return SINGULAR, iterations, alpha, rollouts
@@ -698,8 +906,23 @@ def pik_optimize(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, 
             break
         if j == max_iterations - 1:
             break  # the next direction would be the only use of this gradient
-        _adjoint_slot(chain_i, task_i, _slot(work, cur, steps, n, nj, m), wdot, dt, wv, augmented, input_weight, grad,
-                      lam, v, nv, mu, grad_q, vjp_scratch)
+        _adjoint_slot(
+            chain_i,
+            task_i,
+            _slot(work, cur, steps, n, nj, m),
+            wdot,
+            dt,
+            wv,
+            augmented,
+            input_weight,
+            grad,
+            lam,
+            v,
+            nv,
+            mu,
+            grad_q,
+            vjp_scratch,
+        )
         norm = 0.0
         change = 0.0
         for k in range(steps):

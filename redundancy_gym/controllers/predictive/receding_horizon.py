@@ -51,8 +51,18 @@ class RecedingHorizon:
             update, and a different (on the fig. 5.10 move: lower) pseudoenergy, so off by default.
     """
 
-    def __init__(self, pik: PredictiveIk, steps: int, dt: float, *, iterations: int = 2, tolerance: float = 1e-6,
-                 method: str = "fletcher_reeves", compiled: bool = True, warm_step: bool = False) -> None:
+    def __init__(
+        self,
+        pik: PredictiveIk,
+        steps: int,
+        dt: float,
+        *,
+        iterations: int = 2,
+        tolerance: float = 1e-6,
+        method: str = "fletcher_reeves",
+        compiled: bool = True,
+        warm_step: bool = False,
+    ) -> None:
         if not isinstance(steps, (int, np.integer)) or steps < 1:
             raise ControllerError(f"steps must be an int >= 1, got {steps!r}")
         if not np.isfinite(dt) or dt <= 0.0:
@@ -74,9 +84,18 @@ class RecedingHorizon:
     def update(self, q: ArrayLike, wdot: ArrayLike) -> HorizonUpdate:
         """Optimize from ``q`` with the task velocity reference ``wdot`` (N, 6) of the horizon's samples."""
         start = time.perf_counter()
-        result = self.pik.optimize(q, wdot, self.dt, self._params, u_b=self._u_b, max_iterations=self.iterations,
-                                   tolerance=self.tolerance, method=self.method, compiled=self.compiled,
-                                   step=self._step)
+        result = self.pik.optimize(
+            q,
+            wdot,
+            self.dt,
+            self._params,
+            u_b=self._u_b,
+            max_iterations=self.iterations,
+            tolerance=self.tolerance,
+            method=self.method,
+            compiled=self.compiled,
+            step=self._step,
+        )
         if self.warm_step and result.iterations > 0 and np.isfinite(result.step) and result.step > 0.0:
             # result.step is twice the last accepted step (the next iteration's first trial); the next update's
             # problem is this one shifted by a sample, so its first step is about the last accepted one (an update

@@ -24,7 +24,14 @@ from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
-from .whole_body_ik import REFERENCE_LAYOUT, REFERENCE_SIZE, TASK_ROWS, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
+from .whole_body_ik import (
+    REFERENCE_LAYOUT,
+    REFERENCE_SIZE,
+    TASK_ROWS,
+    WholeBodyIk,
+    WholeBodyIkResult,
+    WholeBodyReference,
+)
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 __all__ = [

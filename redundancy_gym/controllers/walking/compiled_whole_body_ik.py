@@ -9,12 +9,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import ModelError
+from ..exceptions import ControllerError
+from ..kernels.buffers import buffer_view, compiled_entry_point, pack_fields
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.collision_kernels import bounding_spheres, collision_fields
 from ..objectives.collision_objective import CollisionObjective
-from ..exceptions import ControllerError
 from ..objectives.joint_limit_objective import JointLimitObjective
-from ..kernels.buffers import buffer_view, compiled_entry_point, pack_fields
 from ..objectives.posture_objective import PostureObjective
 from .whole_body_ik import Reference, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .whole_body_kernels import (
@@ -39,10 +39,27 @@ def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
     """Whether ``value`` is a float64 array of ``shape`` (copied into the kernel's buffer as it is)."""
     return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
 
-_EMPTY_COLLISION_FLOATS = ("segment_rotation", "segment_translation", "segment_center", "segment_radius",
-                           "segment_world_center", "local", "vertices", "radii", "collision_parameters")
-_EMPTY_COLLISION_INTS = ("segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a",
-                         "volume_b")
+
+_EMPTY_COLLISION_FLOATS = (
+    "segment_rotation",
+    "segment_translation",
+    "segment_center",
+    "segment_radius",
+    "segment_world_center",
+    "local",
+    "vertices",
+    "radii",
+    "collision_parameters",
+)
+_EMPTY_COLLISION_INTS = (
+    "segment_joint",
+    "segment_starts",
+    "kinds",
+    "segment_pairs",
+    "pair_starts",
+    "volume_a",
+    "volume_b",
+)
 
 
 class CompiledWholeBodyIk:
@@ -82,7 +99,8 @@ class CompiledWholeBodyIk:
                 raise ControllerError(
                     "CompiledWholeBodyIk supports ActuatedObjective(JointLimitObjective or PostureObjective over the "
                     f"{na} actuated joints) and one CollisionObjective without environment segments; got "
-                    f"{type(objective).__name__}")
+                    f"{type(objective).__name__}"
+                )
         if len(collisions) > 1:
             raise ControllerError("CompiledWholeBodyIk supports at most one CollisionObjective")
         self.ik = ik
@@ -91,25 +109,46 @@ class CompiledWholeBodyIk:
         self._q_shape = (nq,)
         frames = [model.frame_attachment(f) for f in (*ik.feet_frames, ik.torso_frame)]
         floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
-            "axis": chain.axis, "body_mass": chain.body_mass, "body_com": chain.body_com,
-            "body_inertia": chain.body_inertia, "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)), "composite": np.zeros((nj, 13)),
+            "placement_rotation": chain.placement_rotation,
+            "placement_translation": chain.placement_translation,
+            "axis": chain.axis,
+            "body_mass": chain.body_mass,
+            "body_com": chain.body_com,
+            "body_inertia": chain.body_inertia,
+            "rotation": np.zeros((nj, 3, 3)),
+            "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)),
+            "composite": np.zeros((nj, 13)),
             "frame_rotation": np.array([r for _, r, _ in frames]),
             "frame_translation": np.array([p for _, _, p in frames]),
-            "limit_lower": np.array([o.lower for o in limits]), "limit_upper": np.array([o.upper for o in limits]),
-            "limit_parameters": np.array([(o.potential.activation_distance, o.potential.slope,
-                                           o.potential.switch_ratio, o.weight) for o in limits]),
+            "limit_lower": np.array([o.lower for o in limits]),
+            "limit_upper": np.array([o.upper for o in limits]),
+            "limit_parameters": np.array(
+                [
+                    (o.potential.activation_distance, o.potential.slope, o.potential.switch_ratio, o.weight)
+                    for o in limits
+                ]
+            ),
             "posture_reference": np.array([o.reference for o in postures]),
             "posture_weights": np.array([o.weights for o in postures]),
-            "scalars": np.zeros(len(SCALARS)), "inputs": np.zeros(nq + 2 * REFERENCE_SIZE),
-            "outputs": np.zeros(nq + nv + OUTPUT_EXTRA), "jacobian": np.zeros((18, nv)),
-            "jacobian6": np.zeros((6, nv)), "jacobian_com": np.zeros((3, nv)), "jacobian_angular": np.zeros((3, nv)),
-            "error": np.zeros(18), "rhs": np.zeros(18), "gradient": np.zeros(nv), "scratch": np.zeros(SCRATCH_SIZE),
+            "scalars": np.zeros(len(SCALARS)),
+            "inputs": np.zeros(nq + 2 * REFERENCE_SIZE),
+            "outputs": np.zeros(nq + nv + OUTPUT_EXTRA),
+            "jacobian": np.zeros((18, nv)),
+            "jacobian6": np.zeros((6, nv)),
+            "jacobian_com": np.zeros((3, nv)),
+            "jacobian_angular": np.zeros((3, nv)),
+            "error": np.zeros(18),
+            "rhs": np.zeros(18),
+            "gradient": np.zeros(nv),
+            "scratch": np.zeros(SCRATCH_SIZE),
         }
         ints: dict[str, NDArray[np.int64]] = {
-            "parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index,
-            "v_index": chain.v_index, "frame_joint": np.array([j for j, _, _ in frames], dtype=np.int64),
+            "parent": chain.parent,
+            "joint_type": chain.joint_type,
+            "q_index": chain.q_index,
+            "v_index": chain.v_index,
+            "frame_joint": np.array([j for j, _, _ in frames], dtype=np.int64),
         }
         self.collision: CollisionObjective | None = collisions[0] if collisions else None
         if self.collision is None:
@@ -127,10 +166,18 @@ class CompiledWholeBodyIk:
             floats.update(fields.floats)
             ints.update(fields.ints)
             counts = fields.counts
-        dims = {"joints": nj, "nq": nq, "nv": nv, "base_nq": base_nq, "base_nv": base_nv,
-                "limit_objectives": len(limits), "posture_objectives": len(postures), **counts,
-                "collision": int(self.collision is not None),
-                "momentum_minimization": int(ik.momentum_minimization)}
+        dims = {
+            "joints": nj,
+            "nq": nq,
+            "nv": nv,
+            "base_nq": base_nq,
+            "base_nv": base_nv,
+            "limit_objectives": len(limits),
+            "posture_objectives": len(postures),
+            **counts,
+            "collision": int(self.collision is not None),
+            "momentum_minimization": int(ik.momentum_minimization),
+        }
         ints["dims"] = np.array([dims[name] for name in DIMS], dtype=np.int64)
         self._f, self._i = pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
         self._inputs = self._field("inputs")
@@ -139,12 +186,22 @@ class CompiledWholeBodyIk:
         # views of the kernel's inputs and outputs, sliced once: step() runs once per control period, where
         # numpy's per-call overhead is a noticeable part of the wrapper's cost
         self._q_input = self._inputs[:nq]
-        self._reference_inputs = (self._inputs[nq:nq + REFERENCE_SIZE],
-                                  self._inputs[nq + REFERENCE_SIZE:nq + 2 * REFERENCE_SIZE])
-        self._q_output, self._qdot_output = self._outputs[:nq], self._outputs[nq:nq + nv]
-        self._extra_output = self._outputs[nq + nv:]
-        self._scalars[:] = [ik.gain, ik.gamma, ik.beta, ik.nullspace_gain, ik.damping, ik.singular_threshold,
-                            ik.max_velocity, 0.0]
+        self._reference_inputs = (
+            self._inputs[nq : nq + REFERENCE_SIZE],
+            self._inputs[nq + REFERENCE_SIZE : nq + 2 * REFERENCE_SIZE],
+        )
+        self._q_output, self._qdot_output = self._outputs[:nq], self._outputs[nq : nq + nv]
+        self._extra_output = self._outputs[nq + nv :]
+        self._scalars[:] = [
+            ik.gain,
+            ik.gamma,
+            ik.beta,
+            ik.nullspace_gain,
+            ik.damping,
+            ik.singular_threshold,
+            ik.max_velocity,
+            0.0,
+        ]
         self._kernel = compiled_entry_point(whole_body_step, "int64(float64[::1], int64[::1])")
 
     def _field(self, name: str) -> NDArray[np.float64]:
@@ -154,8 +211,13 @@ class CompiledWholeBodyIk:
     def step(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> WholeBodyIkResult:
         """:meth:`WholeBodyIk.step` (same arguments, same result to round-off) in one kernel call; the references
         may be given packed (:meth:`WholeBodyReference.to_array`), which saves their conversion."""
-        if type(dt) is float and 0.0 < dt < math.inf and _is_float_array(q, self._q_shape) \
-                and _is_float_array(start, _REFERENCE_SHAPE) and _is_float_array(end, _REFERENCE_SHAPE):
+        if (
+            type(dt) is float
+            and 0.0 < dt < math.inf
+            and _is_float_array(q, self._q_shape)
+            and _is_float_array(start, _REFERENCE_SHAPE)
+            and _is_float_array(end, _REFERENCE_SHAPE)
+        ):
             # the walking controller's inputs (float64 arrays of the right shapes): copied in without conversions
             self._q_input[...] = q
             self._reference_inputs[0][...] = start
@@ -168,8 +230,9 @@ class CompiledWholeBodyIk:
                 raise ModelError("configuration contains non-finite values")
             raise ControllerError("the references must be finite")
         error, lz, sigma, success, _, _, limited = self._extra_output.tolist()
-        return WholeBodyIkResult(self._q_output.copy(), self._qdot_output.copy(), error, lz, sigma, bool(success),
-                                 bool(limited))
+        return WholeBodyIkResult(
+            self._q_output.copy(), self._qdot_output.copy(), error, lz, sigma, bool(success), bool(limited)
+        )
 
     def _checked_inputs(self, q: ArrayLike, start: Reference, end: Reference, dt: float) -> NDArray[np.float64]:
         """Check and copy :meth:`step`'s inputs of any type into the kernel's buffer; returns ``q`` as an array."""
@@ -181,7 +244,7 @@ class CompiledWholeBodyIk:
         if q.shape != (nq,):
             raise ModelError(f"configuration must have shape ({nq},), got {q.shape}")
         self._q_input[...] = q
-        for reference, view in zip((start, end), self._reference_inputs):
+        for reference, view in zip((start, end), self._reference_inputs, strict=False):
             packed = reference.to_array() if isinstance(reference, WholeBodyReference) else reference
             shape = packed.shape if type(packed) is np.ndarray else np.shape(packed)
             if shape != (REFERENCE_SIZE,):

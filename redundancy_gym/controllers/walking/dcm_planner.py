@@ -102,8 +102,9 @@ class DcmPlan:
     def sample(self, t: float) -> ComState:
         """The LIPM state at time ``t`` [s]; before the first knot the first, after the last the resting state."""
         px, py, vx, vy, ax, ay, xx, xy, rx, ry = self.values(t)
-        return ComState(np.array((px, py)), np.array((vx, vy)), np.array((ax, ay)), np.array((xx, xy)),
-                        np.array((rx, ry)))
+        return ComState(
+            np.array((px, py)), np.array((vx, vy)), np.array((ax, ay)), np.array((xx, xy)), np.array((rx, ry))
+        )
 
     def values(self, t: float) -> tuple[float, float, float, float, float, float, float, float, float, float]:
         """:meth:`sample` as Python floats: CoM position, velocity, acceleration, DCM and ZMP, (x, y) each."""
@@ -182,8 +183,10 @@ class DcmPlanner:
         self.com_height = float(com_height)
         self.omega = float(np.sqrt(gravity / com_height))
         if not OMEGA_RANGE[0] <= self.omega <= OMEGA_RANGE[1]:
-            raise ControllerError(f"com_height={com_height!r} m and gravity={gravity!r} m/s^2 give omega="
-                                  f"{self.omega:.3g} 1/s, outside {OMEGA_RANGE} (a physical LIPM)")
+            raise ControllerError(
+                f"com_height={com_height!r} m and gravity={gravity!r} m/s^2 give omega="
+                f"{self.omega:.3g} 1/s, outside {OMEGA_RANGE} (a physical LIPM)"
+            )
 
     def dcm_at_knots(self, times: ArrayLike, zmp: ArrayLike) -> NDArray[np.float64]:
         """DCM at every knot by backward recursion from ``xi = r`` at the last knot (the walk ends at rest)."""
@@ -193,7 +196,9 @@ class DcmPlanner:
         for k in range(times.size - 2, -1, -1):
             dt = times[k + 1] - times[k]
             slope = (zmp[k + 1] - zmp[k]) / dt
-            dcm[k] = zmp[k] + slope / self.omega + (dcm[k + 1] - zmp[k + 1] - slope / self.omega) * np.exp(-self.omega * dt)
+            dcm[k] = (
+                zmp[k] + slope / self.omega + (dcm[k + 1] - zmp[k + 1] - slope / self.omega) * np.exp(-self.omega * dt)
+            )
         return dcm
 
     def first_dcm(self, times: ArrayLike, zmp: ArrayLike) -> NDArray[np.float64]:
@@ -240,8 +245,10 @@ class DcmPlanner:
         zmp[0] = 1.0
         gain = self.dcm_at_knots(times, zmp)[0] - offset
         if not np.all(np.abs(gain) > 1e-9):
-            raise ControllerError(f"the first ZMP knot hardly moves the DCM (gain {gain.tolist()}): the first "
-                                  f"segment of {times[1] - times[0]!r} s is too short for a start from rest")
+            raise ControllerError(
+                f"the first ZMP knot hardly moves the DCM (gain {gain.tolist()}): the first "
+                f"segment of {times[1] - times[0]!r} s is too short for a start from rest"
+            )
         zmp[0] = (com - offset) / gain
         return zmp
 

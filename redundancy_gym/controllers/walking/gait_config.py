@@ -61,8 +61,15 @@ class GaitConfig:
             if isinstance(value, (bool, np.bool_)) or not isinstance(value, wanted):
                 kind = "an int" if f.name == "preview_steps" else "a real number"
                 raise ControllerError(f"{f.name} must be {kind}, got {value!r} ({type(value).__name__})")
-        positive = ("step_duration", "step_width", "max_step_length", "min_step_duration", "step_height",
-                    "com_height", "start_duration")
+        positive = (
+            "step_duration",
+            "step_width",
+            "max_step_length",
+            "min_step_duration",
+            "step_height",
+            "com_height",
+            "start_duration",
+        )
         for name in positive:
             value = getattr(self, name)
             if not np.isfinite(value) or value <= 0.0:
@@ -76,8 +83,10 @@ class GaitConfig:
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         if not 0.0 < self.swing_pitch_peak < self.swing_pitch_flat < 1.0:
-            raise ControllerError("need 0 < swing_pitch_peak < swing_pitch_flat < 1, got "
-                                  f"{self.swing_pitch_peak!r}, {self.swing_pitch_flat!r}")
+            raise ControllerError(
+                "need 0 < swing_pitch_peak < swing_pitch_flat < 1, got "
+                f"{self.swing_pitch_peak!r}, {self.swing_pitch_flat!r}"
+            )
         if not 0.0 <= self.swing_settle < 0.5:
             raise ControllerError(f"swing_settle must lie in [0, 0.5), got {self.swing_settle!r}")
         if not 0.0 <= self.swing_pitch <= 0.6:  # toes up would turn the heel below the ground about the toe tip

@@ -9,8 +9,15 @@ __all__ = ["weighted_solve"]
 
 
 @njit(cache=True)
-def weighted_solve(jac: np.ndarray, rhs: np.ndarray, j_lz: np.ndarray, z: np.ndarray, gamma: float,
-                   minimize_momentum: bool, damping: float) -> tuple[np.ndarray, float, bool]:  # pragma: no cover
+def weighted_solve(
+    jac: np.ndarray,
+    rhs: np.ndarray,
+    j_lz: np.ndarray,
+    z: np.ndarray,
+    gamma: float,
+    minimize_momentum: bool,
+    damping: float,
+) -> tuple[np.ndarray, float, bool]:  # pragma: no cover
     """``(qdot, sigma_min, ok)``: ``qdot = W^-1 (J^T lambda - z)``, ``(J W^-1 J^T + damping I) lambda = rhs + J W^-1 z``.
 
     ``W = gamma I + j_lz j_lz^T`` (5.62) is inverted by Sherman-Morrison-Woodbury; ``W = I`` when

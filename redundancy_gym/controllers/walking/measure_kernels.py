@@ -26,8 +26,19 @@ from ..kernels.buffers import buffer_view, compiled_entry_point, float_field, in
 __all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "Measurement"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation", "placement_translation", "axis", "body_mass", "body_com", "rotation", "position",
-    "world_axis", "velocities", "frame_rotation", "frame_translation", "inputs", "outputs",
+    "placement_rotation",
+    "placement_translation",
+    "axis",
+    "body_mass",
+    "body_com",
+    "rotation",
+    "position",
+    "world_axis",
+    "velocities",
+    "frame_rotation",
+    "frame_translation",
+    "inputs",
+    "outputs",
 )
 INT_FIELDS: tuple[str, ...] = ("dims", "parent", "joint_type", "q_index", "v_index", "frame_joint")
 FRAMES = 4
@@ -36,15 +47,38 @@ PARAMETERS = ("mujoco", "stance_frame", "stance", "planned_x", "planned_y", "pla
 """Scalar inputs after ``q``, ``v`` and the ankle wrenches (12: right force, right torque, left force, left torque): 1.0 where the state is MuJoCo's ``qpos``,
 ``qvel`` (else pinocchio's), 1.0 to move into the stance foot's planned pose, the stance foot (0 right, 1 left),
 its planned sole position (x, y) [m] and heading [rad], the ground height [m] and the ZMP's ``min_force`` [N]."""
-OUTPUT_SIZES = (("com", 3), ("com_velocity", 3), ("rotations", 9 * FRAMES), ("positions", 3 * FRAMES), ("turn", 9),
-                ("shift", 3), ("zmp", 3), ("cop", 4), ("normal_force", 2), ("moment", 6))
+OUTPUT_SIZES = (
+    ("com", 3),
+    ("com_velocity", 3),
+    ("rotations", 9 * FRAMES),
+    ("positions", 3 * FRAMES),
+    ("turn", 9),
+    ("shift", 3),
+    ("zmp", 3),
+    ("cop", 4),
+    ("normal_force", 2),
+    ("moment", 6),
+)
 """After the pinocchio ``q`` (nq) and ``v`` (nv) in ``outputs``: the fields of :class:`Measurement` (``zmp`` is x,
 y and 1.0 where valid)."""
 OK, BAD_INPUT = 0, 1
 
 _NF = len(FLOAT_FIELDS)
-(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_BODY_MASS, _F_BODY_COM, _F_ROTATION, _F_POSITION,
- _F_WORLD_AXIS, _F_VELOCITIES, _F_FRAME_ROTATION, _F_FRAME_TRANSLATION, _F_INPUTS, _F_OUTPUTS) = range(_NF)
+(
+    _F_PLACEMENT_ROTATION,
+    _F_PLACEMENT_TRANSLATION,
+    _F_AXIS,
+    _F_BODY_MASS,
+    _F_BODY_COM,
+    _F_ROTATION,
+    _F_POSITION,
+    _F_WORLD_AXIS,
+    _F_VELOCITIES,
+    _F_FRAME_ROTATION,
+    _F_FRAME_TRANSLATION,
+    _F_INPUTS,
+    _F_OUTPUTS,
+) = range(_NF)
 (_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT) = range(_NF, _NF + len(INT_FIELDS))
 
 # the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
@@ -96,9 +130,9 @@ def measure_step(f, i):
     params = inputs[n_state:]
     outputs = float_field(f, i, _F_OUTPUTS)
     q = outputs[:nq]
-    v = outputs[nq:nq + nv]
+    v = outputs[nq : nq + nv]
     q[:] = inputs[:nq]
-    v[:] = inputs[nq:nq + nv]
+    v[:] = inputs[nq : nq + nv]
     parent = int_field(i, _I_PARENT)
     joint_type = int_field(i, _I_JOINT_TYPE)
     q_index = int_field(i, _I_Q_INDEX)
@@ -108,31 +142,52 @@ def measure_step(f, i):
     rotation = float_field(f, i, _F_ROTATION).reshape((nj, 3, 3))
     position = float_field(f, i, _F_POSITION).reshape((nj, 3))
     world_axis = float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(parent, float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-                  float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
-                  float_field(f, i, _F_AXIS).reshape((nj, 3)), joint_type, q_index, q, rotation, position, world_axis)
+    chain_forward(
+        parent,
+        float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
+        float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
+        float_field(f, i, _F_AXIS).reshape((nj, 3)),
+        joint_type,
+        q_index,
+        q,
+        rotation,
+        position,
+        world_axis,
+    )
     o = nq + nv
-    com = outputs[o:o + 3]
-    com_velocity = outputs[o + 3:o + 6]
-    rotations = outputs[o + 6:o + 6 + 9 * FRAMES].reshape((FRAMES, 3, 3))
+    com = outputs[o : o + 3]
+    com_velocity = outputs[o + 3 : o + 6]
+    rotations = outputs[o + 6 : o + 6 + 9 * FRAMES].reshape((FRAMES, 3, 3))
     o += 6 + 9 * FRAMES
-    positions = outputs[o:o + 3 * FRAMES].reshape((FRAMES, 3))
+    positions = outputs[o : o + 3 * FRAMES].reshape((FRAMES, 3))
     o += 3 * FRAMES
-    turn = outputs[o:o + 9].reshape((3, 3))
-    shift = outputs[o + 9:o + 12]
-    zmp = outputs[o + 12:o + 15]
-    cop = outputs[o + 15:o + 19].reshape((2, 2))
-    normal_force = outputs[o + 19:o + 21]
-    moment = outputs[o + 21:o + 27].reshape((2, 3))
-    _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axis, float_field(f, i, _F_BODY_MASS),
-                      float_field(f, i, _F_BODY_COM).reshape((nj, 3)), v,
-                      float_field(f, i, _F_VELOCITIES).reshape((nj, 6)), com, com_velocity)
+    turn = outputs[o : o + 9].reshape((3, 3))
+    shift = outputs[o + 9 : o + 12]
+    zmp = outputs[o + 12 : o + 15]
+    cop = outputs[o + 15 : o + 19].reshape((2, 2))
+    normal_force = outputs[o + 19 : o + 21]
+    moment = outputs[o + 21 : o + 27].reshape((2, 3))
+    _com_and_velocity(
+        parent,
+        joint_type,
+        v_index,
+        rotation,
+        position,
+        world_axis,
+        float_field(f, i, _F_BODY_MASS),
+        float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
+        v,
+        float_field(f, i, _F_VELOCITIES).reshape((nj, 6)),
+        com,
+        com_velocity,
+    )
     frame_joint = int_field(i, _I_FRAME_JOINT)
     frame_rotation = float_field(f, i, _F_FRAME_ROTATION).reshape((FRAMES, 3, 3))
     frame_translation = float_field(f, i, _F_FRAME_TRANSLATION).reshape((FRAMES, 3))
     for k in range(FRAMES):
-        place_frame(rotation, position, frame_joint[k], frame_rotation[k], frame_translation[k], rotations[k],
-                    positions[k])
+        place_frame(
+            rotation, position, frame_joint[k], frame_rotation[k], frame_translation[k], rotations[k], positions[k]
+        )
     # the stance frame (WalkingController._in_stance_frame): R_z(-yaw) and a horizontal shift that put the measured
     # stance sole on its planned position and heading
     turn[:, :] = 0.0
@@ -157,7 +212,7 @@ def measure_step(f, i):
                 rotations[k, 1, col] = -s * x + c * y
             _turn_point(turn, positions[k], shift)
     # the ZMP from the ankle sensors (estimate_zmp): the ground reaction is minus the reading, in the world frame
-    sensors = inputs[nq + nv:nq + nv + 12]  # rows right, left: force (3) then torque (3)
+    sensors = inputs[nq + nv : nq + nv + 12]  # rows right, left: force (3) then torque (3)
     ground, min_force = params[6], params[7]
     total = weighted_x = weighted_y = 0.0
     for side in range(2):
@@ -186,8 +241,9 @@ def measure_step(f, i):
 
 
 @njit(**_JIT)
-def _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com, v, scratch,
-                      com, com_velocity):
+def _com_and_velocity(
+    parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com, v, scratch, com, com_velocity
+):
     """The CoM [m] and its velocity [m/s] (world frame) after :func:`chain_forward`, as ``pinocchio.centerOfMass(q,
     v)``: each joint's angular velocity and its origin's velocity propagated from the root (``scratch[j, :6]``), then
     the mass-weighted mean of the bodies' CoMs and their velocities (no Jacobians, no composite inertias: cheaper
@@ -202,9 +258,12 @@ def _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axi
             # pinocchio's free flyer (the root: SerialChain's): v = [v_body; omega_body] of the joint frame, turned
             # into the world
             for r in range(3):
-                scratch[j, r] = (rotation[j, r, 0] * v[b + 3] + rotation[j, r, 1] * v[b + 4]
-                                 + rotation[j, r, 2] * v[b + 5])
-                scratch[j, 3 + r] = rotation[j, r, 0] * v[b] + rotation[j, r, 1] * v[b + 1] + rotation[j, r, 2] * v[b + 2]
+                scratch[j, r] = (
+                    rotation[j, r, 0] * v[b + 3] + rotation[j, r, 1] * v[b + 4] + rotation[j, r, 2] * v[b + 5]
+                )
+                scratch[j, 3 + r] = (
+                    rotation[j, r, 0] * v[b] + rotation[j, r, 1] * v[b + 1] + rotation[j, r, 2] * v[b + 2]
+                )
         else:
             if p >= 0:
                 _carry(scratch, position, p, j)
@@ -222,9 +281,15 @@ def _com_and_velocity(parent, joint_type, v_index, rotation, position, world_axi
         if m == 0.0:
             continue
         # the body's CoM c and its velocity v_o + omega x (c - o)
-        lx = rotation[j, 0, 0] * body_com[j, 0] + rotation[j, 0, 1] * body_com[j, 1] + rotation[j, 0, 2] * body_com[j, 2]
-        ly = rotation[j, 1, 0] * body_com[j, 0] + rotation[j, 1, 1] * body_com[j, 1] + rotation[j, 1, 2] * body_com[j, 2]
-        lz = rotation[j, 2, 0] * body_com[j, 0] + rotation[j, 2, 1] * body_com[j, 1] + rotation[j, 2, 2] * body_com[j, 2]
+        lx = (
+            rotation[j, 0, 0] * body_com[j, 0] + rotation[j, 0, 1] * body_com[j, 1] + rotation[j, 0, 2] * body_com[j, 2]
+        )
+        ly = (
+            rotation[j, 1, 0] * body_com[j, 0] + rotation[j, 1, 1] * body_com[j, 1] + rotation[j, 1, 2] * body_com[j, 2]
+        )
+        lz = (
+            rotation[j, 2, 0] * body_com[j, 0] + rotation[j, 2, 1] * body_com[j, 1] + rotation[j, 2, 2] * body_com[j, 2]
+        )
         wx, wy, wz = scratch[j, 0], scratch[j, 1], scratch[j, 2]
         mass += m
         cx += m * (position[j, 0] + lx)
@@ -304,16 +369,26 @@ class CompiledMeasurement:
         attachments = [model.frame_attachment(f) for f in frames]
         outputs = nq + nv + sum(size for _, size in OUTPUT_SIZES)
         floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation, "placement_translation": chain.placement_translation,
-            "axis": chain.axis, "body_mass": chain.body_mass, "body_com": chain.body_com,
-            "rotation": np.zeros((nj, 3, 3)), "position": np.zeros((nj, 3)), "world_axis": np.zeros((nj, 3)),
-            "velocities": np.zeros((nj, 6)), "frame_rotation": np.array([r for _, r, _ in attachments]),
+            "placement_rotation": chain.placement_rotation,
+            "placement_translation": chain.placement_translation,
+            "axis": chain.axis,
+            "body_mass": chain.body_mass,
+            "body_com": chain.body_com,
+            "rotation": np.zeros((nj, 3, 3)),
+            "position": np.zeros((nj, 3)),
+            "world_axis": np.zeros((nj, 3)),
+            "velocities": np.zeros((nj, 6)),
+            "frame_rotation": np.array([r for _, r, _ in attachments]),
             "frame_translation": np.array([p for _, _, p in attachments]),
-            "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)), "outputs": np.zeros(outputs),
+            "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)),
+            "outputs": np.zeros(outputs),
         }
         ints: dict[str, NDArray[np.int64]] = {
-            "dims": np.array([nj, nq, nv, FRAMES], dtype=np.int64), "parent": chain.parent,
-            "joint_type": chain.joint_type, "q_index": chain.q_index, "v_index": chain.v_index,
+            "dims": np.array([nj, nq, nv, FRAMES], dtype=np.int64),
+            "parent": chain.parent,
+            "joint_type": chain.joint_type,
+            "q_index": chain.q_index,
+            "v_index": chain.v_index,
             "frame_joint": np.array([j for j, _, _ in attachments], dtype=np.int64),
         }
         self._nq, self._nv = nq, nv
@@ -321,13 +396,13 @@ class CompiledMeasurement:
         inputs = buffer_view(self._f, self._i, FLOAT_FIELDS, "inputs")
         out = buffer_view(self._f, self._i, FLOAT_FIELDS, "outputs")
         # views sliced once: measure() runs once per control period
-        self._q_in, self._v_in = inputs[:nq], inputs[nq:nq + nv]
-        self._sensors_in = inputs[nq + nv:nq + nv + 12]
-        self._params = inputs[nq + nv + 12:]
-        views: dict[str, NDArray[np.float64]] = {"q": out[:nq], "v": out[nq:nq + nv]}
+        self._q_in, self._v_in = inputs[:nq], inputs[nq : nq + nv]
+        self._sensors_in = inputs[nq + nv : nq + nv + 12]
+        self._params = inputs[nq + nv + 12 :]
+        views: dict[str, NDArray[np.float64]] = {"q": out[:nq], "v": out[nq : nq + nv]}
         o = nq + nv
         for name, size in OUTPUT_SIZES:
-            views[name] = out[o:o + size]
+            views[name] = out[o : o + size]
             o += size
         self._views = views
         self._rotations = views["rotations"].reshape(FRAMES, 3, 3)
@@ -337,9 +412,19 @@ class CompiledMeasurement:
         self._moment = views["moment"].reshape(2, 3)
         self._kernel = compiled_entry_point(measure_step, "int64(float64[::1], int64[::1])")
 
-    def measure(self, q: NDArray[np.float64], v: NDArray[np.float64], sensors: NDArray[np.float64], *,
-                mujoco: bool, stance_frame: bool, stance: int, planned: tuple[float, float, float], ground: float,
-                min_force: float = 20.0) -> Measurement | None:
+    def measure(
+        self,
+        q: NDArray[np.float64],
+        v: NDArray[np.float64],
+        sensors: NDArray[np.float64],
+        *,
+        mujoco: bool,
+        stance_frame: bool,
+        stance: int,
+        planned: tuple[float, float, float],
+        ground: float,
+        min_force: float = 20.0,
+    ) -> Measurement | None:
         """Measure a state; None for a non-finite input or a zero base quaternion (nothing to read then).
 
         Args:
@@ -357,12 +442,29 @@ class CompiledMeasurement:
         self._q_in[:] = q
         self._v_in[:] = v
         self._sensors_in[:] = sensors
-        self._params[:] = (1.0 if mujoco else 0.0, 1.0 if stance_frame else 0.0, float(stance), *planned, ground,
-                           min_force)
+        self._params[:] = (
+            1.0 if mujoco else 0.0,
+            1.0 if stance_frame else 0.0,
+            float(stance),
+            *planned,
+            ground,
+            min_force,
+        )
         if self._kernel(self._f, self._i) != OK:
             return None
         views = self._views
         zmp = views["zmp"]
-        return Measurement(views["q"], views["v"], views["com"], views["com_velocity"], self._rotations,
-                           self._positions, self._turn, views["shift"], zmp[:2] if zmp[2] != 0.0 else None, self._cop,
-                           views["normal_force"], self._moment)
+        return Measurement(
+            views["q"],
+            views["v"],
+            views["com"],
+            views["com_velocity"],
+            self._rotations,
+            self._positions,
+            self._turn,
+            views["shift"],
+            zmp[:2] if zmp[2] != 0.0 else None,
+            self._cop,
+            views["normal_force"],
+            self._moment,
+        )

@@ -35,14 +35,25 @@ class Quintic:
         object.__setattr__(self, "_rows", None)
 
     @classmethod
-    def from_boundary(cls, duration: float, start: ArrayLike, end: ArrayLike, start_velocity: ArrayLike = 0.0,
-                      end_velocity: ArrayLike = 0.0, start_acceleration: ArrayLike = 0.0,
-                      end_acceleration: ArrayLike = 0.0) -> Quintic:
+    def from_boundary(
+        cls,
+        duration: float,
+        start: ArrayLike,
+        end: ArrayLike,
+        start_velocity: ArrayLike = 0.0,
+        end_velocity: ArrayLike = 0.0,
+        start_acceleration: ArrayLike = 0.0,
+        end_acceleration: ArrayLike = 0.0,
+    ) -> Quintic:
         """The unique quintic with the given position, velocity and acceleration at ``s = 0`` and ``s = duration``."""
         if not np.isfinite(duration) or duration < 1e-9:
             raise ControllerError(f"duration must be finite and >= 1e-9 s (its fifth power divides), got {duration!r}")
-        p0, p1, v0, v1, a0, a1 = np.broadcast_arrays(*(np.asarray(x, dtype=np.float64) for x in (
-            start, end, start_velocity, end_velocity, start_acceleration, end_acceleration)))
+        p0, p1, v0, v1, a0, a1 = np.broadcast_arrays(
+            *(
+                np.asarray(x, dtype=np.float64)
+                for x in (start, end, start_velocity, end_velocity, start_acceleration, end_acceleration)
+            )
+        )
         if not all(np.all(np.isfinite(x)) for x in (p0, p1, v0, v1, a0, a1)):
             raise ControllerError("boundary values must be finite")
         t = float(duration)

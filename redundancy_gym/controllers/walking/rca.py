@@ -27,10 +27,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel, Segment
 from ...model import RobotModel, collision_geometry_from_mjcf
-from ..objectives.actuated_objective import ActuatedObjective
-from ..objectives.collision_objective import CollisionObjective
 from ...validation import check_real
 from ..exceptions import ControllerError
+from ..objectives.actuated_objective import ActuatedObjective
+from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
 
 __all__ = ["LEG_SEGMENTS", "Rca", "RcaConfig", "RcaState", "return_quintic_no_overshoot_time"]
@@ -151,9 +151,16 @@ class Rca:
         legs: collision segment names of the right and left leg (:data:`LEG_SEGMENTS`).
     """
 
-    def __init__(self, model: RobotModel, soft_lower: ArrayLike, soft_upper: ArrayLike,
-                 config: RcaConfig | None = None, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
-                 legs: tuple[tuple[str, ...], tuple[str, ...]] = LEG_SEGMENTS) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        soft_lower: ArrayLike,
+        soft_upper: ArrayLike,
+        config: RcaConfig | None = None,
+        *,
+        feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+        legs: tuple[tuple[str, ...], tuple[str, ...]] = LEG_SEGMENTS,
+    ) -> None:
         self.model = model
         self.config = config or RcaConfig()
         self.feet_frames = feet_frames
@@ -167,16 +174,19 @@ class Rca:
         lower, upper = np.asarray(soft_lower, dtype=np.float64), np.asarray(soft_upper, dtype=np.float64)
         self._limits = None
         if c.joint_limit_weight > 0.0:
-            self._limits = ActuatedObjective(JointLimitObjective(
-                lower, upper, activation_distance=c.joint_limit_activation, slope=2.0,
-                weight=c.joint_limit_weight), model)
+            self._limits = ActuatedObjective(
+                JointLimitObjective(
+                    lower, upper, activation_distance=c.joint_limit_activation, slope=2.0, weight=c.joint_limit_weight
+                ),
+                model,
+            )
         # the joint-limit gradient acts through the swing leg's joints only: the stance leg's limits are the IK's
         names = model.joint_names
         self._leg_columns = []
         nq, nv = model.base_dofs
         for side in ("r_", "l_"):
             mask = np.zeros(model.nv, dtype=bool)
-            for i, name in enumerate(names[len(names) - (model.nv - nv):]):
+            for i, name in enumerate(names[len(names) - (model.nv - nv) :]):
                 if name.startswith(side) and "shoulder" not in name and "elbow" not in name:
                     mask[nv + i] = True
             self._leg_columns.append(mask)
@@ -208,9 +218,14 @@ class Rca:
         environment = [Segment(f"obstacle_{i}", (v,)) for i, v in enumerate(volumes)]
         c = self.config
         self._models = tuple(  # type: ignore[assignment]
-            CollisionObjective(CollisionModel(leg, environment, self_collision=False),
-                               activation_distance=c.activation_distance, slope=c.slope, weight=c.weight)
-            for leg in self._legs)
+            CollisionObjective(
+                CollisionModel(leg, environment, self_collision=False),
+                activation_distance=c.activation_distance,
+                slope=c.slope,
+                weight=c.weight,
+            )
+            for leg in self._legs
+        )
         self._bounds()
 
     def set_frame(self, rotation: ArrayLike, translation: ArrayLike) -> None:
@@ -264,8 +279,16 @@ class Rca:
         rate = -np.linalg.solve(chol.T, np.linalg.solve(chol, jacobian @ gradient))
         return rate, distance
 
-    def update(self, q: NDArray[np.float64], side: int, step: int, remaining: float, dt: float,
-               foot: NDArray[np.float64], ground: float) -> RcaState:
+    def update(
+        self,
+        q: NDArray[np.float64],
+        side: int,
+        step: int,
+        remaining: float,
+        dt: float,
+        foot: NDArray[np.float64],
+        ground: float,
+    ) -> RcaState:
         """Advance the modification of swing foot ``side`` (0 right, 1 left) by one period ``dt`` [s].
 
         Args:
@@ -314,8 +337,10 @@ class Rca:
         c = self.config
         if self._return is None:
             horizon = max(remaining - dt, dt)
-            limit = min(return_quintic_no_overshoot_time(float(w), float(v), float(a))
-                        for w, v, a in zip(self._w, self._v, self._a))
+            limit = min(
+                return_quintic_no_overshoot_time(float(w), float(v), float(a))
+                for w, v, a in zip(self._w, self._v, self._a, strict=False)
+            )
             duration = min(horizon, max(limit, c.min_return_time))
             self._return = (0.0, duration, self._w.copy(), self._v.copy(), self._a.copy())
         elapsed, duration, w0, v0, a0 = self._return

@@ -34,8 +34,16 @@ from ...geometry import SSV
 from ...validation import check_real
 from ..exceptions import ControllerError
 
-__all__ = ["OBSTACLE_CLASSES", "LinePlan", "ObstacleBox", "ObstacleDecision", "Ssta", "SstaConfig",
-           "SwingModification", "bounding_boxes"]
+__all__ = [
+    "OBSTACLE_CLASSES",
+    "LinePlan",
+    "ObstacleBox",
+    "ObstacleDecision",
+    "Ssta",
+    "SstaConfig",
+    "SwingModification",
+    "bounding_boxes",
+]
 
 BLOCKED_COST = 1e6
 """The cost of a swing through a box it can neither step over nor swing around (:meth:`Ssta.plan_line`): finite,
@@ -62,7 +70,11 @@ class ObstacleBox:
     def __post_init__(self) -> None:
         lower = np.asarray(self.lower, dtype=np.float64)
         upper = np.asarray(self.upper, dtype=np.float64)
-        if lower.shape != (3,) or upper.shape != (3,) or not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper))):
+        if (
+            lower.shape != (3,)
+            or upper.shape != (3,)
+            or not (np.all(np.isfinite(lower)) and np.all(np.isfinite(upper)))
+        ):
             raise ControllerError(f"a box needs finite 3-vector corners, got {self.lower!r}, {self.upper!r}")
         if np.any(upper < lower):
             raise ControllerError(f"a box's upper corner must not lie below its lower one, got {lower}, {upper}")
@@ -291,8 +303,9 @@ class Ssta:
         return self._without_margin
 
     # ------------------------------------------------------------------ classification
-    def _lateral_options(self, box: ObstacleBox, y: float, side: int, outward: float | None = None
-                         ) -> tuple[bool, float]:
+    def _lateral_options(
+        self, box: ObstacleBox, y: float, side: int, outward: float | None = None
+    ) -> tuple[bool, float]:
         """Whether a sole centred at ``y`` meets ``box`` sideways, and the shift [m] that clears it (signed; NaN
         when no shift within the limits does; ``outward`` overrides ``max_outward_shift``)."""
         c = self.config
@@ -315,8 +328,7 @@ class Ssta:
         c = self.config
         return box.height + c.clearance <= c.max_step_over_height and box.depth <= c.max_step_over_depth
 
-    def foot_decision(self, box: ObstacleBox, y: float, side: int, outward: float | None = None
-                      ) -> tuple[str, float]:
+    def foot_decision(self, box: ObstacleBox, y: float, side: int, outward: float | None = None) -> tuple[str, float]:
         """What a foot with its sole centred at ``y`` [m] does about ``box``: ``("beside", 0)``, ``("over", 0)``,
         ``("around", shift)`` or ``("blocked", 0)``; the smaller modification wins (the raise of the swing
         above its step height against ``lateral_cost`` times the sideways shift; ``outward`` [m] limits the
@@ -375,8 +387,10 @@ class Ssta:
     def foothold_band(self, box: ObstacleBox) -> tuple[float, float]:
         """The x range [m] in which a sole point standing in the box's lane would overlap it (with the margin)."""
         c = self.config
-        return (float(box.lower[0]) - c.foothold_margin - c.toe_length,
-                float(box.upper[0]) + c.foothold_margin + c.heel_length)
+        return (
+            float(box.lower[0]) - c.foothold_margin - c.toe_length,
+            float(box.upper[0]) + c.foothold_margin + c.heel_length,
+        )
 
     def in_lane(self, box: ObstacleBox, y: float) -> bool:
         """Whether a sole centred at ``y`` [m] meets ``box`` sideways (with the lateral margin)."""
@@ -387,8 +401,9 @@ class Ssta:
         """Whether a sole point at ``(x, y)`` [m] stands in the band (:meth:`foothold_band`) of a box in its lane."""
         return any(self.in_lane(b, y) and self.foothold_band(b)[0] < x < self.foothold_band(b)[1] for b in boxes)
 
-    def foothold_shift(self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox],
-                       behind: float = -np.inf) -> float | None:
+    def foothold_shift(
+        self, foothold: ArrayLike, previous: ArrayLike, boxes: Sequence[ObstacleBox], behind: float = -np.inf
+    ) -> float | None:
         """The move along x [m] that takes a foothold out of every box's band, changing the step from
         ``previous`` (the other foot's foothold) least within the step-length limits: 0 when it stands clear,
         None when no move does (a box the step cannot clear: too deep or too close to the previous foothold).
@@ -425,8 +440,9 @@ class Ssta:
         decision, shift = self.foot_decision(box, y, side)
         return decision, shift, True
 
-    def swing(self, start: ArrayLike, end: ArrayLike, side: int, boxes: Sequence[ObstacleBox]
-              ) -> SwingModification | None:
+    def swing(
+        self, start: ArrayLike, end: ArrayLike, side: int, boxes: Sequence[ObstacleBox]
+    ) -> SwingModification | None:
         """The modification of a swing of foot ``side`` (0 right, 1 left) from foothold ``start`` to ``end``
         [m], or None when its path passes no box in its lane.
 
@@ -440,7 +456,10 @@ class Ssta:
         height, lateral = c.step_height, 0.0
         band = (np.inf, -np.inf)
         for box in boxes:
-            reach = (float(box.lower[0]) - c.toe_length - c.clearance, float(box.upper[0]) + c.heel_length + c.clearance)
+            reach = (
+                float(box.lower[0]) - c.toe_length - c.clearance,
+                float(box.upper[0]) + c.heel_length + c.clearance,
+            )
             if reach[1] <= low or reach[0] >= high:
                 continue  # the swing's sole does not pass over the box along x
             decision, shift, _ = self._swing_decision(box, y, side)
@@ -484,8 +503,9 @@ class Ssta:
             return BLOCKED_COST  # shifted outwards, the box stays between the legs: the knee passes over its top
         return extra + c.lateral_cost * abs(shift)
 
-    def _passing_cost(self, start: tuple[float, float], end: tuple[float, float], side: int,
-                      boxes: Sequence[ObstacleBox]) -> float:
+    def _passing_cost(
+        self, start: tuple[float, float], end: tuple[float, float], side: int, boxes: Sequence[ObstacleBox]
+    ) -> float:
         """The cost of a swing from ``start`` to ``end`` (x, y) [m] past ``boxes`` (all of which its sole passes along
         x) as :meth:`swing` plans it, the boxes taken together: :data:`BLOCKED_COST` where a box blocks it, where
         the shift it takes around one box leaves its sole in another's lane (without margin), or where it steps
@@ -508,8 +528,14 @@ class Ssta:
                 return BLOCKED_COST
         return float(sum(costs))
 
-    def plan_line(self, footholds: ArrayLike, first_side: int, fixed: tuple[float, float],
-                  boxes: Sequence[ObstacleBox], free_end: bool = False) -> LinePlan:
+    def plan_line(
+        self,
+        footholds: ArrayLike,
+        first_side: int,
+        fixed: tuple[float, float],
+        boxes: Sequence[ObstacleBox],
+        free_end: bool = False,
+    ) -> LinePlan:
         """Sideways offsets of the walking line per foothold that pass ``boxes`` at least cost (dynamic
         programming over the footholds, each offset from the box sides' :meth:`line_shift` and 0).
 
@@ -539,20 +565,34 @@ class Ssta:
         # never passes it, these swings usually do
         c = self.config
         margin, clearance = c.lateral_margin, c.move_clearance
-        ladder = ((c.line_tolerance, clearance, False), (2.0 * c.line_tolerance, clearance, False),
-                  (margin, clearance, False), (margin, 0.5 * clearance, False), (margin, 0.0, False),
-                  (margin, 0.0, True))
+        ladder = (
+            (c.line_tolerance, clearance, False),
+            (2.0 * c.line_tolerance, clearance, False),
+            (margin, clearance, False),
+            (margin, 0.5 * clearance, False),
+            (margin, 0.0, False),
+            (margin, 0.0, True),
+        )
         plan = LinePlan(np.zeros(0), 0.0, None)
         for tolerance, move_clearance, moving_around in ladder:
-            plan = self._plan_line(h, first_side, fixed, boxes, free_end, min(tolerance, margin), move_clearance,
-                                   moving_around)
+            plan = self._plan_line(
+                h, first_side, fixed, boxes, free_end, min(tolerance, margin), move_clearance, moving_around
+            )
             if plan.blocked is None:
                 break
         return plan
 
-    def _plan_line(self, h: NDArray[np.float64], first_side: int, fixed: tuple[float, float],
-                   boxes: Sequence[ObstacleBox], free_end: bool, tolerance: float,
-                   move_clearance: float | None = None, moving_around: bool = False) -> LinePlan:
+    def _plan_line(
+        self,
+        h: NDArray[np.float64],
+        first_side: int,
+        fixed: tuple[float, float],
+        boxes: Sequence[ObstacleBox],
+        free_end: bool,
+        tolerance: float,
+        move_clearance: float | None = None,
+        moving_around: bool = False,
+    ) -> LinePlan:
         """:meth:`plan_line` with the margin to the boxes less ``tolerance`` [m] and sideways-moving swings kept
         ``move_clearance`` [m] along x from the boxes (None: the configured one), or (``moving_around``) costed
         like the other swings where they pass a box."""
@@ -578,8 +618,10 @@ class Ssta:
         # each time the robot's drift maps them again, and the offsets planned before must stay feasible
         half = c.foot_half_width + c.lateral_margin - tolerance
         tolerant = Ssta(replace(c, lateral_margin=c.lateral_margin - tolerance), self.lanes)
-        reaches = [(float(b.lower[0]) - c.toe_length - c.clearance, float(b.upper[0]) + c.heel_length + c.clearance)
-                   for b in boxes]
+        reaches = [
+            (float(b.lower[0]) - c.toe_length - c.clearance, float(b.upper[0]) + c.heel_length + c.clearance)
+            for b in boxes
+        ]
         bands = [self.foothold_band(b) for b in boxes]
         parents: list[NDArray[np.intp]] = []
         swings: list[NDArray[np.float64]] = []
@@ -603,14 +645,16 @@ class Ssta:
                 # a moving swing may step over a box low enough (its path is raised above it wherever it moves)
                 over = passes and self._can_step_over(box)
                 if not moving_around:
-                    swing[moving & sweep] += max(box.height + c.clearance - c.step_height, 0.0) if over \
-                        else BLOCKED_COST
+                    swing[moving & sweep] += (
+                        max(box.height + c.clearance - c.step_height, 0.0) if over else BLOCKED_COST
+                    )
                 if passes:  # its sole passes the box along x: over, around or beside
                     for i, k in zip(*np.nonzero(~moving), strict=True):
                         swing[i, k] += tolerant.swing_cost(box, 0.5 * float(ya[i, 0] + yc[0, k]), side)
             if moving_around:
-                passed = [b for b, (low, high) in zip(boxes, reaches, strict=True) if high > min(x0, x1) and
-                          low < max(x0, x1)]
+                passed = [
+                    b for b, (low, high) in zip(boxes, reaches, strict=True) if high > min(x0, x1) and low < max(x0, x1)
+                ]
                 for i, k in zip(*np.nonzero(moving), strict=True):
                     swing[i, k] += tolerant._passing_cost((x0, float(ya[i, 0])), (x1, float(yc[0, k])), side, passed)
             # a foothold left in a box's band in its lane (full margin) moves along x; where no move fits, the walk
@@ -632,7 +676,9 @@ class Ssta:
             right_y, left_y = (swing_y, stance_y) if side == 0 else (stance_y, swing_y)
             for box, (low, high) in zip(boxes, reaches, strict=True):
                 if box.height > c.straddle_height and high > min(x0, x1) and low < max(x0, x1):
-                    between = (right_y + c.foot_half_width <= box.lower[1]) & (left_y - c.foot_half_width >= box.upper[1])
+                    between = (right_y + c.foot_half_width <= box.lower[1]) & (
+                        left_y - c.foot_half_width >= box.upper[1]
+                    )
                     straddle[between] = BLOCKED_COST
             total = value[:, :, None] + (step + swing + stand[None, :])[:, None, :] + (width + straddle)[None, :, :]
             parent = np.argmin(total, axis=0)  # over a, for each (b, c)
@@ -651,8 +697,14 @@ class Ssta:
             chosen.append(int(parent[chosen[-1], chosen[-2]]))
         chosen = chosen[::-1]  # offsets of footholds 1 .. n-1 (index into offsets)
         path = [a_index, *chosen]
-        blocked = next((m for m in range(len(swings)) if swings[m][path[m], path[m + 2]] +
-                        straddles[m][path[m + 1], path[m + 2]] >= BLOCKED_COST), None)
+        blocked = next(
+            (
+                m
+                for m in range(len(swings))
+                if swings[m][path[m], path[m + 2]] + straddles[m][path[m + 1], path[m + 2]] >= BLOCKED_COST
+            ),
+            None,
+        )
         if not np.isfinite(cost) and blocked is None:  # no stance from the fixed footholds keeps the limits
             blocked = 0
         return LinePlan(offsets[path[2:]], cost, blocked)

@@ -95,8 +95,16 @@ class Stabilizer:
         self._offset: tuple[float, float] = (0.0, 0.0)
         self._zmp: tuple[float, float] | None = None
 
-    def update(self, dt: float, com_ref: ArrayLike, dcm_ref: ArrayLike, zmp_ref: ArrayLike, com: ArrayLike,
-               com_velocity: ArrayLike, zmp: ArrayLike | None) -> StabilizerOutput:
+    def update(
+        self,
+        dt: float,
+        com_ref: ArrayLike,
+        dcm_ref: ArrayLike,
+        zmp_ref: ArrayLike,
+        com: ArrayLike,
+        com_velocity: ArrayLike,
+        zmp: ArrayLike | None,
+    ) -> StabilizerOutput:
         """Advance one control period ``dt`` [s] from the plan (``*_ref``) and the measurement (x, y) [m, m/s].
 
         Each point may have more entries (a 3-D CoM): its first two are used. ``zmp`` None (no loaded foot) keeps
@@ -141,8 +149,9 @@ class Stabilizer:
             ox, oy = ox * scale, oy * scale
             rx, ry = (ox - px) / dt, (oy - py) / dt
         self._offset = (ox, oy)
-        return StabilizerOutput(np.array((ox, oy)), np.array((rx, ry)), np.array((dx, dy)), np.array((mx, my)),
-                                np.array((ex, ey)))
+        return StabilizerOutput(
+            np.array((ox, oy)), np.array((rx, ry)), np.array((dx, dy)), np.array((mx, my)), np.array((ex, ey))
+        )
 
 
 _FLOAT64 = np.dtype(np.float64)
@@ -159,7 +168,7 @@ def _checked_points(values: tuple[ArrayLike, ...]) -> list[tuple[float, float]]:
     """The first two entries of each of :meth:`Stabilizer.update`'s points (``_POINT_NAMES``) as floats;
     ControllerError naming the first one that is not a finite (x, y)."""
     arrays = [np.asarray(v, dtype=np.float64)[:2] for v in values]
-    for name, value in zip(_POINT_NAMES, arrays):
+    for name, value in zip(_POINT_NAMES, arrays, strict=False):
         if value.shape != (2,) or not np.all(np.isfinite(value)):
             raise ControllerError(f"{name} must be a finite (x, y), got {value!r}")
     return [(a.item(0), a.item(1)) for a in arrays]

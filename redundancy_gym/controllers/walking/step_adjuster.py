@@ -80,23 +80,51 @@ class StepAdjusterConfig:
 
     def __post_init__(self) -> None:
         margin = np.asarray(self.ankle_margin, dtype=object)
-        if margin.shape != (2,) or not all(isinstance(v, (int, float, np.floating, np.integer))
-                                            and not isinstance(v, bool) and np.isfinite(v) and v >= 0.0 for v in margin):
-            raise ControllerError(f"step adjuster ankle_margin must be two finite reals >= 0, got {self.ankle_margin!r}")
-        if not isinstance(self.ankle_share, (int, float, np.integer, np.floating)) or isinstance(self.ankle_share, bool) \
-                or not 0.0 <= self.ankle_share <= 1.0:
+        if margin.shape != (2,) or not all(
+            isinstance(v, (int, float, np.floating, np.integer))
+            and not isinstance(v, bool)
+            and np.isfinite(v)
+            and v >= 0.0
+            for v in margin
+        ):
+            raise ControllerError(
+                f"step adjuster ankle_margin must be two finite reals >= 0, got {self.ankle_margin!r}"
+            )
+        if (
+            not isinstance(self.ankle_share, (int, float, np.integer, np.floating))
+            or isinstance(self.ankle_share, bool)
+            or not 0.0 <= self.ankle_share <= 1.0
+        ):
             raise ControllerError(f"step adjuster ankle_share must lie in [0, 1], got {self.ankle_share!r}")
-        for name in ("error_filter", "timing_gain", "min_remaining", "max_delay", "max_forward", "max_backward", "min_width", "max_width",
-                     "max_swing_acceleration"):
+        for name in (
+            "error_filter",
+            "timing_gain",
+            "min_remaining",
+            "max_delay",
+            "max_forward",
+            "max_backward",
+            "min_width",
+            "max_width",
+            "max_swing_acceleration",
+        ):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
-                    or not np.isfinite(value) or value < 0.0:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float, np.floating, np.integer))
+                or not np.isfinite(value)
+                or value < 0.0
+            ):
                 raise ControllerError(f"step adjuster {name} must be a finite real >= 0, got {value!r}")
         if not isinstance(self.enabled, (bool, np.bool_)):
             raise ControllerError(f"step adjuster enabled must be a bool, got {self.enabled!r}")
-        if isinstance(self.timing_candidates, bool) or not isinstance(self.timing_candidates, (int, np.integer)) \
-                or self.timing_candidates < 1:
-            raise ControllerError(f"step adjuster timing_candidates must be an int >= 1, got {self.timing_candidates!r}")
+        if (
+            isinstance(self.timing_candidates, bool)
+            or not isinstance(self.timing_candidates, (int, np.integer))
+            or self.timing_candidates < 1
+        ):
+            raise ControllerError(
+                f"step adjuster timing_candidates must be an int >= 1, got {self.timing_candidates!r}"
+            )
         if self.min_width > self.max_width:
             raise ControllerError(f"min_width={self.min_width!r} exceeds max_width={self.max_width!r}")
 
@@ -135,8 +163,9 @@ class StepAdjuster:
         self._error: NDArray[np.float64] | None = None
         self._time = 0.0
 
-    def update(self, pattern: WalkingPattern, t: float, dcm: ArrayLike,
-               planned: NDArray[np.float64] | None = None) -> StepAdjustment | None:
+    def update(
+        self, pattern: WalkingPattern, t: float, dcm: ArrayLike, planned: NDArray[np.float64] | None = None
+    ) -> StepAdjustment | None:
         """Adjust ``pattern``'s current step at time ``t`` [s] for the measured DCM (x, y) [m]; None if unchanged.
 
         ``planned`` is the pattern's DCM at ``t`` where the caller has sampled it already (else it is read here).
@@ -226,7 +255,9 @@ class StepAdjuster:
             if turn is None:
                 reachable = self._reachable(target, low, high, foot, foot_velocity, ADJUSTED_OVER * left)
             else:
-                local = self._reachable(turn.T @ (target - stance), low, high, foot, foot_velocity, ADJUSTED_OVER * left)
+                local = self._reachable(
+                    turn.T @ (target - stance), low, high, foot, foot_velocity, ADJUSTED_OVER * left
+                )
                 reachable = stance + turn @ local
             miss = float(np.linalg.norm(reachable - target))
             if best is None or miss < best[0] - c.timing_gain:
@@ -243,8 +274,15 @@ class StepAdjuster:
         self._error = dcm - pattern.dcm(t)  # what the new plan leaves
         return StepAdjustment(k, shift, single, error, clipped)
 
-    def _reachable(self, target: NDArray[np.float64], low: NDArray[np.float64], high: NDArray[np.float64],
-                   foot: NDArray[np.float64], velocity: NDArray[np.float64], tau: float) -> NDArray[np.float64]:
+    def _reachable(
+        self,
+        target: NDArray[np.float64],
+        low: NDArray[np.float64],
+        high: NDArray[np.float64],
+        foot: NDArray[np.float64],
+        velocity: NDArray[np.float64],
+        tau: float,
+    ) -> NDArray[np.float64]:
         """The point nearest ``target`` inside the step box and within the swing's reach in ``tau`` [s]."""
         point = np.clip(target, low, high)
         centre = foot + 0.5 * tau * velocity  # where a quintic from this velocity to rest would go unforced

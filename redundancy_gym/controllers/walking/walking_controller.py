@@ -12,30 +12,29 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel
 from ...model import ModelError, RobotModel, collision_model_from_mjcf
+from ..exceptions import ControllerError
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.collision_objective import CollisionObjective
-from ..exceptions import ControllerError
 from ..objectives.joint_limit_objective import JointLimitObjective
 from ..objectives.posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
-from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .rca import Rca, RcaConfig, RcaState
 from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
+from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
-
 
 __all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
 
@@ -155,14 +154,30 @@ class WalkingController:
             onto the pattern's first reference.
     """
 
-    def __init__(self, model: RobotModel, dt: float, soft_lower: ArrayLike, soft_upper: ArrayLike, *,
-                 gait: GaitConfig | None = None, gains: StabilizerGains | None = None,
-                 ik: WalkingIkConfig | None = None, stepping: StepAdjusterConfig | None = None, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
-                 ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"), torso_frame: str = "imu",
-                 correction_iterations: int = 3, correction_samples: int = 20, stance_frame: bool = True,
-                 ssta: SstaConfig | None = None, rca: RcaConfig | None = None, use_ssta: bool = True,
-                 use_rca: bool = True, correction_configuration: ArrayLike | None = None,
-                 ikd: WalkingIkdConfig | None = None) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        dt: float,
+        soft_lower: ArrayLike,
+        soft_upper: ArrayLike,
+        *,
+        gait: GaitConfig | None = None,
+        gains: StabilizerGains | None = None,
+        ik: WalkingIkConfig | None = None,
+        stepping: StepAdjusterConfig | None = None,
+        feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+        ankle_frames: tuple[str, str] = ("r_ankle_ft", "l_ankle_ft"),
+        torso_frame: str = "imu",
+        correction_iterations: int = 3,
+        correction_samples: int = 20,
+        stance_frame: bool = True,
+        ssta: SstaConfig | None = None,
+        rca: RcaConfig | None = None,
+        use_ssta: bool = True,
+        use_rca: bool = True,
+        correction_configuration: ArrayLike | None = None,
+        ikd: WalkingIkdConfig | None = None,
+    ) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
         if not model.floating_base:
@@ -175,9 +190,14 @@ class WalkingController:
         self.gains = gains or StabilizerGains()
         self.ik_config = ik or WalkingIkConfig()
         ratio_knot = self.gait.double_support_ratio * correction_samples
-        if correction_iterations and abs(correction_samples - ratio_knot - round(correction_samples - ratio_knot)) > 1e-9:
-            raise ControllerError(f"correction_samples={correction_samples} puts no knot at the single-support end "
-                                  f"(double_support_ratio={self.gait.double_support_ratio})")
+        if (
+            correction_iterations
+            and abs(correction_samples - ratio_knot - round(correction_samples - ratio_knot)) > 1e-9
+        ):
+            raise ControllerError(
+                f"correction_samples={correction_samples} puts no knot at the single-support end "
+                f"(double_support_ratio={self.gait.double_support_ratio})"
+            )
         self._nq, self._nv = model.base_dofs
         self.soft_lower = np.asarray(soft_lower, dtype=np.float64)
         self.soft_upper = np.asarray(soft_upper, dtype=np.float64)
@@ -201,8 +221,10 @@ class WalkingController:
         if correction_configuration is not None:
             joints = np.asarray(correction_configuration, dtype=np.float64)
             if joints.shape != (model.nq - self._nq,) or not np.all(np.isfinite(joints)):
-                raise ControllerError(f"correction_configuration must be {model.nq - self._nq} finite joint positions "
-                                      f"[rad], got shape {joints.shape}")
+                raise ControllerError(
+                    f"correction_configuration must be {model.nq - self._nq} finite joint positions "
+                    f"[rad], got shape {joints.shape}"
+                )
             self.correction_configuration = joints
         self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
         self.step_adjuster = StepAdjuster(stepping)
@@ -216,9 +238,11 @@ class WalkingController:
         self.time = 0.0
         self._command_replan = -np.inf
         self._next: PatternSample | None = None
-        self.ssta_config = ssta or SstaConfig(step_height=self.gait.step_height,
-                                              max_step_length=self.gait.max_step_length,
-                                              toe_length=self.gait.toe_length)
+        self.ssta_config = ssta or SstaConfig(
+            step_height=self.gait.step_height,
+            max_step_length=self.gait.max_step_length,
+            toe_length=self.gait.toe_length,
+        )
         self.ssta: Ssta | None = None
         self.obstacle_boxes: tuple[ObstacleBox, ...] = ()
         self.use_ssta, self.use_rca = bool(use_ssta), bool(use_rca)
@@ -240,17 +264,39 @@ class WalkingController:
         if c.posture_weight > 0.0:
             objectives.append(ActuatedObjective(PostureObjective(posture, c.posture_weight), self.model))
         if c.joint_limit_weight > 0.0:
-            objectives.append(ActuatedObjective(JointLimitObjective(
-                self.soft_lower, self.soft_upper, activation_distance=c.joint_limit_activation,
-                slope=c.joint_limit_slope, weight=c.joint_limit_weight), self.model))
+            objectives.append(
+                ActuatedObjective(
+                    JointLimitObjective(
+                        self.soft_lower,
+                        self.soft_upper,
+                        activation_distance=c.joint_limit_activation,
+                        slope=c.joint_limit_slope,
+                        weight=c.joint_limit_weight,
+                    ),
+                    self.model,
+                )
+            )
         if c.self_collision_weight > 0.0:
             if self._collision_model is None:  # the MJCF's volumes, read once
                 self._collision_model = collision_model_from_mjcf(self.model)
-            objectives.append(CollisionObjective(self._collision_model, activation_distance=c.self_collision_activation,
-                                                 slope=c.self_collision_slope, weight=c.self_collision_weight))
-        return WholeBodyIk(self.model, feet_frames=self.feet_frames, torso_frame=self.torso_frame, gain=c.gain,
-                           gamma=c.gamma, momentum_minimization=c.momentum_minimization, beta=c.beta,
-                           objectives=tuple(objectives))
+            objectives.append(
+                CollisionObjective(
+                    self._collision_model,
+                    activation_distance=c.self_collision_activation,
+                    slope=c.self_collision_slope,
+                    weight=c.self_collision_weight,
+                )
+            )
+        return WholeBodyIk(
+            self.model,
+            feet_frames=self.feet_frames,
+            torso_frame=self.torso_frame,
+            gain=c.gain,
+            gamma=c.gamma,
+            momentum_minimization=c.momentum_minimization,
+            beta=c.beta,
+            objectives=tuple(objectives),
+        )
 
     def start(self, q: ArrayLike, speed: float) -> None:
         """Begin a walk from the standing configuration ``q`` (pinocchio convention) at ``speed`` [m/s].
@@ -266,10 +312,21 @@ class WalkingController:
             # the CLIK's joint-limit objective (without it the IKD stretched a knee at 0.7 m/s); neither its posture
             # (the IKD has its own posture stiffness) nor its self-collision objective (evaluated in Python it took
             # some 230 us a period, and the IKD walks on BipedWalk kept 19 mm between the links without it)
-            objectives = tuple(o for o in self.ik.objectives if isinstance(o, ActuatedObjective)
-                               and isinstance(o.objective, JointLimitObjective))
-            self.ikd = WalkingIkd(self.model, self.dt, self.ikd_config, omega=self.stabilizer.omega, posture=q_ref,
-                                  feet_frames=self.feet_frames, torso_frame=self.torso_frame, objectives=objectives)
+            objectives = tuple(
+                o
+                for o in self.ik.objectives
+                if isinstance(o, ActuatedObjective) and isinstance(o.objective, JointLimitObjective)
+            )
+            self.ikd = WalkingIkd(
+                self.model,
+                self.dt,
+                self.ikd_config,
+                omega=self.stabilizer.omega,
+                posture=q_ref,
+                feet_frames=self.feet_frames,
+                torso_frame=self.torso_frame,
+                objectives=objectives,
+            )
             self.ikd.start(q_ref)
             self.model.update(q_ref)
             self._ikd_com = (self.model.com().copy(), np.zeros(3))
@@ -283,8 +340,11 @@ class WalkingController:
             key = (round(float(speed), 9), self.ik_config.momentum_minimization, b"" if canonical else q_ref.tobytes())
             correction = self._corrections.get(key)
             if correction is None:
-                correction = self._canonical_correction(speed) if canonical else \
-                    self._estimate_correction(q_ref, speed, self.solver, start)
+                correction = (
+                    self._canonical_correction(speed)
+                    if canonical
+                    else self._estimate_correction(q_ref, speed, self.solver, start)
+                )
                 if len(self._corrections) >= 16:
                     self._corrections.pop(next(iter(self._corrections)))
                 self._corrections[key] = correction
@@ -357,7 +417,9 @@ class WalkingController:
             self.rca.set_frame(rotation, translation)
         # SSTA plans again when the map moved the obstacles by more than a centimetre (or new ones came)
         last_rotation, last_translation = self._ssta_map
-        moved = float(np.max(np.abs(translation - last_translation))) + 0.5 * float(np.max(np.abs(rotation - last_rotation)))
+        moved = float(np.max(np.abs(translation - last_translation))) + 0.5 * float(
+            np.max(np.abs(rotation - last_rotation))
+        )
         if not force and moved < SSTA_REMAP:
             return
         self._ssta_map = (rotation.copy(), translation.copy())
@@ -368,8 +430,9 @@ class WalkingController:
                 self._next = None
 
     @staticmethod
-    def _standing_reference(com: NDArray[np.float64], feet: NDArray[np.float64],
-                            rotations: NDArray[np.float64]) -> WholeBodyReference:
+    def _standing_reference(
+        com: NDArray[np.float64], feet: NDArray[np.float64], rotations: NDArray[np.float64]
+    ) -> WholeBodyReference:
         yaw = np.eye(3)
         return WholeBodyReference(com, np.zeros(3), feet, rotations, np.zeros((2, 6)), yaw, np.zeros(3))
 
@@ -379,30 +442,43 @@ class WalkingController:
         assert self.correction_configuration is not None
         q = np.zeros(self.model.nq)
         q[self._nq - 1] = 1.0  # the identity quaternion (x, y, z, w)
-        q[self._nq:] = self.correction_configuration
+        q[self._nq :] = self.correction_configuration
         _, solver, q_ref, start = self._stand(q)
         return self._estimate_correction(q_ref, speed, solver, start)
 
-    def _stand(self, q: NDArray[np.float64]) -> tuple[WholeBodyIk, WholeBodyIk | CompiledWholeBodyIk,
-                                                    NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    def _stand(
+        self, q: NDArray[np.float64]
+    ) -> tuple[
+        WholeBodyIk,
+        WholeBodyIk | CompiledWholeBodyIk,
+        NDArray[np.float64],
+        tuple[NDArray[np.float64], NDArray[np.float64]],
+    ]:
         """An IK with ``q``'s joints as its posture, and ``q`` moved by it onto the standing reference (the CoM
         ``com_height`` above the soles): ``(ik, solver, q_ref, (feet [m], CoM (x, y) [m]))``."""
-        ik = self._make_ik(q[self._nq:].copy())
-        solver: WholeBodyIk | CompiledWholeBodyIk = CompiledWholeBodyIk(ik) if self.ik_config.backend == "compiled" else ik
+        ik = self._make_ik(q[self._nq :].copy())
+        solver: WholeBodyIk | CompiledWholeBodyIk = (
+            CompiledWholeBodyIk(ik) if self.ik_config.backend == "compiled" else ik
+        )
         self.model.update(q)
         feet = np.array([self.model.frame_position(f) for f in self._feet])
         rotations = np.array([self.model.frame_rotation(f) for f in self._feet])
         com, _ = self.model.com_and_centroidal_matrix()
-        stand = self._standing_reference(np.array([com[0], com[1], float(feet[:, 2].mean()) + self.gait.com_height]),
-                                         feet, rotations)
+        stand = self._standing_reference(
+            np.array([com[0], com[1], float(feet[:, 2].mean()) + self.gait.com_height]), feet, rotations
+        )
         q_ref = q.copy()
         for _ in range(20):
             q_ref = solver.step(q_ref, stand, stand, self.dt).q
         return ik, solver, q_ref, (feet, com[:2].copy())
 
-    def _estimate_correction(self, q_start: NDArray[np.float64], speed: float,
-                             solver: WholeBodyIk | CompiledWholeBodyIk,
-                             start: tuple[NDArray[np.float64], NDArray[np.float64]]) -> ZmpCorrection:
+    def _estimate_correction(
+        self,
+        q_start: NDArray[np.float64],
+        speed: float,
+        solver: WholeBodyIk | CompiledWholeBodyIk,
+        start: tuple[NDArray[np.float64], NDArray[np.float64]],
+    ) -> ZmpCorrection:
         """Kinematic rollouts with ``solver`` from ``q_start`` (feet and CoM ``start``): the ZMP shift
         ``(-Ldot_y, Ldot_x) / (m g)`` of the reference motion, per phase.
 
@@ -434,7 +510,9 @@ class WalkingController:
             for side, k in ((0, 2), (1, 3)):
                 t0, duration = pattern.step_start(k), pattern.step_duration
                 for j, phase in enumerate(phases):
-                    window = (times_a >= t0 + (phase - 0.5 / n) * duration) & (times_a < t0 + (phase + 0.5 / n) * duration)
+                    window = (times_a >= t0 + (phase - 0.5 / n) * duration) & (
+                        times_a < t0 + (phase + 0.5 / n) * duration
+                    )
                     offsets[side, j] = shift[window].mean(axis=0)
             correction = ZmpCorrection(phases, offsets)
         assert correction is not None
@@ -442,8 +520,9 @@ class WalkingController:
 
     # ------------------------------------------------------------------ step
     @staticmethod
-    def _reference_array(sample: PatternSample, offset: NDArray[np.float64],
-                         rate: NDArray[np.float64]) -> NDArray[np.float64]:
+    def _reference_array(
+        sample: PatternSample, offset: NDArray[np.float64], rate: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
         """The IK reference of a pattern sample, packed (:meth:`WholeBodyReference.to_array`): the CoM moved by the
         stabilizer's ``offset`` [m] at ``rate`` [m/s], soles ``R_z(yaw) R_y(pitch)`` (angular velocity
         ``R_z(yaw) (0, pitch rate, 0) + (0, 0, yaw rate)``), torso upright along the mean heading of the feet."""
@@ -452,12 +531,18 @@ class WalkingController:
     @staticmethod
     def _with_offset(base: _ReferenceBase, offset: ArrayLike, rate: ArrayLike) -> NDArray[np.float64]:
         """A copy of the packed reference ``base`` with the CoM moved by ``offset`` [m] at ``rate`` [m/s] (x, y)."""
-        return WalkingController._offset_reference(base, float(offset[0]), float(offset[1]),  # type: ignore[index]
-                                                   float(rate[0]), float(rate[1]))  # type: ignore[index]
+        return WalkingController._offset_reference(
+            base,
+            float(offset[0]),
+            float(offset[1]),  # type: ignore[index]
+            float(rate[0]),
+            float(rate[1]),
+        )  # type: ignore[index]
 
     @staticmethod
-    def _offset_reference(base: _ReferenceBase, offset_x: float, offset_y: float, rate_x: float,
-                          rate_y: float) -> NDArray[np.float64]:
+    def _offset_reference(
+        base: _ReferenceBase, offset_x: float, offset_y: float, rate_x: float, rate_y: float
+    ) -> NDArray[np.float64]:
         """:meth:`_with_offset` on floats: the CoM offset [m] and its rate [m/s]."""
         packed, com_x, com_y, velocity_x, velocity_y = base
         a = packed.copy()
@@ -482,13 +567,13 @@ class WalkingController:
             c, s = math.cos(pitch), math.sin(pitch)
             yaw, yaw_rate = yaws[i], yaw_rates[i]
             if yaw == 0.0 and yaw_rate == 0.0:
-                a[12 + 9 * i:21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
+                a[12 + 9 * i : 21 + 9 * i] = c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c
                 a[34 + 6 * i] = pitch_rates[i]
                 continue
             cz, sz = math.cos(yaw), math.sin(yaw)
-            a[12 + 9 * i:21 + 9 * i] = cz * c, -sz, cz * s, sz * c, cz, sz * s, -s, 0.0, c
+            a[12 + 9 * i : 21 + 9 * i] = cz * c, -sz, cz * s, sz * c, cz, sz * s, -s, 0.0, c
             pitch_rate = pitch_rates[i]
-            a[33 + 6 * i:36 + 6 * i] = -sz * pitch_rate, cz * pitch_rate, yaw_rate
+            a[33 + 6 * i : 36 + 6 * i] = -sz * pitch_rate, cz * pitch_rate, yaw_rate
         torso, torso_rate = 0.5 * (yaws[0] + yaws[1]), 0.5 * (yaw_rates[0] + yaw_rates[1])
         if torso == 0.0 and torso_rate == 0.0:
             a[42:51] = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0
@@ -507,9 +592,14 @@ class WalkingController:
         self._base = (sample, base)
         return base
 
-    def _in_stance_frame(self, sample: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
-                         rotations: NDArray[np.float64], positions: NDArray[np.float64]
-                         ) -> tuple[NDArray[np.float64], ...]:
+    def _in_stance_frame(
+        self,
+        sample: PatternSample,
+        com: NDArray[np.float64],
+        com_velocity: NDArray[np.float64],
+        rotations: NDArray[np.float64],
+        positions: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], ...]:
         """The measurement moved rigidly (yaw about z and a horizontal shift) so that the measured stance sole lies on
         its planned pose (its planned position and heading) (rows 2, 3 of ``rotations``/``positions``: the soles right, left).
 
@@ -533,11 +623,11 @@ class WalkingController:
         real = positions[2 + stance]
         shift = np.array([planned[0], planned[1], 0.0]) - turn @ np.array([real[0], real[1], 0.0])
         self._world_to_plan = (turn, shift)
-        return (turn @ com + shift, turn @ com_velocity, turn @ rotations,
-                positions @ turn.T + shift)
+        return (turn @ com + shift, turn @ com_velocity, turn @ rotations, positions @ turn.T + shift)
 
-    def _reference(self, sample: PatternSample, offset: NDArray[np.float64],
-                   rate: NDArray[np.float64]) -> WholeBodyReference:
+    def _reference(
+        self, sample: PatternSample, offset: NDArray[np.float64], rate: NDArray[np.float64]
+    ) -> WholeBodyReference:
         return WholeBodyReference.from_array(self._reference_array(sample, offset, rate))
 
     def step(self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike) -> WalkingCommand:
@@ -549,8 +639,12 @@ class WalkingController:
         """
         start = self._start_sample()
         measured = None
-        if _is_float_array(q, (self.model.nq,)) and _is_float_array(v, (self.model.nv,)) \
-                and _is_float_array(forces, (2, 3)) and _is_float_array(torques, (2, 3)):
+        if (
+            _is_float_array(q, (self.model.nq,))
+            and _is_float_array(v, (self.model.nv,))
+            and _is_float_array(forces, (2, 3))
+            and _is_float_array(torques, (2, 3))
+        ):
             sensors = self._sensors
             sensors[:, :3] = forces
             sensors[:, 3:] = torques
@@ -569,8 +663,11 @@ class WalkingController:
         """
         start = self._start_sample()
         measured = None
-        if _is_float_array(qpos, (self.model.nq,)) and _is_float_array(qvel, (self.model.nv,)) \
-                and _is_float_array(wrenches, (12,)):
+        if (
+            _is_float_array(qpos, (self.model.nq,))
+            and _is_float_array(qvel, (self.model.nv,))
+            and _is_float_array(wrenches, (12,))
+        ):
             measured = self._measure_compiled(qpos, qvel, wrenches, True, start)
         if measured is None:
             q, v = self.model.from_mujoco_state(qpos, qvel)
@@ -585,8 +682,14 @@ class WalkingController:
         nxt = self._next
         return nxt if nxt is not None and nxt.time == self.time else self.pattern.sample(self.time)
 
-    def _measure_compiled(self, q: NDArray[np.float64], v: NDArray[np.float64], sensors: NDArray[np.float64],
-                          mujoco: bool, start: PatternSample) -> _Measured | None:
+    def _measure_compiled(
+        self,
+        q: NDArray[np.float64],
+        v: NDArray[np.float64],
+        sensors: NDArray[np.float64],
+        mujoco: bool,
+        start: PatternSample,
+    ) -> _Measured | None:
         """The measurement (CoM, its velocity, the ZMP) in one kernel call (:class:`CompiledMeasurement`): the
         same as :meth:`_measure_python` to round-off; None for a non-finite input (the checked path names it)."""
         assert self.pattern is not None
@@ -595,20 +698,29 @@ class WalkingController:
         k = start.step
         stance = (k + 1) % 2 if k >= 0 else 1  # the standing start: the left foot, the first stance foot
         planned = start.feet[stance]
-        m = self._measurement.measure(q, v, sensors, mujoco=mujoco, stance_frame=self.stance_frame, stance=stance,
-                                      planned=(planned.item(0), planned.item(1), start.feet_yaw.item(stance)),
-                                      ground=self.pattern.ground)
+        m = self._measurement.measure(
+            q,
+            v,
+            sensors,
+            mujoco=mujoco,
+            stance_frame=self.stance_frame,
+            stance=stance,
+            planned=(planned.item(0), planned.item(1), start.feet_yaw.item(stance)),
+            ground=self.pattern.ground,
+        )
         if m is None:
             return None
         if self.stance_frame:
             self._world_to_plan = (m.turn.copy(), m.shift.copy())
         # copies: the estimate outlives the period (WalkingCommand.contact), the kernel's buffers do not
-        contact = ZmpEstimate(None if m.zmp is None else m.zmp.copy(), m.cop.copy(), m.normal_force.copy(),
-                              m.moment.copy())
+        contact = ZmpEstimate(
+            None if m.zmp is None else m.zmp.copy(), m.cop.copy(), m.normal_force.copy(), m.moment.copy()
+        )
         return m.com.copy(), m.com_velocity.copy(), contact
 
-    def _measure_python(self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike,
-                        start: PatternSample) -> _Measured:
+    def _measure_python(
+        self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike, start: PatternSample
+    ) -> _Measured:
         """The measurement through pinocchio and NumPy, with every input checked (the errors name the bad one)."""
         assert self.pattern is not None
         model = self.model
@@ -616,13 +728,15 @@ class WalkingController:
         v = np.asarray(v, dtype=np.float64)
         com, com_velocity, rotations, positions = model.measure(q, v, self._ankles + self._feet)
         if self.stance_frame:
-            com, com_velocity, rotations, positions = self._in_stance_frame(start, com, com_velocity, rotations,
-                                                                             positions)
+            com, com_velocity, rotations, positions = self._in_stance_frame(
+                start, com, com_velocity, rotations, positions
+            )
         contact = estimate_zmp(rotations[:2], positions[:2], forces, torques, ground=self.pattern.ground)
         return com, com_velocity, contact
 
-    def _step(self, start: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64],
-              contact: ZmpEstimate) -> WalkingCommand:
+    def _step(
+        self, start: PatternSample, com: NDArray[np.float64], com_velocity: NDArray[np.float64], contact: ZmpEstimate
+    ) -> WalkingCommand:
         """The period after the measurement: obstacles, step adjustment, stabilizer, IK."""
         assert self.pattern is not None and self.solver is not None and self.q_ref is not None
         if self._obstacle_volumes and start.step != self._obstacle_step:
@@ -634,9 +748,12 @@ class WalkingController:
         # the measured DCM, c + c_dot / omega (x, y), in floats
         (com_x, com_y, _), (velocity_x, velocity_y, _) = com.tolist(), com_velocity.tolist()
         omega = self.stabilizer.omega
-        adjustment = self.step_adjuster.update(self.pattern, self.time,
-                                               np.array((com_x + velocity_x / omega, com_y + velocity_y / omega)),
-                                               planned=start.dcm)
+        adjustment = self.step_adjuster.update(
+            self.pattern,
+            self.time,
+            np.array((com_x + velocity_x / omega, com_y + velocity_y / omega)),
+            planned=start.dcm,
+        )
         if adjustment is not None:
             start = self.pattern.sample(self.time)  # the plan changed from now on
         end = self.pattern.sample(self.time + self.dt)
@@ -651,8 +768,9 @@ class WalkingController:
         # the offset at the period's end, offset + rate dt, in floats (the same operations on x and y)
         (offset_x, offset_y), (rate_x, rate_y) = feedback.offset.tolist(), feedback.rate.tolist()
         start_ref = self._offset_reference(self._packed_base(start), offset_x, offset_y, rate_x, rate_y)
-        end_ref = self._offset_reference(self._packed_base(end), offset_x + rate_x * self.dt,
-                                         offset_y + rate_y * self.dt, rate_x, rate_y)
+        end_ref = self._offset_reference(
+            self._packed_base(end), offset_x + rate_x * self.dt, offset_y + rate_y * self.dt, rate_x, rate_y
+        )
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)
@@ -663,18 +781,24 @@ class WalkingController:
             result = self.solver.step(self.q_ref, start_ref, end_ref, self.dt)
         self.q_ref = result.q
         self.time += self.dt
-        return WalkingCommand(result.q[self._nq:].copy(), start, feedback, contact, result, adjustment, avoidance)
+        return WalkingCommand(result.q[self._nq :].copy(), start, feedback, contact, result, adjustment, avoidance)
 
-    def _ikd_step(self, start: PatternSample, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64],
-                  feedback: StabilizerOutput) -> WalkingIkdStep:
+    def _ikd_step(
+        self,
+        start: PatternSample,
+        start_ref: NDArray[np.float64],
+        end_ref: NDArray[np.float64],
+        feedback: StabilizerOutput,
+    ) -> WalkingIkdStep:
         """The IKD's period: the pattern's soles, torso and ZMP, the balance feedback's CoM offset on the soles."""
         assert self.ikd is not None and self.pattern is not None
         k = start.step
         window = None
         if k >= 0:
             window = (self.pattern.step_start(k) + self.pattern.step_single(k), self.pattern.step_start(k + 1))
-        result = self.ikd.step(start, start_ref, end_ref, window, feedback.offset, feedback.rate,
-                               self.pattern.reference_zmp(start.time))
+        result = self.ikd.step(
+            start, start_ref, end_ref, window, feedback.offset, feedback.rate, self.pattern.reference_zmp(start.time)
+        )
         self._ikd_com = (result.com + result.com_velocity * self.dt, result.com_velocity)
         return result
 

@@ -14,9 +14,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..objectives.objective import Objective
 from ..ikd.biped_ikd import GRAVITY, BipedIkd, BipedIkdReference
 from ..ikd.plan_stabilizer import PlanStabilizer
+from ..objectives.objective import Objective
 
 if TYPE_CHECKING:  # the walking package imports this module lazily (it would otherwise import itself)
     from .walking_pattern import PatternSample
@@ -65,8 +65,19 @@ class WalkingIkdConfig:
     def __post_init__(self) -> None:
         if not math.isfinite(self.max_velocity) or self.max_velocity <= 0.0:
             raise ControllerError(f"max_velocity must be finite and > 0 [rad/s], got {self.max_velocity!r}")
-        for name in ("moment_gain", "planning_max_shift", "objective_gain", "stiffness", "damping", "self_motion_damping",
-                     "posture_stiffness", "support_margin", "toe_length", "heel_length", "foot_half_width"):
+        for name in (
+            "moment_gain",
+            "planning_max_shift",
+            "objective_gain",
+            "stiffness",
+            "damping",
+            "self_motion_damping",
+            "posture_stiffness",
+            "support_margin",
+            "toe_length",
+            "heel_length",
+            "foot_half_width",
+        ):
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
@@ -147,19 +158,37 @@ class WalkingIkd:
             :class:`BipedIkd`.
     """
 
-    def __init__(self, model: RobotModel, dt: float, config: WalkingIkdConfig, *, omega: float, posture: ArrayLike,
-                 feet_frames: tuple[str, str] = ("r_sole", "l_sole"), torso_frame: str = "imu",
-                 objectives: Sequence[Objective] = ()) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        dt: float,
+        config: WalkingIkdConfig,
+        *,
+        omega: float,
+        posture: ArrayLike,
+        feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+        torso_frame: str = "imu",
+        objectives: Sequence[Objective] = (),
+    ) -> None:
         if not math.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0 [s], got {dt!r}")
         self.model = model
         self.dt = float(dt)
         self.config = config
-        self.ikd = BipedIkd(model, feet_frames=feet_frames, torso_frame=torso_frame, stiffness=config.stiffness,
-                            damping=config.damping, self_motion_damping=config.self_motion_damping,
-                            posture_stiffness=config.posture_stiffness, posture=posture,
-                            moment_gain=config.moment_gain, period=self.dt, objectives=objectives,
-                            objective_gain=config.objective_gain)
+        self.ikd = BipedIkd(
+            model,
+            feet_frames=feet_frames,
+            torso_frame=torso_frame,
+            stiffness=config.stiffness,
+            damping=config.damping,
+            self_motion_damping=config.self_motion_damping,
+            posture_stiffness=config.posture_stiffness,
+            posture=posture,
+            moment_gain=config.moment_gain,
+            period=self.dt,
+            objectives=objectives,
+            objective_gain=config.objective_gain,
+        )
         self.planner = PlanStabilizer(omega, ramp=config.planning_ramp, max_shift=config.planning_max_shift)
         self._mass = model.total_mass
         self.force = self._mass * GRAVITY
@@ -211,8 +240,9 @@ class WalkingIkd:
         m = c.support_margin
         return np.array([[x_min + m, y_min + m], [x_max - m, y_max - m]])
 
-    def _support_general(self, sample: PatternSample, shift: NDArray[np.float64] | tuple[float, float]
-                         ) -> NDArray[np.float64]:
+    def _support_general(
+        self, sample: PatternSample, shift: NDArray[np.float64] | tuple[float, float]
+    ) -> NDArray[np.float64]:
         """:meth:`_support` on arrays (any inputs; NaN propagates, no foot down raises NumPy's error)."""
         c = self.config
         corners = []
@@ -228,9 +258,16 @@ class WalkingIkd:
         points = np.array(corners)
         return np.array([points.min(axis=0) + c.support_margin, points.max(axis=0) - c.support_margin])
 
-    def step(self, start: PatternSample, start_reference: NDArray[np.float64], end_reference: NDArray[np.float64],
-             double_support: tuple[float, float] | None, feet_shift: ArrayLike = (0.0, 0.0),
-             feet_shift_rate: ArrayLike = (0.0, 0.0), zmp: ArrayLike | None = None) -> WalkingIkdStep:
+    def step(
+        self,
+        start: PatternSample,
+        start_reference: NDArray[np.float64],
+        end_reference: NDArray[np.float64],
+        double_support: tuple[float, float] | None,
+        feet_shift: ArrayLike = (0.0, 0.0),
+        feet_shift_rate: ArrayLike = (0.0, 0.0),
+        zmp: ArrayLike | None = None,
+    ) -> WalkingIkdStep:
         """One control period from ``start`` (the pattern at the period's start).
 
         Args:
@@ -247,21 +284,29 @@ class WalkingIkd:
         """
         # the common inputs (packed float64 references, a float pair or float64 (2,) shifts, a float64 (2,) ZMP)
         # take one compiled assembly of the IKD's reference and one of the result; others _step_general
-        if not (_is_float_array(start_reference, _REFERENCE_SHAPE)
-                and _is_float_array(end_reference, _REFERENCE_SHAPE)):
-            return self._step_general(start, start_reference, end_reference, double_support, feet_shift,
-                                      feet_shift_rate, zmp)
+        if not (
+            _is_float_array(start_reference, _REFERENCE_SHAPE) and _is_float_array(end_reference, _REFERENCE_SHAPE)
+        ):
+            return self._step_general(
+                start, start_reference, end_reference, double_support, feet_shift, feet_shift_rate, zmp
+            )
         shift = _pair(feet_shift)
         rate = _pair(feet_shift_rate)
         ideal = np.asarray(start.zmp if zmp is None else zmp, dtype=np.float64)
         if shift is None or rate is None or ideal.shape != (2,):
-            return self._step_general(start, start_reference, end_reference, double_support, feet_shift,
-                                      feet_shift_rate, zmp)
+            return self._step_general(
+                start, start_reference, end_reference, double_support, feet_shift, feet_shift_rate, zmp
+            )
         dt, model, c = self.dt, self.model, self.config
         shift_x, shift_y = -shift[0], -shift[1]
         t = float(start.time)
-        if (c.planning and double_support is not None and start.step >= 0 and start.step != self._step
-                and t >= double_support[0] - 0.5 * dt):
+        if (
+            c.planning
+            and double_support is not None
+            and start.step >= 0
+            and start.step != self._step
+            and t >= double_support[0] - 0.5 * dt
+        ):
             self._replan(start, t, double_support)
         com, com_velocity = start.com, start.com_velocity
         plan_x, plan_y = float(com[0]), float(com[1])
@@ -277,28 +322,86 @@ class WalkingIkd:
             planning_shift = np.zeros(2)
         support = self._support(start, (shift_x, shift_y))
         force = self.force
-        _assemble(start_reference, end_reference, shift_x, shift_y, -rate[0], -rate[1], dt, float(com[2]),
-                  force * zmp_y, force * -zmp_x, plan_x, plan_y, plan_xdot, plan_ydot, self._buffer)
+        _assemble(
+            start_reference,
+            end_reference,
+            shift_x,
+            shift_y,
+            -rate[0],
+            -rate[1],
+            dt,
+            float(com[2]),
+            force * zmp_y,
+            force * -zmp_x,
+            plan_x,
+            plan_y,
+            plan_xdot,
+            plan_ydot,
+            self._buffer,
+        )
         views = self._views
         if not views or views[0].base is not self._buffer:  # first use, or a copy's views (copies, not views)
             views = self._views = _buffer_views(self._buffer)
-        position, rotation, velocity, acceleration, torso_rotation, torso_rate, torso_acceleration, height, moment, \
-            plan = views
-        reference = BipedIkdReference(position, rotation, velocity, acceleration, torso_rotation, torso_rate,
-                                      torso_acceleration, height, moment, plan if c.moment_gain > 0.0 else None,
-                                      support)
+        (
+            position,
+            rotation,
+            velocity,
+            acceleration,
+            torso_rotation,
+            torso_rate,
+            torso_acceleration,
+            height,
+            moment,
+            plan,
+        ) = views
+        reference = BipedIkdReference(
+            position,
+            rotation,
+            velocity,
+            acceleration,
+            torso_rotation,
+            torso_rate,
+            torso_acceleration,
+            height,
+            moment,
+            plan if c.moment_gain > 0.0 else None,
+            support,
+        )
         result = self.ikd.step(self.q, self.qdot, reference)
         terms = self.ikd.terms
         assert terms is not None
         com_velocity, lz, realized, qdot, limited = _finish(
-            terms.centroidal, self.qdot, result.qddot, result.com_acceleration, result.moment, dt, self._mass,
-            c.max_velocity, force, result.success)
+            terms.centroidal,
+            self.qdot,
+            result.qddot,
+            result.com_acceleration,
+            result.moment,
+            dt,
+            self._mass,
+            c.max_velocity,
+            force,
+            result.success,
+        )
         self.qdot = qdot
         if result.success:
             self.q = model.integrate(self.q, qdot, dt)
-        return WalkingIkdStep(self.q.copy(), qdot.copy(), result.qddot, terms.com, com_velocity, realized, ideal.copy(),
-                              planning_shift, result.moment, support, lz, result.residual, result.sigma_min,
-                              result.success, limited)
+        return WalkingIkdStep(
+            self.q.copy(),
+            qdot.copy(),
+            result.qddot,
+            terms.com,
+            com_velocity,
+            realized,
+            ideal.copy(),
+            planning_shift,
+            result.moment,
+            support,
+            lz,
+            result.residual,
+            result.sigma_min,
+            result.success,
+            limited,
+        )
 
     def _replan(self, start: PatternSample, t: float, double_support: tuple[float, float]) -> None:
         """Restart the plan from the IKD's CoM at the double support's start (once per step)."""
@@ -309,10 +412,16 @@ class WalkingIkd:
         com_velocity = centroidal[:2] @ self.qdot / model.total_mass
         self.planner.replan(t, com[:2] - start.com[:2], com_velocity - start.com_velocity[:2], double_support)
 
-    def _step_general(self, start: PatternSample, start_reference: NDArray[np.float64],
-                      end_reference: NDArray[np.float64], double_support: tuple[float, float] | None,
-                      feet_shift: ArrayLike = (0.0, 0.0), feet_shift_rate: ArrayLike = (0.0, 0.0),
-                      zmp: ArrayLike | None = None) -> WalkingIkdStep:
+    def _step_general(
+        self,
+        start: PatternSample,
+        start_reference: NDArray[np.float64],
+        end_reference: NDArray[np.float64],
+        double_support: tuple[float, float] | None,
+        feet_shift: ArrayLike = (0.0, 0.0),
+        feet_shift_rate: ArrayLike = (0.0, 0.0),
+        zmp: ArrayLike | None = None,
+    ) -> WalkingIkdStep:
         """:meth:`step` for any inputs, on NumPy arrays (the fast path's arithmetic, entry by entry)."""
         dt, model, c = self.dt, self.model, self.config
         shift = -np.asarray(feet_shift, dtype=np.float64)
@@ -327,8 +436,13 @@ class WalkingIkd:
         torso_rate = ref[51:54]
         torso_acceleration = (ahead[51:54] - torso_rate) / dt
         t = float(start.time)
-        if (c.planning and double_support is not None and start.step >= 0 and start.step != self._step
-                and t >= double_support[0] - 0.5 * dt):
+        if (
+            c.planning
+            and double_support is not None
+            and start.step >= 0
+            and start.step != self._step
+            and t >= double_support[0] - 0.5 * dt
+        ):
             self._replan(start, t, double_support)
         planned = self.planner.advance(t, dt) if c.planning else None
         ideal = np.asarray(start.zmp if zmp is None else zmp, dtype=np.float64)
@@ -338,9 +452,19 @@ class WalkingIkd:
             com_plan += np.concatenate([planned.com_offset, planned.com_offset_rate])
         support = self._support(start, shift)
         moment = self.force * np.array([zmp[1], -zmp[0]])
-        reference = BipedIkdReference(position, ref[12:30].reshape(2, 3, 3), velocity, acceleration, torso_rotation,
-                                      torso_rate, torso_acceleration, np.array([float(start.com[2]), 0.0, 0.0]),
-                                      moment, com_plan if c.moment_gain > 0.0 else None, support)
+        reference = BipedIkdReference(
+            position,
+            ref[12:30].reshape(2, 3, 3),
+            velocity,
+            acceleration,
+            torso_rotation,
+            torso_rate,
+            torso_acceleration,
+            np.array([float(start.com[2]), 0.0, 0.0]),
+            moment,
+            com_plan if c.moment_gain > 0.0 else None,
+            support,
+        )
         result = self.ikd.step(self.q, self.qdot, reference)
         terms = self.ikd.terms
         assert terms is not None
@@ -360,9 +484,23 @@ class WalkingIkd:
             self.q = model.integrate(self.q, self.qdot, dt)
         else:  # a singular task: hold still rather than integrate zeros into a moving state
             self.qdot = np.zeros(model.nv)
-        return WalkingIkdStep(self.q.copy(), self.qdot.copy(), result.qddot, com, com_velocity, realized, ideal.copy(),
-                              planned.zmp_shift if planned is not None else np.zeros(2), result.moment, support, lz,
-                              result.residual, result.sigma_min, result.success, limited)
+        return WalkingIkdStep(
+            self.q.copy(),
+            self.qdot.copy(),
+            result.qddot,
+            com,
+            com_velocity,
+            realized,
+            ideal.copy(),
+            planned.zmp_shift if planned is not None else np.zeros(2),
+            result.moment,
+            support,
+            lz,
+            result.residual,
+            result.sigma_min,
+            result.success,
+            limited,
+        )
 
 
 _FLOAT64 = np.dtype(np.float64)
@@ -374,8 +512,18 @@ _BUFFER_SIZE = 72
 
 def _buffer_views(b: NDArray[np.float64]) -> tuple[NDArray[np.float64], ...]:
     """The reference rows in ``b`` (:data:`_BUFFER_SIZE`), in BipedIkdReference's order, then the CoM plan."""
-    return (b[0:6].reshape(2, 3), b[6:24].reshape(2, 3, 3), b[24:36].reshape(2, 6), b[36:48].reshape(2, 6),
-            b[48:57].reshape(3, 3), b[57:60], b[60:63], b[63:66], b[66:68], b[68:72])
+    return (
+        b[0:6].reshape(2, 3),
+        b[6:24].reshape(2, 3, 3),
+        b[24:36].reshape(2, 6),
+        b[36:48].reshape(2, 6),
+        b[48:57].reshape(3, 3),
+        b[57:60],
+        b[60:63],
+        b[63:66],
+        b[66:68],
+        b[68:72],
+    )
 
 
 def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
@@ -403,8 +551,23 @@ _F, _B = types.float64, types.boolean
 
 
 @njit(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **_JIT)
-def _assemble(ref, ahead, shift_x, shift_y, rate_x, rate_y, dt, com_z, moment_x, moment_y, plan_x, plan_y,
-              plan_xdot, plan_ydot, buffer):  # pragma: no cover - compiled
+def _assemble(
+    ref,
+    ahead,
+    shift_x,
+    shift_y,
+    rate_x,
+    rate_y,
+    dt,
+    com_z,
+    moment_x,
+    moment_y,
+    plan_x,
+    plan_y,
+    plan_xdot,
+    plan_ydot,
+    buffer,
+):  # pragma: no cover - compiled
     """The IKD's reference of one period into ``buffer`` (:data:`_BUFFER_SIZE`), as :meth:`WalkingIkd._step_general`
     builds it from the packed references (REFERENCE_LAYOUT): the soles moved by the shift and its rate, the
     accelerations as the references' difference over ``dt``."""
@@ -431,8 +594,9 @@ def _assemble(ref, ahead, shift_x, shift_y, rate_x, rate_y, dt, com_z, moment_x,
 
 
 @njit(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **_JIT)
-def _finish(centroidal, qdot, qddot, com_acceleration, moment, dt, mass, max_velocity, hold_force,
-            success):  # pragma: no cover - compiled
+def _finish(
+    centroidal, qdot, qddot, com_acceleration, moment, dt, mass, max_velocity, hold_force, success
+):  # pragma: no cover - compiled
     """``(com_velocity, lz, zmp, qdot_next, limited)`` of :meth:`WalkingIkd._step_general` after the IKD: the CoM's
     velocity and ``L_z`` at the period's start, the realized ZMP (for ``m (g + zddot_c)``, or ``hold_force`` at a
     failed step), the velocity at its end bounded by ``max_velocity`` (zeros at a failed step)."""

@@ -138,8 +138,15 @@ class WalkingPattern:
         correction: the multi-body ZMP shift per step (None: the plain LIPM).
     """
 
-    def __init__(self, config: GaitConfig, right_foot: ArrayLike, left_foot: ArrayLike, com: ArrayLike,
-                 speed: float, correction: ZmpCorrection | None = None) -> None:
+    def __init__(
+        self,
+        config: GaitConfig,
+        right_foot: ArrayLike,
+        left_foot: ArrayLike,
+        com: ArrayLike,
+        speed: float,
+        correction: ZmpCorrection | None = None,
+    ) -> None:
         self.config = config
         self.correction = correction
         try:
@@ -147,7 +154,9 @@ class WalkingPattern:
         except (TypeError, ValueError):
             start = np.zeros(0)
         if start.shape != (2, 3) or not np.all(np.isfinite(start)):
-            raise ControllerError(f"right_foot and left_foot must be finite 3-vectors, got {right_foot!r}, {left_foot!r}")
+            raise ControllerError(
+                f"right_foot and left_foot must be finite 3-vectors, got {right_foot!r}, {left_foot!r}"
+            )
         com = horizontal_point("com", com)
         self.step_length, self.step_duration = config.timing(speed)
         self.speed = self.step_length / self.step_duration
@@ -186,10 +195,13 @@ class WalkingPattern:
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
-        self._swing_pitch = PiecewiseQuintic([
-            Quintic.from_boundary(peak, 0.0, config.swing_pitch),
-            Quintic.from_boundary(flat - peak, config.swing_pitch, 0.0),
-            Quintic.from_boundary(self._single - flat, 0.0, 0.0)])
+        self._swing_pitch = PiecewiseQuintic(
+            [
+                Quintic.from_boundary(peak, 0.0, config.swing_pitch),
+                Quintic.from_boundary(flat - peak, config.swing_pitch, 0.0),
+                Quintic.from_boundary(self._single - flat, 0.0, 0.0),
+            ]
+        )
         times, zmp = self._knots(-1)
         zmp = self.planner.start_zmp(times, zmp, com)
         self._start_zmp = zmp[0].copy()  # the first knot of the standing start, for a replan within it
@@ -286,8 +298,9 @@ class WalkingPattern:
         """The commanded yaw rate [rad/s] (:meth:`set_velocity`)."""
         return self._yaw_rate
 
-    def set_velocity(self, t: float, forward: float, lateral: float = 0.0, replan: bool = True,
-                     yaw_rate: float = 0.0) -> bool:
+    def set_velocity(
+        self, t: float, forward: float, lateral: float = 0.0, replan: bool = True, yaw_rate: float = 0.0
+    ) -> bool:
         """Walk at ``forward`` and ``lateral`` [m/s], turning at ``yaw_rate`` [rad/s] (positive: to the left), from
         the next step that has not begun: the footholds after the landing of the step under way at ``t`` (after
         the first landing during the standing start) move so that each step covers ``(forward, lateral) *
@@ -457,8 +470,7 @@ class WalkingPattern:
             return self._single * travel / c.long_swing
         return None
 
-    def _plan_line(self, first: int, boxes: tuple[ObstacleBox, ...], ssta: Ssta, reach: float,
-                   free_end: bool) -> bool:
+    def _plan_line(self, first: int, boxes: tuple[ObstacleBox, ...], ssta: Ssta, reach: float, free_end: bool) -> bool:
         """Offset the walking line sideways from foothold ``first`` on (:meth:`Ssta.plan_line`): the footholds up
         to ``reach`` [m] along x and two more, which come back to the line unless ``free_end``. A blocked swing
         stops the walk in front of it. Returns whether an offset changed."""
@@ -481,8 +493,10 @@ class WalkingPattern:
             self._stop = first + plan.blocked
             for j in [j for j in line if j >= self._stop]:
                 del line[j]
-        return any(abs(line.get(j, 0.0) - old.get(j, 0.0)) > 1e-6 for j in set(line) | set(old)) or \
-            plan.blocked is not None
+        return (
+            any(abs(line.get(j, 0.0) - old.get(j, 0.0)) > 1e-6 for j in set(line) | set(old))
+            or plan.blocked is not None
+        )
 
     def _replan_from(self, t: float) -> None:
         """The CoM plan from ``t`` on, with the footholds as they are now."""
@@ -557,7 +571,7 @@ class WalkingPattern:
                 heading = self.heading(k + 1)
                 c, s = math.cos(heading), math.sin(heading)
                 offsets = offsets @ np.array([[c, s], [-s, c]])
-            for phase, offset in zip(correction.phases, offsets):
+            for phase, offset in zip(correction.phases, offsets, strict=False):
                 if phase < ratio:
                     base = stance + (swing_to - stance) * (phase / ratio)
                 else:
@@ -622,25 +636,41 @@ class WalkingPattern:
                     ahead = toe * (1.0 - math.cos(angle))
                     ahead_rate = toe * rate * math.sin(angle)
                     feet[swing_side] = (x + c * ahead, y + s_ * ahead, z + toe * math.sin(angle))
-                    feet_velocity[swing_side] = (x_rate + (c * ahead_rate - s_ * ahead * heading_rate),
-                                                 y_rate + (s_ * ahead_rate + c * ahead * heading_rate),
-                                                 z_rate + toe * rate * math.cos(angle))
+                    feet_velocity[swing_side] = (
+                        x_rate + (c * ahead_rate - s_ * ahead * heading_rate),
+                        y_rate + (s_ * ahead_rate + c * ahead * heading_rate),
+                        z_rate + toe * rate * math.cos(angle),
+                    )
                     yaw[swing_side], yaw_rate[swing_side] = heading, heading_rate
                 else:
                     # np.cos and np.sin as before (their last bit may differ from math's)
                     cos, sin = float(np.cos(angle)), float(np.sin(angle))
                     feet[swing_side] = (x + toe * (1.0 - cos), y + toe * 0.0, z + toe * sin)
                     toe_rate = toe * rate
-                    feet_velocity[swing_side] = (x_rate + toe_rate * sin, y_rate + toe_rate * 0.0, z_rate + toe_rate * cos)
+                    feet_velocity[swing_side] = (
+                        x_rate + toe_rate * sin,
+                        y_rate + toe_rate * 0.0,
+                        z_rate + toe_rate * cos,
+                    )
                 pitch[swing_side], pitch_rate[swing_side] = angle, rate
                 contact[swing_side] = False
         zmp = np.array((rx, ry))
         return PatternSample(
-            time=float(t), com=np.array((px, py, self.ground + self.config.com_height)),
-            com_velocity=np.array((vx, vy, 0.0)), zmp=zmp, dcm=np.array((dcm_x, dcm_y)), feet=feet,
-            feet_velocity=feet_velocity, feet_pitch=pitch, feet_pitch_rate=pitch_rate, feet_yaw=yaw,
-            feet_yaw_rate=yaw_rate, contact=(contact[0], contact[1]),
-            right_load=self._right_load(zmp, feet, contact), step=k)
+            time=float(t),
+            com=np.array((px, py, self.ground + self.config.com_height)),
+            com_velocity=np.array((vx, vy, 0.0)),
+            zmp=zmp,
+            dcm=np.array((dcm_x, dcm_y)),
+            feet=feet,
+            feet_velocity=feet_velocity,
+            feet_pitch=pitch,
+            feet_pitch_rate=pitch_rate,
+            feet_yaw=yaw,
+            feet_yaw_rate=yaw_rate,
+            contact=(contact[0], contact[1]),
+            right_load=self._right_load(zmp, feet, contact),
+            step=k,
+        )
 
     def reference_zmp(self, t: float) -> NDArray[np.float64]:
         """The ZMP [m] (x, y) the whole body should have at ``t`` [s]: the piecewise-linear reference under the
@@ -703,7 +733,9 @@ class WalkingPattern:
         ((z,), (vz,), _), ((x, y), (vx, vy), _) = height, path
         return x, y, z, vx, vy, vz
 
-    def _swing_kinematics(self, k: int, s: float) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
+    def _swing_kinematics(
+        self, k: int, s: float
+    ) -> tuple[tuple[NDArray[np.float64], ...], tuple[NDArray[np.float64], ...]]:
         """Horizontal and vertical (position, velocity, acceleration) of step ``k``'s swing at ``s`` [s]."""
         retimed = self._retimed.get(k)
         if retimed is None:
@@ -725,13 +757,15 @@ class WalkingPattern:
                     return self._swing_cache[k]
                 self._modifications.pop(k, None)
             single = self.step_single(k)
-            self._swing_cache[k] = (self._nominal_vertical(start, end, single),
-                                    Quintic.from_boundary(single * (1.0 - self.config.swing_settle), start[:2],
-                                                          end[:2]))
+            self._swing_cache[k] = (
+                self._nominal_vertical(start, end, single),
+                Quintic.from_boundary(single * (1.0 - self.config.swing_settle), start[:2], end[:2]),
+            )
         return self._swing_cache[k]
 
-    def _modified_swing(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float,
-                        modification: SwingModification) -> tuple[PiecewiseQuintic, PiecewiseQuintic]:
+    def _modified_swing(
+        self, start: NDArray[np.float64], end: NDArray[np.float64], single: float, modification: SwingModification
+    ) -> tuple[PiecewiseQuintic, PiecewiseQuintic]:
         """An SSTA swing (monograph 5.4.2): its control points at the ends of the band where it passes the box,
         raised to the box's height (``"over"``) or shifted sideways by the overlap (``"around"``); C2 throughout.
 
@@ -766,27 +800,46 @@ class WalkingPattern:
         y1, vy1, ay1 = (float(x) for x in lateral.evaluate(t1))
         y2, vy2, ay2 = (float(x) for x in lateral.evaluate(t1 + t2))
         d = modification.lateral
-        horizontal = PiecewiseQuintic([
-            Quintic.from_boundary(t1, start[:2], [b0, y1 + d], 0.0, [v1, vy1], 0.0, [0.0, ay1]),
-            Quintic.from_boundary(t2, [b0, y1 + d], [b1, y2 + d], [v1, vy1], [v2, vy2], [0.0, ay1], [0.0, ay2]),
-            Quintic.from_boundary(t3_horizontal, [b1, y2 + d], end[:2], [v2, vy2], 0.0, [0.0, ay2], 0.0)])
-        vertical = PiecewiseQuintic([Quintic.from_boundary(t1, start[2], top),
-                                     Quintic.from_boundary(t2, top, top),
-                                     Quintic.from_boundary(t3, top, end[2])])
+        horizontal = PiecewiseQuintic(
+            [
+                Quintic.from_boundary(t1, start[:2], [b0, y1 + d], 0.0, [v1, vy1], 0.0, [0.0, ay1]),
+                Quintic.from_boundary(t2, [b0, y1 + d], [b1, y2 + d], [v1, vy1], [v2, vy2], [0.0, ay1], [0.0, ay2]),
+                Quintic.from_boundary(t3_horizontal, [b1, y2 + d], end[:2], [v2, vy2], 0.0, [0.0, ay2], 0.0),
+            ]
+        )
+        vertical = PiecewiseQuintic(
+            [
+                Quintic.from_boundary(t1, start[2], top),
+                Quintic.from_boundary(t2, top, top),
+                Quintic.from_boundary(t3, top, end[2]),
+            ]
+        )
         return vertical, horizontal
 
-    def _nominal_vertical(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float) -> PiecewiseQuintic:
+    def _nominal_vertical(
+        self, start: NDArray[np.float64], end: NDArray[np.float64], single: float
+    ) -> PiecewiseQuintic:
         """The nominal swing height over ``single`` [s]: up to ``step_height`` above the landing and down, C2 at the
         apex (both pieces share the parabola's apex acceleration)."""
         half = 0.5 * single
         height = self.config.step_height
         apex_acceleration = -8.0 * height / single**2
-        return PiecewiseQuintic([
-            Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration),
-            Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration)])
+        return PiecewiseQuintic(
+            [
+                Quintic.from_boundary(half, start[2], end[2] + height, end_acceleration=apex_acceleration),
+                Quintic.from_boundary(half, end[2] + height, end[2], start_acceleration=apex_acceleration),
+            ]
+        )
 
-    def _around(self, start: NDArray[np.float64], end: NDArray[np.float64], single: float,
-                modification: SwingModification, b0: float, b1: float) -> PiecewiseQuintic:
+    def _around(
+        self,
+        start: NDArray[np.float64],
+        end: NDArray[np.float64],
+        single: float,
+        modification: SwingModification,
+        b0: float,
+        b1: float,
+    ) -> PiecewiseQuintic:
         """The horizontal path of a swing around a box: the nominal one (settled before the landing) plus a sideways
         shift by ``modification.lateral``, made before the sole reaches the band ``[b0, b1]`` along x and taken back
         after it, each in at least ``0.3 * single`` [s] times the shift over ``quick_shift`` (at most 1).
@@ -921,12 +974,25 @@ class WalkingPattern:
         rise, over = ADJUSTED_RISE * remaining, ADJUSTED_OVER * remaining
         top = max(float(z), self.ground + self.config.step_height)
         landing = self.foothold(k + 2)
-        vertical = PiecewiseQuintic([Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
-                                     Quintic.from_boundary(remaining - rise, top, landing[2])])
-        horizontal = PiecewiseQuintic([Quintic.from_boundary(over, xy, landing[:2], vxy, 0.0, axy, 0.0),
-                                       Quintic.from_boundary(remaining - over, landing[:2], landing[:2])])
-        self._retimed[k] = _RetimedSwing(since=s, nominal_since=nominal, rate=(self._single - nominal) / remaining,
-                                         horizontal=horizontal, vertical=vertical)
+        vertical = PiecewiseQuintic(
+            [
+                Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
+                Quintic.from_boundary(remaining - rise, top, landing[2]),
+            ]
+        )
+        horizontal = PiecewiseQuintic(
+            [
+                Quintic.from_boundary(over, xy, landing[:2], vxy, 0.0, axy, 0.0),
+                Quintic.from_boundary(remaining - over, landing[:2], landing[:2]),
+            ]
+        )
+        self._retimed[k] = _RetimedSwing(
+            since=s,
+            nominal_since=nominal,
+            rate=(self._single - nominal) / remaining,
+            horizontal=horizontal,
+            vertical=vertical,
+        )
         times, zmp = self._knots_from(t, k)
         self._plan = self.planner.plan(times, zmp, com)
 
@@ -937,8 +1003,10 @@ class WalkingPattern:
         if remaining <= 0.0:
             raise ControllerError(f"a step can be adjusted in single support only; t={t!r} is not in one")
         if not np.isfinite(single) or single < s + MIN_ADJUSTED_SWING or single > 2.0 * self._single:
-            raise ControllerError(f"single must lie in [{s + MIN_ADJUSTED_SWING!r}, {2.0 * self._single!r}] s (at "
-                                  f"least {MIN_ADJUSTED_SWING} s of swing left), got {single!r}")
+            raise ControllerError(
+                f"single must lie in [{s + MIN_ADJUSTED_SWING!r}, {2.0 * self._single!r}] s (at "
+                f"least {MIN_ADJUSTED_SWING} s of swing left), got {single!r}"
+            )
         return k, s, remaining
 
     def _knots_from(self, t: float, k: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

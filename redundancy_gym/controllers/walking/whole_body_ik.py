@@ -27,16 +27,27 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..objectives.objective import Objective
 from ..kernels.linalg import rotation_error
+from ..objectives.objective import Objective
 from .ik_kernels import weighted_solve
 from .whole_body_kernels import REFERENCE_LAYOUT, REFERENCE_SIZE
 
-__all__ = ["REFERENCE_LAYOUT", "REFERENCE_SIZE", "TASK_ROWS", "Reference", "WholeBodyIk", "WholeBodyIkResult",
-           "WholeBodyReference"]
+__all__ = [
+    "REFERENCE_LAYOUT",
+    "REFERENCE_SIZE",
+    "TASK_ROWS",
+    "Reference",
+    "WholeBodyIk",
+    "WholeBodyIkResult",
+    "WholeBodyReference",
+]
 
-TASK_ROWS: dict[str, slice] = {"com": slice(0, 3), "right_foot": slice(3, 9), "left_foot": slice(9, 15),
-                               "torso": slice(15, 18)}
+TASK_ROWS: dict[str, slice] = {
+    "com": slice(0, 3),
+    "right_foot": slice(3, 9),
+    "left_foot": slice(9, 15),
+    "torso": slice(15, 18),
+}
 """Rows of the stacked task (CoM, right sole pose, left sole pose, torso orientation)."""
 _M = 18
 
@@ -76,8 +87,12 @@ class WholeBodyReference:
         a = np.asarray(packed, dtype=np.float64)
         if a.shape != (REFERENCE_SIZE,):
             raise ControllerError(f"a packed reference has shape ({REFERENCE_SIZE},), got {a.shape}")
-        shapes = {"feet_position": (2, 3), "feet_rotation": (2, 3, 3), "feet_velocity": (2, 6),
-                  "torso_rotation": (3, 3)}
+        shapes = {
+            "feet_position": (2, 3),
+            "feet_rotation": (2, 3, 3),
+            "feet_velocity": (2, 6),
+            "torso_rotation": (3, 3),
+        }
         return cls(**{name: a[rows].reshape(shapes.get(name, (3,))) for name, rows in REFERENCE_LAYOUT.items()})
 
 
@@ -129,18 +144,32 @@ class WholeBodyIk:
             the weighted pseudoinverse grows without bound; this keeps the targets sent to the servos sane.
     """
 
-    def __init__(self, model: RobotModel, *, feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
-                 torso_frame: str = "imu", gain: float = 100.0, gamma: float = 0.008,
-                 momentum_minimization: bool = True, beta: float = 1.0, nullspace_gain: float = 1.0,
-                 objectives: tuple[Objective, ...] = (), damping: float = 1e-10,
-                 singular_threshold: float = 1e-6, max_velocity: float = 25.0) -> None:
+    def __init__(
+        self,
+        model: RobotModel,
+        *,
+        feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
+        torso_frame: str = "imu",
+        gain: float = 100.0,
+        gamma: float = 0.008,
+        momentum_minimization: bool = True,
+        beta: float = 1.0,
+        nullspace_gain: float = 1.0,
+        objectives: tuple[Objective, ...] = (),
+        damping: float = 1e-10,
+        singular_threshold: float = 1e-6,
+        max_velocity: float = 25.0,
+    ) -> None:
         if not model.floating_base:
             raise ControllerError(f"the whole-body IK needs a floating-base model, {model.source} has a fixed base")
         for name, value in (("gain", gain), ("gamma", gamma), ("beta", beta), ("max_velocity", max_velocity)):
             if not np.isfinite(value) or value <= 0.0:
                 raise ControllerError(f"{name} must be finite and > 0, got {value!r}")
-        for name, value in (("nullspace_gain", nullspace_gain), ("damping", damping),
-                            ("singular_threshold", singular_threshold)):
+        for name, value in (
+            ("nullspace_gain", nullspace_gain),
+            ("damping", damping),
+            ("singular_threshold", singular_threshold),
+        ):
             if not np.isfinite(value) or value < 0.0:
                 raise ControllerError(f"{name} must be finite and >= 0, got {value!r}")
         self.model = model
@@ -160,8 +189,9 @@ class WholeBodyIk:
         self._jacobian = np.zeros((_M, model.nv))
 
     # ------------------------------------------------------------------ build
-    def build(self, q: ArrayLike, reference: WholeBodyReference) -> tuple[NDArray[np.float64], NDArray[np.float64],
-                                                                        NDArray[np.float64]]:
+    def build(
+        self, q: ArrayLike, reference: WholeBodyReference
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(J, e, j_Lz)`` at ``q``: the stacked task Jacobian (18 x nv), error (reference - actual) and ``J_Lz``."""
         model = self.model
         model.update(q)
@@ -173,20 +203,31 @@ class WholeBodyIk:
             rows = slice(3 + 6 * i, 9 + 6 * i)
             jac[rows] = model.frame_jacobian(frame, "full")
             rotation, position = model.frame_placement(frame)
-            err[rows.start:rows.start + 3] = reference.feet_position[i] - position
-            err[rows.start + 3:rows.stop] = rotation_error(reference.feet_rotation[i], rotation)
+            err[rows.start : rows.start + 3] = reference.feet_position[i] - position
+            err[rows.start + 3 : rows.stop] = rotation_error(reference.feet_rotation[i], rotation)
         jac[15:18] = model.frame_jacobian(self._torso, "rotational")
         err[15:18] = rotation_error(reference.torso_rotation, model.frame_rotation(self._torso))
         return jac, err, centroidal[5]
 
     def reference_velocity(self, reference: WholeBodyReference) -> NDArray[np.float64]:
         """The stacked task velocity ``wdot_d`` (18)."""
-        return np.concatenate([reference.com_velocity, reference.feet_velocity[0], reference.feet_velocity[1],
-                               reference.torso_angular_velocity])
+        return np.concatenate(
+            [
+                reference.com_velocity,
+                reference.feet_velocity[0],
+                reference.feet_velocity[1],
+                reference.torso_angular_velocity,
+            ]
+        )
 
     # ------------------------------------------------------------------ solve
-    def solve(self, jac: NDArray[np.float64], rhs: NDArray[np.float64], j_lz: NDArray[np.float64],
-              gradient: NDArray[np.float64] | None) -> tuple[NDArray[np.float64], float, bool]:
+    def solve(
+        self,
+        jac: NDArray[np.float64],
+        rhs: NDArray[np.float64],
+        j_lz: NDArray[np.float64],
+        gradient: NDArray[np.float64] | None,
+    ) -> tuple[NDArray[np.float64], float, bool]:
         """``(qdot, sigma_min, ok)``: ``qdot = W^-1 (J^T lambda - z)`` with ``J W^-1 J^T lambda = rhs + J W^-1 z``.
 
         ``z = (alpha / beta) dH/dq`` (``gradient`` may be None: no nullspace objective); this is (5.14) with
@@ -196,8 +237,7 @@ class WholeBodyIk:
             z = np.zeros(jac.shape[1])
         else:
             z = (self.nullspace_gain / self.beta) * gradient
-        qdot, sigma_min, ok = weighted_solve(jac, rhs, j_lz, z, self.gamma, self.momentum_minimization,
-                                             self.damping)
+        qdot, sigma_min, ok = weighted_solve(jac, rhs, j_lz, z, self.gamma, self.momentum_minimization, self.damping)
         return qdot, float(sigma_min), bool(ok) and sigma_min >= self.singular_threshold
 
     def objective_gradient(self, q: NDArray[np.float64]) -> NDArray[np.float64] | None:

@@ -17,38 +17,113 @@ from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...model.chain_kernels import chain_centroidal, chain_forward, chain_integrate, chain_jacobian, place_frame
-from ..objectives.collision_kernels import collision_potential
 from ..kernels.buffers import float_field, int_field
 from ..kernels.linalg import rotation_error_into
+from ..objectives.collision_kernels import collision_potential
 from .ik_kernels import weighted_solve
 
-__all__ = ["DIMS", "FLOAT_FIELDS", "INT_FIELDS", "OUTPUT_EXTRA", "REFERENCE_LAYOUT", "REFERENCE_SIZE", "BAD_INPUT",
-           "OK", "whole_body_step"]
+__all__ = [
+    "DIMS",
+    "FLOAT_FIELDS",
+    "INT_FIELDS",
+    "OUTPUT_EXTRA",
+    "REFERENCE_LAYOUT",
+    "REFERENCE_SIZE",
+    "BAD_INPUT",
+    "OK",
+    "whole_body_step",
+]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation", "placement_translation", "axis", "body_mass", "body_com", "body_inertia",
-    "rotation", "position", "world_axis", "composite",
-    "frame_rotation", "frame_translation",
-    "limit_lower", "limit_upper", "limit_parameters", "posture_reference", "posture_weights",
-    "segment_rotation", "segment_translation", "segment_center", "segment_radius", "segment_world_center",
-    "local", "vertices", "radii", "collision_parameters",
-    "scalars", "inputs", "outputs", "jacobian", "jacobian6", "jacobian_com", "jacobian_angular", "error", "rhs",
-    "gradient", "scratch",
+    "placement_rotation",
+    "placement_translation",
+    "axis",
+    "body_mass",
+    "body_com",
+    "body_inertia",
+    "rotation",
+    "position",
+    "world_axis",
+    "composite",
+    "frame_rotation",
+    "frame_translation",
+    "limit_lower",
+    "limit_upper",
+    "limit_parameters",
+    "posture_reference",
+    "posture_weights",
+    "segment_rotation",
+    "segment_translation",
+    "segment_center",
+    "segment_radius",
+    "segment_world_center",
+    "local",
+    "vertices",
+    "radii",
+    "collision_parameters",
+    "scalars",
+    "inputs",
+    "outputs",
+    "jacobian",
+    "jacobian6",
+    "jacobian_com",
+    "jacobian_angular",
+    "error",
+    "rhs",
+    "gradient",
+    "scratch",
 )
 INT_FIELDS: tuple[str, ...] = (
-    "dims", "parent", "joint_type", "q_index", "v_index", "frame_joint",
-    "segment_joint", "segment_starts", "kinds", "segment_pairs", "pair_starts", "volume_a", "volume_b",
+    "dims",
+    "parent",
+    "joint_type",
+    "q_index",
+    "v_index",
+    "frame_joint",
+    "segment_joint",
+    "segment_starts",
+    "kinds",
+    "segment_pairs",
+    "pair_starts",
+    "volume_a",
+    "volume_b",
 )
-DIMS: tuple[str, ...] = ("joints", "nq", "nv", "base_nq", "base_nv", "limit_objectives", "posture_objectives",
-                         "segments", "volumes", "pairs", "volume_pairs", "collision", "momentum_minimization")
+DIMS: tuple[str, ...] = (
+    "joints",
+    "nq",
+    "nv",
+    "base_nq",
+    "base_nv",
+    "limit_objectives",
+    "posture_objectives",
+    "segments",
+    "volumes",
+    "pairs",
+    "volume_pairs",
+    "collision",
+    "momentum_minimization",
+)
 REFERENCE_LAYOUT: dict[str, slice] = {
-    "com": slice(0, 3), "com_velocity": slice(3, 6), "feet_position": slice(6, 12), "feet_rotation": slice(12, 30),
-    "feet_velocity": slice(30, 42), "torso_rotation": slice(42, 51), "torso_angular_velocity": slice(51, 54),
+    "com": slice(0, 3),
+    "com_velocity": slice(3, 6),
+    "feet_position": slice(6, 12),
+    "feet_rotation": slice(12, 30),
+    "feet_velocity": slice(30, 42),
+    "torso_rotation": slice(42, 51),
+    "torso_angular_velocity": slice(51, 54),
 }
 """Where each :class:`~.WholeBodyReference` field lies in a packed reference (flattened, row-major)."""
 REFERENCE_SIZE = 54
-SCALARS: tuple[str, ...] = ("gain", "gamma", "beta", "nullspace_gain", "damping", "singular_threshold",
-                            "max_velocity", "dt")
+SCALARS: tuple[str, ...] = (
+    "gain",
+    "gamma",
+    "beta",
+    "nullspace_gain",
+    "damping",
+    "singular_threshold",
+    "max_velocity",
+    "dt",
+)
 # after q_next (nq) and qdot (nv) in "outputs"
 OUTPUT_EXTRA = 7  # task error, lz, sigma_min, success, smallest collision distance seen [m], objective value,
 # limited
@@ -57,14 +132,60 @@ OK, BAD_INPUT = 0, 1
 
 _M = 18
 _NF = len(FLOAT_FIELDS)
-(_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_BODY_MASS, _F_BODY_COM, _F_BODY_INERTIA, _F_ROTATION,
- _F_POSITION, _F_WORLD_AXIS, _F_COMPOSITE, _F_FRAME_ROTATION, _F_FRAME_TRANSLATION, _F_LIMIT_LOWER, _F_LIMIT_UPPER,
- _F_LIMIT_PARAMETERS, _F_POSTURE_REFERENCE, _F_POSTURE_WEIGHTS, _F_SEGMENT_ROTATION, _F_SEGMENT_TRANSLATION,
- _F_SEGMENT_CENTER, _F_SEGMENT_RADIUS, _F_SEGMENT_WORLD_CENTER, _F_LOCAL, _F_VERTICES, _F_RADII,
- _F_COLLISION_PARAMETERS, _F_SCALARS, _F_INPUTS, _F_OUTPUTS, _F_JACOBIAN, _F_JACOBIAN6, _F_JACOBIAN_COM,
- _F_JACOBIAN_ANGULAR, _F_ERROR, _F_RHS, _F_GRADIENT, _F_SCRATCH) = range(_NF)
-(_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT, _I_SEGMENT_JOINT, _I_SEGMENT_STARTS,
- _I_KINDS, _I_SEGMENT_PAIRS, _I_PAIR_STARTS, _I_VOLUME_A, _I_VOLUME_B) = range(_NF, _NF + len(INT_FIELDS))
+(
+    _F_PLACEMENT_ROTATION,
+    _F_PLACEMENT_TRANSLATION,
+    _F_AXIS,
+    _F_BODY_MASS,
+    _F_BODY_COM,
+    _F_BODY_INERTIA,
+    _F_ROTATION,
+    _F_POSITION,
+    _F_WORLD_AXIS,
+    _F_COMPOSITE,
+    _F_FRAME_ROTATION,
+    _F_FRAME_TRANSLATION,
+    _F_LIMIT_LOWER,
+    _F_LIMIT_UPPER,
+    _F_LIMIT_PARAMETERS,
+    _F_POSTURE_REFERENCE,
+    _F_POSTURE_WEIGHTS,
+    _F_SEGMENT_ROTATION,
+    _F_SEGMENT_TRANSLATION,
+    _F_SEGMENT_CENTER,
+    _F_SEGMENT_RADIUS,
+    _F_SEGMENT_WORLD_CENTER,
+    _F_LOCAL,
+    _F_VERTICES,
+    _F_RADII,
+    _F_COLLISION_PARAMETERS,
+    _F_SCALARS,
+    _F_INPUTS,
+    _F_OUTPUTS,
+    _F_JACOBIAN,
+    _F_JACOBIAN6,
+    _F_JACOBIAN_COM,
+    _F_JACOBIAN_ANGULAR,
+    _F_ERROR,
+    _F_RHS,
+    _F_GRADIENT,
+    _F_SCRATCH,
+) = range(_NF)
+(
+    _I_DIMS,
+    _I_PARENT,
+    _I_JOINT_TYPE,
+    _I_Q_INDEX,
+    _I_V_INDEX,
+    _I_FRAME_JOINT,
+    _I_SEGMENT_JOINT,
+    _I_SEGMENT_STARTS,
+    _I_KINDS,
+    _I_SEGMENT_PAIRS,
+    _I_PAIR_STARTS,
+    _I_VOLUME_A,
+    _I_VOLUME_B,
+) = range(_NF, _NF + len(INT_FIELDS))
 
 _JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
@@ -79,10 +200,18 @@ def _build(f, i, dims, q, reference):
     rotation = float_field(f, i, _F_ROTATION).reshape((nj, 3, 3))
     position = float_field(f, i, _F_POSITION).reshape((nj, 3))
     world_axis = float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(parent, float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-                  float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
-                  float_field(f, i, _F_AXIS).reshape((nj, 3)), joint_type, int_field(i, _I_Q_INDEX), q, rotation,
-                  position, world_axis)
+    chain_forward(
+        parent,
+        float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
+        float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
+        float_field(f, i, _F_AXIS).reshape((nj, 3)),
+        joint_type,
+        int_field(i, _I_Q_INDEX),
+        q,
+        rotation,
+        position,
+        world_axis,
+    )
     nv = dims[2]
     jac = float_field(f, i, _F_JACOBIAN).reshape((_M, nv))
     jac6 = float_field(f, i, _F_JACOBIAN6).reshape((6, nv))
@@ -91,10 +220,21 @@ def _build(f, i, dims, q, reference):
     err = float_field(f, i, _F_ERROR)
     scratch = float_field(f, i, _F_SCRATCH)
     com = scratch[0:3]
-    chain_centroidal(parent, joint_type, v_index, rotation, position, world_axis, float_field(f, i, _F_BODY_MASS),
-                     float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
-                     float_field(f, i, _F_BODY_INERTIA).reshape((nj, 3, 3)),
-                     float_field(f, i, _F_COMPOSITE).reshape((nj, 13)), com, jac_com, jac_angular)
+    chain_centroidal(
+        parent,
+        joint_type,
+        v_index,
+        rotation,
+        position,
+        world_axis,
+        float_field(f, i, _F_BODY_MASS),
+        float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
+        float_field(f, i, _F_BODY_INERTIA).reshape((nj, 3, 3)),
+        float_field(f, i, _F_COMPOSITE).reshape((nj, 13)),
+        com,
+        jac_com,
+        jac_angular,
+    )
     for r in range(3):
         jac[r, :] = jac_com[r, :]
         err[r] = reference[r] - com[r]
@@ -107,15 +247,16 @@ def _build(f, i, dims, q, reference):
     feet_rotation = reference[12:30].reshape((2, 3, 3))
     for side in range(3):  # right sole, left sole, torso
         place_frame(rotation, position, frame_joint[side], frame_rotation[side], frame_translation[side], rot, pos)
-        chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, frame_joint[side], pos[0],
-                       pos[1], pos[2], jac6)
+        chain_jacobian(
+            parent, joint_type, v_index, rotation, position, world_axis, frame_joint[side], pos[0], pos[1], pos[2], jac6
+        )
         if side < 2:
             row = 3 + 6 * side
             for r in range(6):
                 jac[row + r, :] = jac6[r, :]
             for r in range(3):
                 err[row + r] = feet_position[side, r] - pos[r]
-            rotation_error_into(feet_rotation[side], rot, err[row + 3:row + 6])
+            rotation_error_into(feet_rotation[side], rot, err[row + 3 : row + 6])
         else:
             for r in range(3):
                 jac[15 + r, :] = jac6[3 + r, :]
@@ -153,18 +294,31 @@ def _objectives(f, i, dims, q, gradient):
     if collision:
         nj, ns, nvol, npairs = dims[0], dims[7], dims[8], dims[9]
         h, smallest = collision_potential(
-            int_field(i, _I_SEGMENT_JOINT), int_field(i, _I_SEGMENT_STARTS), int_field(i, _I_KINDS),
-            int_field(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)), int_field(i, _I_PAIR_STARTS),
-            int_field(i, _I_VOLUME_A), int_field(i, _I_VOLUME_B),
+            int_field(i, _I_SEGMENT_JOINT),
+            int_field(i, _I_SEGMENT_STARTS),
+            int_field(i, _I_KINDS),
+            int_field(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
+            int_field(i, _I_PAIR_STARTS),
+            int_field(i, _I_VOLUME_A),
+            int_field(i, _I_VOLUME_B),
             float_field(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
             float_field(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)),
-            float_field(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)), float_field(f, i, _F_SEGMENT_RADIUS),
+            float_field(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
+            float_field(f, i, _F_SEGMENT_RADIUS),
             float_field(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
-            float_field(f, i, _F_LOCAL).reshape((nvol, 3, 3)), float_field(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-            float_field(f, i, _F_RADII), float_field(f, i, _F_COLLISION_PARAMETERS), int_field(i, _I_PARENT),
-            int_field(i, _I_JOINT_TYPE), int_field(i, _I_V_INDEX), float_field(f, i, _F_ROTATION).reshape((nj, 3, 3)),
-            float_field(f, i, _F_POSITION).reshape((nj, 3)), float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3)),
-            gradient, float_field(f, i, _F_SCRATCH))
+            float_field(f, i, _F_LOCAL).reshape((nvol, 3, 3)),
+            float_field(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
+            float_field(f, i, _F_RADII),
+            float_field(f, i, _F_COLLISION_PARAMETERS),
+            int_field(i, _I_PARENT),
+            int_field(i, _I_JOINT_TYPE),
+            int_field(i, _I_V_INDEX),
+            float_field(f, i, _F_ROTATION).reshape((nj, 3, 3)),
+            float_field(f, i, _F_POSITION).reshape((nj, 3)),
+            float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3)),
+            gradient,
+            float_field(f, i, _F_SCRATCH),
+        )
         value += h
     return value, smallest
 
@@ -181,15 +335,22 @@ def whole_body_step(f, i):
         if not np.isfinite(inputs[k]):
             return BAD_INPUT
     q = inputs[:nq]
-    start = inputs[nq:nq + REFERENCE_SIZE]
-    end = inputs[nq + REFERENCE_SIZE:nq + 2 * REFERENCE_SIZE]
+    start = inputs[nq : nq + REFERENCE_SIZE]
+    end = inputs[nq + REFERENCE_SIZE : nq + 2 * REFERENCE_SIZE]
     scalars = float_field(f, i, _F_SCALARS)
-    gain, gamma, beta, alpha, damping, threshold = scalars[0], scalars[1], scalars[2], scalars[3], scalars[4], scalars[5]
+    gain, gamma, beta, alpha, damping, threshold = (
+        scalars[0],
+        scalars[1],
+        scalars[2],
+        scalars[3],
+        scalars[4],
+        scalars[5],
+    )
     max_velocity, dt = scalars[6], scalars[7]
     outputs = float_field(f, i, _F_OUTPUTS)
     q_next = outputs[:nq]
-    qdot = outputs[nq:nq + nv]
-    extra = outputs[nq + nv:]
+    qdot = outputs[nq : nq + nv]
+    extra = outputs[nq + nv :]
     jac = float_field(f, i, _F_JACOBIAN).reshape((_M, nv))
     jac_angular = float_field(f, i, _F_JACOBIAN_ANGULAR).reshape((3, nv))
     err = float_field(f, i, _F_ERROR)

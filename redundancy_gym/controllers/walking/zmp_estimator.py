@@ -29,8 +29,14 @@ class ZmpEstimate(NamedTuple):
     moment: NDArray[np.float64]
 
 
-def estimate_zmp(rotations: ArrayLike, ankles: ArrayLike, forces: ArrayLike, torques: ArrayLike,
-                 ground: float = 0.0, min_force: float = 20.0) -> ZmpEstimate:
+def estimate_zmp(
+    rotations: ArrayLike,
+    ankles: ArrayLike,
+    forces: ArrayLike,
+    torques: ArrayLike,
+    ground: float = 0.0,
+    min_force: float = 20.0,
+) -> ZmpEstimate:
     """ZMP from the wrenches that the shanks feel at the ankle sensors.
 
     The sensor measures what the foot exerts on the shank in the sensor frame; the ground reaction on the
@@ -57,8 +63,9 @@ def estimate_zmp(rotations: ArrayLike, ankles: ArrayLike, forces: ArrayLike, tor
     reaction, moment = _negated_in_world(rotation_lists, force_list), _negated_in_world(rotation_lists, torque_list)
     # one finite check: a non-finite sensor value makes a reaction or moment non-finite (NaN and inf survive
     # products and sums); the detailed check names the bad input, or passes when the sum only overflowed
-    if not math.isfinite(sum(reaction[0]) + sum(reaction[1]) + sum(moment[0]) + sum(moment[1]) + sum(ankle_list[0])
-                         + sum(ankle_list[1])):
+    if not math.isfinite(
+        sum(reaction[0]) + sum(reaction[1]) + sum(moment[0]) + sum(moment[1]) + sum(ankle_list[0]) + sum(ankle_list[1])
+    ):
         _checked_lists(rotations, ankles, forces, torques)
     ground, min_force = float(ground), float(min_force)  # Python floats: a NumPy scalar would set the precision
     cop = [[math.nan, math.nan], [math.nan, math.nan]]
@@ -89,16 +96,16 @@ def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
 
 def _negated_in_world(rotations: list[list[list[float]]], vectors: list[list[float]]) -> list[list[float]]:
     """``-R_i v_i`` for each foot ``i`` (rows right, left): a sensor reading turned into the world frame, negated."""
-    return [[-(r[0] * v[0] + r[1] * v[1] + r[2] * v[2]) for r in rotation] for rotation, v in zip(rotations, vectors)]
+    return [[-(r[0] * v[0] + r[1] * v[1] + r[2] * v[2]) for r in rotation] for rotation, v in zip(rotations, vectors, strict=False)]
 
 
 def _checked_lists(*values: ArrayLike) -> list[list[Any]]:
     """:func:`estimate_zmp`'s rotations, ankles, forces and torques as nested lists of floats; ControllerError for a
     wrong shape or, naming the input, a non-finite value."""
     arrays = [np.asarray(v, dtype=np.float64) for v in values]
-    if any(a.shape != shape for a, shape in zip(arrays, _SHAPES)):
+    if any(a.shape != shape for a, shape in zip(arrays, _SHAPES, strict=False)):
         raise ControllerError("need rotations (2, 3, 3) and ankles, forces, torques (2, 3)")
-    for name, value in zip(_NAMES, arrays):
+    for name, value in zip(_NAMES, arrays, strict=False):
         if not np.all(np.isfinite(value)):
             raise ControllerError(f"the ankle sensor {name} must be finite, got {value.tolist()}")
     return [a.tolist() for a in arrays]

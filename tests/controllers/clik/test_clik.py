@@ -140,8 +140,15 @@ def test_unreachable_target_pseudoinverse_reports_instead_of_nan(planar_model: R
     """Without speed limits the exact solve stretches the arm into the singularity and says so (with the
     model's speed limits it slows down before it gets there: tests/hard_cases/test_clik_bounds.py)."""
     target = np.array([2.0, 0.5])
-    clik = Clik(planar_model, _task(), method="pseudoinverse", gain=2.0, singular_threshold=1e-3,
-                max_joint_velocity=np.inf, period=0.01)
+    clik = Clik(
+        planar_model,
+        _task(),
+        method="pseudoinverse",
+        gain=2.0,
+        singular_threshold=1e-3,
+        max_joint_velocity=np.inf,
+        period=0.01,
+    )
     q, results = _run(clik, planar_model, np.array([-0.8, 0.6, 0.5, 0.3]), target, 1500)
     assert all(np.all(np.isfinite(r.qdot)) for r in results)
     singular = [r for r in results if not r.success]
@@ -183,9 +190,13 @@ def test_acceleration_level_solves_5_18_and_converges(planar_model: RobotModel, 
 
 @pytest.mark.parametrize(
     "kwargs, match",
-    [(dict(method="svd"), "pseudoinverse, dls, transpose"), (dict(gain=-1.0), "gain"),
-     (dict(weights=np.zeros(4)), "weights"), (dict(nullspace_gain=np.nan), "nullspace_gain"),
-     (dict(objectives=[object()]), "evaluate")],
+    [
+        (dict(method="svd"), "pseudoinverse, dls, transpose"),
+        (dict(gain=-1.0), "gain"),
+        (dict(weights=np.zeros(4)), "weights"),
+        (dict(nullspace_gain=np.nan), "nullspace_gain"),
+        (dict(objectives=[object()]), "evaluate"),
+    ],
 )
 def test_invalid_arguments(planar_model: RobotModel, kwargs: dict, match: str) -> None:
     with pytest.raises(ControllerError, match=match):

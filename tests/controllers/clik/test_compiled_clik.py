@@ -22,9 +22,11 @@ from redundancy_gym.geometry import LSS, PSS, TSS, Segment
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
 
 # a stem, a fruit and a leaf triangle in front of the agricultural arm, inside its reach
-PLANT = (Segment("stem", (LSS([0.55, 0.05, 0.2], [0.55, 0.05, 1.7], 0.007),)),
-         Segment("fruit", (PSS([0.5, -0.08, 1.0], 0.045),)),
-         Segment("leaf", (TSS([0.45, 0.1, 1.2], [0.6, 0.2, 1.25], [0.5, 0.25, 1.1], 0.002),)))
+PLANT = (
+    Segment("stem", (LSS([0.55, 0.05, 0.2], [0.55, 0.05, 1.7], 0.007),)),
+    Segment("fruit", (PSS([0.5, -0.08, 1.0], 0.045),)),
+    Segment("leaf", (TSS([0.45, 0.1, 1.2], [0.6, 0.2, 1.25], [0.5, 0.25, 1.1], 0.002),)),
+)
 
 
 def assert_same(a: ClikResult, b: ClikResult) -> None:
@@ -40,8 +42,9 @@ def assert_same(a: ClikResult, b: ClikResult) -> None:
 
 def agri_clik(method: str, model: RobotModel | None = None) -> tuple[Clik, CollisionObjective]:
     model = model or RobotModel.from_mjcf(AGRI_ARM_XML)
-    collision = CollisionObjective(collision_model_from_mjcf(model, PLANT), activation_distance=0.1, slope=4.0,
-                                   weight=10.0)
+    collision = CollisionObjective(
+        collision_model_from_mjcf(model, PLANT), activation_distance=0.1, slope=4.0, weight=10.0
+    )
     limits = JointLimitObjective.from_model(model, activation_distance=0.2, weight=0.5)
     return Clik(model, FrameAxisTask(AGRI_ARM_TCP), method=method, objectives=[limits, collision]), collision
 
@@ -68,12 +71,23 @@ def test_agri_arm_step_matches_clik(method: str, rng: np.random.Generator) -> No
 def test_planar_arm_with_posture_and_a_moving_obstacle_matches_clik(planar_model: RobotModel, rng) -> None:
     """FramePositionTask rows, posture and limit objectives, and an environment sphere moved between steps."""
     obstacle = Segment("ball", (PSS(np.zeros(3), 1.0),))
-    collision = CollisionObjective(collision_model_from_mjcf(planar_model, [obstacle]), activation_distance=0.15,
-                                   slope=2.0, weight=3.0)
-    objectives = [JointLimitObjective.from_model(planar_model, activation_distance=0.3),
-                  PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]), collision]
-    clik = Clik(planar_model, FramePositionTask(PLANAR_ARM_TCP, "xz"), method="dls", gain=[5.0, 8.0],
-                weights=[1.0, 2.0, 3.0, 4.0], nullspace_gain=0.7, objectives=objectives)
+    collision = CollisionObjective(
+        collision_model_from_mjcf(planar_model, [obstacle]), activation_distance=0.15, slope=2.0, weight=3.0
+    )
+    objectives = [
+        JointLimitObjective.from_model(planar_model, activation_distance=0.3),
+        PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
+        collision,
+    ]
+    clik = Clik(
+        planar_model,
+        FramePositionTask(PLANAR_ARM_TCP, "xz"),
+        method="dls",
+        gain=[5.0, 8.0],
+        weights=[1.0, 2.0, 3.0, 4.0],
+        nullspace_gain=0.7,
+        objectives=objectives,
+    )
     compiled = CompiledClik(clik)
     model = collision.collision_model
     for _ in range(60):
@@ -174,8 +188,7 @@ def test_grasp_path_sampler_meets_its_boundary_conditions_and_derivatives() -> N
         assert np.linalg.norm(target[3:]) == pytest.approx(1.0, abs=1e-12)
         np.testing.assert_allclose((ahead[:3] - behind[:3]) / (2 * eps), velocity[:3], atol=1e-6)
         # the axis turns with omega: da/dt = omega x a
-        np.testing.assert_allclose((ahead[3:] - behind[3:]) / (2 * eps), np.cross(velocity[3:], target[3:]),
-                                   atol=1e-6)
+        np.testing.assert_allclose((ahead[3:] - behind[3:]) / (2 * eps), np.cross(velocity[3:], target[3:]), atol=1e-6)
 
 
 def test_robot_segment_on_a_world_fixed_frame_is_placed_once(rng) -> None:
@@ -277,8 +290,13 @@ def test_grasp_path_params_are_what_the_compiled_sampler_reads() -> None:
     target and target velocity."""
     from redundancy_gym.geometry.grasp_path import GraspPath, sample_grasp_path
 
-    path = GraspPath.plan(np.array([0.4, 0.1, 0.9]), np.array([1.0, 0.0, 0.0]), np.array([0.7, 0.2, 1.0]),
-                          np.array([0.8, 0.2, 1.0]), np.array([1.0, 0.0, 0.0]))
+    path = GraspPath.plan(
+        np.array([0.4, 0.1, 0.9]),
+        np.array([1.0, 0.0, 0.0]),
+        np.array([0.7, 0.2, 1.0]),
+        np.array([0.8, 0.2, 1.0]),
+        np.array([1.0, 0.0, 0.0]),
+    )
     params = path.params
     assert not params.flags.writeable
     with pytest.raises(ValueError):

@@ -24,8 +24,15 @@ def _separate_calls(policy: GraspClikPolicy, obs: np.ndarray) -> tuple[np.ndarra
 
 def _same_result(a: ClikResult, b: ClikResult) -> None:
     assert np.array_equal(a.qdot, b.qdot) and np.array_equal(a.error, b.error)
-    assert (a.error_norm, a.sigma_min, a.damping, a.objective, a.success, a.status, a.limited) == \
-        (b.error_norm, b.sigma_min, b.damping, b.objective, b.success, b.status, b.limited)
+    assert (a.error_norm, a.sigma_min, a.damping, a.objective, a.success, a.status, a.limited) == (
+        b.error_norm,
+        b.sigma_min,
+        b.damping,
+        b.objective,
+        b.success,
+        b.status,
+        b.limited,
+    )
 
 
 @pytest.mark.parametrize("difficulty", ["medium", "hard"])
@@ -127,5 +134,5 @@ def test_compiled_step_reads_strided_vectors() -> None:
     wide[1] = np.concatenate([q, target, velocity])
     column = np.asfortranarray(wide)[1]
     assert not column.flags.c_contiguous
-    strided = controller.step(column[:q.size], column[q.size:q.size + 6], column[q.size + 6:])
+    strided = controller.step(column[: q.size], column[q.size : q.size + 6], column[q.size + 6 :])
     _same_result(strided, controller.step(q.copy(), target.copy(), velocity.copy()))

@@ -9,9 +9,9 @@ import pytest
 
 from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import ControllerError
+from redundancy_gym.controllers.clik.redundancy_resolution import resolve
 from redundancy_gym.controllers.ikd import BipedIkd, BipedIkdReference, BipedIkdResult
 from redundancy_gym.controllers.ikd.biped_ikd import GRAVITY
-from redundancy_gym.controllers.clik.redundancy_resolution import resolve
 from redundancy_gym.controllers.kernels.linalg import rotation_error
 from redundancy_gym.model import RobotModel
 from tests.controllers.walking.biped_helpers import standing
@@ -32,9 +32,17 @@ def _reference(model: RobotModel, q: np.ndarray, zmp: np.ndarray, lift: float = 
     position[1, 2] += lift
     rotation = np.array([model.frame_rotation(f) for f in FEET])
     force = model.total_mass * GRAVITY
-    return BipedIkdReference(position, rotation, np.zeros((2, 6)), np.zeros((2, 6)), model.frame_rotation("imu"),
-                             np.zeros(3), np.zeros(3), np.array([model.com()[2], 0.0, 0.0]),
-                             np.array([force * zmp[1], -force * zmp[0]]))
+    return BipedIkdReference(
+        position,
+        rotation,
+        np.zeros((2, 6)),
+        np.zeros((2, 6)),
+        model.frame_rotation("imu"),
+        np.zeros(3),
+        np.zeros(3),
+        np.array([model.com()[2], 0.0, 0.0]),
+        np.array([force * zmp[1], -force * zmp[0]]),
+    )
 
 
 def _contact_moment(model: RobotModel, q: np.ndarray, qdot: np.ndarray, qddot: np.ndarray) -> np.ndarray:
@@ -157,16 +165,30 @@ def _walk(biped: RobotModel, gain: float, duration: float) -> tuple[list[float],
         velocity[:, :3], velocity[:, 4] = sample.feet_velocity, sample.feet_pitch_rate
         acceleration[:, :3] = (ahead.feet_velocity - sample.feet_velocity) / dt
         acceleration[:, 4] = (ahead.feet_pitch_rate - sample.feet_pitch_rate) / dt
-        rotation = np.array([[[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]]
-                             for a in sample.feet_pitch])
+        rotation = np.array(
+            [[[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]] for a in sample.feet_pitch]
+        )
         standing_feet = [f for f, c in zip(sample.feet, sample.contact, strict=True) if c]
-        box = np.array([np.min([[f[0] - 0.095, f[1] - 0.075] for f in standing_feet], axis=0),
-                        np.max([[f[0] + 0.165, f[1] + 0.075] for f in standing_feet], axis=0)])
+        box = np.array(
+            [
+                np.min([[f[0] - 0.095, f[1] - 0.075] for f in standing_feet], axis=0),
+                np.max([[f[0] + 0.165, f[1] + 0.075] for f in standing_feet], axis=0),
+            ]
+        )
         zmp = sample.zmp
-        reference = BipedIkdReference(sample.feet.copy(), rotation, velocity, acceleration, np.eye(3), np.zeros(3),
-                                      np.zeros(3), np.array([start[2], 0.0, 0.0]),
-                                      np.array([force * zmp[1], -force * zmp[0]]),
-                                      np.array([*sample.com[:2], *sample.com_velocity[:2]]), box)
+        reference = BipedIkdReference(
+            sample.feet.copy(),
+            rotation,
+            velocity,
+            acceleration,
+            np.eye(3),
+            np.zeros(3),
+            np.zeros(3),
+            np.array([start[2], 0.0, 0.0]),
+            np.array([force * zmp[1], -force * zmp[0]]),
+            np.array([*sample.com[:2], *sample.com_velocity[:2]]),
+            box,
+        )
         result = ikd.step(q, qdot, reference)
         if not result.success:
             break
@@ -206,15 +228,18 @@ def _reference_step(ikd: BipedIkd, q: np.ndarray, qdot: np.ndarray, reference: B
     for i, frame in enumerate(ikd.feet_frames):
         jac = model.frame_jacobian(frame, "full")
         rotation, position = model.frame_placement(frame)
-        error = np.concatenate([reference.feet_position[i] - position,
-                                rotation_error(reference.feet_rotation[i], rotation)])
-        accelerations.append(reference.feet_acceleration[i] + ikd.kd * (reference.feet_velocity[i] - jac @ qdot)
-                             + ikd.kp * error)
+        error = np.concatenate(
+            [reference.feet_position[i] - position, rotation_error(reference.feet_rotation[i], rotation)]
+        )
+        accelerations.append(
+            reference.feet_acceleration[i] + ikd.kd * (reference.feet_velocity[i] - jac @ qdot) + ikd.kp * error
+        )
         jacobians.append(jac)
     jac = model.frame_jacobian(ikd.torso_frame, "rotational")
     error = rotation_error(reference.torso_rotation, model.frame_rotation(ikd.torso_frame))
-    accelerations.append(reference.torso_angular_acceleration
-                         + ikd.kd * (reference.torso_angular_velocity - jac @ qdot) + ikd.kp * error)
+    accelerations.append(
+        reference.torso_angular_acceleration + ikd.kd * (reference.torso_angular_velocity - jac @ qdot) + ikd.kp * error
+    )
     jacobians.append(jac)
     j_known, drift_known = np.vstack(jacobians), np.concatenate([drift[0], drift[1], drift[2, 3:]])
     wddot_known = np.concatenate(accelerations)
@@ -227,8 +252,9 @@ def _reference_step(ikd: BipedIkd, q: np.ndarray, qdot: np.ndarray, reference: B
     b_mat = np.array([[0.0, -m * com[2]], [m * com[2], 0.0]])
     if reference.com_plan is not None and ikd.moment_gain > 0.0:  # (5.97)
         plan, force = reference.com_plan, m * g
-        moment = moment + b_mat @ (ikd.com_stiffness * (plan[:2] - com[:2])
-                                   + ikd.com_damping * (plan[2:] - j_com[:2] @ qdot))
+        moment = moment + b_mat @ (
+            ikd.com_stiffness * (plan[:2] - com[:2]) + ikd.com_damping * (plan[2:] - j_com[:2] @ qdot)
+        )
         if reference.support is not None and force > 0.0:
             zmp = np.clip(np.array([-moment[1], moment[0]]) / force, reference.support[0], reference.support[1])
             moment = force * np.array([zmp[1], -zmp[0]])
@@ -241,10 +267,18 @@ def _reference_step(ikd: BipedIkd, q: np.ndarray, qdot: np.ndarray, reference: B
         preferred = preferred - ikd.posture_stiffness * model.difference(ikd.posture, q)
     res = resolve(r_mat, -r_vec, -ikd.weights.apply(preferred), ikd.weights, singular_threshold=ikd.singular_threshold)
     if not res.success:
-        return BipedIkdResult(np.zeros(model.nv), np.zeros(3), float(np.linalg.norm(r_vec)), res.sigma_min, False,
-                              res.status, moment)
-    return BipedIkdResult(res.x, j_com @ res.x + drift_com, float(np.linalg.norm(r_mat @ res.x + r_vec)),
-                          res.sigma_min, True, res.status, moment)
+        return BipedIkdResult(
+            np.zeros(model.nv), np.zeros(3), float(np.linalg.norm(r_vec)), res.sigma_min, False, res.status, moment
+        )
+    return BipedIkdResult(
+        res.x,
+        j_com @ res.x + drift_com,
+        float(np.linalg.norm(r_mat @ res.x + r_vec)),
+        res.sigma_min,
+        True,
+        res.status,
+        moment,
+    )
 
 
 def _assert_same_result(fast: BipedIkdResult, slow: BipedIkdResult, rtol: float = 1e-9) -> None:
@@ -275,15 +309,29 @@ def _walk_states(biped: RobotModel, duration: float) -> list[tuple[np.ndarray, n
         velocity[:, :3], velocity[:, 4] = sample.feet_velocity, sample.feet_pitch_rate
         acceleration[:, :3] = (ahead.feet_velocity - sample.feet_velocity) / dt
         acceleration[:, 4] = (ahead.feet_pitch_rate - sample.feet_pitch_rate) / dt
-        rotation = np.array([[[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]]
-                             for a in sample.feet_pitch])
+        rotation = np.array(
+            [[[np.cos(a), 0.0, np.sin(a)], [0.0, 1.0, 0.0], [-np.sin(a), 0.0, np.cos(a)]] for a in sample.feet_pitch]
+        )
         standing_feet = [f for f, c in zip(sample.feet, sample.contact, strict=True) if c]
-        box = np.array([np.min([[f[0] - 0.095, f[1] - 0.075] for f in standing_feet], axis=0),
-                        np.max([[f[0] + 0.165, f[1] + 0.075] for f in standing_feet], axis=0)])
-        reference = BipedIkdReference(sample.feet.copy(), rotation, velocity, acceleration, np.eye(3), np.zeros(3),
-                                      np.zeros(3), np.array([start[2], 0.0, 0.0]),
-                                      np.array([force * sample.zmp[1], -force * sample.zmp[0]]),
-                                      np.array([*sample.com[:2], *sample.com_velocity[:2]]), box)
+        box = np.array(
+            [
+                np.min([[f[0] - 0.095, f[1] - 0.075] for f in standing_feet], axis=0),
+                np.max([[f[0] + 0.165, f[1] + 0.075] for f in standing_feet], axis=0),
+            ]
+        )
+        reference = BipedIkdReference(
+            sample.feet.copy(),
+            rotation,
+            velocity,
+            acceleration,
+            np.eye(3),
+            np.zeros(3),
+            np.zeros(3),
+            np.array([start[2], 0.0, 0.0]),
+            np.array([force * sample.zmp[1], -force * sample.zmp[0]]),
+            np.array([*sample.com[:2], *sample.com_velocity[:2]]),
+            box,
+        )
         if n % 10 == 0:
             states.append((q.copy(), qdot.copy(), reference))
         result = ikd.step(q, qdot, reference)
@@ -301,11 +349,14 @@ def test_the_compiled_step_equals_the_reference_computation_along_a_walk(biped):
     posture = standing(biped)
     rng = np.random.default_rng(7)
     root = rng.normal(size=(biped.nv, biped.nv))
-    variants = [BipedIkd(biped, posture=posture, moment_gain=1e-3),
-                BipedIkd(biped, moment_gain=0.0, stiffness=100.0, damping=20.0, self_motion_damping=3.0),
-                BipedIkd(biped, posture=posture, moment_gain=2e-3, weights=rng.uniform(0.5, 2.0, biped.nv),
-                         posture_stiffness=5.0),
-                BipedIkd(biped, posture=posture, moment_gain=1e-3, weights=root @ root.T + biped.nv * np.eye(biped.nv))]
+    variants = [
+        BipedIkd(biped, posture=posture, moment_gain=1e-3),
+        BipedIkd(biped, moment_gain=0.0, stiffness=100.0, damping=20.0, self_motion_damping=3.0),
+        BipedIkd(
+            biped, posture=posture, moment_gain=2e-3, weights=rng.uniform(0.5, 2.0, biped.nv), posture_stiffness=5.0
+        ),
+        BipedIkd(biped, posture=posture, moment_gain=1e-3, weights=root @ root.T + biped.nv * np.eye(biped.nv)),
+    ]
     clipped = 0
     for q, qdot, reference in states:
         assert np.abs(qdot).max() > 0.0 or q is states[0][0]
@@ -317,8 +368,11 @@ def test_the_compiled_step_equals_the_reference_computation_along_a_walk(biped):
                 _assert_same_result(fast, _reference_step(ikd, q, qdot, ref))
                 assert fast.success and fast.residual < 1e-9
         result = variants[0].step(q, qdot, tight)
-        clipped += bool(np.any(np.abs(np.array([-result.moment[1], result.moment[0]])
-                                      / (biped.total_mass * GRAVITY) - zmp) > 0.999e-3))
+        clipped += bool(
+            np.any(
+                np.abs(np.array([-result.moment[1], result.moment[0]]) / (biped.total_mass * GRAVITY) - zmp) > 0.999e-3
+            )
+        )
     assert len(states) == 120 and clipped > 10
 
 
@@ -336,16 +390,22 @@ def test_inputs_of_other_types_and_layouts_give_the_same_step(biped):
     readonly = reference.feet_velocity.copy()
     readonly.flags.writeable = False
     _assert_same_result(ikd.step(q, strided[::2], reference._replace(feet_velocity=readonly)), expected, rtol=0.0)
-    _assert_same_result(ikd.step(q, qdot, reference._replace(torso_rotation=np.eye(3, dtype=int),
-                                                             torso_angular_velocity=0.0)), expected, rtol=0.0)
+    _assert_same_result(
+        ikd.step(q, qdot, reference._replace(torso_rotation=np.eye(3, dtype=int), torso_angular_velocity=0.0)),
+        expected,
+        rtol=0.0,
+    )
     scalar_box = reference._replace(support=np.array([-1.0, 1.0]))  # box[0], box[1] broadcast over x and y
     _assert_same_result(ikd.step(q, qdot, scalar_box), _reference_step(ikd, q, qdot, scalar_box))
     # the plan's shape matters only when it is used; the rows must be rows
     with pytest.raises(ControllerError, match="com_plan"):
         ikd.step(q, qdot, reference._replace(com_plan=np.zeros(3)))
     unstabilized = BipedIkd(biped, posture=standing(biped))
-    _assert_same_result(unstabilized.step(q, qdot, reference._replace(com_plan=np.zeros(3))),
-                        unstabilized.step(q, qdot, reference), rtol=0.0)
+    _assert_same_result(
+        unstabilized.step(q, qdot, reference._replace(com_plan=np.zeros(3))),
+        unstabilized.step(q, qdot, reference),
+        rtol=0.0,
+    )
     with pytest.raises(ControllerError, match="feet_rotation"):
         ikd.step(q, qdot, reference._replace(feet_rotation=np.zeros((2, 3))))
     with pytest.raises(ControllerError, match="feet_velocity"):
@@ -394,8 +454,12 @@ def test_the_compiled_joint_limit_gradient_equals_the_objectives_evaluation(bipe
     from redundancy_gym.geometry import GeometryError
 
     states = _walk_states(biped, 0.6)
-    limits = ActuatedObjective(JointLimitObjective(biped.lower_limits[7:], biped.upper_limits[7:],
-                                                   activation_distance=0.6, slope=2.0, weight=1.5), biped)
+    limits = ActuatedObjective(
+        JointLimitObjective(
+            biped.lower_limits[7:], biped.upper_limits[7:], activation_distance=0.6, slope=2.0, weight=1.5
+        ),
+        biped,
+    )
     posture = standing(biped)
     active = 0
     for kwargs in ({"posture": posture}, {}, {"posture": posture, "posture_stiffness": 0.0}):

@@ -8,8 +8,8 @@ import pytest
 
 from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import ControllerError, JointLimitObjective, PostureObjective
-from redundancy_gym.controllers.objectives.actuated_objective import ActuatedObjective
 from redundancy_gym.controllers.ikd import BipedIkd
+from redundancy_gym.controllers.objectives.actuated_objective import ActuatedObjective
 from redundancy_gym.model import RobotModel
 from tests.controllers.ikd.test_biped_ikd import _reference
 from tests.controllers.walking.biped_helpers import standing

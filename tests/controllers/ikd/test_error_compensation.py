@@ -76,8 +76,9 @@ def test_without_the_pd_a_moment_error_tips_the_pendulum_as_its_analytic_solutio
     expected = u / (MASS * GRAVITY) * (math.cosh(omega * t) - 1.0)
     np.testing.assert_allclose(offsets[-1], expected, rtol=1e-9)
     rate = u / (MASS * GRAVITY) * omega * math.sinh(omega * t)
-    np.testing.assert_allclose(compensation.offset_rate, u / (MASS * GRAVITY) * omega * math.sinh(omega * (t + period)),
-                               rtol=1e-9)
+    np.testing.assert_allclose(
+        compensation.offset_rate, u / (MASS * GRAVITY) * omega * math.sinh(omega * (t + period)), rtol=1e-9
+    )
     assert np.all(rate != 0.0)
     # the pendulum's own ZMP moment m g d - m z_c d'' cancels the error: it is -u at every instant
     d, dd = offsets[-1], u / (MASS * HEIGHT) * math.cosh(omega * t)
@@ -91,10 +92,14 @@ def _continuous_closed_loop(error: float, times: np.ndarray) -> np.ndarray:
     """
     k, lead, lag = 3200.0, 0.2, 0.02
     mz, mg = MASS * HEIGHT, MASS * GRAVITY
-    a = np.array([[0.0, 1.0, 0.0, 0.0],
-                  [(mg - k * lead / lag) / mz, 0.0, -k * (1.0 - lead / lag) / mz, error / mz],
-                  [1.0 / lag, 0.0, -1.0 / lag, 0.0],
-                  [0.0, 0.0, 0.0, 0.0]])
+    a = np.array(
+        [
+            [0.0, 1.0, 0.0, 0.0],
+            [(mg - k * lead / lag) / mz, 0.0, -k * (1.0 - lead / lag) / mz, error / mz],
+            [1.0 / lag, 0.0, -1.0 / lag, 0.0],
+            [0.0, 0.0, 0.0, 0.0],
+        ]
+    )
     start = np.array([0.0, 0.0, 0.0, 1.0])
     return np.array([(expm(a * t) @ start)[0] for t in times])
 
@@ -133,11 +138,19 @@ def test_the_stability_condition_and_the_saturation():
     assert not limited.step(np.zeros(2), np.zeros(2)).saturated
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [
-    ({"mass": 0.0}, "mass"), ({"com_height": -1.0}, "com_height"), ({"period": float("nan")}, "period"),
-    ({"gain": -1.0}, "gain"), ({"lead": float("inf")}, "lead"), ({"lag": 0.0}, "lag"),
-    ({"max_moment": 0.0}, "max_moment"), ({"gravity": True}, "gravity"),
-])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"mass": 0.0}, "mass"),
+        ({"com_height": -1.0}, "com_height"),
+        ({"period": float("nan")}, "period"),
+        ({"gain": -1.0}, "gain"),
+        ({"lead": float("inf")}, "lead"),
+        ({"lag": 0.0}, "lag"),
+        ({"max_moment": 0.0}, "max_moment"),
+        ({"gravity": True}, "gravity"),
+    ],
+)
 def test_bad_parameters_are_refused_by_name(kwargs, name):
     args = {"mass": MASS, "com_height": HEIGHT, "period": 0.001}
     args.update({k: v for k, v in kwargs.items() if k in args})

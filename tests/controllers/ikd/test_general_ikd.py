@@ -134,9 +134,14 @@ def test_more_prescribed_task_rows_than_unknowns_is_singular_and_returns_zeros(a
     result = ikd.step(q, qdot, np.zeros(8), np.zeros(3), np.zeros(3), np.ones(3))
     assert not result.success and result.status == "singular"
     assert np.all(result.qddot == 0.0) and np.all(np.isfinite(result.forces))
-    damped = GeneralIkd(arm, FramePositionTask(AGRI_ARM_TCP), known_forces=list(range(8)), method="dls",
-                        dls_threshold=1e3, dls_max_damping=1e-3).step(q, qdot, np.zeros(8), np.zeros(3), np.zeros(3),
-                                                                      np.ones(3))
+    damped = GeneralIkd(
+        arm,
+        FramePositionTask(AGRI_ARM_TCP),
+        known_forces=list(range(8)),
+        method="dls",
+        dls_threshold=1e3,
+        dls_max_damping=1e-3,
+    ).step(q, qdot, np.zeros(8), np.zeros(3), np.zeros(3), np.ones(3))
     assert damped.success and damped.status == "damped" and np.all(np.isfinite(damped.qddot))
     assert damped.residual > 0.0  # a least-squares compromise, not an exact solution
 

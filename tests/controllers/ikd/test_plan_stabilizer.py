@@ -25,8 +25,9 @@ def _lipm(deviation: np.ndarray, rate: np.ndarray, shift: np.ndarray, dt: float)
     return deviation, rate
 
 
-@pytest.mark.parametrize("deviation, rate", [((0.01, -0.005), (0.0, 0.0)), ((-0.002, 0.003), (0.02, -0.01)),
-                                             ((0.0, 0.0), (-0.015, 0.0))])
+@pytest.mark.parametrize(
+    "deviation, rate", [((0.01, -0.005), (0.0, 0.0)), ((-0.002, 0.003), (0.02, -0.01)), ((0.0, 0.0), (-0.015, 0.0))]
+)
 def test_the_modification_in_double_support_brings_the_dcm_deviation_to_zero_at_its_end(deviation, rate):
     stabilizer = PlanStabilizer(OMEGA, max_shift=1.0)
     window = (0.64, 0.8)
@@ -52,7 +53,7 @@ def test_the_shape_is_a_trapezoid_over_the_double_support_only():
     assert stabilizer.shape(0.425) == pytest.approx(0.5)
     assert stabilizer.shape(0.575) == pytest.approx(0.5)
     values = [stabilizer.shape(t) for t in np.linspace(0.4, 0.6, 101)]
-    assert max(abs(a - b) for a, b in zip(values, values[1:])) <= 0.04 + 1e-12  # continuous ramps
+    assert max(abs(a - b) for a, b in zip(values, values[1:], strict=False)) <= 0.04 + 1e-12  # continuous ramps
 
 
 def test_a_saturated_modification_leaves_a_plan_that_converges_instead_of_diverging():

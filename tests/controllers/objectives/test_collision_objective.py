@@ -36,8 +36,9 @@ def test_gradient_matches_finite_differences(planar_model: RobotModel, rng: np.r
 
 
 def test_inactive_far_from_obstacles(planar_model: RobotModel) -> None:
-    model = collision_model_from_mjcf(planar_model, [Segment("obstacle", (PSS([5.0, 0.0, 0.0], 0.1),))],
-                                      self_collision=False)
+    model = collision_model_from_mjcf(
+        planar_model, [Segment("obstacle", (PSS([5.0, 0.0, 0.0], 0.1),))], self_collision=False
+    )
     objective = CollisionObjective(model, activation_distance=0.1)
     q = np.zeros(planar_model.nv)
     planar_model.update(q)
@@ -57,8 +58,9 @@ def test_planar_reach_with_obstacle_is_solved_without_collision() -> None:
     from redundancy_gym.eval.evaluate import evaluate
 
     env_id = "redundancy_gym/PlanarReach-v0"
-    plain = evaluate(env_id, "clik", episodes=2, seed=0, policy_kwargs={"collision_avoidance": "off"},
-                     progress=False).to_json()
+    plain = evaluate(
+        env_id, "clik", episodes=2, seed=0, policy_kwargs={"collision_avoidance": "off"}, progress=False
+    ).to_json()
     avoid = evaluate(env_id, "clik", episodes=3, seed=0, progress=False).to_json()
     assert plain["collision_rate"] == 1.0
     assert avoid["collision_rate"] == 0.0 and avoid["success_rate"] == 1.0

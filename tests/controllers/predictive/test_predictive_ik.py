@@ -13,8 +13,8 @@ from redundancy_gym.controllers import (
     FrameAxisTask,
     FramePositionTask,
     JointLimitObjective,
+    PredictiveIk,
 )
-from redundancy_gym.controllers import PredictiveIk
 from redundancy_gym.geometry import PSS, Segment
 from redundancy_gym.model import RobotModel, collision_model_from_mjcf
 
@@ -27,15 +27,22 @@ def _planar(**kwargs: object) -> tuple[PredictiveIk, np.ndarray, np.ndarray]:
     obstacle = [Segment("obstacle", (PSS(np.array([0.7, 0.0, -0.12]), 0.1),))]
     collision = CollisionObjective(collision_model_from_mjcf(model, obstacle), activation_distance=0.15, slope=5.0)
     limits = JointLimitObjective.from_model(model, activation_distance=0.35, weight=0.6)
-    pik = PredictiveIk(model, FramePositionTask(PLANAR_ARM_TCP, "xz"), joint_limits=limits, collision=collision,
-                       **kwargs)
+    pik = PredictiveIk(
+        model, FramePositionTask(PLANAR_ARM_TCP, "xz"), joint_limits=limits, collision=collision, **kwargs
+    )
     wdot = np.zeros((200, 6))
     wdot[:, 1] = -0.45 * np.sin(np.linspace(0.0, np.pi, 200)) ** 2  # a rest-to-rest move of 0.45 m
     return pik, np.array([-1.3, 1.0, 0.9, 0.5]), wdot
 
 
-def _finite_difference_error(pik: PredictiveIk, q0: np.ndarray, params: np.ndarray, wdot: np.ndarray,
-                             u_b: np.ndarray | None, rng: np.random.Generator) -> tuple[float, float]:
+def _finite_difference_error(
+    pik: PredictiveIk,
+    q0: np.ndarray,
+    params: np.ndarray,
+    wdot: np.ndarray,
+    u_b: np.ndarray | None,
+    rng: np.random.Generator,
+) -> tuple[float, float]:
     roll, gradient = pik.gradient(q0, params, wdot, DT, u_b)
     eps, worst = 1e-6, 0.0
     for _ in range(25):
@@ -54,8 +61,7 @@ def test_planar_gradient_matches_finite_differences(augmented: bool) -> None:
     params = rng.normal(size=(100, 4)) * 0.5
     roll = pik.rollout(q0, params, wdot[:100], DT, rng.normal(size=4))
     assert roll.terms["collision"] > 0.0  # the obstacle term is active along this rollout
-    error, scale = _finite_difference_error(pik, q0, params, wdot[:100], rng.normal(size=4) if augmented else None,
-                                            rng)
+    error, scale = _finite_difference_error(pik, q0, params, wdot[:100], rng.normal(size=4) if augmented else None, rng)
     assert error < 1e-7 * max(scale, 1.0)
 
 
@@ -102,7 +108,7 @@ def test_conjugate_gradient_reaches_a_tight_tolerance_in_fewer_iterations_than_s
     costs = {}
     for method in ("fletcher_reeves", "steepest_descent"):
         result = pik.optimize(q0, wdot, DT, np.zeros((200, 4)), max_iterations=80, tolerance=0.0, method=method)
-        assert all(b <= a for a, b in zip(result.costs, result.costs[1:]))  # every step lowers the cost
+        assert all(b <= a for a, b in zip(result.costs, result.costs[1:], strict=False))  # every step lowers the cost
         costs[method] = np.array(result.costs)
     best = min(c.min() for c in costs.values())
     start = costs["fletcher_reeves"][0]
@@ -169,9 +175,14 @@ def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -
     setup = prepare_point_to_point(FIG_5_10)
     grasp, q0, steps = setup.policy, setup.q_start, setup.steps
     table = np.array([np.concatenate(setup.path(k * DT)) for k in range(steps)])
-    pik = predictive_problem(grasp.model, grasp.task, grasp.joint_limits, grasp.collision,
-                             PredictivePolicyConfig(collision_weight=1.0, collision_activation=0.1,
-                                                    collision_slope=4.0).for_task("grasp"), augmented=False)
+    pik = predictive_problem(
+        grasp.model,
+        grasp.task,
+        grasp.joint_limits,
+        grasp.collision,
+        PredictivePolicyConfig(collision_weight=1.0, collision_activation=0.1, collision_slope=4.0).for_task("grasp"),
+        augmented=False,
+    )
     plan = pik.optimize(q0, table[:, 6:], DT, np.zeros((steps, 9)), max_iterations=300, tolerance=1e-9).rollout
     deviation, speed = {}, {}
     for gain in (0.0, float(grasp.config.gain)):
@@ -193,8 +204,14 @@ def _agri_axis(augmented: bool = False) -> tuple[PredictiveIk, np.ndarray, np.nd
     model = RobotModel.from_mjcf(AGRI_ARM_XML)
     collision = CollisionObjective(collision_model_from_mjcf(model), activation_distance=0.1, slope=5.0)
     limits = JointLimitObjective.from_model(model, activation_distance=0.3, weight=0.6)
-    pik = PredictiveIk(model, FrameAxisTask(AGRI_ARM_TCP, 0), joint_limits=limits, collision=collision,
-                       augmented=augmented, input_weight=0.01)
+    pik = PredictiveIk(
+        model,
+        FrameAxisTask(AGRI_ARM_TCP, 0),
+        joint_limits=limits,
+        collision=collision,
+        augmented=augmented,
+        input_weight=0.01,
+    )
     rng = np.random.default_rng(3)
     q0 = rng.uniform(model.lower_limits, model.upper_limits) * 0.5
     wdot = np.zeros((60, 6))
@@ -221,10 +238,12 @@ def test_compiled_optimize_takes_the_python_loops_iterates(problem: str, method:
     initial = rng.normal(size=(wdot.shape[0], n)) * 0.1
     u_b = rng.normal(size=n) * 0.1 if augmented else None
     for iterations in (0, 1, 6):
-        a = pik.optimize(q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method,
-                         compiled=False)
-        b = pik.optimize(q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method,
-                         compiled=True)
+        a = pik.optimize(
+            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, compiled=False
+        )
+        b = pik.optimize(
+            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, compiled=True
+        )
         assert (a.status, a.iterations, a.rollouts) == (b.status, b.iterations, b.rollouts)
         np.testing.assert_allclose(b.costs, a.costs, rtol=1e-11)
         scale = max(1.0, float(np.max(np.abs(a.params))))
@@ -243,8 +262,7 @@ def test_compiled_optimize_stops_and_fails_like_the_python_loop() -> None:
     pik, q0, wdot = _planar()
     for tolerance in (1e-3, 0.0):
         a = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance)
-        b = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance,
-                         compiled=True)
+        b = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance, compiled=True)
         assert a.status == b.status and (a.status == "converged") == (tolerance > 0.0)
         if tolerance > 0.0:
             assert a.iterations == b.iterations
@@ -256,8 +274,7 @@ def test_compiled_optimize_stops_and_fails_like_the_python_loop() -> None:
     with pytest.raises(ControllerError, match="overflowed"):
         pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2, compiled=True)
     with pytest.raises(ControllerError, match="u_b"):
-        _planar(augmented=True)[0].optimize(q0, wdot[:80], DT, np.zeros((80, 4)), u_b=np.full(4, np.nan),
-                                            compiled=True)
+        _planar(augmented=True)[0].optimize(q0, wdot[:80], DT, np.zeros((80, 4)), u_b=np.full(4, np.nan), compiled=True)
 
 
 def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum() -> None:
@@ -267,13 +284,15 @@ def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum
     from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon  # noqa: PLC0415
 
     pik, q0, wdot = _planar(augmented=True, input_weight=0.01)
-    horizons = {name: RecedingHorizon(pik, 100, DT, iterations=2, **kwargs) for name, kwargs in
-                (("python", {"compiled": False}), ("compiled", {}), ("warm", {"warm_step": True}))}
+    horizons = {
+        name: RecedingHorizon(pik, 100, DT, iterations=2, **kwargs)
+        for name, kwargs in (("python", {"compiled": False}), ("compiled", {}), ("warm", {"warm_step": True}))
+    }
     q = {name: q0.copy() for name in horizons}
     rollouts = {name: 0 for name in horizons}
     for k in range(30):
         for name, horizon in horizons.items():
-            update = horizon.update(q[name], wdot[k:k + 100])
+            update = horizon.update(q[name], wdot[k : k + 100])
             rollouts[name] += update.result.rollouts
             q[name] = q[name] + DT * update.result.rollout.qdot[0]
         np.testing.assert_allclose(horizons["compiled"].last.u, horizons["python"].last.u, atol=1e-9)
@@ -281,7 +300,11 @@ def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum
     # from one state, the warm-started step reaches the same optimum as a cold start (many iterations)
     warm, cold = horizons["warm"], horizons["compiled"]
     params, u_b = warm._params, warm._u_b
-    best = [pik.optimize(q["warm"], wdot[30:130], DT, params, u_b=u_b, max_iterations=150, tolerance=1e-12, step=step,
-                         compiled=True) for step in (warm._step, 1.0)]
+    best = [
+        pik.optimize(
+            q["warm"], wdot[30:130], DT, params, u_b=u_b, max_iterations=150, tolerance=1e-12, step=step, compiled=True
+        )
+        for step in (warm._step, 1.0)
+    ]
     assert best[0].costs[-1] == pytest.approx(best[1].costs[-1], rel=1e-4)
     assert cold._step == 1.0 and warm._step != 1.0

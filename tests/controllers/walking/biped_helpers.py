@@ -24,5 +24,11 @@ def standing(model: RobotModel, **joints: float) -> np.ndarray:
 def walking_controller(model: RobotModel, **ik: object) -> WalkingController:
     """A 4 ms controller on the soft limits with one correction rollout and the IK options ``ik``."""
     lower, upper = model.lower_limits[7:], model.upper_limits[7:]
-    return WalkingController(model, 0.004, lower + BIPED_SOFT_LIMIT_MARGIN, upper - BIPED_SOFT_LIMIT_MARGIN,
-                             ik=WalkingIkConfig(**ik), correction_iterations=1)
+    return WalkingController(
+        model,
+        0.004,
+        lower + BIPED_SOFT_LIMIT_MARGIN,
+        upper - BIPED_SOFT_LIMIT_MARGIN,
+        ik=WalkingIkConfig(**ik),
+        correction_iterations=1,
+    )

@@ -10,8 +10,8 @@ import pytest
 
 from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import CollisionObjective, ControllerError, PostureObjective
-from redundancy_gym.controllers.walking import CompiledWholeBodyIk, WalkingIkConfig, WholeBodyIk, WholeBodyReference
 from redundancy_gym.controllers.kernels.linalg import rotation_error
+from redundancy_gym.controllers.walking import CompiledWholeBodyIk, WalkingIkConfig, WholeBodyIk, WholeBodyReference
 from redundancy_gym.model import ModelError, RobotModel, collision_model_from_mjcf
 
 from .biped_helpers import standing, walking_controller
@@ -27,8 +27,15 @@ def _hold(model: RobotModel, q: np.ndarray, com_lift: float = 0.0) -> WholeBodyR
     model.update(q)
     feet = np.array([model.frame_position(f) for f in ("r_sole", "l_sole")])
     rotations = np.array([model.frame_rotation(f) for f in ("r_sole", "l_sole")])
-    return WholeBodyReference(model.com() + [0.0, 0.0, com_lift], np.zeros(3), feet, rotations, np.zeros((2, 6)),
-                              model.frame_rotation("imu"), np.zeros(3))
+    return WholeBodyReference(
+        model.com() + [0.0, 0.0, com_lift],
+        np.zeros(3),
+        feet,
+        rotations,
+        np.zeros((2, 6)),
+        model.frame_rotation("imu"),
+        np.zeros(3),
+    )
 
 
 @pytest.mark.parametrize("momentum", [True, False], ids=("W_5_62", "W_identity"))
@@ -106,8 +113,7 @@ def test_self_collision_avoidance_opens_the_closest_pair_in_the_nullspace(model:
 def test_unreachable_com_on_stretched_legs_stays_bounded(model: RobotModel) -> None:
     """Hard case: knees straight and the CoM 5 cm above reach. The weighted pseudoinverse would ask for about
     14000 rad/s; both backends bound the step to ``max_velocity`` and agree."""
-    q = standing(model, r_hip_pitch=0.0, r_knee=0.0, r_ankle_pitch=0.0, l_hip_pitch=0.0, l_knee=0.0,
-                  l_ankle_pitch=0.0)
+    q = standing(model, r_hip_pitch=0.0, r_knee=0.0, r_ankle_pitch=0.0, l_hip_pitch=0.0, l_knee=0.0, l_ankle_pitch=0.0)
     reference = _hold(model, q, com_lift=0.05)
     ik = WholeBodyIk(model)
     for solver in (ik, CompiledWholeBodyIk(ik)):
@@ -116,8 +122,11 @@ def test_unreachable_com_on_stretched_legs_stays_bounded(model: RobotModel) -> N
         assert np.all(np.isfinite(result.q))
         assert np.max(np.abs(result.qdot)) == pytest.approx(ik.max_velocity)
         assert np.max(np.abs(model.difference(q, result.q))) <= 2.0 * ik.max_velocity * 0.004 + 1e-12
-    np.testing.assert_allclose(CompiledWholeBodyIk(ik).step(q, reference, reference, 0.004).q,
-                               ik.step(q, reference, reference, 0.004).q, atol=1e-10)
+    np.testing.assert_allclose(
+        CompiledWholeBodyIk(ik).step(q, reference, reference, 0.004).q,
+        ik.step(q, reference, reference, 0.004).q,
+        atol=1e-10,
+    )
 
 
 def test_compiled_ik_rejects_what_it_cannot_compile_and_bad_inputs(model: RobotModel) -> None:
@@ -168,10 +177,12 @@ def test_packed_reference_round_trip_and_controller_packing(model: RobotModel) -
     np.testing.assert_allclose(reference.com_velocity[:2], sample.com_velocity[:2] + rate)
     np.testing.assert_array_equal(reference.feet_position, sample.feet)
     for i in range(2):
-        np.testing.assert_allclose(reference.feet_rotation[i], pin.utils.rpyToMatrix(0.0, sample.feet_pitch[i], 0.0),
-                                   atol=1e-15)
-        np.testing.assert_array_equal(reference.feet_velocity[i], [*sample.feet_velocity[i], 0.0,
-                                                                   sample.feet_pitch_rate[i], 0.0])
+        np.testing.assert_allclose(
+            reference.feet_rotation[i], pin.utils.rpyToMatrix(0.0, sample.feet_pitch[i], 0.0), atol=1e-15
+        )
+        np.testing.assert_array_equal(
+            reference.feet_velocity[i], [*sample.feet_velocity[i], 0.0, sample.feet_pitch_rate[i], 0.0]
+        )
     assert np.any(sample.feet_pitch != 0.0)
     with pytest.raises(ControllerError, match="shape"):
         WholeBodyReference.from_array(np.zeros(5))

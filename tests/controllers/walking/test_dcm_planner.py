@@ -69,7 +69,7 @@ def test_sample_results_are_fresh_arrays_and_do_not_depend_on_the_order_of_calls
     ts = rng.uniform(plan.times[0] - 0.1, plan.times[-1] + 0.5, 30)
     forward = [plan.sample(float(t)) for t in ts]
     twin = DcmPlan(plan.omega, plan.times, plan.zmp, plan.dcm, plan.com)  # nothing cached yet
-    for t, state in zip(ts[::-1], forward[::-1]):
+    for t, state in zip(ts[::-1], forward[::-1], strict=False):
         again = twin.sample(float(t))
         for field in ("position", "velocity", "acceleration", "dcm", "zmp"):
             np.testing.assert_array_equal(getattr(again, field), getattr(state, field))

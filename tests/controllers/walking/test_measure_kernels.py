@@ -31,8 +31,16 @@ def random_state(model: RobotModel, rng: np.random.Generator) -> tuple[np.ndarra
     return q, rng.normal(size=model.nv)
 
 
-def reference(model: RobotModel, q: np.ndarray, v: np.ndarray, sensors: np.ndarray, stance: int,
-              planned: tuple[float, float, float], stance_frame: bool, ground: float) -> dict[str, object]:
+def reference(
+    model: RobotModel,
+    q: np.ndarray,
+    v: np.ndarray,
+    sensors: np.ndarray,
+    stance: int,
+    planned: tuple[float, float, float],
+    stance_frame: bool,
+    ground: float,
+) -> dict[str, object]:
     """What WalkingController measured through pinocchio and NumPy before the kernel (its _in_stance_frame)."""
     com, com_velocity, rotations, positions = model.measure(q, v, FRAMES)
     turn, shift = np.eye(3), np.zeros(3)
@@ -43,13 +51,26 @@ def reference(model: RobotModel, q: np.ndarray, v: np.ndarray, sensors: np.ndarr
         turn = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
         real = positions[2 + stance]
         shift = np.array([planned[0], planned[1], 0.0]) - turn @ np.array([real[0], real[1], 0.0])
-        com, com_velocity, rotations, positions = turn @ com + shift, turn @ com_velocity, turn @ rotations, \
-            positions @ turn.T + shift
+        com, com_velocity, rotations, positions = (
+            turn @ com + shift,
+            turn @ com_velocity,
+            turn @ rotations,
+            positions @ turn.T + shift,
+        )
     wrench = sensors.reshape(2, 6)
     contact = estimate_zmp(rotations[:2], positions[:2], wrench[:, :3], wrench[:, 3:], ground=ground)
-    return {"com": com, "com_velocity": com_velocity, "rotations": rotations, "positions": positions, "turn": turn,
-            "shift": shift, "zmp": contact.zmp, "cop": contact.cop, "normal_force": contact.normal_force,
-            "moment": contact.moment}
+    return {
+        "com": com,
+        "com_velocity": com_velocity,
+        "rotations": rotations,
+        "positions": positions,
+        "turn": turn,
+        "shift": shift,
+        "zmp": contact.zmp,
+        "cop": contact.cop,
+        "normal_force": contact.normal_force,
+        "moment": contact.moment,
+    }
 
 
 def to_mujoco(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -57,9 +78,13 @@ def to_mujoco(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     qpos = q.copy()
     qpos[3:7] = q[[6, 3, 4, 5]]
     x, y, z, w = q[3:7]
-    rotation = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    rotation = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     qvel = v.copy()
     qvel[:3] = rotation @ v[:3]
     return qpos, qvel
@@ -79,8 +104,9 @@ def test_the_kernel_agrees_with_pinocchio_and_numpy(model: RobotModel, stance_fr
         stance = trial % 2
         planned = (float(rng.normal()), float(rng.normal()), float(rng.normal()) if trial % 3 else 0.0)
         inputs = to_mujoco(q, v) if mujoco else (q, v)
-        m = measurement.measure(*inputs, sensors, mujoco=mujoco, stance_frame=stance_frame, stance=stance,
-                                planned=planned, ground=0.01)
+        m = measurement.measure(
+            *inputs, sensors, mujoco=mujoco, stance_frame=stance_frame, stance=stance, planned=planned, ground=0.01
+        )
         assert m is not None
         expected = reference(model, q, v, sensors, stance, planned, stance_frame, 0.01)
         np.testing.assert_allclose(m.q, q, rtol=0.0, atol=1e-12)
@@ -124,8 +150,9 @@ def test_step_mujoco_is_step_on_the_converted_state(model: RobotModel) -> None:
         qpos, qvel = to_mujoco(q, v)
         a = controllers[0].step_mujoco(qpos, qvel, wrenches)
         b = controllers[1].step(*model.from_mujoco_state(qpos, qvel), forces, torques)
-        c = controllers[2].step(*(x.tolist() for x in model.from_mujoco_state(qpos, qvel)), forces.tolist(),
-                                torques.tolist())
+        c = controllers[2].step(
+            *(x.tolist() for x in model.from_mujoco_state(qpos, qvel)), forces.tolist(), torques.tolist()
+        )
         np.testing.assert_allclose(a.joint_targets, b.joint_targets, rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(c.joint_targets, b.joint_targets, rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(a.contact.zmp, b.contact.zmp, rtol=0.0, atol=1e-12)

@@ -13,8 +13,14 @@ def test_boundary_conditions_hold_to_c2() -> None:
     q = Quintic.from_boundary(0.7, [0.1, -0.2], [0.5, 0.3], [0.2, 0.0], [-0.1, 0.4], [1.0, -2.0], [0.5, 0.5])
     p0, v0, a0 = q.evaluate(0.0)
     p1, v1, a1 = q.evaluate(0.7)
-    for got, want in ((p0, [0.1, -0.2]), (v0, [0.2, 0.0]), (a0, [1.0, -2.0]), (p1, [0.5, 0.3]), (v1, [-0.1, 0.4]),
-                      (a1, [0.5, 0.5])):
+    for got, want in (
+        (p0, [0.1, -0.2]),
+        (v0, [0.2, 0.0]),
+        (a0, [1.0, -2.0]),
+        (p1, [0.5, 0.3]),
+        (v1, [-0.1, 0.4]),
+        (a1, [0.5, 0.5]),
+    ):
         assert np.allclose(got, want, atol=1e-12)
     # velocity and acceleration are the derivatives of position (central differences)
     h = 1e-5
@@ -29,7 +35,7 @@ def test_swing_height_is_c2_at_the_apex_and_rests_at_both_ends() -> None:
     vertical, horizontal = pattern._swing_cache[0]
     apex = vertical.breaks[1]
     left, right = vertical.pieces[0].evaluate(apex), vertical.pieces[1].evaluate(0.0)
-    for a, b in zip(left, right):
+    for a, b in zip(left, right, strict=False):
         assert float(a) == pytest.approx(float(b), abs=1e-12)
     assert float(left[0]) == pytest.approx(GaitConfig().step_height)
     for s in (0.0, vertical.duration):
@@ -55,7 +61,7 @@ def test_scalar_evaluation_is_the_array_form_bit_for_bit(shape: tuple[int, ...])
         q = Quintic.from_boundary(rng.uniform(0.1, 1.0), *(rng.normal(size=shape) for _ in range(6)))
         s = rng.uniform(-0.1, 1.1)
         fast, array = q.evaluate(s), q._evaluate_array(min(max(s, 0.0), q.duration))
-        for a, b in zip(fast, array):
+        for a, b in zip(fast, array, strict=False):
             assert type(a) is type(b) and np.shape(a) == np.shape(b)
             np.testing.assert_array_equal(a, b)
         values = q.values(s)
@@ -63,5 +69,5 @@ def test_scalar_evaluation_is_the_array_form_bit_for_bit(shape: tuple[int, ...])
             assert values is None
         else:
             assert values is not None
-            for a, b in zip(values, array):
+            for a, b in zip(values, array, strict=False):
                 np.testing.assert_array_equal(a, np.reshape(b, -1))

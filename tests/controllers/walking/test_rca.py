@@ -77,8 +77,16 @@ def test_the_modification_is_the_steepest_descent_of_the_potential_through_the_l
         return objective.evaluate(model, x).value
 
     eps = 1e-6
-    numeric = np.array([(potential(model.integrate(q, least_squares[:, i], eps))
-                         - potential(model.integrate(q, least_squares[:, i], -eps))) / (2 * eps) for i in range(3)])
+    numeric = np.array(
+        [
+            (
+                potential(model.integrate(q, least_squares[:, i], eps))
+                - potential(model.integrate(q, least_squares[:, i], -eps))
+            )
+            / (2 * eps)
+            for i in range(3)
+        ]
+    )
     np.testing.assert_allclose(rate, -numeric, rtol=1e-4, atol=1e-7)
     # the post stands in front: the foot is sent backwards, away from it
     assert rate[0] < 0.0

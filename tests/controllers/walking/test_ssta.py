@@ -6,17 +6,17 @@ import numpy as np
 import pytest
 
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.controllers.walking.ssta import BLOCKED_COST
 from redundancy_gym.controllers.walking import (
     GaitConfig,
-    Quintic,
     ObstacleBox,
+    Quintic,
     Ssta,
     SstaConfig,
     SwingModification,
     WalkingPattern,
     bounding_boxes,
 )
+from redundancy_gym.controllers.walking.ssta import BLOCKED_COST
 from redundancy_gym.geometry import LSS, TSS
 
 LANES = (-0.09, 0.09)
@@ -26,7 +26,9 @@ FEET = ([0.0, -0.09, 0.0], [0.0, 0.09, 0.0])
 def rectangle(x: float, width: float, height: float, depth: float, y: float = 0.0) -> list[TSS]:
     """A block as the env models it: a vertical rectangle across the path swept by half its depth."""
     r = 0.5 * depth
-    p = np.array([[x, y - width / 2, 0.0], [x, y + width / 2, 0.0], [x, y + width / 2, height], [x, y - width / 2, height]])
+    p = np.array(
+        [[x, y - width / 2, 0.0], [x, y + width / 2, 0.0], [x, y + width / 2, height], [x, y - width / 2, height]]
+    )
     return [TSS(p[0], p[1], p[2], r), TSS(p[0], p[2], p[3], r)]
 
 
@@ -139,8 +141,9 @@ def test_no_planned_sole_overlaps_the_box_and_every_step_stays_feasible(course):
         step = h[0] - pattern.foothold(j - 1)[0]
         assert config.min_step_length - 1e-9 <= step <= config.max_step_length + 1e-9
     # some foothold moved next to the box: the plan hugs it
-    assert any(abs(pattern.foothold(j)[0] - high) < 1e-9 or abs(pattern.foothold(j)[0] - low) < 1e-9
-               for j in range(2, 14))
+    assert any(
+        abs(pattern.foothold(j)[0] - high) < 1e-9 or abs(pattern.foothold(j)[0] - low) < 1e-9 for j in range(2, 14)
+    )
 
 
 def _swing_samples(pattern: WalkingPattern, k: int, n: int = 400) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -182,8 +185,9 @@ def test_a_swing_around_the_triangle_is_beside_it_wherever_the_sole_passes_it():
         front, back = position[:, 0] + config.toe_length, position[:, 0] - config.heel_length
         alongside = (front > box.lower[0]) & (back < box.upper[0])
         assert alongside.any()
-        inner = np.where(position[:, 1] > 0, position[:, 1] - config.foot_half_width,
-                         -(position[:, 1] + config.foot_half_width))
+        inner = np.where(
+            position[:, 1] > 0, position[:, 1] - config.foot_half_width, -(position[:, 1] + config.foot_half_width)
+        )
         assert np.all(inner[alongside] >= box.upper[1] - 1e-9)
         np.testing.assert_allclose(position[-1], pattern.foothold(k + 2), atol=1e-12)
 
@@ -196,9 +200,12 @@ def test_modified_swings_are_c2(course):
     single = pattern.step_single(k)
     h = single / 3999
     # finite differences agree with the analytic derivatives (no jump anywhere, the piece joints included)
-    np.testing.assert_allclose(np.gradient(position, h, axis=0)[1:-1], velocity[1:-1], atol=5e-3 * np.abs(velocity).max())
-    np.testing.assert_allclose(np.gradient(velocity, h, axis=0)[1:-1], acceleration[1:-1],
-                               atol=2e-2 * np.abs(acceleration).max())
+    np.testing.assert_allclose(
+        np.gradient(position, h, axis=0)[1:-1], velocity[1:-1], atol=5e-3 * np.abs(velocity).max()
+    )
+    np.testing.assert_allclose(
+        np.gradient(velocity, h, axis=0)[1:-1], acceleration[1:-1], atol=2e-2 * np.abs(acceleration).max()
+    )
     np.testing.assert_allclose(velocity[[0, -1]], 0.0, atol=1e-12)
     np.testing.assert_allclose(acceleration[[0, -1]], 0.0, atol=1e-9)
 
@@ -208,7 +215,9 @@ def test_a_slower_step_over_reschedules_the_later_steps():
     overs = [k for k in range(8) if (m := pattern.swing_modification(k)) is not None and m.kind == "over"]
     plain = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
     assert [pattern.step_single(k) for k in overs] == [0.9, 0.9]
-    assert pattern.step_start(overs[-1] + 1) == pytest.approx(plain.step_start(overs[-1] + 1) + 2 * (0.9 - plain.single_support))
+    assert pattern.step_start(overs[-1] + 1) == pytest.approx(
+        plain.step_start(overs[-1] + 1) + 2 * (0.9 - plain.single_support)
+    )
 
 
 def test_bad_configs_and_boxes_raise_naming_the_value():
@@ -316,7 +325,9 @@ def test_a_modified_swing_back_along_x_still_starts_and_ends_on_its_footholds():
     # a foothold moved behind the same foot's previous one (rare: moves along x for two boxes): finite durations
     pattern = WalkingPattern(GaitConfig(), *FEET, [0.0, 0.0], 0.4)
     start, end = np.array([1.0, -0.09, 0.0]), np.array([0.9, -0.09, 0.0])
-    vertical, horizontal = pattern._modified_swing(start, end, 0.48, SwingModification("around", 0.07, -0.05, (0.8, 1.1)))
+    vertical, horizontal = pattern._modified_swing(
+        start, end, 0.48, SwingModification("around", 0.07, -0.05, (0.8, 1.1))
+    )
     xy0, v0, _ = horizontal.evaluate(0.0)
     xy1, v1, _ = horizontal.evaluate(0.48)
     np.testing.assert_allclose(xy0, start[:2], atol=1e-12)
@@ -376,7 +387,8 @@ def test_a_long_swing_is_slowed_to_the_mean_speed_of_the_longest_nominal_one():
             assert pattern.step_single(k) == single
         # the later steps start later by the longer single supports before them
         assert pattern.step_start(k + 1) - pattern.step_start(k) == pytest.approx(
-            plain.step_duration - single + pattern.step_single(k))
+            plain.step_duration - single + pattern.step_single(k)
+        )
     assert slowed == 2
     never = pattern_with(triangle(), SstaConfig(long_swing=None))[0]
     assert all(never.step_single(k) == single for k in range(12))
@@ -412,10 +424,24 @@ def _staggered_posts() -> tuple[np.ndarray, list[ObstacleBox]]:
     """The footholds and boxes (plan frame) of a random course where the line, moved right past a post on the
     left, must move left before a post on the right 1.4 m on: the right foot's last chance to move lands 0.25 m
     in front of the second post."""
-    h = np.array([[8.645, 0.09], [8.965, -0.09], [9.285, 0.09], [9.437, -0.09], [9.757, 0.09], [10.077, -0.09],
-                  [10.397, 0.09], [10.717, -0.09], [11.037, 0.09], [11.357, -0.09]])
-    boxes = [ObstacleBox(np.array([8.268, 0.107, -0.044]), np.array([8.356, 0.196, 0.354])),
-             ObstacleBox(np.array([9.687, -0.296, -0.043]), np.array([9.774, -0.136, 0.42]))]
+    h = np.array(
+        [
+            [8.645, 0.09],
+            [8.965, -0.09],
+            [9.285, 0.09],
+            [9.437, -0.09],
+            [9.757, 0.09],
+            [10.077, -0.09],
+            [10.397, 0.09],
+            [10.717, -0.09],
+            [11.037, 0.09],
+            [11.357, -0.09],
+        ]
+    )
+    boxes = [
+        ObstacleBox(np.array([8.268, 0.107, -0.044]), np.array([8.356, 0.196, 0.354])),
+        ObstacleBox(np.array([9.687, -0.296, -0.043]), np.array([9.774, -0.136, 0.42])),
+    ]
     return h, boxes
 
 
@@ -444,8 +470,20 @@ def test_the_line_moves_a_centimetre_rather_than_leave_a_foothold_where_no_move_
     # a tall block beside the right lane, 9 mm into its margin; the right foothold in front of it can move
     # neither back (behind the left foot) nor forward (a 0.62 m step)
     block = ObstacleBox(np.array([2.716, -0.453, 0.0]), np.array([3.114, -0.191, 0.363]))
-    h = np.array([[2.022, 0.09], [2.342, -0.09], [2.662, 0.09], [2.982, -0.09], [3.302, 0.09], [3.622, -0.09],
-                  [3.942, 0.09], [4.262, -0.09], [4.582, 0.09], [4.902, -0.09]])
+    h = np.array(
+        [
+            [2.022, 0.09],
+            [2.342, -0.09],
+            [2.662, 0.09],
+            [2.982, -0.09],
+            [3.302, 0.09],
+            [3.622, -0.09],
+            [3.942, 0.09],
+            [4.262, -0.09],
+            [4.582, 0.09],
+            [4.902, -0.09],
+        ]
+    )
     ssta = Ssta(SstaConfig(), LANES)
     assert ssta.foothold_shift(h[3], h[2], [block], behind=float(h[1, 0])) is None
     plan = ssta.plan_line(h, 1, (0.0, 0.0), [block])

@@ -54,8 +54,9 @@ def test_the_offset_is_bounded_and_the_rate_is_what_reaches_the_bound() -> None:
         np.testing.assert_allclose(out.rate, (out.offset - previous) / DT, atol=1e-12)
         previous = out.offset
     np.testing.assert_allclose(np.linalg.norm(previous), 0.01, rtol=1e-14)
-    np.testing.assert_allclose(previous / np.linalg.norm(previous), np.array([0.5, -0.2]) / np.hypot(0.5, 0.2),
-                               rtol=1e-12)
+    np.testing.assert_allclose(
+        previous / np.linalg.norm(previous), np.array([0.5, -0.2]) / np.hypot(0.5, 0.2), rtol=1e-12
+    )
 
 
 def test_outputs_are_not_the_stabilizer_state() -> None:
@@ -91,7 +92,7 @@ def test_lists_float32_and_numpy_scalars_give_the_float64_result() -> None:
     args = ([0.1, 0.0], [0.12, 0.01], [0.08, -0.05], [0.11, 0.0], [0.3, -0.1], [0.05, -0.04])
     reference = Stabilizer(StabilizerGains(dcm=1.5, zmp=0.8, com=2.0, max_offset=1.0), OMEGA).update(DT, *args)
     out = Stabilizer(gains, OMEGA).update(np.float32(DT), *(np.asarray(a, dtype=np.float32) for a in args))
-    for got, expected in zip(out, reference):
+    for got, expected in zip(out, reference, strict=False):
         assert got.dtype == np.float64
         # float32 inputs are rounded once; the arithmetic is float64 throughout
         np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-8)

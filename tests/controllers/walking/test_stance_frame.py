@@ -45,7 +45,9 @@ def test_a_rigidly_turned_robot_gets_the_same_feedback(model: RobotModel, stance
         a = controllers[0].step(q, v, forces, torques)
         b = controllers[1].step(moved(q, 0.3, np.array([0.2, -0.1, 0.0])), v, forces, torques)
         worst["targets"] = max(worst["targets"], float(np.max(np.abs(a.joint_targets - b.joint_targets))))
-        worst["dcm_error"] = max(worst["dcm_error"], float(np.max(np.abs(a.stabilizer.dcm_error - b.stabilizer.dcm_error))))
+        worst["dcm_error"] = max(
+            worst["dcm_error"], float(np.max(np.abs(a.stabilizer.dcm_error - b.stabilizer.dcm_error)))
+        )
         worst["zmp"] = max(worst["zmp"], float(np.max(np.abs(a.contact.zmp - b.contact.zmp))))
         q = a.ik.q
     if stance_frame:

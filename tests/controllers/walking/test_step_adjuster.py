@@ -128,12 +128,17 @@ def test_disabled_adjuster_never_adjusts() -> None:
     assert StepAdjuster(StepAdjusterConfig(enabled=False)).update(pattern, t, pattern.dcm(t) + [0.5, 0.5]) is None
 
 
-@pytest.mark.parametrize("kwargs, match", [({"ankle_margin": (0.06, -0.1)}, "ankle_margin"),
-                                           ({"ankle_share": 1.5}, "ankle_share"),
-                                           ({"min_width": 0.5}, "min_width"),
-                                           ({"max_forward": float("nan")}, "max_forward"),
-                                           ({"timing_candidates": 0}, "timing_candidates"),
-                                           ({"enabled": "yes"}, "enabled")])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"ankle_margin": (0.06, -0.1)}, "ankle_margin"),
+        ({"ankle_share": 1.5}, "ankle_share"),
+        ({"min_width": 0.5}, "min_width"),
+        ({"max_forward": float("nan")}, "max_forward"),
+        ({"timing_candidates": 0}, "timing_candidates"),
+        ({"enabled": "yes"}, "enabled"),
+    ],
+)
 def test_config_rejects_bad_values(kwargs: dict, match: str) -> None:
     with pytest.raises(ControllerError, match=match):
         StepAdjusterConfig(**kwargs)
@@ -145,15 +150,21 @@ def test_non_finite_dcm_raises() -> None:
         StepAdjuster().update(pattern, t, [np.nan, 0.0])
 
 
-@pytest.mark.parametrize("force, start", [((0.0, -150.0, 0.0), 2.36), ((0.0, 150.0, 0.0), 3.0)],
-                         ids=["right-foot-swinging-pushed-right", "left-foot-swinging-pushed-left"])
+@pytest.mark.parametrize(
+    "force, start",
+    [((0.0, -150.0, 0.0), 2.36), ((0.0, 150.0, 0.0), 3.0)],
+    ids=["right-foot-swinging-pushed-right", "left-foot-swinging-pushed-left"],
+)
 def test_a_15_Ns_lateral_push_towards_the_swing_side_is_recovered_by_stepping(force, start) -> None:
     """BipedWalk at 0.5 m/s, a 0.1 s push on the torso towards the swinging foot's side: the walker steps out and
     stands, where without step adjustment (ankle and hip strategy only) it falls."""
     outcomes = {}
     for push_recovery in (True, False):
-        env = gym.make("redundancy_gym/BipedWalk-v0", target_speed=0.5,
-                       push=[{"time": start, "force": list(force), "duration": 0.1}])
+        env = gym.make(
+            "redundancy_gym/BipedWalk-v0",
+            target_speed=0.5,
+            push=[{"time": start, "force": list(force), "duration": 0.1}],
+        )
         policy = make_policy("walking", env, push_recovery=push_recovery)
         obs, _ = env.reset(seed=0)
         adjusted, fell = 0, False

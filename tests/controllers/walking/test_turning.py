@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.controllers.walking import GaitConfig, StepAdjuster, StepAdjusterConfig, WalkingController, WalkingPattern
+from redundancy_gym.controllers.walking import (
+    GaitConfig,
+    StepAdjuster,
+    StepAdjusterConfig,
+    WalkingController,
+    WalkingPattern,
+)
 from redundancy_gym.controllers.walking.walking_pattern import MAX_STEP_TURN, TURN_WIDENING
 
 FEET = ([0.0, -0.09, 0.0], [0.0, 0.09, 0.0])
@@ -96,22 +102,28 @@ def test_zmp_knots_lie_along_and_across_the_turned_feet() -> None:
     for j in range(2, 8):
         h, heading = pattern.foothold(j)[:2], pattern.heading(j)
         inward = 1.0 if j % 2 == 0 else -1.0
-        np.testing.assert_allclose(pattern._zmp_point(j, config.heel_toe_shift),
-                                   h + rz(heading) @ [config.heel_toe_shift, inward * config.zmp_inset], atol=1e-12)
+        np.testing.assert_allclose(
+            pattern._zmp_point(j, config.heel_toe_shift),
+            h + rz(heading) @ [config.heel_toe_shift, inward * config.zmp_inset],
+            atol=1e-12,
+        )
 
 
 def test_the_ik_reference_turns_the_soles_and_the_torso() -> None:
     pattern = turning(0.3)
-    sample = next(s for s in (pattern.sample(float(t)) for t in np.arange(2.0, 4.0, 0.004))
-                  if not all(s.contact) and abs(s.feet_yaw_rate).max() > 0.1 and abs(s.feet_pitch).max() > 0.05)
+    sample = next(
+        s
+        for s in (pattern.sample(float(t)) for t in np.arange(2.0, 4.0, 0.004))
+        if not all(s.contact) and abs(s.feet_yaw_rate).max() > 0.1 and abs(s.feet_pitch).max() > 0.05
+    )
     a = WalkingController._reference_array(sample, np.zeros(2), np.zeros(2))
     for i in range(2):
         yaw, pitch = sample.feet_yaw[i], sample.feet_pitch[i]
         cz, sz, c, s = math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch)
         expected = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]]) @ np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-        np.testing.assert_allclose(a[12 + 9 * i:21 + 9 * i].reshape(3, 3), expected, atol=1e-12)
+        np.testing.assert_allclose(a[12 + 9 * i : 21 + 9 * i].reshape(3, 3), expected, atol=1e-12)
         omega = np.array([-sz * sample.feet_pitch_rate[i], cz * sample.feet_pitch_rate[i], sample.feet_yaw_rate[i]])
-        np.testing.assert_allclose(a[33 + 6 * i:36 + 6 * i], omega, atol=1e-12)
+        np.testing.assert_allclose(a[33 + 6 * i : 36 + 6 * i], omega, atol=1e-12)
     mean = sample.feet_yaw.mean()
     np.testing.assert_allclose(a[42:51].reshape(3, 3)[:2, :2], rz(mean), atol=1e-12)
     assert a[53] == pytest.approx(sample.feet_yaw_rate.mean())

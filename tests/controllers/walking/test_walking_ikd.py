@@ -12,8 +12,13 @@ import pytest
 
 from redundancy_gym.assets import BIPED_XML
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.controllers.walking import WalkingIkd, WalkingIkdConfig
-from redundancy_gym.controllers.walking import GaitConfig, WalkingController, WalkingPattern
+from redundancy_gym.controllers.walking import (
+    GaitConfig,
+    WalkingController,
+    WalkingIkd,
+    WalkingIkdConfig,
+    WalkingPattern,
+)
 from redundancy_gym.model import RobotModel
 from tests.controllers.walking.biped_helpers import standing
 
@@ -62,7 +67,9 @@ def _walk(biped: RobotModel, config: WalkingIkdConfig, duration: float, shift: n
             break
         moment = _contact_moment(biped, q0, qdot0, step.qddot)
         out["moment_error"].append(float(np.abs(moment[:2] - step.moment).max() / np.abs(step.moment).max()))
-        out["inside"].append(bool(np.all(step.zmp >= step.support[0] - 1e-9) and np.all(step.zmp <= step.support[1] + 1e-9)))
+        out["inside"].append(
+            bool(np.all(step.zmp >= step.support[0] - 1e-9) and np.all(step.zmp <= step.support[1] + 1e-9))
+        )
         out["distance"].append(float(np.linalg.norm(step.com[:2] - start.com[:2])))
         in_double = window is not None and window[0] - DT <= t <= window[1]
         out["shift_outside_ds"].append(bool(step.planning_shift.any()) and not in_double)
@@ -142,13 +149,21 @@ def _previous_support(ikd: WalkingIkd, sample, shift: np.ndarray) -> np.ndarray:
     return np.array([points.min(axis=0) + c.support_margin, points.max(axis=0) - c.support_margin])
 
 
-def _previous_step(ikd: WalkingIkd, start, start_reference, end_reference, double_support, feet_shift=(0.0, 0.0),
-                   feet_shift_rate=(0.0, 0.0), zmp=None):
+def _previous_step(
+    ikd: WalkingIkd,
+    start,
+    start_reference,
+    end_reference,
+    double_support,
+    feet_shift=(0.0, 0.0),
+    feet_shift_rate=(0.0, 0.0),
+    zmp=None,
+):
     """:meth:`WalkingIkd.step` as it was before the compiled assembly (NumPy throughout, the planner's advance
     and the support box on arrays): the independent reference of the fast path."""
     from redundancy_gym.controllers.ikd import BipedIkdReference
-    from redundancy_gym.controllers.walking import WalkingIkdStep
     from redundancy_gym.controllers.ikd.biped_ikd import GRAVITY
+    from redundancy_gym.controllers.walking import WalkingIkdStep
 
     dt, model, c = ikd.dt, ikd.model, ikd.config
     shift = -np.asarray(feet_shift, dtype=np.float64)
@@ -163,8 +178,13 @@ def _previous_step(ikd: WalkingIkd, start, start_reference, end_reference, doubl
     torso_rate = ref[51:54]
     torso_acceleration = (ahead[51:54] - torso_rate) / dt
     t = float(start.time)
-    if (c.planning and double_support is not None and start.step >= 0 and start.step != ikd._step
-            and t >= double_support[0] - 0.5 * dt):
+    if (
+        c.planning
+        and double_support is not None
+        and start.step >= 0
+        and start.step != ikd._step
+        and t >= double_support[0] - 0.5 * dt
+    ):
         ikd._step = start.step
         model.update(ikd.q)
         com, centroidal = model.com_and_centroidal_matrix()
@@ -178,9 +198,19 @@ def _previous_step(ikd: WalkingIkd, start, start_reference, end_reference, doubl
         com_plan += np.concatenate([planned.com_offset, planned.com_offset_rate])
     support = _previous_support(ikd, start, shift)
     moment = ikd.force * np.array([zmp[1], -zmp[0]])
-    reference = BipedIkdReference(position, ref[12:30].reshape(2, 3, 3), velocity, acceleration, torso_rotation,
-                                  torso_rate, torso_acceleration, np.array([float(start.com[2]), 0.0, 0.0]),
-                                  moment, com_plan if c.moment_gain > 0.0 else None, support)
+    reference = BipedIkdReference(
+        position,
+        ref[12:30].reshape(2, 3, 3),
+        velocity,
+        acceleration,
+        torso_rotation,
+        torso_rate,
+        torso_acceleration,
+        np.array([float(start.com[2]), 0.0, 0.0]),
+        moment,
+        com_plan if c.moment_gain > 0.0 else None,
+        support,
+    )
     result = ikd.ikd.step(ikd.q, ikd.qdot, reference)
     com, centroidal = ikd.ikd.terms.com, ikd.ikd.terms.centroidal
     com_velocity = centroidal[:3] @ ikd.qdot / model.total_mass
@@ -197,9 +227,23 @@ def _previous_step(ikd: WalkingIkd, start, start_reference, end_reference, doubl
         ikd.q = model.integrate(ikd.q, ikd.qdot, dt)
     else:
         ikd.qdot = np.zeros(model.nv)
-    return WalkingIkdStep(ikd.q.copy(), ikd.qdot.copy(), result.qddot, com, com_velocity, realized, ideal.copy(),
-                          planned.zmp_shift if planned is not None else np.zeros(2), result.moment, support, lz,
-                          result.residual, result.sigma_min, result.success, limited)
+    return WalkingIkdStep(
+        ikd.q.copy(),
+        ikd.qdot.copy(),
+        result.qddot,
+        com,
+        com_velocity,
+        realized,
+        ideal.copy(),
+        planned.zmp_shift if planned is not None else np.zeros(2),
+        result.moment,
+        support,
+        lz,
+        result.residual,
+        result.sigma_min,
+        result.success,
+        limited,
+    )
 
 
 class _Plain:
@@ -220,8 +264,9 @@ def _assert_same_step(fast, slow, rtol: float = 1e-9) -> None:
             continue
         a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
         assert a.shape == b.shape, name
-        np.testing.assert_allclose(a, b, rtol=0.0, atol=rtol * max(float(np.abs(b).max(initial=0.0)), 1e-300),
-                                   err_msg=name)
+        np.testing.assert_allclose(
+            a, b, rtol=0.0, atol=rtol * max(float(np.abs(b).max(initial=0.0)), 1e-300), err_msg=name
+        )
 
 
 def _walker_pair(biped: RobotModel, config: WalkingIkdConfig, pattern_speed: float = 0.4):
@@ -235,17 +280,26 @@ def _walker_pair(biped: RobotModel, config: WalkingIkdConfig, pattern_speed: flo
     gait = GaitConfig(step_duration=0.6)
     pattern = WalkingPattern(gait, feet[0], feet[1], com[:2], pattern_speed)
     # the walking controller's joint-limit objective, with limits near enough to act along this walk
-    limits = ActuatedObjective(JointLimitObjective(biped.lower_limits[7:], biped.upper_limits[7:],
-                                                   activation_distance=0.6, slope=2.0, weight=1.5), biped)
-    walkers = [WalkingIkd(biped, DT, config, omega=np.sqrt(9.81 / gait.com_height), posture=q, objectives=objectives)
-               for objectives in ((limits,), (_Plain(limits),))]
+    limits = ActuatedObjective(
+        JointLimitObjective(
+            biped.lower_limits[7:], biped.upper_limits[7:], activation_distance=0.6, slope=2.0, weight=1.5
+        ),
+        biped,
+    )
+    walkers = [
+        WalkingIkd(biped, DT, config, omega=np.sqrt(9.81 / gait.com_height), posture=q, objectives=objectives)
+        for objectives in ((limits,), (_Plain(limits),))
+    ]
     for walker in walkers:
         walker.start(q)
     return pattern, walkers
 
 
-@pytest.mark.parametrize("config", [WalkingIkdConfig(), WalkingIkdConfig(planning=False, max_velocity=0.9),
-                                    WalkingIkdConfig(moment_gain=0.0)], ids=["hybrid", "limited", "planning-only"])
+@pytest.mark.parametrize(
+    "config",
+    [WalkingIkdConfig(), WalkingIkdConfig(planning=False, max_velocity=0.9), WalkingIkdConfig(moment_gain=0.0)],
+    ids=["hybrid", "limited", "planning-only"],
+)
 def test_the_fast_step_equals_the_previous_computation_along_300_periods(biped, config):
     # the compiled assembly, the float support box and planner, the compiled joint-limit gradient: along 300
     # periods of a walk with a moving balance offset and a prescribed ZMP, the same steps (1e-9, relative) as the
@@ -290,9 +344,11 @@ def test_other_input_types_take_the_general_step_with_the_same_result(biped):
         offset = np.array([0.004, -0.002])
         strided = np.zeros(2 * start_ref.size)
         strided[::2] = start_ref
-        variants = [(start_ref, end_ref, offset, (0.01, 0), start.zmp.tolist()),
-                    (strided[::2], end_ref, list(offset), (np.float64(0.01), 0.0), start.zmp),
-                    (start_ref, end_ref, tuple(offset), np.array([0.01, 0.0]), start.zmp)]
+        variants = [
+            (start_ref, end_ref, offset, (0.01, 0), start.zmp.tolist()),
+            (strided[::2], end_ref, list(offset), (np.float64(0.01), 0.0), start.zmp),
+            (start_ref, end_ref, tuple(offset), np.array([0.01, 0.0]), start.zmp),
+        ]
         other = variants[1 + n % 2]
         a = fast.step(start, *variants[0][:2], window, *variants[0][2:])
         b = slow.step(start, *other[:2], window, *other[2:])
@@ -307,14 +363,42 @@ def test_the_support_box_equals_the_array_computation_turned_or_not(biped):
     for n in range(200):
         yaw = np.zeros(2) if n % 2 else rng.uniform(-0.6, 0.6, 2)
         contact = [(True, True), (True, False), (False, True)][n % 3]
-        sample = PatternSample(0.0, np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), rng.normal(size=(2, 3)),
-                               np.zeros((2, 3)), np.zeros(2), np.zeros(2), yaw, np.zeros(2), contact, 0.5, 0)
+        sample = PatternSample(
+            0.0,
+            np.zeros(3),
+            np.zeros(3),
+            np.zeros(2),
+            np.zeros(2),
+            rng.normal(size=(2, 3)),
+            np.zeros((2, 3)),
+            np.zeros(2),
+            np.zeros(2),
+            yaw,
+            np.zeros(2),
+            contact,
+            0.5,
+            0,
+        )
         shift = rng.normal(scale=0.02, size=2)
         expected = _previous_support(ikd, sample, shift)
         np.testing.assert_allclose(ikd._support(sample, shift), expected, rtol=1e-12, atol=1e-15)
         np.testing.assert_array_equal(ikd._support(sample, tuple(shift.tolist())), ikd._support(sample, shift))
-    nowhere = PatternSample(0.0, np.zeros(3), np.zeros(3), np.zeros(2), np.zeros(2), np.full((2, 3), np.nan),
-                            np.zeros((2, 3)), np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2), (True, True), 0.5, 0)
+    nowhere = PatternSample(
+        0.0,
+        np.zeros(3),
+        np.zeros(3),
+        np.zeros(2),
+        np.zeros(2),
+        np.full((2, 3), np.nan),
+        np.zeros((2, 3)),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(2),
+        np.zeros(2),
+        (True, True),
+        0.5,
+        0,
+    )
     assert np.all(np.isnan(ikd._support(nowhere, np.zeros(2))))
 
 

@@ -43,13 +43,15 @@ def test_start_zmp_starts_the_dcm_at_the_resting_com() -> None:
 def _inside_support(zmp: np.ndarray, feet: np.ndarray, contact: tuple[bool, bool]) -> float:
     """Signed margin of the ZMP to the support polygon (convex hull of the soles on the ground) [m]."""
     corners = []
-    for foot, on in zip(feet, contact):
+    for foot, on in zip(feet, contact, strict=False):
         if on:
-            corners += [foot[:2] + [dx, dy] for dx in (SOLE_BACK, SOLE_FRONT) for dy in (-SOLE_HALF_WIDTH, SOLE_HALF_WIDTH)]
+            corners += [
+                foot[:2] + [dx, dy] for dx in (SOLE_BACK, SOLE_FRONT) for dy in (-SOLE_HALF_WIDTH, SOLE_HALF_WIDTH)
+            ]
     pts = np.array(corners)
     hull = _convex_hull(pts)
     margin = np.inf
-    for a, b in zip(hull, np.roll(hull, -1, axis=0)):
+    for a, b in zip(hull, np.roll(hull, -1, axis=0), strict=False):
         edge = b - a
         normal = np.array([edge[1], -edge[0]]) / np.linalg.norm(edge)  # outward for a counter-clockwise hull
         margin = min(margin, -float(normal @ (zmp - a)))
@@ -62,6 +64,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> float:
 
 def _convex_hull(points: np.ndarray) -> np.ndarray:
     pts = sorted(map(tuple, points))
+
     def half(seq):  # noqa: ANN001, ANN202
         out = []
         for p in seq:
@@ -69,6 +72,7 @@ def _convex_hull(points: np.ndarray) -> np.ndarray:
                 out.pop()
             out.append(p)
         return out
+
     lower, upper = half(pts), half(reversed(pts))
     return np.array(lower[:-1] + upper[:-1])
 

@@ -64,7 +64,7 @@ def test_momentum_minimization_lowers_peak_lz(model: RobotModel) -> None:
             result = controller.ik.step(q, start, end, controller.dt)
             q, start = result.q, end
             lz.append(result.lz)
-        peaks[on] = float(np.max(np.abs(lz[int(round(pattern.step_start(1) / controller.dt)):])))
+        peaks[on] = float(np.max(np.abs(lz[int(round(pattern.step_start(1) / controller.dt)) :])))
     assert peaks[True] < 0.7 * peaks[False]
 
 

@@ -43,8 +43,14 @@ def test_a_correction_from_the_nominal_posture_is_the_same_for_every_start(model
     nominal = [NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS]
 
     def controller() -> WalkingController:
-        return WalkingController(model, 0.004, lower + BIPED_SOFT_LIMIT_MARGIN, upper - BIPED_SOFT_LIMIT_MARGIN,
-                                 correction_iterations=1, correction_configuration=nominal)
+        return WalkingController(
+            model,
+            0.004,
+            lower + BIPED_SOFT_LIMIT_MARGIN,
+            upper - BIPED_SOFT_LIMIT_MARGIN,
+            correction_iterations=1,
+            correction_configuration=nominal,
+        )
 
     a, b = controller(), controller()
     a.start(standing(model, r_knee=0.25, l_knee=0.25), 0.5)
