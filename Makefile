@@ -3,13 +3,19 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test baselines system-deps clean
+.PHONY: demo test lint baselines system-deps clean
 
 demo: $(VENV)/.learn-installed
 	$(BIN)/redundancy-gym demo --out results
 
 test: $(VENV)/.test-installed
 	$(BIN)/python -m pytest -q
+
+# the linter, the formatter's check and the type checker, as CI runs them before the tests (configured in pyproject.toml)
+lint: $(VENV)/.test-installed
+	$(BIN)/ruff check redundancy_gym tests
+	$(BIN)/ruff format --check redundancy_gym tests
+	$(BIN)/mypy
 
 # the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb,
 # checkpoints in runs/baselines) into baselines/models/ with its training record, then evaluates every analytic
@@ -50,5 +56,5 @@ $(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps
 
 # numba's on-disk cache keys a kernel on its own file only: after editing a kernel that others call, clean
 clean:
-	rm -rf $(VENV) results runs .pytest_cache
+	rm -rf $(VENV) results runs .pytest_cache .mypy_cache .ruff_cache
 	find redundancy_gym -name '*.nbi' -delete -o -name '*.nbc' -delete
