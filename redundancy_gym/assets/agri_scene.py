@@ -4,8 +4,8 @@ The scene is compiled once per env with as many plant geoms of each category as 
 hold; every reset places the new row's parts into them and hides the spare ones, so a reset never recompiles.
 Plant geoms are visual in MuJoCo (``contype = conaffinity = 0``): the env judges contacts on the swept-sphere
 model of the same parts. Stems, shoots and petioles are capsules, peppers spheres, and a leaf blade (two TSS)
-one flat ellipsoid (MuJoCo has no swept triangle; DESIGN.md allows "a mesh or box", and an ellipsoid draws the
-blade's outline with one geom). The pool ``leaf`` counts blades.
+one flat ellipsoid (MuJoCo has no swept triangle: the TSS stays in the collision model and the plant draws any shape
+that covers it, a mesh or a box; an ellipsoid draws the blade's outline with one geom). The pool ``leaf`` counts blades.
 """
 
 from __future__ import annotations

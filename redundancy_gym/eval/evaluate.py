@@ -1,4 +1,4 @@
-"""The evaluation harness: run a policy for N seeded episodes and report the evaluation contract of DESIGN.md."""
+"""The evaluation harness: run a policy for N seeded episodes and report the evaluation contract (docs/evaluation.md)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -90,7 +90,7 @@ class EpisodeSummary:
 
 @dataclass
 class EvalReport:
-    """Everything an evaluation measured; :meth:`to_json` gives the DESIGN.md contract."""
+    """Everything an evaluation measured; :meth:`to_json` gives the evaluation contract of docs/evaluation.md."""
 
     env: str
     policy: str
@@ -214,11 +214,18 @@ def reseed_policy(policy: Any, seed: int) -> None:
 
 def _controller_clock(env: gym.Env) -> Any:
     """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
-    while env is not None:
-        if CONTROLLER_TIME_ATTRIBUTE in vars(env):
-            return env
-        env = getattr(env, "env", None)
+    layer: gym.Env | None = env
+    while layer is not None:
+        if CONTROLLER_TIME_ATTRIBUTE in vars(layer):
+            return layer
+        layer = getattr(layer, "env", None)
     return None
+
+
+def _frame(env: gym.Env) -> NDArray[np.uint8]:
+    """``env.render()``: one RGB frame, as the ``rgb_array`` render mode that a caller asking for frames sets
+    gives (gymnasium types ``render`` for every mode)."""
+    return cast(NDArray[np.uint8], env.render())
 
 
 def run_episode(
@@ -232,7 +239,7 @@ def run_episode(
     obs, info = env.reset(seed=seed)
     controller = _controller_clock(env)
     if frames is not None:
-        frames.append(env.render())
+        frames.append(_frame(env))
     rows: list[tuple[float, ...]] = []
     ret = 0.0
     collision = False
@@ -250,7 +257,7 @@ def run_episode(
         if controller is not None:  # an action wrapper's controller is part of the policy: its time counts too
             elapsed_us += float(getattr(controller, CONTROLLER_TIME_ATTRIBUTE))
         if frames is not None:
-            frames.append(env.render())
+            frames.append(_frame(env))
         ret += float(reward)
         collision = collision or bool(info.get("collision", False))
         obstacle_contact = obstacle_contact or bool(info.get("obstacle_contact", False))

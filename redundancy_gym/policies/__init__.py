@@ -1,7 +1,7 @@
 """Policies with the stable-baselines3 ``predict`` signature over the controllers, and the one registry of
 policies and action wrappers (:func:`make_policy`, :func:`register`).
 
-This package joins controllers and envs (DESIGN.md): a policy reads what it needs from the env by duck typing
+This package joins controllers and envs (docs/architecture.md): a policy reads what it needs from the env by duck typing
 (the attributes its capabilities promise, :data:`CAPABILITY_ATTRIBUTES`) and never imports mujoco, so the same
 policy object can drive a robot fed with the same observation. The policy classes load when first used.
 """
