@@ -1,7 +1,9 @@
 """Action wrappers over the model-based pipeline: the learner commands a task-space velocity
 (:class:`TaskSpaceAction`), the nullspace input of (5.100) (:class:`NullspaceAction`) or a residual on the
-reference policy (:class:`ResidualAction`), or the biped's walking velocity (:class:`WalkingCommandAction`). Each registers in the one registry of
-:mod:`redundancy_gym.policies` (read by :func:`make_wrapper`, the wrapped env ids and ``redundancy-gym list``).
+reference policy (:class:`ResidualAction`), or the biped's walking velocity (:class:`WalkingCommandAction`). Each
+registers in the one registry of :mod:`redundancy_gym.policies` (read by :func:`make_wrapper`, the wrapped env ids
+and ``redundancy-gym list``), and records its constructor arguments, so that ``gym.make(env.spec)`` rebuilds a
+wrapper applied by hand.
 """
 
 from __future__ import annotations

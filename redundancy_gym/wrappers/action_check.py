@@ -10,9 +10,18 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from .. import validation
 from .exceptions import WrapperActionError, WrapperError
 
-__all__ = ["CONTROLLER_TIME_ATTRIBUTE", "check_action", "check_policy_kwargs", "normalized_box"]
+__all__ = [
+    "CONTROLLER_TIME_ATTRIBUTE",
+    "check_action",
+    "check_bool",
+    "check_int",
+    "check_policy_kwargs",
+    "check_real",
+    "normalized_box",
+]
 
 CONTROLLER_TIME_ATTRIBUTE = "controller_time_us"
 """The wrapper attribute holding its own compute time in the last step [us]: its controller turning the learner's
@@ -26,7 +35,7 @@ def normalized_box(dim: int) -> spaces.Box:
     return spaces.Box(-1.0, 1.0, shape=(dim,), dtype=np.float32)
 
 
-def check_action(action: Any, space: spaces.Box, wrapper: str) -> NDArray[np.float64]:
+def check_action(action: Any, space: spaces.Space[Any], wrapper: str) -> NDArray[np.float64]:
     """``action`` as float64 after checking it is an array of ``space``'s shape with finite entries; entries
     outside ``[-1, 1]`` (every wrapper's box, :func:`normalized_box`) are clipped into it, as the envs clip
     theirs.
@@ -59,3 +68,34 @@ def check_policy_kwargs(value: Any, wrapper: str) -> dict[str, Any]:
             f"{value!r} ({type(value).__name__})"
         )
     return dict(value)
+
+
+def check_bool(name: str, value: Any) -> bool:
+    """``value`` when it is a bool, else :class:`WrapperError` (:func:`redundancy_gym.validation.check_bool`)."""
+    return validation.check_bool(name, value, error=WrapperError)
+
+
+def check_real(
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    unit: str | None = None,
+) -> float:
+    """``value`` as a float when it is a finite real number inside the range, else :class:`WrapperError`
+    (:func:`redundancy_gym.validation.check_real`; no wrapper option takes None where a number is asked for)."""
+    x = validation.check_real(name, value, low=low, high=high, low_open=low_open, unit=unit, error=WrapperError)
+    if x is None:  # cannot happen without optional=True; narrows the shared check's Optional result
+        raise WrapperError(f"{name} must be a finite real number, got None")
+    return x
+
+
+def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None) -> int:
+    """``value`` as an int when it is an int inside ``[low, high]``, else :class:`WrapperError`
+    (:func:`redundancy_gym.validation.check_int`)."""
+    n = validation.check_int(name, value, low=low, high=high, error=WrapperError)
+    if n is None:  # cannot happen without optional=True; narrows the shared check's Optional result
+        raise WrapperError(f"{name} must be an int, got None")
+    return n

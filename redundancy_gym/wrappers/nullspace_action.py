@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import asdict, dataclass, field
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -12,8 +12,7 @@ from numpy.typing import NDArray
 
 from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
-from ..validation import check_bool, check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_bool, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
@@ -47,7 +46,7 @@ def _without_objectives(env: gym.Env) -> dict[str, Any]:
     return {"joint_limit_weight": 0.0, "collision_avoidance": "off", **({} if grasp else {"posture_weight": 0.0})}
 
 
-class NullspaceAction(gym.Wrapper):
+class NullspaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """The redundancy resolution as the action: CLIK tracks the env's reference, the learner chooses ``u``.
 
     ## Description
@@ -74,12 +73,20 @@ class NullspaceAction(gym.Wrapper):
     ## Arguments
     ``env`` and the fields of :class:`NullspaceActionConfig` as keyword arguments.
 
+    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
+    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
+    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
+
     ## Version History
     - v0: initial version.
     """
 
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
+
+    # the ``clik`` reference this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
+    # controller, task reference and joint speeds), used by duck typing as the registry builds it
+    reference: Any
 
     def __init__(
         self,
@@ -88,21 +95,23 @@ class NullspaceAction(gym.Wrapper):
         objectives: bool = False,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        super().__init__(env)
+        gym.Wrapper.__init__(self, env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = NullspaceActionConfig(
             max_nullspace_speed=check_real(
-                "max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0, low_open=True, error=WrapperError
+                "max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0, low_open=True
             ),
-            objectives=check_bool("objectives", objectives, error=WrapperError),
+            objectives=check_bool("objectives", objectives),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "NullspaceAction"),
         )
+        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
+        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
         options = (
             dict(self.config.policy_kwargs) if objectives else {**_without_objectives(env), **self.config.policy_kwargs}
         )
         try:
-            self.reference: Any = make_policy("clik", env, **options)
+            self.reference = make_policy("clik", env, **options)
         except PolicyError as exc:
             raise WrapperError(f"NullspaceAction: {exc}") from exc
         self._speeds = self.reference.max_joint_speeds
@@ -136,7 +145,7 @@ class NullspaceAction(gym.Wrapper):
                     break
         return result, fraction
 
-    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[NDArray[np.floating], SupportsFloat, bool, bool, dict[str, Any]]:
         if self._obs is None:
             raise WrapperError("NullspaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "NullspaceAction")

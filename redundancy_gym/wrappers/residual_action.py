@@ -2,18 +2,18 @@
 
 from __future__ import annotations
 
+import os
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import asdict, dataclass, field
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from ..policies import PolicyError, make_policy, supported_policies
-from ..validation import check_bool, check_real
-from .action_check import check_action, check_policy_kwargs
+from ..policies import POLICY_NAMES, PolicyError, make_policy, supported_policies
+from .action_check import check_action, check_bool, check_policy_kwargs, check_real
 from .exceptions import WrapperError
 
 __all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
@@ -30,8 +30,9 @@ class ResidualActionConfig:
         scale: the residual's bound as a fraction of half the env's action range: the applied action is
             ``clip(reference + scale * half_range * a)`` for ``a`` in ``[-1, 1]`` (> 0, <= 2; ``half_range`` is 1
             for a ``[-1, 1]`` box).
-        policy: the reference policy (a registered name); None: the first of :data:`REFERENCE_POLICIES` that the
-            env supports (``clik`` on the arms, ``walking`` on the biped).
+        policy: the reference policy: a registered name, or the path of a stable-baselines3 ``.zip`` (a
+            ``pathlib.Path`` is kept as its ``str``); None: the first of :data:`REFERENCE_POLICIES` that the env
+            supports (``clik`` on the arms, ``walking`` on the biped).
         policy_kwargs: options of the reference policy.
         observe_reference: append the reference action to the observation.
     """
@@ -42,7 +43,24 @@ class ResidualActionConfig:
     observe_reference: bool = False
 
 
-class ResidualAction(gym.Wrapper):
+def _policy_name(policy: Any) -> str | None:
+    """``policy`` as a name: a path as its ``str``, so that the recorded constructor arguments (``env.spec``) stay
+    JSON-friendly; the name itself is checked when the policy is built.
+
+    Raises:
+        WrapperError: neither None, a name nor a path (a policy object: the spec could not rebuild it).
+    """
+    if policy is None or isinstance(policy, str):
+        return policy
+    if isinstance(policy, os.PathLike):
+        return os.fsdecode(policy)
+    raise WrapperError(
+        f"ResidualAction: policy must be a registered policy name ({', '.join(POLICY_NAMES)}), the path of a "
+        f"stable-baselines3 .zip, or None, got {policy!r} ({type(policy).__name__})"
+    )
+
+
+class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """Residual learning on an analytic controller: the applied action is the reference policy's action plus a
     bounded correction.
 
@@ -68,6 +86,12 @@ class ResidualAction(gym.Wrapper):
     ``env`` and the fields of :class:`ResidualActionConfig` as keyword arguments: ``scale``, ``policy``,
     ``policy_kwargs``, ``observe_reference``.
 
+    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
+    filled in (``policy_kwargs=None`` as ``{}``, a path ``policy`` as its ``str``; ``policy=None`` stays None and
+    is resolved again on a rebuild), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)`` rebuilds the
+    whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand. A relative ``.zip`` path is
+    recorded as given: a rebuild from another working directory does not find it.
+
     ## Version History
     - v0: initial version.
     """
@@ -79,22 +103,25 @@ class ResidualAction(gym.Wrapper):
         self,
         env: gym.Env,
         scale: float = ResidualActionConfig.scale,
-        policy: str | None = None,
+        policy: str | os.PathLike[str] | None = None,
         policy_kwargs: dict[str, Any] | None = None,
         observe_reference: bool = False,
     ) -> None:
-        super().__init__(env)
+        gym.Wrapper.__init__(self, env)
         self.config = ResidualActionConfig(
-            scale=check_real("scale", scale, low=0.0, high=2.0, low_open=True, error=WrapperError),
-            policy=policy,
+            scale=check_real("scale", scale, low=0.0, high=2.0, low_open=True),
+            policy=_policy_name(policy),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "ResidualAction"),
-            observe_reference=check_bool("observe_reference", observe_reference, error=WrapperError),
+            observe_reference=check_bool("observe_reference", observe_reference),
         )
+        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
+        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
         space = env.action_space
         if not isinstance(space, spaces.Box) or not (
             np.all(np.isfinite(space.low)) and np.all(np.isfinite(space.high))
         ):
             raise WrapperError(f"ResidualAction needs a bounded Box action space, got {space}")
+        policy = self.config.policy
         if policy is None:
             offered = supported_policies(env)
             policy = next((p for p in REFERENCE_POLICIES if p in offered), None)
@@ -115,6 +142,8 @@ class ResidualAction(gym.Wrapper):
         self.action_space = spaces.Box(-1.0, 1.0, shape=space.shape, dtype=np.float32)
         if self.config.observe_reference:
             obs = env.observation_space
+            if not isinstance(obs, spaces.Box):
+                raise WrapperError(f"ResidualAction: observe_reference=True needs a Box observation space, got {obs}")
             self.observation_space = spaces.Box(
                 np.concatenate([obs.low, space.low]).astype(obs.dtype),
                 np.concatenate([obs.high, space.high]).astype(obs.dtype),
@@ -142,7 +171,7 @@ class ResidualAction(gym.Wrapper):
         obs, info = self.env.reset(seed=seed, options=options)
         return self._observe(obs, True), info
 
-    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[NDArray[np.floating], SupportsFloat, bool, bool, dict[str, Any]]:
         if self._reference_action is None:
             raise WrapperError("ResidualAction: call reset() before step()")
         a = check_action(action, self.action_space, "ResidualAction")

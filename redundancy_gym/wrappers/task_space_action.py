@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, field
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
@@ -14,8 +15,7 @@ from numpy.typing import NDArray
 from ..controllers import ClikResult
 from ..geometry import SSV, Segment
 from ..policies import PolicyError, make_policy
-from ..validation import check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
@@ -64,6 +64,12 @@ class TaskSpaceActionConfig:
 Vec = tuple[float, float, float]
 
 
+def _vec(entries: Iterable[float]) -> Vec:
+    """Three floats as a :data:`Vec`."""
+    x, y, z = entries
+    return (x, y, z)
+
+
 def _tool_axis(quaternion: NDArray[np.float64]) -> Vec:
     """The x axis of the rotation ``(w, x, y, z)``."""
     w, x, y, z = quaternion.tolist()
@@ -92,7 +98,7 @@ def _rotate(vector: Vec, rotation: Vec) -> Vec:
     k = (rotation[0] / angle, rotation[1] / angle, rotation[2] / angle)
     c, s = math.cos(angle), math.sin(angle)
     kxv, kv = _cross(k, vector), _dot(k, vector) * (1.0 - c)
-    return tuple(vector[i] * c + kxv[i] * s + k[i] * kv for i in range(3))  # type: ignore[return-value]
+    return _vec(vector[i] * c + kxv[i] * s + k[i] * kv for i in range(3))
 
 
 def _perpendicular_basis(axis: Vec) -> tuple[Vec, Vec]:
@@ -118,7 +124,7 @@ def _scene_obstacles(base: Any) -> list[Segment] | None:
     return segments
 
 
-class TaskSpaceAction(gym.Wrapper):
+class TaskSpaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     """The action is a task-space velocity; the compiled CLIK of the ``clik`` reference, with joint-limit and
     collision avoidance (self and environment) in its nullspace, turns it into the env's joint command.
 
@@ -129,16 +135,16 @@ class TaskSpaceAction(gym.Wrapper):
     own segments and the env's obstacles (PlanarReach: the sphere; AgriReach: every stem, shoot and fruit of the
     episode but the target, since the learner may take the arm anywhere, not only near the K observed parts).
     A velocity damper on the pairs nearer than ``guard_distance`` limits how fast each may close in, so a
-    command that drives the TCP itself at an obstacle (which no nullspace motion can avoid) slows to a stop. The learner never has to learn inverse kinematics or avoidance. The target is
-    kept within ``max_lead`` of the TCP, so a command the arm cannot follow does not wind up.
+    command that drives the TCP itself at an obstacle (which no nullspace motion can avoid) slows to a stop. The
+    learner never has to learn inverse kinematics or avoidance. The target is kept within ``max_lead`` of the TCP,
+    so a command the arm cannot follow does not wind up.
 
     ## Action Space
     ``Box(-1, 1, (k,), float32)``, scaled by the bounds:
 
-    | env | k | entries |
-    |-----|---|---------|
-    | PlanarReach | 2 | TCP velocity along x and z, times ``max_speed`` [m/s] |
-    | AgriReach | 5 | TCP velocity x, y, z times ``max_speed`` [m/s]; tool-axis turn rate about two directions orthogonal to the current tool axis, times ``max_turn_rate`` [rad/s] |
+    - PlanarReach, k = 2: the TCP velocity along x and z, times ``max_speed`` [m/s].
+    - AgriReach, k = 5: the TCP velocity along x, y, z times ``max_speed`` [m/s]; the tool-axis turn rate about
+      two directions orthogonal to the current tool axis, times ``max_turn_rate`` [rad/s].
 
     Non-finite actions raise :class:`WrapperError`.
 
@@ -149,12 +155,20 @@ class TaskSpaceAction(gym.Wrapper):
     ## Arguments
     ``env`` and the fields of :class:`TaskSpaceActionConfig` as keyword arguments.
 
+    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
+    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
+    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
+
     ## Version History
     - v0: initial version.
     """
 
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
+
+    # the ``clik`` reference this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
+    # controller, model, collision model and obstacle planning differ), used by duck typing as the registry builds it
+    reference: Any
 
     def __init__(
         self,
@@ -167,34 +181,28 @@ class TaskSpaceAction(gym.Wrapper):
         stop_distance: float = TaskSpaceActionConfig.stop_distance,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        super().__init__(env)
+        gym.Wrapper.__init__(self, env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = TaskSpaceActionConfig(
-            max_speed=check_real(
-                "max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s", error=WrapperError
-            ),
-            max_turn_rate=check_real(
-                "max_turn_rate", max_turn_rate, low=0.0, high=6.0, low_open=True, unit="rad/s", error=WrapperError
-            ),
-            max_lead=check_real("max_lead", max_lead, low=0.0, high=0.5, low_open=True, unit="m", error=WrapperError),
-            max_lead_angle=check_real(
-                "max_lead_angle", max_lead_angle, low=0.0, high=1.5, low_open=True, unit="rad", error=WrapperError
-            ),
-            guard_distance=check_real(
-                "guard_distance", guard_distance, low=0.0, high=0.2, low_open=True, unit="m", error=WrapperError
-            ),
-            stop_distance=check_real("stop_distance", stop_distance, low=0.0, unit="m", error=WrapperError),
+            max_speed=check_real("max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s"),
+            max_turn_rate=check_real("max_turn_rate", max_turn_rate, low=0.0, high=6.0, low_open=True, unit="rad/s"),
+            max_lead=check_real("max_lead", max_lead, low=0.0, high=0.5, low_open=True, unit="m"),
+            max_lead_angle=check_real("max_lead_angle", max_lead_angle, low=0.0, high=1.5, low_open=True, unit="rad"),
+            guard_distance=check_real("guard_distance", guard_distance, low=0.0, high=0.2, low_open=True, unit="m"),
+            stop_distance=check_real("stop_distance", stop_distance, low=0.0, unit="m"),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "TaskSpaceAction"),
         )
+        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
+        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
         if self.config.stop_distance >= self.config.guard_distance:
             raise WrapperError(f"stop_distance={stop_distance!r} must be below guard_distance={guard_distance!r} [m]")
         options = {"collision_avoidance": "on", **self.config.policy_kwargs}
         try:
-            self.reference: Any = make_policy("clik", env, **options)
+            self.reference = make_policy("clik", env, **options)
         except PolicyError as exc:
             raise WrapperError(f"TaskSpaceAction: {exc}") from exc
-        base = env.unwrapped
+        base: Any = env.unwrapped  # read by duck typing: the attributes the tcp_tracking/grasp_task envs offer
         self._layout = dict(getattr(base, "observation_layout", None) or base.OBSERVATION_LAYOUT)
         self._grasp = "grasp_position" in self._layout
         self._dt = float(base.dt)
@@ -256,14 +264,14 @@ class TaskSpaceAction(gym.Wrapper):
         axis = _tool_axis(obs[lay["tcp_quaternion"]])
         u, v = _perpendicular_basis(axis)
         rate = c.max_turn_rate
-        omega = tuple((entries[3] * u[i] + entries[4] * v[i]) * rate for i in range(3))
-        target_axis = _rotate(self._axis, tuple(w * self._dt for w in omega))
+        omega = _vec((entries[3] * u[i] + entries[4] * v[i]) * rate for i in range(3))
+        target_axis = _rotate(self._axis, _vec(w * self._dt for w in omega))
         angle = math.acos(max(-1.0, min(1.0, _dot(target_axis, axis))))
         if angle > c.max_lead_angle:  # turn the target axis back towards the tool axis, onto the allowed cone
             turn = _cross(axis, target_axis)
             norm = math.sqrt(_dot(turn, turn))
             if norm > 1e-12:
-                target_axis = _rotate(axis, tuple(x / norm * c.max_lead_angle for x in turn))
+                target_axis = _rotate(axis, _vec(x / norm * c.max_lead_angle for x in turn))
         self._axis = _unit(target_axis)
         return self._guarded(q, np.array([*target, *self._axis]), np.array([*velocity, *omega]))
 
@@ -274,6 +282,7 @@ class TaskSpaceAction(gym.Wrapper):
         pair's distance may shrink at most at ``max_speed`` times ``(d - stop_distance) / (guard_distance -
         stop_distance)`` (zero at ``stop_distance``, growing below it), enforced by projecting ``qdot`` onto each
         violated constraint in turn; then every joint is kept inside its range over ``_LOOKAHEAD`` periods."""
+        assert self._obs is not None
         controller = self.reference.controller
         result = controller.step(q, target, velocity)
         c = self.config
@@ -335,7 +344,7 @@ class TaskSpaceAction(gym.Wrapper):
         near = np.flatnonzero(state.distance < limit)
         return state.distance[near], model.distance_gradient(self.reference.model, state, near)
 
-    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[NDArray[np.floating], SupportsFloat, bool, bool, dict[str, Any]]:
         if self._obs is None:
             raise WrapperError("TaskSpaceAction: call reset() before step()")
         a = check_action(action, self.action_space, "TaskSpaceAction")

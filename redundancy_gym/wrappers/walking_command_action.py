@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import asdict, dataclass, field
+from typing import Any, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
 from ..policies import PolicyError, make_policy
-from ..validation import check_int, check_real
-from .action_check import check_action, check_policy_kwargs, normalized_box
+from .action_check import check_action, check_int, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
 
 __all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
@@ -64,9 +63,9 @@ def _hold(held: dict[str, Any], info: dict[str, Any]) -> None:
             held[key] = min(held.get(key, np.inf), float(value))
 
 
-class WalkingCommandAction(gym.Wrapper):
-    """The action is a walking velocity and yaw rate; the ``walking`` reference (DCM pattern, stabilizer, step adjustment,
-    whole-body CLIK) turns it into the biped's joint targets every control period.
+class WalkingCommandAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
+    """The action is a walking velocity and yaw rate; the ``walking`` reference (DCM pattern, stabilizer, step
+    adjustment, whole-body CLIK) turns it into the biped's joint targets every control period.
 
     ## Description
     Each action sets the velocity and the turning rate of the walk
@@ -88,12 +87,16 @@ class WalkingCommandAction(gym.Wrapper):
     walker that turns away from +x scores less. With ``command_period`` > 1 the
     rewards of the periods are summed (so are ``info``'s reward terms and ``pseudoenergy``; ``collision``,
     ``self_collision`` and ``fell`` hold if they held in any period, ``peak_joint_speed`` and the clearances are
-    the worst of the periods), and the episode ends at the env's time limit in control periods (10 s). ``info`` keeps every
-    entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s], ``commanded_yaw_rate`` [rad/s] and
-    ``step_adjusted`` (the push-recovery step adjustment acted in this period).
+    the worst of the periods), and the episode ends at the env's time limit in control periods (10 s). ``info``
+    keeps every entry of the env's and adds ``commanded_forward_speed`` and ``commanded_lateral_speed`` [m/s],
+    ``commanded_yaw_rate`` [rad/s] and ``step_adjusted`` (the push-recovery step adjustment acted in this period).
 
     ## Arguments
     ``env`` and the fields of :class:`WalkingCommandActionConfig` as keyword arguments.
+
+    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
+    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
+    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
 
     ## Version History
     - v0: initial version; the yaw rate (the action's third entry) was added later under the same id.
@@ -101,6 +104,10 @@ class WalkingCommandAction(gym.Wrapper):
 
     # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
     CAPABILITIES: frozenset[str] = frozenset()
+
+    # the ``walking`` reference this wrapper drives (WalkingPolicy: its controller, commands and episode start),
+    # used by duck typing as the registry builds it
+    reference: Any
 
     def __init__(
         self,
@@ -112,29 +119,25 @@ class WalkingCommandAction(gym.Wrapper):
         command_period: int = WalkingCommandActionConfig.command_period,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        super().__init__(env)
+        gym.Wrapper.__init__(self, env)
         self.controller_time_us = 0.0
         """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
         self.config = WalkingCommandActionConfig(
-            min_forward_speed=check_real(
-                "min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s", error=WrapperError
-            ),
-            max_forward_speed=check_real(
-                "max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s", error=WrapperError
-            ),
-            max_lateral_speed=check_real(
-                "max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s", error=WrapperError
-            ),
-            max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s", error=WrapperError),
-            command_period=check_int("command_period", command_period, low=1, high=1000, error=WrapperError),
+            min_forward_speed=check_real("min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s"),
+            max_forward_speed=check_real("max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s"),
+            max_lateral_speed=check_real("max_lateral_speed", max_lateral_speed, low=0.0, high=0.1, unit="m/s"),
+            max_yaw_rate=check_real("max_yaw_rate", max_yaw_rate, low=0.0, high=0.5, unit="rad/s"),
+            command_period=check_int("command_period", command_period, low=1, high=1000),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "WalkingCommandAction"),
         )
+        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
+        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
         if self.config.min_forward_speed >= self.config.max_forward_speed:
             raise WrapperError(
                 f"min_forward_speed={min_forward_speed!r} must be below max_forward_speed={max_forward_speed!r} [m/s]"
             )
         try:
-            self.reference: Any = make_policy("walking", env, **self.config.policy_kwargs)
+            self.reference = make_policy("walking", env, **self.config.policy_kwargs)
         except PolicyError as exc:
             raise WrapperError(f"WalkingCommandAction: {exc}") from exc
         self.action_space = normalized_box(3)
@@ -165,7 +168,7 @@ class WalkingCommandAction(gym.Wrapper):
         forward = c.min_forward_speed + 0.5 * (float(action[0]) + 1.0) * (c.max_forward_speed - c.min_forward_speed)
         return forward, float(action[1]) * c.max_lateral_speed, float(action[2]) * c.max_yaw_rate
 
-    def step(self, action: Any) -> tuple[NDArray[np.floating], float, bool, bool, dict[str, Any]]:
+    def step(self, action: Any) -> tuple[NDArray[np.floating], SupportsFloat, bool, bool, dict[str, Any]]:
         if self._obs is None:
             raise WrapperError("WalkingCommandAction: call reset() before step()")
         forward, lateral, yaw_rate = self.velocity(check_action(action, self.action_space, "WalkingCommandAction"))

@@ -60,6 +60,8 @@ def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] |
         raise WrapperError(f"{', '.join(clash)} given both as a keyword and in wrapper_kwargs")
     env_kwargs = {k: v for k, v in kwargs.items() if k not in options}
     spec = gym.spec(env_id)
+    if spec.entry_point is None:
+        raise WrapperError(f"env_id {env_id!r} is registered without an entry point: it cannot be built")
     creator = (
         gym.envs.registration.load_env_creator(spec.entry_point)
         if isinstance(spec.entry_point, str)
@@ -71,5 +73,7 @@ def make_wrapped_env(env_id: str, wrapper: str, wrapper_kwargs: dict[str, Any] |
         if "unknown keyword" in str(exc):  # a typo may have meant a wrapper option: name those too
             raise EnvConfigError(f"{exc}; or an option of the {wrapper} wrapper: {', '.join(sorted(options))}") from exc
         raise
+    if not isinstance(env, gym.Env):  # an entry point may return anything; the wrappers need one gymnasium.Env
+        raise WrapperError(f"the entry point of {env_id} made a {type(env).__name__}, not a gymnasium.Env")
     env.spec = spec  # the base env's spec, so that make_policy and messages name the env it is
     return make_wrapper(wrapper, env, **{**own, **(wrapper_kwargs or {})})
