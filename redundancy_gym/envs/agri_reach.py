@@ -30,10 +30,13 @@ from .validation import (
     check_bool,
     check_choice,
     check_int,
+    check_known_arguments,
     check_noise,
     check_range_pair,
     check_real,
     check_render_arguments,
+    constructor_arguments,
+    constructor_defaults,
     warn_if_time_limit_short,
 )
 
@@ -51,43 +54,9 @@ _OBSTACLE_FEATURES = 15  # mask, one-hot kind (3), hard, 9 vertex coordinates, r
 
 
 def default_config() -> dict[str, Any]:
-    """Default keyword arguments of :class:`AgriReachEnv` (a fresh dict each call)."""
-    return {
-        "difficulty": "medium",
-        "leaves_per_stem": None,
-        "fruits_per_stem": None,
-        "shoot_probability": None,
-        "cluster_spread": None,
-        "row_distance": 1.05,
-        "row_gap": 0.45,
-        "row_length": 8.0,
-        "stem_spacing": (0.25, 0.35),
-        "stem_diameter": (0.010, 0.015),
-        "fruit_diameter": (0.08, 0.09),
-        "harvest_band": (0.9, 1.3),
-        "prune": True,
-        "pregrasp_distance": 0.15,
-        "approach_elevation": (0.0, 30.0),
-        "observed_obstacles": 32,
-        "max_joint_speed": 1.5,
-        "max_lift_speed": 0.4,
-        "position_weight": 1.0,
-        "orientation_weight": 0.2,
-        "energy_weight": 10.0,
-        "leaf_penalty": 0.1,
-        "collision_penalty": 200.0,
-        "success_bonus": 10.0,
-        "success_position_tolerance": 0.01,
-        "success_angle_tolerance": 10.0,
-        "clearance_horizon": 0.1,
-        "reset_noise_scale": 0.05,
-        "frame_skip": 1,
-        "reference_speed": 0.35,
-        "reference_turn_rate": 0.8,
-        "reference_min_duration": 1.5,
-        "reference_approach_speed": 0.12,
-        "obs_noise": None,
-    }
+    """Default keyword arguments of :class:`AgriReachEnv`, the rendering ones left out (a fresh dict each call),
+    read from its signature: the one place they are written."""
+    return constructor_defaults(AgriReachEnv.__init__)
 
 
 class AgriReachEnv(gym.Env, utils.EzPickle):
@@ -129,7 +98,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     | ``tcp_reference`` | 6 | the reference path's TCP position [m] and tool axis (unit) now (``info["tcp_ref"]``) |
     | ``tcp_reference_velocity`` | 6 | the reference's velocity [m/s] and angular velocity [rad/s] now |
     | ``tcp_error`` | 3 | reference position minus the observed, possibly noisy, TCP position [m] |
-    | ``obstacles`` | 15 K | the K plant parts nearest to the approach corridor, each ``[mask, PSS, LSS, TSS, hard, v0, v1, v2, radius]`` (one-hot kind, vertices [m], radius [m]; unused rows repeat the last vertex; zero rows with mask 0 pad) |
+    | ``obstacles`` | 15 K | the K plant parts nearest to the approach corridor, one row each (below) |
+
+    Each ``obstacles`` row is ``[mask, PSS, LSS, TSS, hard, v0, v1, v2, radius]``: one-hot kind, vertices [m],
+    radius [m]; unused vertices repeat the last one; zero rows with mask 0 pad.
 
     ## Rewards
     The reward is the sum of the terms in ``info``: ``reward_position = -position_weight * |p_tcp - p_grasp|``,
@@ -165,10 +137,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       ``shoot_probability`` (occluding side shoots) and ``cluster_spread`` (fruit clusters); each may be given
       explicitly instead (``None`` keeps the preset).
     - ``row_distance``, ``row_gap``, ``row_length`` [m] (> 0); ``stem_spacing``, ``stem_diameter``,
-      ``fruit_diameter`` (ranges (low, high) [m], both > 0, fruits at least 0.07 m; the stem spacing at least the largest stem diameter);
-      ``harvest_band`` ((low, high) [m], >= 0, at least ``cluster_spread`` high).
+      ``fruit_diameter`` (ranges (low, high) [m], both > 0, fruits at least 0.07 m; the stem spacing at least the
+      largest stem diameter); ``harvest_band`` ((low, high) [m], >= 0, at least ``cluster_spread`` high).
     - ``prune`` (bool): place only the parts within the arm's reach.
-    - ``pregrasp_distance`` [m], in (0, 0.5]; ``approach_elevation`` ((min, max) [deg] of the upward tilt of the approach).
+    - ``pregrasp_distance`` [m], in (0, 0.5]; ``approach_elevation`` ((min, max) [deg] of the upward tilt of the
+      approach).
     - ``observed_obstacles`` (K >= 0).
     - ``max_joint_speed`` [rad/s], ``max_lift_speed`` [m/s]: velocity commands at action 1.
     - ``position_weight``, ``orientation_weight``, ``energy_weight``, ``leaf_penalty``, ``collision_penalty``,
@@ -192,16 +165,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
-    - v0: initial version (physics step 10 ms, ``frame_skip`` 1; leaf blades drawn as one ellipsoid each).
-      Before release, ``info["task_error"]`` (the distance to the grasp point) was renamed ``goal_error``, and
-      ``tracking_error`` (against the reference path, new ``reference_*`` arguments), ``goal_reached`` and
-      ``tcp_ref`` were added; rewards and dynamics are unchanged. Before release the default ``energy_weight``
-      became 10 (was 0.01): random actions (about 15 rad^2/s of pseudoenergy per episode) earned about as much
-      as holding still; ``collision_penalty`` became 200 (was 10), more than the reference's costliest
-      episode, so that ending an episode early by a collision never pays. Before release the observation gained
-      ``tcp_reference``, ``tcp_reference_velocity`` and ``tcp_error`` (515 -> 530 entries with the default 32
-      obstacles): the reference path is planned from the start pose, so a learner could not see what the
-      tracking error measures against, and behaviour cloning of the ``clik`` reference collided in most episodes.
+    - v0: initial release (0.1.0)
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 100}
@@ -209,6 +173,10 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
     TCP_FRAME = AGRI_ARM_TCP
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"grasp_task"})
+    # the episode's running state (set at reset by _reset_episode_state): time [s], any collision so far, leaves touched
+    _time: float
+    _collided: bool
+    _leaf_total: int
 
     def __init__(
         self,
@@ -252,50 +220,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         obs_noise: float | dict[str, float] | None = None,
         **kwargs: Any,
     ) -> None:
-        if kwargs:
-            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
-            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(
-            self,
-            difficulty,
-            leaves_per_stem,
-            fruits_per_stem,
-            shoot_probability,
-            cluster_spread,
-            row_distance,
-            row_gap,
-            row_length,
-            stem_spacing,
-            stem_diameter,
-            fruit_diameter,
-            harvest_band,
-            prune,
-            pregrasp_distance,
-            approach_elevation,
-            observed_obstacles,
-            max_joint_speed,
-            max_lift_speed,
-            position_weight,
-            orientation_weight,
-            energy_weight,
-            leaf_penalty,
-            collision_penalty,
-            success_bonus,
-            success_position_tolerance,
-            success_angle_tolerance,
-            clearance_horizon,
-            reset_noise_scale,
-            frame_skip,
-            reference_speed,
-            reference_turn_rate,
-            reference_min_duration,
-            reference_approach_speed,
-            render_mode,
-            width,
-            height,
-            camera_name,
-            obs_noise=obs_noise,
-        )
+        check_known_arguments(kwargs, AgriReachEnv.__init__)
+        utils.EzPickle.__init__(self, **constructor_arguments(AgriReachEnv.__init__, locals()))
         check_choice("difficulty", difficulty, DIFFICULTIES)
         scene = crop_row_defaults(difficulty)
         if leaves_per_stem is not None:
@@ -306,7 +232,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             scene["shoot_probability"] = check_real("shoot_probability", shoot_probability, low=0.0, high=1.0)
         if cluster_spread is not None:
             scene["cluster_spread"] = check_real("cluster_spread", cluster_spread, low=0.0, unit="m")
-        positive = {"low": 0.0, "low_open": True, "unit": "m"}
+        positive: dict[str, Any] = {"low": 0.0, "low_open": True, "unit": "m"}  # a length > 0 [m]
         scene.update(
             row_distance=check_real("row_distance", row_distance, **positive),
             row_gap=check_real("row_gap", row_gap, **positive),
@@ -557,6 +483,13 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         """The difficulty preset."""
         return self._difficulty
 
+    @property
+    def _reference_path(self) -> GraspPath:
+        """The episode's reference path (planned at reset)."""
+        if self._path is None:
+            raise gym.error.ResetNeeded("call reset() before step()")
+        return self._path
+
     def _get_obs(self) -> NDArray[np.float64]:
         o = self._obs  # episode-constant entries (targets, obstacle block) were written at reset
         lay = self.observation_layout
@@ -568,7 +501,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         o[lay["time"]] = self._time
         # the reference path is planned from the start pose, which a policy sees only at the first step: without
         # these entries the tracking error is measured against something the observation does not hold
-        target, velocity = self._path(self._time)  # type: ignore[misc]  # planned at reset
+        target, velocity = self._reference_path(self._time)
         o[lay["tcp_reference"]] = target
         o[lay["tcp_reference_velocity"]] = velocity
         if self._noise is None:
@@ -599,7 +532,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         x, y, z = self.data.site_xpos[self._tcp_site].tolist()
         gx, gy, gz = self._grasp_tuple
         error = math.sqrt((x - gx) ** 2 + (y - gy) ** 2 + (z - gz) ** 2)
-        rx, ry, rz = self._path.position(self._time)  # type: ignore[union-attr]  # planned at reset
+        rx, ry, rz = self._reference_path.position(self._time)
         tracking = math.sqrt((x - rx) ** 2 + (y - ry) ** 2 + (z - rz) ** 2)
         m = self.data.site_xmat[self._tcp_site]
         ax, ay, az = self._approach_tuple

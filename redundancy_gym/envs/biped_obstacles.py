@@ -25,14 +25,16 @@ from ..assets.obstacle_course import (
 )
 from ..geometry import SSV, PackedVolumes, PairBatch
 from .biped_walk import BipedWalkEnv
-from .biped_walk import default_config as _walk_config
 from .exceptions import EnvConfigError
 from .validation import (
     check_choice,
     check_int,
+    check_known_arguments,
     check_range_pair,
     check_real,
     check_real_array,
+    constructor_arguments,
+    constructor_defaults,
     warn_if_time_limit_short,
 )
 
@@ -62,34 +64,9 @@ _OBSTACLE_KEYS = ("shape", "center", "size", "yaw", "kind")
 
 
 def default_config() -> dict[str, Any]:
-    """Default keyword arguments of :class:`BipedObstaclesEnv` (a fresh dict each call)."""
-    return {
-        **_walk_config(),
-        "target_speed": _WALK_SPEED,
-        "course": "random",
-        "obstacles": None,
-        "n_obstacles": (3, 6),
-        "obstacle_spacing": (1.2, 3.0),
-        "first_obstacle_distance": 1.5,
-        "observed_obstacles": 8,
-        "contact_weight": 1.0,
-        "success_distance": 1.0,
-    }
-
-
-def _longest_random_course_time() -> float:
-    """Time [s] to walk the longest default random course at 0.4 m/s: the start, then from the origin to the last
-    obstacle's far face (5 gaps of 3.0 m after the first at 1.5 m, half the deepest obstacle) plus 1.0 m."""
-    spec = default_config()
-    n, gap, first = spec["n_obstacles"][1], spec["obstacle_spacing"][1], spec["first_obstacle_distance"]
-    end = first + (n - 1) * gap + 0.5 * MAX_OBSTACLE_DEPTH + spec["success_distance"]
-    return WALK_START_TIME + end / _WALK_SPEED
-
-
-_CONTROL_RATE = 250  # [1/s] control steps per second at the default frame_skip (2 physics steps of 2 ms)
-MAX_EPISODE_STEPS = int(math.ceil(_longest_random_course_time())) * _CONTROL_RATE
-"""The registered time limit: 11250 steps of 4 ms (45 s), the longest default random course at 0.4 m/s (44.65 s:
-0.4 s start, 17.7 m) rounded up to whole seconds."""
+    """Default keyword arguments of :class:`BipedObstaclesEnv`, the rendering ones left out (a fresh dict each call),
+    read from its signature: the one place they are written."""
+    return constructor_defaults(BipedObstaclesEnv.__init__)
 
 
 class BipedObstaclesEnv(BipedWalkEnv):
@@ -178,9 +155,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
     - ``success_distance`` ([m], >= 0; default 1.0): how far past the last obstacle the pelvis must walk.
 
     ## Version History
-    - v0: initial version. Before release its walking reward became BipedWalk-v0's bounded speed tracking
-      (``speed_scale``) with ``healthy_reward`` 0.05 (was 1): standing still for the whole 45 s earned more than
-      walking the course, which ends the episode.
+    - v0: initial release (0.1.0)
     """
 
     OBSTACLE_FEATURES = OBSTACLE_FEATURES
@@ -224,12 +199,13 @@ class BipedObstaclesEnv(BipedWalkEnv):
         speed_scale: float = 0.25,
         **kwargs: Any,
     ) -> None:
-        if kwargs:
-            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
-            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
+        check_known_arguments(kwargs, BipedObstaclesEnv.__init__)
+        # read before any argument is rebound; recorded after BipedWalkEnv's constructor, which records its own
+        arguments = constructor_arguments(BipedObstaclesEnv.__init__, locals())
         check_choice("course", course, COURSES)
         self._course = course
-        self._n_obstacles = check_range_pair("n_obstacles", n_obstacles, low=1, integer=True)
+        fewest, most = check_range_pair("n_obstacles", n_obstacles, low=1, integer=True)
+        self._n_obstacles = (int(fewest), int(most))
         self._spacing = check_range_pair(
             "obstacle_spacing",
             obstacle_spacing,
@@ -258,66 +234,15 @@ class BipedObstaclesEnv(BipedWalkEnv):
             self._obstacles = ()  # drawn at every reset
         start = BipedWalkEnv.OBSERVATION_SIZE
         self.OBSERVATION_LAYOUT = {
-            **BipedWalkEnv.OBSERVATION_LAYOUT,  # type: ignore[misc]
+            **BipedWalkEnv.OBSERVATION_LAYOUT,
             "obstacles": slice(start, start + OBSTACLE_FEATURES * self._k),
         }
-        self.OBSERVATION_SIZE = start + OBSTACLE_FEATURES * self._k  # type: ignore[misc]
+        self.OBSERVATION_SIZE = start + OBSTACLE_FEATURES * self._k
         self._base_xml: str | None = None
         self._touched = False
         self._contact_steps = 0
-        super().__init__(
-            target_speed=target_speed,
-            speed_weight=speed_weight,
-            lateral_weight=lateral_weight,
-            healthy_reward=healthy_reward,
-            energy_weight=energy_weight,
-            fall_penalty=fall_penalty,
-            min_base_height=min_base_height,
-            max_torso_tilt=max_torso_tilt,
-            reset_noise_scale=reset_noise_scale,
-            velocity_feedforward=velocity_feedforward,
-            floor_friction=floor_friction,
-            frame_skip=frame_skip,
-            render_mode=render_mode,
-            width=width,
-            height=height,
-            camera_name=camera_name,
-            sensor_noise=sensor_noise,
-            push=push,
-            actuator_torque_scale=actuator_torque_scale,
-            speed_scale=speed_scale,
-        )
-        utils.EzPickle.__init__(
-            self,
-            target_speed=target_speed,
-            speed_weight=speed_weight,
-            lateral_weight=lateral_weight,
-            healthy_reward=healthy_reward,
-            energy_weight=energy_weight,
-            fall_penalty=fall_penalty,
-            min_base_height=min_base_height,
-            max_torso_tilt=max_torso_tilt,
-            reset_noise_scale=reset_noise_scale,
-            velocity_feedforward=velocity_feedforward,
-            floor_friction=floor_friction,
-            frame_skip=frame_skip,
-            render_mode=render_mode,
-            width=width,
-            height=height,
-            camera_name=camera_name,
-            sensor_noise=sensor_noise,
-            push=push,
-            actuator_torque_scale=actuator_torque_scale,
-            course=course,
-            obstacles=obstacles,
-            n_obstacles=n_obstacles,
-            obstacle_spacing=obstacle_spacing,
-            first_obstacle_distance=first_obstacle_distance,
-            observed_obstacles=observed_obstacles,
-            contact_weight=contact_weight,
-            success_distance=success_distance,
-            speed_scale=speed_scale,
-        )
+        super().__init__(**constructor_arguments(BipedWalkEnv.__init__, arguments))  # every BipedWalk argument
+        utils.EzPickle.__init__(self, **arguments)
         if self._explicit:
             self._check_clear_of_standing_robot()
 
@@ -439,7 +364,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
             self._set_course(
                 random_course(
                     self.np_random,
-                    n_obstacles=self._n_obstacles,  # type: ignore[arg-type]
+                    n_obstacles=self._n_obstacles,
                     spacing=self._spacing,
                     first_obstacle_distance=self._first_distance,
                 )
@@ -561,6 +486,21 @@ class BipedObstaclesEnv(BipedWalkEnv):
         return any(low <= g < high for g in self.data.contact.geom.ravel().tolist())
 
 
+def _longest_random_course_time() -> float:
+    """Time [s] to walk the longest default random course at 0.4 m/s: the start, then from the origin to the last
+    obstacle's far face (5 gaps of 3.0 m after the first at 1.5 m, half the deepest obstacle) plus 1.0 m."""
+    spec = default_config()
+    n, gap, first = spec["n_obstacles"][1], spec["obstacle_spacing"][1], spec["first_obstacle_distance"]
+    end = first + (n - 1) * gap + 0.5 * MAX_OBSTACLE_DEPTH + spec["success_distance"]
+    return WALK_START_TIME + end / _WALK_SPEED
+
+
+_CONTROL_RATE = 250  # [1/s] control steps per second at the default frame_skip (2 physics steps of 2 ms)
+MAX_EPISODE_STEPS = int(math.ceil(_longest_random_course_time())) * _CONTROL_RATE
+"""The registered time limit: 11250 steps of 4 ms (45 s), the longest default random course at 0.4 m/s (44.65 s:
+0.4 s start, 17.7 m) rounded up to whole seconds."""
+
+
 def _parse_obstacles(value: Any) -> tuple[Obstacle, ...]:
     """The ``obstacles`` argument as a course, each entry checked with the name of its key."""
     if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence) or not value:
@@ -602,5 +542,5 @@ def _parse_obstacles(value: Any) -> tuple[Obstacle, ...]:
         )
         yaw = check_real(f"{name}['yaw']", item.get("yaw", 0.0), unit="rad")
         kind = check_choice(f"{name}['kind']", item.get("kind", "custom"), OBSTACLE_KINDS)
-        course.append(Obstacle(shape, tuple(center), tuple(size), yaw, kind))  # type: ignore[arg-type]
+        course.append(Obstacle(shape, tuple(center), tuple(size), yaw, kind))
     return tuple(course)

@@ -28,9 +28,12 @@ from .validation import (
     MAX_FRAME_SKIP,
     check_bool,
     check_int,
+    check_known_arguments,
     check_noise,
     check_real,
     check_render_arguments,
+    constructor_arguments,
+    constructor_defaults,
     render_modes,
 )
 
@@ -44,7 +47,6 @@ __all__ = [
 ]
 
 _TIMESTEP = 0.002  # [s], the MJCF option
-_GRAVITY = 9.81
 NOMINAL_POSTURE: dict[str, float] = {
     "r_hip_pitch": -0.5002,
     "r_knee": 0.9921,
@@ -80,25 +82,9 @@ _UPPER_BODY = (
 
 
 def default_config() -> dict[str, Any]:
-    """Default keyword arguments of :class:`BipedWalkEnv` (a fresh dict each call)."""
-    return {
-        "target_speed": 0.5,
-        "speed_weight": 1.0,
-        "speed_scale": 0.25,
-        "lateral_weight": 0.5,
-        "healthy_reward": 0.05,
-        "energy_weight": 0.001,
-        "fall_penalty": 10.0,
-        "min_base_height": 0.55,
-        "max_torso_tilt": 0.8,
-        "reset_noise_scale": 0.02,
-        "velocity_feedforward": True,
-        "floor_friction": 1.0,
-        "frame_skip": 2,
-        "sensor_noise": None,
-        "push": None,
-        "actuator_torque_scale": 1.0,
-    }
+    """Default keyword arguments of :class:`BipedWalkEnv`, the rendering ones left out (a fresh dict each call),
+    read from its signature: the one place they are written."""
+    return constructor_defaults(BipedWalkEnv.__init__)
 
 
 class BipedWalkEnv(MujocoEnv, utils.EzPickle):
@@ -128,7 +114,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     | ``base_linear_velocity``: world frame | 3 | m/s |
     | ``base_angular_velocity``: pelvis frame | 3 | rad/s |
     | ``qdot``: joint velocities | 22 | rad/s |
-    | ``right_force``, ``right_torque``: ankle sensor, sensor frame (what the foot exerts on the shank) | 3 + 3 | N, N m |
+    | ``right_force``, ``right_torque``: ankle sensor, sensor frame (the foot's load on the shank) | 3 + 3 | N, N m |
     | ``left_force``, ``left_torque`` | 3 + 3 | N, N m |
     | ``imu_acceleration``: torso accelerometer (includes gravity) | 3 | m/s^2 |
     | ``imu_gyro``: torso angular velocity, IMU frame | 3 | rad/s |
@@ -159,9 +145,10 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     robot volumes), ``self_collision``, ``collision`` (the same), ``fell``, ``torso_tilt`` [rad],
     ``joint_limit_margin`` [rad], ``pseudoenergy``, ``peak_joint_speed`` [rad/s], ``speed_error``
     (``|v_x - target_speed|`` [m/s], instantaneous: it swings within every step), ``mean_speed_error``
-    (``|distance / time - target_speed|`` [m/s], the episode so far) and ``is_success`` (no fall or self-collision so far and the mean speed
-    ``distance / time`` within ``max(10 % of target_speed, 0.02 m/s)`` of the command: at ``target_speed=0`` a
-    robot that stands, drifting less than 2 cm/s on average, succeeds; see :data:`SUCCESS_SPEED_TOLERANCE`).
+    (``|distance / time - target_speed|`` [m/s], the episode so far) and ``is_success`` (no fall or self-collision
+    so far and the mean speed ``distance / time`` within ``max(10 % of target_speed, 0.02 m/s)`` of the command: at
+    ``target_speed=0`` a robot that stands, drifting less than 2 cm/s on average, succeeds; see
+    :data:`SUCCESS_SPEED_TOLERANCE`).
 
     ## Starting State
     The standing posture :data:`NOMINAL_POSTURE` with both soles flat on the ground and the pelvis at the
@@ -207,14 +194,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
-    - v0: initial version. Before release, the fault arguments ``sensor_noise``, ``push`` and
-      ``actuator_torque_scale`` (all off by default: behaviour unchanged) and ``info["push_force"]`` were added;
-      ``info["task_error"]`` (``|v_x - target_speed|``) was renamed
-      ``speed_error`` and ``mean_speed_error`` was added; ``info["cop"]`` of an unloaded foot and ``info["zmp"]``
-      in flight became 0 with the flags ``cop_valid`` and ``zmp_valid`` (they were NaN); rewards and dynamics are
-      unchanged. Before release the speed reward became a bounded tracking reward (``speed_scale`` added; it was
-      ``-speed_weight (v_x - target_speed)^2``) and ``healthy_reward`` 0.05 (was 1): standing still earned 77 % of
-      the walking reference's return, and a barely trained PPO learned to stand.
+    - v0: initial release (0.1.0)
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 250}
@@ -272,32 +252,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         speed_scale: float = 0.25,
         **kwargs: Any,
     ) -> None:
-        if kwargs:
-            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
-            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(
-            self,
-            target_speed,
-            speed_weight,
-            lateral_weight,
-            healthy_reward,
-            energy_weight,
-            fall_penalty,
-            min_base_height,
-            max_torso_tilt,
-            reset_noise_scale,
-            velocity_feedforward,
-            floor_friction,
-            frame_skip,
-            render_mode,
-            width,
-            height,
-            camera_name,
-            sensor_noise=sensor_noise,
-            push=push,
-            actuator_torque_scale=actuator_torque_scale,
-            speed_scale=speed_scale,
-        )
+        check_known_arguments(kwargs, BipedWalkEnv.__init__)
+        utils.EzPickle.__init__(self, **constructor_arguments(BipedWalkEnv.__init__, locals()))
         self._target_speed = check_real(
             "target_speed",
             target_speed,
@@ -412,7 +368,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self.action_space = spaces.Box(-1.0, 1.0, shape=(len(BIPED_JOINTS),), dtype=np.float32)
         return self.action_space
 
-    def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+    # Gymnasium's MujocoEnv annotates step's reward as np.float64 and info as dict[str, np.float64], narrower than
+    # gymnasium.Env's SupportsFloat and dict[str, Any], which this env returns (a float reward, mixed info values)
+    def step(  # type: ignore[override]
+        self, action: NDArray[np.floating]
+    ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
         try:
             action = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
@@ -428,7 +388,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._targets = targets
         x_before = float(self.data.qpos[0])
         if self._push is not None:
-            self._apply_push()
+            self._apply_push(self._push)
         self.do_simulation(ctrl, self.frame_skip)
         self._time += self.dt
         metrics = self._metrics((float(self.data.qpos[0]) - x_before) / self.dt)
@@ -442,9 +402,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         """Whether the step's ``metrics`` end the episode: a fall or a self-collision."""
         return bool(metrics["fell"] or metrics["self_collision"])
 
-    def _apply_push(self) -> None:
+    def _apply_push(self, push: PushSchedule) -> None:
         """Set ``xfrc_applied`` for the coming control step from the push schedule (clear it after a push)."""
-        acting = self._push.force_at(self._time, self.np_random)  # type: ignore[union-attr]
+        acting = push.force_at(self._time, self.np_random)
         xfrc = self.data.xfrc_applied
         if acting is None:
             if self._push_force.any():

@@ -26,10 +26,13 @@ from .validation import (
     MAX_FRAME_SKIP,
     check_bool,
     check_int,
+    check_known_arguments,
     check_noise,
     check_real,
     check_real_array,
     check_render_arguments,
+    constructor_arguments,
+    constructor_defaults,
     render_modes,
     warn_if_time_limit_short,
 )
@@ -41,24 +44,9 @@ _CLEARANCE_HORIZON = 10.0  # [m] distances beyond this are reported as this valu
 
 
 def default_config() -> dict[str, Any]:
-    """Default keyword arguments of :class:`PlanarReachEnv` (a fresh dict each call)."""
-    return {
-        "obstacle": True,
-        "obstacle_center": (0.7, -0.12),
-        "obstacle_radius": 0.1,
-        "line_start": (0.9, 0.45),
-        "line_end": (0.9, -0.45),
-        "duration": 2.0,
-        "initial_configuration": (-1.3, 1.0, 0.9, 0.5),
-        "max_joint_speed": 3.0,
-        "tracking_weight": 10.0,
-        "energy_weight": 40.0,
-        "collision_penalty": 100.0,
-        "reset_noise_scale": 0.1,
-        "success_tolerance": 1e-3,
-        "frame_skip": 10,
-        "obs_noise": None,
-    }
+    """Default keyword arguments of :class:`PlanarReachEnv`, the rendering ones left out (a fresh dict each call),
+    read from its signature: the one place they are written."""
+    return constructor_defaults(PlanarReachEnv.__init__)
 
 
 MIN_OBSTACLE_RADIUS = 1e-6
@@ -148,17 +136,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
-    - v0: initial version. Before release the default obstacle moved from (0.55, 0.05) to (0.7, -0.12): at the
-      old place the arm had to pass the obstacle on the other side, which no local method can do (the chain
-      cannot change sides without crossing it); at the new place plain CLIK still collides and nullspace
-      collision avoidance passes it, as in monograph 5.6.2.
-    - Before release, ``info["task_error"]`` / ``max_task_error`` were renamed ``tracking_error`` /
-      ``max_tracking_error``, and ``goal_error`` / ``goal_reached`` were added; rewards and dynamics are unchanged.
-    - Before release the observation gained ``tcp_error`` (18 -> 20 entries).
-    - Before release the default ``energy_weight`` became 40 (was 0.1): random actions (about 25 rad^2/s of
-      pseudoenergy per episode, the CLIK about 1) earned about as much as holding still; and
-      ``collision_penalty`` 100 (was 10): an episode ended early by a collision saved more energy than the
-      penalty cost and paid more than the collision-free reference.
+    - v0: initial release (0.1.0)
     """
 
     metadata = {"render_modes": ["human", "rgb_array", "depth_array"], "render_fps": 100}
@@ -202,31 +180,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         obs_noise: float | dict[str, float] | None = None,
         **kwargs: Any,
     ) -> None:
-        if kwargs:
-            valid = ", ".join(sorted(default_config()) + ["render_mode", "width", "height", "camera_name"])
-            raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")
-        utils.EzPickle.__init__(
-            self,
-            obstacle,
-            obstacle_center,
-            obstacle_radius,
-            line_start,
-            line_end,
-            duration,
-            initial_configuration,
-            max_joint_speed,
-            tracking_weight,
-            energy_weight,
-            collision_penalty,
-            reset_noise_scale,
-            success_tolerance,
-            frame_skip,
-            render_mode,
-            width,
-            height,
-            camera_name,
-            obs_noise=obs_noise,
-        )
+        check_known_arguments(kwargs, PlanarReachEnv.__init__)
+        utils.EzPickle.__init__(self, **constructor_arguments(PlanarReachEnv.__init__, locals()))
         self._noise = check_noise(
             "obs_noise",
             obs_noise,
@@ -262,10 +217,10 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         )
         width, height = check_render_arguments(render_mode, width, height, camera_name)
         self._scene_xml = planar_arm_scene_xml(
-            obstacle_center=self._obstacle_center if self._obstacle else None,
+            obstacle_center=self._obstacle_center.tolist() if self._obstacle else None,
             obstacle_radius=self._obstacle_radius,
-            line_start=self._line_start,
-            line_end=self._line_end,
+            line_start=self._line_start.tolist(),
+            line_end=self._line_end.tolist(),
         )
         self.metadata = {
             "render_modes": render_modes("rgb_array", "depth_array"),
@@ -286,12 +241,13 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._time = 0.0
         self._max_tracking_error = 0.0
         self._collided = False
-        self._nominal_q = self._project_to_line_start(np.clip(seed_q, self._lower, self._upper))
-        if self._nominal_q is None:
+        nominal_q = self._project_to_line_start(np.clip(seed_q, self._lower, self._upper))
+        if nominal_q is None:
             raise EnvConfigError(
                 f"no configuration near initial_configuration {tuple(seed_q)} puts the TCP at "
                 f"line_start {tuple(self._line_start)}"
             )
+        self._nominal_q: NDArray[np.float64] = nominal_q
 
     # ------------------------------------------------------------------ gymnasium API
     def _initialize_simulation(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
@@ -314,7 +270,11 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         # mj_step leaves positions of the state before the last integration; observe the current one
         mujoco.mj_kinematics(self.model, self.data)
 
-    def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+    # Gymnasium's MujocoEnv annotates step's reward as np.float64 and info as dict[str, np.float64], narrower than
+    # gymnasium.Env's SupportsFloat and dict[str, Any], which this env returns (a float reward, mixed info values)
+    def step(  # type: ignore[override]
+        self, action: NDArray[np.floating]
+    ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
         try:
             action = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action

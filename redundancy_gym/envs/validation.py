@@ -2,10 +2,16 @@
 
 The type, finiteness and range checks are those of :mod:`redundancy_gym.validation` (shared with the policies
 and the geometry), bound here to :class:`EnvConfigError`; they run in the constructors only.
+
+Each env writes its keyword arguments and their defaults once, in its explicit ``__init__`` signature;
+:func:`constructor_defaults` reads its ``default_config()`` from there, :func:`constructor_arguments` what
+``EzPickle`` records, and :func:`check_known_arguments` the valid names of the unknown-argument error.
 """
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable, Mapping
 from functools import partial
 from typing import Any
 
@@ -18,16 +24,20 @@ from .exceptions import EnvConfigError
 
 __all__ = [
     "MAX_FRAME_SKIP",
+    "RENDER_ARGUMENTS",
     "RENDER_MODES",
     "check_bool",
     "check_choice",
     "check_int",
+    "check_known_arguments",
     "check_noise",
     "check_range_pair",
     "check_real",
     "check_real_array",
     "check_render_arguments",
     "check_render_backend",
+    "constructor_arguments",
+    "constructor_defaults",
     "non_negative",
     "positive",
     "render_modes",
@@ -82,6 +92,51 @@ def check_render_backend(render_mode: str | None) -> None:
         require_window()
 
 
+def check_real(
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    unit: str | None = None,
+    note: str | None = None,
+) -> float:
+    """``value`` as a float when it is a finite real number inside the range, else :class:`EnvConfigError`
+    (:func:`redundancy_gym.validation.check_real`; no env argument takes None where a number is asked for)."""
+    x = _checks.check_real(
+        name,
+        value,
+        low=low,
+        high=high,
+        low_open=low_open,
+        high_open=high_open,
+        unit=unit,
+        note=note,
+        error=EnvConfigError,
+    )
+    if x is None:  # cannot happen without optional=True; narrows the shared check's Optional result
+        raise EnvConfigError(f"{name} must be a finite real number, got None")
+    return x
+
+
+def check_int(
+    name: str,
+    value: Any,
+    *,
+    low: int | None = None,
+    high: int | None = None,
+    note: str | None = None,
+) -> int:
+    """``value`` as an int when it is an int inside ``[low, high]``, else :class:`EnvConfigError`
+    (:func:`redundancy_gym.validation.check_int`)."""
+    n = _checks.check_int(name, value, low=low, high=high, note=note, error=EnvConfigError)
+    if n is None:  # cannot happen without optional=True; narrows the shared check's Optional result
+        raise EnvConfigError(f"{name} must be an int, got None")
+    return n
+
+
 def positive(value: float, name: str) -> float:
     """``value`` as a float when it is a finite real number > 0 (see :func:`redundancy_gym.validation.check_real`)."""
     return check_real(name, value, low=0.0, low_open=True)
@@ -94,8 +149,6 @@ def non_negative(value: float, name: str) -> float:
 
 # the shared checks of redundancy_gym.validation, raising EnvConfigError
 check_bool = partial(_checks.check_bool, error=EnvConfigError)
-check_real = partial(_checks.check_real, error=EnvConfigError)
-check_int = partial(_checks.check_int, error=EnvConfigError)
 check_choice = partial(_checks.check_choice, error=EnvConfigError)
 check_range_pair = partial(_checks.check_range_pair, error=EnvConfigError)
 check_real_array = partial(_checks.check_real_array, error=EnvConfigError)
@@ -171,4 +224,44 @@ def check_render_arguments(
             f"camera_name must be None or a camera's name (a str), got {camera_name!r} ({type(camera_name).__name__})"
         )
     check_render_backend(render_mode)
-    return w, h  # type: ignore[return-value]
+    return w, h
+
+
+RENDER_ARGUMENTS: tuple[str, ...] = ("render_mode", "width", "height", "camera_name")
+"""The rendering keyword arguments every env takes, as Gymnasium's MuJoCo envs do; they are no part of an env's
+``default_config()`` (they change what is drawn, not the task)."""
+
+
+def _named_parameters(init: Callable[..., Any]) -> list[inspect.Parameter]:
+    """The parameters of an env constructor that take an argument by name (``self`` and ``**kwargs`` left out)."""
+    kinds = (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)
+    return [p for p in list(inspect.signature(init).parameters.values())[1:] if p.kind in kinds]
+
+
+def constructor_defaults(init: Callable[..., Any]) -> dict[str, Any]:
+    """The defaults of the env constructor ``init``'s keyword arguments, the :data:`RENDER_ARGUMENTS` left out: each
+    env's ``default_config()``.
+
+    The explicit signature is the one place an env writes its defaults (it stays explicit for IDE help and
+    ``help()``, as Gymnasium's v5 envs do); ``default_config()`` and the pickled arguments
+    (:func:`constructor_arguments`) are read from it.
+    """
+    return {p.name: p.default for p in _named_parameters(init) if p.name not in RENDER_ARGUMENTS}
+
+
+def constructor_arguments(init: Callable[..., Any], local_vars: Mapping[str, Any]) -> dict[str, Any]:
+    """The arguments of one call of the env constructor ``init``, by name, read from its ``locals()``: what
+    ``gymnasium.utils.EzPickle`` records, so that unpickling makes the env again with every argument it was given.
+
+    Pass ``locals()`` before the constructor rebinds an argument (``frame_skip = check_int(...)``): the record must
+    hold what the caller passed.
+    """
+    return {p.name: local_vars[p.name] for p in _named_parameters(init)}
+
+
+def check_known_arguments(kwargs: Mapping[str, Any], init: Callable[..., Any]) -> None:
+    """Raise :class:`EnvConfigError` when the env constructor ``init`` got keyword arguments it does not take
+    (``kwargs``, its ``**kwargs``), naming them and the valid ones; a ``TypeError`` would name no valid choice."""
+    if kwargs:
+        valid = ", ".join(sorted(constructor_defaults(init)) + list(RENDER_ARGUMENTS))
+        raise EnvConfigError(f"unknown keyword argument(s) {', '.join(sorted(kwargs))}; valid: {valid}")

@@ -19,7 +19,7 @@ ENV_ID = "redundancy_gym/AgriReach-v0"
 
 def _arm_volumes(env: gym.Env) -> list:
     u = env.unwrapped
-    out = []
+    out: list[LSS | PSS] = []
     for k, name in enumerate(AGRI_ARM_GEOMS):
         g = u.model.geom(name).id
         pos = u.data.geom_xpos[g]

@@ -188,7 +188,10 @@ def test_obstacle_arguments_are_checked() -> None:
         Obstacle("box", (0, 0, 0), (1, 0, 1))
     with pytest.raises(ValueError, match="kind"):
         Obstacle("box", (0, 0, 0), (1, 1, 1), kind="wall")
-    assert Obstacle("box", [0, 0, 0.5], [1, 1, 1]) == Obstacle("box", (0.0, 0.0, 0.5), (1.0, 1.0, 1.0))
+    # lists on purpose (the annotation asks for tuples): the constructor must coerce them
+    assert Obstacle("box", [0, 0, 0.5], [1, 1, 1]) == Obstacle(  # type: ignore[arg-type]
+        "box", (0.0, 0.0, 0.5), (1.0, 1.0, 1.0)
+    )
 
 
 # ---------------------------------------------------------------------- courses
@@ -358,6 +361,7 @@ def _robot_volumes(base: BipedObstaclesEnv) -> list[SSV]:
 def test_min_obstacle_clearance_is_the_brute_force_minimum() -> None:
     env = gym.make(ENV_ID, obstacles=NEAR)
     base = env.unwrapped
+    assert isinstance(base, BipedObstaclesEnv)
     rng = np.random.default_rng(0)
     _, info = env.reset(seed=2)
     checked = []
@@ -384,7 +388,9 @@ def test_min_obstacle_clearance_is_the_brute_force_minimum() -> None:
     # the same far from every obstacle (the clearance search widens its margin)
     far = gym.make(ENV_ID, obstacles=[{"shape": "cylinder", "center": [9.0, 3.0, 0.5], "size": [0.1, 1.0]}])
     _, info = far.reset(seed=0)
-    brute = min(distance(a, b).distance for a in _robot_volumes(far.unwrapped) for b in far.unwrapped.obstacle_volumes)
+    far_base = far.unwrapped
+    assert isinstance(far_base, BipedObstaclesEnv)
+    brute = min(distance(a, b).distance for a in _robot_volumes(far_base) for b in far_base.obstacle_volumes)
     assert info["min_obstacle_clearance"] == pytest.approx(brute, abs=1e-12) and brute > 8.0
 
 
@@ -511,6 +517,7 @@ def test_renders_after_a_reset_that_changed_the_course() -> None:
         gc.enable()
     assert env.unwrapped.model is not model
     frame = env.render()
+    assert isinstance(first, np.ndarray) and isinstance(frame, np.ndarray)
     assert frame.shape == (72, 96, 3) and frame.dtype == np.uint8 and frame.std() > 0
     assert first.shape == frame.shape and not np.array_equal(first, frame)  # another episode
     for _ in range(3):
@@ -540,7 +547,8 @@ def test_eval_reports_obstacle_contacts_and_clearance() -> None:
     assert clean.obstacle_contact is False and touched.obstacle_contact is True
     report = EvalReport(ENV_ID, "zero", 2, 0, {}, [clean, touched], np.ones(40)).to_json()
     assert report["obstacle_contact_rate"] == 0.5
-    assert report["min_obstacle_clearance"] == touched.min_obstacle_clearance < 0.0
+    assert touched.min_obstacle_clearance is not None and touched.min_obstacle_clearance < 0.0
+    assert report["min_obstacle_clearance"] == touched.min_obstacle_clearance
     assert report["per_episode"][1]["obstacle_contact"] is True
     text = format_report(report)
     assert "obstacle contact rate" in text and "to obstacles" in text

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -21,14 +23,22 @@ def _checked(env: gym.Env) -> gym.Env:
     return env
 
 
-def _rollout(env: gym.Env, seed: int, steps: int) -> tuple[list[np.ndarray], list[float], list[dict]]:
+def _action_shape(env: gym.Env) -> tuple[int, ...]:
+    """The shape of the env's ``Box`` action space (every env and wrapped env has one)."""
+    assert isinstance(env.action_space, gym.spaces.Box), env.action_space
+    return env.action_space.shape
+
+
+def _rollout(env: gym.Env, seed: int, steps: int) -> tuple[list[np.ndarray], list[float], list[dict[str, Any]]]:
     rng = np.random.default_rng(seed)
     obs, info = env.reset(seed=seed)
-    observations, rewards, infos = [obs], [], [info]
+    observations: list[np.ndarray] = [obs]
+    rewards: list[float] = []
+    infos = [info]
     for _ in range(steps):
-        obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, env.action_space.shape))
+        obs, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, _action_shape(env)))
         observations.append(obs)
-        rewards.append(reward)
+        rewards.append(float(reward))
         infos.append(info)
         if terminated or truncated:
             break
@@ -78,12 +88,13 @@ def test_reward_is_sum_of_terms_and_finite(env_id: str) -> None:
 def test_non_finite_or_misshaped_actions_raise(env_id: str) -> None:
     env = gym.make(env_id)
     env.reset(seed=0)
-    bad = np.zeros(env.action_space.shape)
+    shape = _action_shape(env)
+    bad = np.zeros(shape)
     bad[0] = np.nan
     with pytest.raises(InvalidActionError):
         env.step(bad)
     with pytest.raises(InvalidActionError):
-        env.step(np.zeros(env.action_space.shape[0] + 1))
+        env.step(np.zeros(shape[0] + 1))
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)

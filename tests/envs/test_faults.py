@@ -87,10 +87,11 @@ def test_faults_off_are_bitwise_identical_to_the_defaults(env_id: str, off: dict
 def test_observation_noise_is_seeded_and_on_the_measured_channels_only(
     env_id: str, kwarg: str, channels: list[slice]
 ) -> None:
+    noise: dict[str, Any] = {kwarg: 0.01}
     clean, rewards, _ = _run(env_id, steps=30)
-    noisy, noisy_rewards, _ = _run(env_id, steps=30, **{kwarg: 0.01})
-    again, _, _ = _run(env_id, steps=30, **{kwarg: 0.01})
-    other, _, _ = _run(env_id, steps=30, seed=4, **{kwarg: 0.01})
+    noisy, noisy_rewards, _ = _run(env_id, steps=30, **noise)
+    again, _, _ = _run(env_id, steps=30, **noise)
+    other, _, _ = _run(env_id, steps=30, seed=4, **noise)
     other_clean, _, _ = _run(env_id, steps=30, seed=4)
     assert np.array_equal(noisy, again)  # same seed, same noise
     assert not np.allclose(noisy - clean, other - other_clean)  # another seed, other noise

@@ -1,4 +1,3 @@
-import inspect
 import warnings
 
 import gymnasium as gym
@@ -9,12 +8,6 @@ from redundancy_gym.envs import EnvConfigError, PlanarReachEnv
 from redundancy_gym.envs.planar_reach import default_config
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
-
-
-def test_default_config_matches_signature() -> None:
-    params = inspect.signature(PlanarReachEnv.__init__).parameters
-    for name, value in default_config().items():
-        assert params[name].default == value, name
 
 
 def test_start_on_line_with_varied_posture() -> None:

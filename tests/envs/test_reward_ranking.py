@@ -4,6 +4,8 @@ standing still more than every episode of random actions, each by a clear margin
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -13,7 +15,7 @@ from redundancy_gym.eval.evaluate import evaluate
 # standing still may earn); seeds 13000+ are used by no other test or figure. On the walkers standing still must
 # not pay: with the earlier reward (a quadratic speed penalty under a healthy reward of 1 per step) it earned 77 %
 # of the walking reference's gain and a barely trained PPO learned to stand.
-CASES = [
+CASES: list[tuple[str, dict[str, Any], str, int, float]] = [
     ("redundancy_gym/PlanarReach-v0", {"obstacle": True}, "clik", 3, 0.9),
     ("redundancy_gym/PlanarReach-v0", {"obstacle": False}, "clik", 3, 0.9),
     ("redundancy_gym/AgriReach-v0", {"difficulty": "medium"}, "clik", 3, 0.9),
@@ -22,7 +24,7 @@ CASES = [
 ]
 
 
-def _returns(env_id: str, env_kwargs: dict, policy: str, episodes: int) -> np.ndarray:
+def _returns(env_id: str, env_kwargs: dict[str, Any], policy: str, episodes: int) -> np.ndarray:
     report = evaluate(env_id, policy, episodes=episodes, seed=13000, env_kwargs=env_kwargs, progress=False)
     return np.array([episode["return"] for episode in report.to_json()["per_episode"]])
 
@@ -33,8 +35,8 @@ def _returns(env_id: str, env_kwargs: dict, policy: str, episodes: int) -> np.nd
     ids=[f"{c[0].split('/')[1]}-{c[2]}-{'-'.join(f'{k}={v}' for k, v in c[1].items())}" for c in CASES],
 )
 def test_reference_beats_standing_still_which_beats_random_actions(
-    env_id, env_kwargs, reference, episodes, still_share
-):
+    env_id: str, env_kwargs: dict[str, Any], reference: str, episodes: int, still_share: float
+) -> None:
     best = _returns(env_id, env_kwargs, reference, episodes)
     still = _returns(env_id, env_kwargs, "zero", episodes)
     random = _returns(env_id, env_kwargs, "random", episodes)

@@ -14,12 +14,14 @@ from redundancy_gym.registration import ENV_IDS
 def _rollout(env_id: str, mode: str, steps: int = 3) -> list[np.ndarray]:
     envs = gym.make_vec(env_id, num_envs=2, vectorization_mode=mode)
     try:
-        obs, _ = envs.reset(seed=[11, 12])
+        obs, _ = envs.reset(seed=11)  # the sub-envs get seeds 11 and 12
+        space = envs.single_observation_space
+        assert isinstance(space, gym.spaces.Box)
         envs.action_space.seed(5)
         out = [obs]
         for _ in range(steps):
             obs, reward, terminated, truncated, _ = envs.step(envs.action_space.sample())
-            assert obs.shape == (2, *envs.single_observation_space.shape) and np.all(np.isfinite(obs))
+            assert obs.shape == (2, *space.shape) and np.all(np.isfinite(obs))
             assert reward.shape == (2,) and np.all(np.isfinite(reward))
             out.append(obs)
         return out

@@ -22,14 +22,20 @@ ENV_IDS = [PLANAR, AGRI, BIPED]
 SHORT = {PLANAR: "planar", AGRI: "agri", BIPED: "biped"}
 
 
+def _box(env: gym.Env) -> gym.spaces.Box:
+    """The env's action space, a ``Box`` for every env here."""
+    assert isinstance(env.action_space, gym.spaces.Box), env.action_space
+    return env.action_space
+
+
 def _zero(env: gym.Env) -> np.ndarray:
-    return np.zeros(env.action_space.shape, dtype=env.action_space.dtype)
+    return np.zeros(_box(env).shape, dtype=_box(env).dtype)
 
 
 def _finite_step(env: gym.Env, action: np.ndarray) -> tuple:
     obs, reward, terminated, truncated, info = env.step(action)
     assert obs.shape == env.observation_space.shape and np.all(np.isfinite(obs)), obs
-    assert np.isfinite(reward)
+    assert np.isfinite(float(reward))
     return obs, reward, terminated, truncated, info
 
 
@@ -122,7 +128,7 @@ def test_planar_20k_steps_of_saturated_actions_stay_finite_and_inside_the_joint_
         qs, qdots, phases = [], [], []
         steps, truncated = 0, False
         for sign in (1.0, -1.0):
-            action = np.full(env.action_space.shape, sign, dtype=env.action_space.dtype)
+            action = np.full(_box(env).shape, sign, dtype=_box(env).dtype)
             for _ in range(10_000):
                 obs, _, terminated, truncated, info = _finite_step(env, action)
                 steps += 1
@@ -132,11 +138,11 @@ def test_planar_20k_steps_of_saturated_actions_stay_finite_and_inside_the_joint_
                 phases.append(obs[layout["phase"]][0])
         assert steps == 20_000 and truncated
         assert info["time"] == pytest.approx(200.0, abs=1e-6)
-        qs = np.array(qs)
+        q = np.array(qs)
         give = 0.1  # [rad] MuJoCo's soft joint limits let a joint driven into its stop in by a few centiradians
-        assert np.all(qs >= model.lower_limits - give) and np.all(qs <= model.upper_limits + give)
-        assert np.any(qs.max(axis=0) > model.upper_limits - 0.05)  # the +1 phase did reach the upper stops
-        assert np.any(qs.min(axis=0) < model.lower_limits + 0.05)  # and the -1 phase the lower ones
+        assert np.all(q >= model.lower_limits - give) and np.all(q <= model.upper_limits + give)
+        assert np.any(q.max(axis=0) > model.upper_limits - 0.05)  # the +1 phase did reach the upper stops
+        assert np.any(q.min(axis=0) < model.lower_limits + 0.05)  # and the -1 phase the lower ones
         assert np.max(np.abs(qdots)) < 2.0 * env.unwrapped.max_joint_speed  # rebounds off the stops, no blow-up
         assert 0.0 <= min(phases) and max(phases) <= 1.0
     finally:
@@ -152,7 +158,7 @@ def test_saturated_actions_over_many_episodes_stay_finite(env_id: str) -> None:
         env.reset(seed=0)
         episodes, sign = 0, 1.0
         for _ in range(1500):
-            action = np.full(env.action_space.shape, sign, dtype=env.action_space.dtype)
+            action = np.full(_box(env).shape, sign, dtype=_box(env).dtype)
             _, _, terminated, truncated, _ = _finite_step(env, action)
             if terminated or truncated:
                 obs, _ = env.reset()
