@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["BORROW", "JIT", "JIT_EXACT"]
+__all__ = ["BACKENDS", "BORROW", "BORROW_EXACT", "DEFAULT_BACKEND", "JIT", "JIT_EXACT"]
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # in the kernels is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
@@ -22,3 +22,16 @@ JIT_EXACT: dict[str, Any] = {"cache": True, "error_model": "numpy"}
 # ``_nrt`` is outside numba's documented options; the tests cover every kernel compiled with it.
 BORROW: dict[str, Any] = {**JIT, "_nrt": False}
 """:data:`JIT` without reference counting, for kernels that only borrow arrays."""
+
+# Which twin runs: every controller with a compiled twin (Clik/CompiledClik, WholeBodyIk/CompiledWholeBodyIk, the
+# walking measurement/CompiledMeasurement, PredictiveIk.optimize's Python loop/pik_optimize) and every policy option
+# that picks one takes ``backend`` with these choices and this default (checked by validation.check_backend).
+BACKENDS: tuple[str, ...] = ("compiled", "python")
+"""The implementations a ``backend`` argument chooses between: the compiled twin, or the readable Python reference
+it is held equal to (to round-off) by the tests."""
+
+DEFAULT_BACKEND = "compiled"
+"""The ``backend`` of every controller and policy that has a compiled twin, unless the caller says otherwise."""
+
+BORROW_EXACT: dict[str, Any] = {**JIT_EXACT, "_nrt": False}
+""":data:`JIT_EXACT` without reference counting, for exact kernels that only borrow arrays."""

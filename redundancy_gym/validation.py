@@ -24,8 +24,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .kernel_options import BACKENDS
+
 __all__ = [
     "as_real_array",
+    "check_backend",
     "check_bool",
     "check_choice",
     "check_int",
@@ -183,6 +186,13 @@ def check_choice(name: str, value: Any, choices: Sequence[Any], *, error: ErrorT
             return value
     listed = ", ".join(c if isinstance(c, str) else repr(c) for c in choices)
     raise error(f"{name} must be one of {listed}; got {_show(value)}")
+
+
+def check_backend(name: str, value: Any, *, error: ErrorType = ValueError) -> str:
+    """``value`` when it is one of :data:`~redundancy_gym.kernel_options.BACKENDS` (``"compiled"``: the compiled
+    twin; ``"python"``: its readable reference); otherwise ``error``: ``backend must be one of compiled, python; got
+    'gpu'``. Every controller and policy option that picks a twin checks it here, so all say the same."""
+    return str(check_choice(name, value, BACKENDS, error=error))
 
 
 def check_real_array(

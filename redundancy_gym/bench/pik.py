@@ -392,7 +392,13 @@ def agri_self_collision_traces(
             q0, steps, dt, _mpc_command(pik, mpc, wdot, target, gain), task_part, move.clearance
         )
     plan = velocity_level.optimize(
-        q0, wdot(0, steps), dt, np.zeros((steps, velocity_level.n)), max_iterations=global_iterations, tolerance=1e-9
+        q0,
+        wdot(0, steps),
+        dt,
+        np.zeros((steps, velocity_level.n)),
+        max_iterations=global_iterations,
+        tolerance=1e-9,
+        backend="python",  # the global plan on the reference loop, as the global policy's
     ).rollout
     traces["global"] = _rollout(
         q0, steps, dt, _plan_command(velocity_level, plan, target, gain), task_part, move.clearance
@@ -455,7 +461,14 @@ def _descent_comparison(seed: int, iterations: int, tolerance: float) -> dict[st
         costs = {}
         for method in ("fletcher_reeves", "steepest_descent"):
             result = pik.optimize(
-                q0, wdot, policy.dt, np.zeros((steps, pik.n)), max_iterations=iterations, tolerance=0.0, method=method
+                q0,
+                wdot,
+                policy.dt,
+                np.zeros((steps, pik.n)),
+                max_iterations=iterations,
+                tolerance=0.0,
+                method=method,
+                backend="python",  # fig. 5.32's descent comparison on the reference loop
             )
             costs[method] = np.array(result.costs)
     finally:

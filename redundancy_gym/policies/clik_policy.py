@@ -17,9 +17,11 @@ from ..controllers import (
     CompiledClik,
     FramePositionTask,
     JointLimitObjective,
+    Objective,
     PostureObjective,
 )
 from ..geometry import PSS, Segment
+from ..kernel_options import DEFAULT_BACKEND
 from ..model import RobotModel, collision_model_from_mjcf
 from .exceptions import PolicyError
 from .options import config_from_options, control_period, env_with_attributes
@@ -66,7 +68,7 @@ class ClikPolicyConfig:
     collision_slope: float = 5.0
     collision_weight: float = 1.0
     self_collision: bool = True
-    backend: str = "compiled"
+    backend: str = DEFAULT_BACKEND
 
 
 COLLISION_MODES = ("auto", "on", "off")
@@ -94,7 +96,7 @@ class ClikPolicy(PerEnvPolicy):
         self._layout = base.OBSERVATION_LAYOUT
         self._speed = float(base.max_joint_speed)
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
-        objectives = []
+        objectives: list[Objective] = []
         if self.config.joint_limit_weight > 0.0:
             objectives.append(
                 JointLimitObjective.from_model(

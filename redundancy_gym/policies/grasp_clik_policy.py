@@ -24,6 +24,7 @@ from ..controllers.objectives.joint_limit_objective import JointLimitObjective
 from ..controllers.tasks.frame_axis_task import FrameAxisTask
 from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
+from ..kernel_options import DEFAULT_BACKEND
 from ..model import RobotModel, collision_geometry_from_mjcf
 from .exceptions import PolicyError
 from .grasp_clik_kernels import grasp_clik_action
@@ -77,7 +78,7 @@ class GraspClikConfig:
     avoid_leaves: bool = False
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
-    backend: str = "compiled"
+    backend: str = DEFAULT_BACKEND
 
 
 def _tool_axis(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -133,7 +134,9 @@ class GraspClikPolicy(PerEnvPolicy):
         self.timing = GraspPathTiming(
             *(
                 env if own is None else float(own)
-                for own, env in zip((c.max_speed, c.max_turn_rate, c.min_duration, c.approach_speed), env_timing, strict=False)
+                for own, env in zip(
+                    (c.max_speed, c.max_turn_rate, c.min_duration, c.approach_speed), env_timing, strict=False
+                )
             )
         )
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)

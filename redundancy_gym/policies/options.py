@@ -11,6 +11,7 @@ from typing import Any, TypeVar
 
 from .. import validation as checks
 from ..controllers import DESCENT_METHODS, METHODS
+from ..kernel_options import BACKENDS
 from .exceptions import PolicyError
 
 __all__ = [
@@ -27,8 +28,8 @@ __all__ = [
 ]
 
 C = TypeVar("C")
-# how a CLIK policy runs its controller: one fused compiled kernel (CompiledClik) or the Python Clik
-BACKENDS: tuple[str, ...] = ("compiled", "python")
+# BACKENDS (re-exported, the one tuple of kernel_options): how a policy runs its controller, the compiled twin
+# (CompiledClik, CompiledWholeBodyIk with CompiledMeasurement) or the Python reference (Clik, WholeBodyIk)
 # how the walking policy turns its pattern into joint trajectories: whole-body CLIK or Inverse Kineto-Dynamics
 WALKING_IK: tuple[str, ...] = ("clik", "ikd")
 
@@ -249,11 +250,12 @@ def config_from_options(config_type: type[C], options: dict[str, Any]) -> C:
     unknown = set(options) - valid
     if unknown:
         raise PolicyError(
-            f"unknown option(s) of {config_type.__name__}: {', '.join(sorted(unknown))}; valid: {', '.join(sorted(valid))}"
+            f"unknown option(s) of {config_type.__name__}: {', '.join(sorted(unknown))}; "
+            f"valid: {', '.join(sorted(valid))}"
         )
     checked = {}
     for name, value in options.items():
-        rule = option_rule(config_type, name)  # type: ignore[arg-type]
+        rule = option_rule(config_type, name)
         checked[name] = value if rule is None else rule.check(name, value, PolicyError)
     return config_type(**checked)
 

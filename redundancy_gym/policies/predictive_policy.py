@@ -10,6 +10,7 @@ start and follows that plan. Like :mod:`.clik_policy` they read the env by duck 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from typing import Any
 
@@ -91,7 +92,7 @@ class PredictivePolicyConfig:
         filled in."""
         if task not in TASK_DEFAULTS:
             raise PolicyError(f"unknown task {task!r}; valid: {', '.join(TASK_DEFAULTS)}")
-        filled = {k: v for k, v in TASK_DEFAULTS[task].items() if getattr(self, k) is None}
+        filled: dict[str, Any] = {k: v for k, v in TASK_DEFAULTS[task].items() if getattr(self, k) is None}
         return replace(self, **filled)
 
 
@@ -122,7 +123,8 @@ def predictive_problem(
 ) -> PredictiveIk:
     """:class:`PredictiveIk` on a reference controller's potentials with the weights of ``config``
     (``joint_limit_weight`` on (5.58), ``collision_weight`` on (5.49), ``velocity_weight`` on (5.131)) and
-    its collision potential's shape where set; ``config`` must have its weights (:meth:`~PredictivePolicyConfig.for_task`)."""
+    its collision potential's shape where set; ``config`` must have its weights
+    (:meth:`~PredictivePolicyConfig.for_task`)."""
     if config.joint_limit_weight is None or config.collision_weight is None:
         raise PolicyError("the configuration has no cost weights; fill them with for_task()")
     p = joint_limits.potential
@@ -235,10 +237,13 @@ class PredictivePolicy(PerEnvPolicy):
         """The optimal control problem on the reference policy's task, joint limits and collision model, with
         the weights of this configuration."""
         ref = self._reference_policy
+        task: FramePositionTask | FrameAxisTask
         if isinstance(ref, GraspClikPolicy):
             task, limits = ref.task, ref.joint_limits
         else:
             clik = ref.controller.clik if isinstance(ref.controller, CompiledClik) else ref.controller
+            if not isinstance(clik.task, (FramePositionTask, FrameAxisTask)):  # ClikPolicy builds a position task
+                raise PolicyError(f"the predictive problem needs a frame task, got {type(clik.task).__name__}")
             task = clik.task
             limits = JointLimitObjective.from_model(
                 self.model, activation_distance=ref.config.joint_limit_activation, slope=ref.config.joint_limit_slope
@@ -256,6 +261,7 @@ class PredictivePolicy(PerEnvPolicy):
         """A new episode: plan the reference (and the obstacles), build the problem, solve it once (global)."""
         c = self.config
         ref = self._reference_policy
+        sample: Callable[[float], tuple[NDArray[np.float64], NDArray[np.float64]]]
         if isinstance(ref, GraspClikPolicy):
             ref.plan(obs)
             path = ref.path
@@ -266,9 +272,11 @@ class PredictivePolicy(PerEnvPolicy):
             ref.update_obstacle(obs)
             end = float(self._episode_steps) * self.control_dt if self._episode_steps else 0.0
 
-            def sample(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+            def planar(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
                 position, velocity, _ = self._reference(t)
                 return position, velocity
+
+            sample = planar
 
         horizon_steps = max(1, int(round(c.horizon / self.dt)))
         total = (int(np.ceil(end / self.dt)) + horizon_steps + 1) * self.substeps
@@ -293,6 +301,9 @@ class PredictivePolicy(PerEnvPolicy):
                 max_iterations=c.global_iterations,
                 tolerance=1e-9,
                 method=c.descent,
+                # the reference loop: over hundreds of iterations the compiled one may stop at another iterate
+                # of about the same cost (PredictiveIk.optimize), and the global plan is the reported optimum
+                backend="python",
             )
             self.plan = result.rollout
             self.global_result = result

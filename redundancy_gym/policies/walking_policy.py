@@ -59,7 +59,9 @@ class WalkingPolicyConfig:
         self_collision_weight: weight of self-collision avoidance (5.49) in the IK's nullspace (0: off).
         self_collision_activation: its activation distance ``d_a`` [m].
         self_collision_slope: its slope at contact [1/m].
-        backend: whole-body IK implementation, ``"compiled"`` or ``"python"``.
+        backend: ``"compiled"`` (:class:`~redundancy_gym.controllers.walking.CompiledWholeBodyIk` and
+            :class:`~redundancy_gym.controllers.walking.CompiledMeasurement`) or ``"python"`` (the pinocchio
+            references); see :class:`WalkingIkConfig`.
         push_recovery: step adjustment from the measured DCM (:class:`StepAdjuster`: landing and timing of the
             current step) on.
         step_min_remaining: shortest single support left after a re-timing [s].

@@ -16,13 +16,15 @@ cost adds ``w_a udot^T udot`` (A.62).
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import warnings
+from typing import NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...kernel_options import DEFAULT_BACKEND
 from ...model import RobotModel
-from ...validation import check_real
+from ...validation import check_backend, check_real
 from ..clik.redundancy_resolution import as_float_array
 from ..exceptions import ControllerError
 from ..objectives.collision_kernels import bounding_spheres, collision_fields
@@ -47,6 +49,31 @@ __all__ = ["DESCENT_METHODS", "PredictiveIk", "PredictiveResult", "PredictiveRol
 
 DESCENT_METHODS = METHODS
 """Descent directions of :meth:`PredictiveIk.optimize` ("fletcher_reeves", "polak_ribiere", "steepest_descent")."""
+
+
+def resolve_backend(backend: str, compiled: bool | None, *, stacklevel: int) -> str:
+    """``backend`` checked (:func:`~redundancy_gym.validation.check_backend`), or the one that the deprecated
+    ``compiled`` keyword names (with a :class:`DeprecationWarning`; ``stacklevel`` points it at the caller's call).
+
+    Raises:
+        ControllerError: an unknown ``backend``, a ``compiled`` that is no bool, or ``compiled`` contradicting a
+            ``backend`` other than the default.
+    """
+    backend = check_backend("backend", backend, error=ControllerError)
+    if compiled is None:
+        return backend
+    if not isinstance(compiled, (bool, np.bool_)):
+        raise ControllerError(f"compiled must be a bool (deprecated: use backend=), got {compiled!r}")
+    implied = "compiled" if compiled else "python"
+    warnings.warn(
+        f"compiled={bool(compiled)} is deprecated and goes in redundancy_gym 0.3; use backend={implied!r}",
+        DeprecationWarning,
+        stacklevel=stacklevel,
+    )
+    # the default backend cannot be told from one left out, so only another backend contradicts compiled
+    if backend != DEFAULT_BACKEND and backend != implied:
+        raise ControllerError(f"compiled={bool(compiled)} contradicts backend={backend!r}; pass backend only")
+    return implied
 
 
 class PredictiveRollout(NamedTuple):
@@ -147,7 +174,7 @@ class PredictiveIk:
         if model.floating_base:
             raise ControllerError("PredictiveIk needs a fixed-base model")
         velocity_weight, input_weight, damping = (
-            check_real(name, value, low=0.0, error=ControllerError)
+            cast(float, check_real(name, value, low=0.0, error=ControllerError))  # None only with optional=True
             for name, value in (
                 ("velocity_weight", velocity_weight),
                 ("input_weight", input_weight),
@@ -483,7 +510,8 @@ class PredictiveIk:
         tolerance: float = 1e-4,
         method: str = "fletcher_reeves",
         step: float = 1.0,
-        compiled: bool = False,
+        backend: str = DEFAULT_BACKEND,
+        compiled: bool | None = None,
     ) -> PredictiveResult:
         """Algorithm 11 from the initial decision variables ``initial`` (N, n).
 
@@ -498,13 +526,18 @@ class PredictiveIk:
             method: ``"fletcher_reeves"`` (conjugate gradient) or ``"steepest_descent"``.
             step: first trial step size ``alpha`` of the backtracking line search (in the function-space
                 gradient's units: the input changes by ``alpha`` times the gradient of the Hamiltonian).
-            compiled: run the whole loop in one compiled call (:func:`.predictive_kernels.pik_optimize`, what
-                :class:`~redundancy_gym.controllers.predictive.receding_horizon.RecedingHorizon` uses: the same steps to
-                round-off, about twice as fast); False (the default) runs it in Python on the separate rollout
-                and adjoint kernels, the reference. Round-off grows along the conjugate directions (through the
-                parabolic step's curvature, a difference of nearly equal costs), so over hundreds of iterations
-                the two may stop at different iterates of about the same cost: the global plans, the bench's
-                and the tests' hard cases, stay on the reference.
+            backend: ``"compiled"`` (the default) runs the whole loop in one compiled call
+                (:func:`.predictive_kernels.pik_optimize`, about twice as fast); ``"python"`` runs it in Python on
+                the separate rollout and adjoint kernels, the reference: the same steps to round-off. Round-off
+                grows along the conjugate directions (through the parabolic step's curvature, a difference of
+                nearly equal costs), so over hundreds of iterations the two may stop at different iterates of about
+                the same cost: the global plans (the ``global`` policy, the bench's) ask for the reference.
+            compiled: deprecated (goes in redundancy_gym 0.3): ``True`` is ``backend="compiled"``, ``False``
+                ``backend="python"``.
+
+        Raises:
+            ControllerError: an unknown ``backend`` (naming the choices), ``compiled`` contradicting ``backend``, or
+                an option out of its range.
         """
         if method not in DESCENT_METHODS:
             raise ControllerError(f"unknown method {method!r}; valid: {', '.join(DESCENT_METHODS)}")
@@ -512,7 +545,7 @@ class PredictiveIk:
             raise ControllerError(f"max_iterations must be an int >= 0, got {max_iterations!r}")
         if not np.isfinite(step) or step <= 0.0 or not np.isfinite(tolerance) or tolerance < 0.0:
             raise ControllerError(f"step must be > 0 and tolerance >= 0, got {step!r}, {tolerance!r}")
-        if compiled:
+        if resolve_backend(backend, compiled, stacklevel=3) == "compiled":
             return self._optimize_compiled(
                 q0, wdot, dt, initial, u_b, int(max_iterations), float(tolerance), method, float(step)
             )

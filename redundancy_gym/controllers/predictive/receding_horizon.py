@@ -3,13 +3,15 @@
 from __future__ import annotations
 
 import time
+import warnings
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...kernel_options import DEFAULT_BACKEND
 from ..exceptions import ControllerError
-from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult
+from .predictive_ik import DESCENT_METHODS, PredictiveIk, PredictiveResult, resolve_backend
 
 __all__ = ["HorizonUpdate", "RecedingHorizon"]
 
@@ -44,8 +46,10 @@ class RecedingHorizon:
         iterations: conjugate gradient iterations per update (``j_max``).
         tolerance: relative cost decrease that ends an update early.
         method: descent direction (:data:`~redundancy_gym.controllers.DESCENT_METHODS`).
-        compiled: optimize in one compiled call (False: the Python loop of :meth:`PredictiveIk.optimize`, the
-            reference; the same iterates to round-off).
+        backend: ``"compiled"`` (the default: each update in one compiled call) or ``"python"`` (the Python loop
+            of :meth:`PredictiveIk.optimize`, the reference; the same iterates to round-off).
+        compiled: deprecated (goes in redundancy_gym 0.3): ``True`` is ``backend="compiled"``, ``False``
+            ``backend="python"``.
         warm_step: start each update's backtracking line search from the step size the last update ended with
             (warm-started like the inputs) instead of from 1.0: about a third fewer forward integrations per
             update, and a different (on the fig. 5.10 move: lower) pseudoenergy, so off by default.
@@ -60,7 +64,8 @@ class RecedingHorizon:
         iterations: int = 2,
         tolerance: float = 1e-6,
         method: str = "fletcher_reeves",
-        compiled: bool = True,
+        backend: str = DEFAULT_BACKEND,
+        compiled: bool | None = None,
         warm_step: bool = False,
     ) -> None:
         if not isinstance(steps, (int, np.integer)) or steps < 1:
@@ -71,8 +76,19 @@ class RecedingHorizon:
             raise ControllerError(f"unknown method {method!r}; valid: {', '.join(DESCENT_METHODS)}")
         self.pik, self.steps, self.dt = pik, int(steps), float(dt)
         self.iterations, self.tolerance, self.method = int(iterations), float(tolerance), method
-        self.compiled, self.warm_step = bool(compiled), bool(warm_step)
+        self.backend = resolve_backend(backend, compiled, stacklevel=3)
+        self.warm_step = bool(warm_step)
         self.reset()
+
+    @property
+    def compiled(self) -> bool:
+        """Deprecated (goes in redundancy_gym 0.3): ``backend == "compiled"``."""
+        warnings.warn(
+            "RecedingHorizon.compiled is deprecated and goes in redundancy_gym 0.3; read backend",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.backend == "compiled"
 
     def reset(self) -> None:
         """Forget the last solution (a new episode): the next update starts from zero inputs."""
@@ -93,7 +109,7 @@ class RecedingHorizon:
             max_iterations=self.iterations,
             tolerance=self.tolerance,
             method=self.method,
-            compiled=self.compiled,
+            backend=self.backend,
             step=self._step,
         )
         if self.warm_step and result.iterations > 0 and np.isfinite(result.step) and result.step > 0.0:

@@ -7,23 +7,28 @@ velocity and the ankle and sole placements (:meth:`~redundancy_gym.model.RobotMo
 into the stance foot's planned pose (``WalkingController._in_stance_frame``) and the ZMP from the ankle wrenches
 (:func:`~.zmp_estimator.estimate_zmp`). The same formulas in the same order, on the compiled kinematics of
 :mod:`redundancy_gym.model.chain_kernels`: the results agree with the pinocchio/NumPy path to round-off (a test
-holds them to 1e-12).
+holds them to 1e-12). That path stays the reference: the walking controller runs it with ``backend="python"``
+(:class:`~redundancy_gym.controllers.walking.WalkingIkConfig`), this kernel with ``backend="compiled"``, and never
+the one in place of the other.
 """
 
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+import warnings
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from ...kernel_options import JIT
 from ...model import RobotModel
 from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, place_frame
+from ..exceptions import ControllerError
 from ..kernels.buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
 
-__all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "Measurement"]
+__all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "MeasurementResult"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
     "placement_rotation",
@@ -44,9 +49,10 @@ INT_FIELDS: tuple[str, ...] = ("dims", "parent", "joint_type", "q_index", "v_ind
 FRAMES = 4
 """Frames measured: the ankle sensors (right, left), then the soles (right, left)."""
 PARAMETERS = ("mujoco", "stance_frame", "stance", "planned_x", "planned_y", "planned_yaw", "ground", "min_force")
-"""Scalar inputs after ``q``, ``v`` and the ankle wrenches (12: right force, right torque, left force, left torque): 1.0 where the state is MuJoCo's ``qpos``,
-``qvel`` (else pinocchio's), 1.0 to move into the stance foot's planned pose, the stance foot (0 right, 1 left),
-its planned sole position (x, y) [m] and heading [rad], the ground height [m] and the ZMP's ``min_force`` [N]."""
+"""Scalar inputs after ``q``, ``v`` and the ankle wrenches (12: right force, right torque, left force, left
+torque): 1.0 where the state is MuJoCo's ``qpos``, ``qvel`` (else pinocchio's), 1.0 to move into the stance foot's
+planned pose, the stance foot (0 right, 1 left), its planned sole position (x, y) [m] and heading [rad], the ground
+height [m] and the ZMP's ``min_force`` [N]."""
 OUTPUT_SIZES = (
     ("com", 3),
     ("com_velocity", 3),
@@ -59,7 +65,7 @@ OUTPUT_SIZES = (
     ("normal_force", 2),
     ("moment", 6),
 )
-"""After the pinocchio ``q`` (nq) and ``v`` (nv) in ``outputs``: the fields of :class:`Measurement` (``zmp`` is x,
+"""After the pinocchio ``q`` (nq) and ``v`` (nv) in ``outputs``: the fields of :class:`MeasurementResult` (``zmp`` is x,
 y and 1.0 where valid)."""
 OK, BAD_INPUT = 0, 1
 
@@ -81,11 +87,10 @@ _NF = len(FLOAT_FIELDS)
 ) = range(_NF)
 (_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT) = range(_NF, _NF + len(INT_FIELDS))
 
-# the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
+# JIT: the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _from_mujoco(joint_type, q_index, v_index, q, v):
     """MuJoCo's free joint (``[x y z qw qx qy qz]``, ``[v_world; omega_body]``) in place into pinocchio's free flyer
     (``[x y z qx qy qz qw]``, ``[v_body; omega_body]``), as :meth:`RobotModel.from_mujoco_state`; returns False
@@ -115,7 +120,7 @@ def _from_mujoco(joint_type, q_index, v_index, q, v):
     return True
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def measure_step(f, i):
     """One measurement on the buffers: reads ``inputs`` (``q``, ``v``, forces, torques, :data:`PARAMETERS`) and
     writes ``outputs`` (pinocchio ``q``, ``v``, then :data:`OUTPUT_SIZES`); returns :data:`OK` or :data:`BAD_INPUT`
@@ -240,7 +245,7 @@ def measure_step(f, i):
     return OK
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _com_and_velocity(
     parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com, v, scratch, com, com_velocity
 ):
@@ -302,7 +307,7 @@ def _com_and_velocity(
     com_velocity[0], com_velocity[1], com_velocity[2] = vx / mass, vy / mass, vz / mass
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _carry(scratch, position, p, j):
     """Joint ``j``'s frame carried by its parent ``p`` (``scratch[k] = (omega, v_origin)``, world frame): the
     parent's angular velocity, and its origin's velocity plus ``omega_p x (o_j - o_p)``."""
@@ -314,7 +319,7 @@ def _carry(scratch, position, p, j):
     scratch[j, 5] = scratch[p, 5] + wx * dy - wy * dx
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _turn_point(turn, point, shift):
     """``point = turn @ point + shift`` in place for a yaw ``turn``; ``shift`` empty: no shift."""
     x, y = point[0], point[1]
@@ -326,7 +331,7 @@ def _turn_point(turn, point, shift):
             point[r] += shift[r]
 
 
-class Measurement(NamedTuple):
+class MeasurementResult(NamedTuple):
     """One :meth:`CompiledMeasurement.measure` (views of the kernel's outputs: valid until the next call).
 
     Attributes:
@@ -359,11 +364,15 @@ class CompiledMeasurement:
     Args:
         model: the floating-base model (1-DoF joints and a free flyer: :meth:`RobotModel.serial_chain`).
         frames: the four frames measured (ankle sensors right, left, then soles right, left), names or indices.
+
+    Raises:
+        ModelError: a model the compiled kinematics do not cover (a joint other than 1-DoF or a free flyer).
+        ControllerError: not four frames.
     """
 
     def __init__(self, model: RobotModel, frames: tuple[str | int, ...]) -> None:
         if len(frames) != FRAMES:
-            raise ValueError(f"CompiledMeasurement measures {FRAMES} frames, got {len(frames)}")
+            raise ControllerError(f"CompiledMeasurement measures {FRAMES} frames, got {len(frames)}: {frames!r}")
         chain = model.serial_chain()
         nj, nq, nv = chain.num_joints, model.nq, model.nv
         attachments = [model.frame_attachment(f) for f in frames]
@@ -424,7 +433,7 @@ class CompiledMeasurement:
         planned: tuple[float, float, float],
         ground: float,
         min_force: float = 20.0,
-    ) -> Measurement | None:
+    ) -> MeasurementResult | None:
         """Measure a state; None for a non-finite input or a zero base quaternion (nothing to read then).
 
         Args:
@@ -454,7 +463,7 @@ class CompiledMeasurement:
             return None
         views = self._views
         zmp = views["zmp"]
-        return Measurement(
+        return MeasurementResult(
             views["q"],
             views["v"],
             views["com"],
@@ -468,3 +477,16 @@ class CompiledMeasurement:
             views["normal_force"],
             self._moment,
         )
+
+
+def __getattr__(name: str) -> Any:
+    """``Measurement``: the old name of :class:`MeasurementResult` (a result, not the measurement), kept for one
+    release with a :class:`DeprecationWarning`."""
+    if name == "Measurement":
+        warnings.warn(
+            f"{__name__}.Measurement is now MeasurementResult; the old name goes in redundancy_gym 0.3",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return MeasurementResult
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -12,17 +12,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, TypeGuard
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...constants import GRAVITY
 from ...geometry import SSV, CollisionModel
+from ...kernel_options import BACKENDS, DEFAULT_BACKEND
 from ...model import ModelError, RobotModel, collision_model_from_mjcf
+from ...validation import as_real_array, check_backend
 from ..exceptions import ControllerError
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.objective import Objective
 from ..objectives.posture_objective import PostureObjective
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
@@ -36,11 +40,8 @@ from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
+# BACKENDS: kernel_options' one tuple of twins, exported here as before (WalkingIkConfig.backend's choices)
 __all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
-
-BACKENDS = ("compiled", "python")
-"""Whole-body IK implementations of :class:`WalkingIkConfig`."""
-
 
 SSTA_REMAP = 0.01
 """How far [m] the map from the world into the plan's frame must have moved the obstacles (at the sole's reach)
@@ -53,7 +54,7 @@ _ReferenceBase = tuple[NDArray[np.float64], float, float, float, float]
 """A packed IK reference without the stabilizer's offset, and its CoM (x, y) [m] and CoM velocity (x, y) [m/s]."""
 
 
-def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
+def _is_float_array(value: object, shape: tuple[int, ...]) -> TypeGuard[NDArray[np.float64]]:
     """Whether ``value`` is a float64 array of ``shape`` (what the compiled measurement reads without conversion)."""
     return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
 
@@ -79,8 +80,11 @@ class WalkingIkConfig:
             volumes (0: off).
         self_collision_activation: its ``d_a`` [m].
         self_collision_slope: its slope ``|H'(0)|`` [1/m] at contact.
-        backend: ``"compiled"`` (:class:`CompiledWholeBodyIk`, one kernel call a period) or ``"python"``
-            (:class:`WholeBodyIk` on pinocchio); both give the same result to round-off.
+        backend: which twins the controller runs (:data:`~redundancy_gym.kernel_options.BACKENDS`):
+            ``"compiled"`` (the default: :class:`CompiledWholeBodyIk`, one kernel call a period, and the
+            measurement's :class:`~.measure_kernels.CompiledMeasurement`; both need a model of 1-DoF joints on a
+            free flyer, which :class:`WalkingController` checks) or ``"python"`` (:class:`WholeBodyIk` and the
+            measurement on pinocchio and NumPy, the references); both give the same result to round-off.
     """
 
     gain: float = 100.0
@@ -94,11 +98,10 @@ class WalkingIkConfig:
     self_collision_weight: float = 1.0
     self_collision_activation: float = 0.04
     self_collision_slope: float = 10.0
-    backend: str = "compiled"
+    backend: str = DEFAULT_BACKEND
 
     def __post_init__(self) -> None:
-        if self.backend not in BACKENDS:
-            raise ControllerError(f"unknown backend {self.backend!r}; valid: {', '.join(BACKENDS)}")
+        check_backend("backend", self.backend, error=ControllerError)
 
 
 class WalkingCommand(NamedTuple):
@@ -148,10 +151,10 @@ class WalkingController:
         use_ssta, use_rca: switch either obstacle layer off (ablations); without both, obstacles are ignored.
         correction_configuration: the standing joint positions [rad] the ZMP correction is estimated from, once
             per speed (None: from each start's own standing state, about 0.26 s per start).
-        ikd: generate the joint trajectory by Inverse Kineto-Dynamics (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`,
-            monograph 5.5) instead of the whole-body CLIK (None): the pattern's ZMP is then realized exactly, so
-            ``correction_iterations`` should be 0 (the plain LIPM plan). The CLIK still moves the standing start
-            onto the pattern's first reference.
+        ikd: generate the joint trajectory by Inverse Kineto-Dynamics
+            (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`, monograph 5.5) instead of the whole-body CLIK
+            (None): the pattern's ZMP is then realized exactly, so ``correction_iterations`` should be 0 (the plain
+            LIPM plan). The CLIK still moves the standing start onto the pattern's first reference.
     """
 
     def __init__(
@@ -205,13 +208,17 @@ class WalkingController:
             raise ControllerError(f"soft limits must have length {model.nv - self._nv}")
         self._feet = tuple(model.frame_id(f) for f in feet_frames)
         self._ankles = tuple(model.frame_id(f) for f in ankle_frames)
-        # the per-period measurement in one kernel call; a model the compiled kinematics do not cover (not 1-DoF
-        # joints on a free flyer) is measured through pinocchio
-        self._measurement: CompiledMeasurement | None
-        try:
-            self._measurement = CompiledMeasurement(model, self._ankles + self._feet)
-        except ModelError:
-            self._measurement = None
+        # the per-period measurement: one kernel call with the compiled backend, which must then cover the model
+        # (the compiled IK needs the same chain: better said here than at start()); pinocchio with "python"
+        self._measurement: CompiledMeasurement | None = None
+        if self.ik_config.backend == "compiled":
+            try:
+                self._measurement = CompiledMeasurement(model, self._ankles + self._feet)
+            except ModelError as error:
+                raise ControllerError(
+                    f"backend='compiled' needs a model of 1-DoF joints on a free flyer ({error}); "
+                    "WalkingIkConfig(backend='python') runs the pinocchio references on any model"
+                ) from error
         self._sensors = np.zeros((2, 6))  # step()'s forces and torques, packed as the kernel reads them
         self.feet_frames, self.torso_frame = feet_frames, torso_frame
         self.correction_iterations = int(correction_iterations)
@@ -226,7 +233,7 @@ class WalkingController:
                     f"[rad], got shape {joints.shape}"
                 )
             self.correction_configuration = joints
-        self.stabilizer = Stabilizer(self.gains, np.sqrt(9.81 / self.gait.com_height))
+        self.stabilizer = Stabilizer(self.gains, np.sqrt(GRAVITY / self.gait.com_height))
         self.step_adjuster = StepAdjuster(stepping)
         self.stance_frame = stance_frame
         self._mass = model.total_mass
@@ -260,7 +267,7 @@ class WalkingController:
     # ------------------------------------------------------------------ start
     def _make_ik(self, posture: NDArray[np.float64]) -> WholeBodyIk:
         c = self.ik_config
-        objectives = []
+        objectives: list[Objective] = []
         if c.posture_weight > 0.0:
             objectives.append(ActuatedObjective(PostureObjective(posture, c.posture_weight), self.model))
         if c.joint_limit_weight > 0.0:
@@ -362,7 +369,7 @@ class WalkingController:
         self.step_adjuster.reset()
         self.time = 0.0
         self._command_replan = -np.inf
-        self._next: PatternSample | None = None
+        self._next = None
         self._base = None
 
     def set_command(self, forward: float, lateral: float = 0.0, yaw_rate: float = 0.0) -> None:
@@ -505,7 +512,7 @@ class WalkingController:
                 times.append(t - 0.5 * self.dt)
             times_a, momentum_a = np.array(times), np.array(momentum)
             rate = np.gradient(momentum_a, times_a, axis=0)
-            shift = np.stack([-rate[:, 1], rate[:, 0]], axis=1) / (self._mass * 9.81)
+            shift = np.stack([-rate[:, 1], rate[:, 0]], axis=1) / (self._mass * GRAVITY)
             offsets = np.zeros((2, n, 2))
             for side, k in ((0, 2), (1, 3)):
                 t0, duration = pattern.step_start(k), pattern.step_duration
@@ -531,13 +538,8 @@ class WalkingController:
     @staticmethod
     def _with_offset(base: _ReferenceBase, offset: ArrayLike, rate: ArrayLike) -> NDArray[np.float64]:
         """A copy of the packed reference ``base`` with the CoM moved by ``offset`` [m] at ``rate`` [m/s] (x, y)."""
-        return WalkingController._offset_reference(
-            base,
-            float(offset[0]),
-            float(offset[1]),  # type: ignore[index]
-            float(rate[0]),
-            float(rate[1]),
-        )  # type: ignore[index]
+        (offset_x, offset_y), (rate_x, rate_y) = np.asarray(offset).tolist(), np.asarray(rate).tolist()
+        return WalkingController._offset_reference(base, float(offset_x), float(offset_y), float(rate_x), float(rate_y))
 
     @staticmethod
     def _offset_reference(
@@ -601,7 +603,8 @@ class WalkingController:
         positions: NDArray[np.float64],
     ) -> tuple[NDArray[np.float64], ...]:
         """The measurement moved rigidly (yaw about z and a horizontal shift) so that the measured stance sole lies on
-        its planned pose (its planned position and heading) (rows 2, 3 of ``rotations``/``positions``: the soles right, left).
+        its planned pose (its planned position and heading) (rows 2, 3 of ``rotations``/``positions``: the soles
+        right, left).
 
         The IK's kinematic model stands on the planned footholds; the real robot stands where its feet landed and
         turns with its stance foot when that slips about the vertical (a long, quick swing). Its joints track the
@@ -636,8 +639,19 @@ class WalkingController:
         Args:
             q, v: measured configuration and velocity (pinocchio convention; the base from the IMU/estimator).
             forces, torques: ankle force/torque sensor readings [N, N m] (2, 3).
+
+        The measurement runs on the backend's twin (:attr:`WalkingIkConfig.backend`): the compiled kernel reads
+        float64 arrays of these shapes as they are and any other array-like after the checks (never the pinocchio
+        path in its place); both backends raise the same errors.
+
+        Raises:
+            ModelError: ``q`` or ``v`` of the wrong shape or with a non-finite value.
+            ControllerError: ``forces`` or ``torques`` of the wrong shape or non-finite (naming which), or no
+                :meth:`start` yet.
         """
         start = self._start_sample()
+        if self._measurement is None:  # backend "python": the reference, every input checked
+            return self._step(start, *self._measure_python(q, v, forces, torques, start))
         measured = None
         if (
             _is_float_array(q, (self.model.nq,))
@@ -649,8 +663,8 @@ class WalkingController:
             sensors[:, :3] = forces
             sensors[:, 3:] = torques
             measured = self._measure_compiled(q, v, sensors.reshape(-1), False, start)
-        if measured is None:  # other input types, or a non-finite value: checked (and the error named) on this path
-            measured = self._measure_python(q, v, forces, torques, start)
+        if measured is None:  # other input types, or a value the kernel rejects: checked, the bad one named
+            measured = self._measure_checked(*self._checked_state(q, v, forces, torques), start)
         return self._step(start, *measured)
 
     def step_mujoco(self, qpos: ArrayLike, qvel: ArrayLike, wrenches: ArrayLike) -> WalkingCommand:
@@ -664,7 +678,8 @@ class WalkingController:
         start = self._start_sample()
         measured = None
         if (
-            _is_float_array(qpos, (self.model.nq,))
+            self._measurement is not None
+            and _is_float_array(qpos, (self.model.nq,))
             and _is_float_array(qvel, (self.model.nv,))
             and _is_float_array(wrenches, (12,))
         ):
@@ -672,7 +687,10 @@ class WalkingController:
         if measured is None:
             q, v = self.model.from_mujoco_state(qpos, qvel)
             wrench = np.asarray(wrenches, dtype=np.float64).reshape(2, 6)
-            measured = self._measure_python(q, v, wrench[:, :3], wrench[:, 3:], start)
+            if self._measurement is None:  # backend "python"
+                measured = self._measure_python(q, v, wrench[:, :3], wrench[:, 3:], start)
+            else:  # other input types, or a value the kernel rejects: checked, the bad one named
+                measured = self._measure_checked(*self._checked_state(q, v, wrench[:, :3], wrench[:, 3:]), start)
         return self._step(start, *measured)
 
     def _start_sample(self) -> PatternSample:
@@ -691,10 +709,9 @@ class WalkingController:
         start: PatternSample,
     ) -> _Measured | None:
         """The measurement (CoM, its velocity, the ZMP) in one kernel call (:class:`CompiledMeasurement`): the
-        same as :meth:`_measure_python` to round-off; None for a non-finite input (the checked path names it)."""
-        assert self.pattern is not None
-        if self._measurement is None:
-            return None
+        same as :meth:`_measure_python` to round-off; None for a non-finite input or a zero base quaternion
+        (:meth:`_checked_state` names it)."""
+        assert self.pattern is not None and self._measurement is not None
         k = start.step
         stance = (k + 1) % 2 if k >= 0 else 1  # the standing start: the left foot, the first stance foot
         planned = start.feet[stance]
@@ -717,6 +734,38 @@ class WalkingController:
             None if m.zmp is None else m.zmp.copy(), m.cop.copy(), m.normal_force.copy(), m.moment.copy()
         )
         return m.com.copy(), m.com_velocity.copy(), contact
+
+    def _checked_state(
+        self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """The pinocchio ``q``, ``v`` and the 12 ankle sensor floats as the measurement's kernel reads them, checked
+        with the errors of :meth:`_measure_python`: :class:`ModelError` for a configuration or velocity of the
+        wrong shape or with a non-finite value, :class:`ControllerError` naming the ankle sensor input."""
+        model = self.model
+        q = model.check_configuration(q)
+        velocity = as_real_array("velocity", v, error=ModelError)
+        if velocity.shape != (model.nv,):
+            raise ModelError(f"velocity must have shape ({model.nv},), got {velocity.shape}")
+        if not np.all(np.isfinite(velocity)):
+            raise ModelError("velocity contains non-finite values")
+        sensors = np.empty((2, 6))
+        for columns, name, value in ((slice(0, 3), "forces", forces), (slice(3, 6), "torques", torques)):
+            reading = as_real_array(name, value, error=ControllerError)
+            if reading.shape != (2, 3):
+                raise ControllerError(f"the ankle sensor {name} must have shape (2, 3), got {reading.shape}")
+            if not np.all(np.isfinite(reading)):
+                raise ControllerError(f"the ankle sensor {name} must be finite, got {reading.tolist()}")
+            sensors[:, columns] = reading
+        return q, velocity, sensors.reshape(-1)
+
+    def _measure_checked(
+        self, q: NDArray[np.float64], v: NDArray[np.float64], sensors: NDArray[np.float64], start: PatternSample
+    ) -> _Measured:
+        """:meth:`_measure_compiled` on a :meth:`_checked_state` (pinocchio's convention), which the kernel reads."""
+        measured = self._measure_compiled(q, v, sensors, False, start)
+        if measured is None:  # finite, and no quaternion to convert: the kernel has nothing to reject
+            raise ControllerError("the compiled measurement rejected a checked state; report it (backend='python')")
+        return measured
 
     def _measure_python(
         self, q: ArrayLike, v: ArrayLike, forces: ArrayLike, torques: ArrayLike, start: PatternSample

@@ -3,6 +3,8 @@ task held along the rollout, conjugate gradient against steepest descent, bad in
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -21,7 +23,7 @@ from redundancy_gym.model import RobotModel, collision_model_from_mjcf
 DT = 0.01
 
 
-def _planar(**kwargs: object) -> tuple[PredictiveIk, np.ndarray, np.ndarray]:
+def _planar(**kwargs: Any) -> tuple[PredictiveIk, np.ndarray, np.ndarray]:
     """The arm of fig. 5.30 with the default PlanarReach obstacle; the TCP moves down the line at 0.45 m/s."""
     model = RobotModel.from_mjcf(PLANAR_ARM_XML)
     obstacle = [Segment("obstacle", (PSS(np.array([0.7, 0.0, -0.12]), 0.1),))]
@@ -183,8 +185,13 @@ def test_hard_case_fig_5_10_global_plan_drifts_open_loop_and_follow_holds_it() -
         PredictivePolicyConfig(collision_weight=1.0, collision_activation=0.1, collision_slope=4.0).for_task("grasp"),
         augmented=False,
     )
-    plan = pik.optimize(q0, table[:, 6:], DT, np.zeros((steps, 9)), max_iterations=300, tolerance=1e-9).rollout
-    deviation, speed = {}, {}
+    # a global plan on the reference loop, as the global policy's: over 300 iterations the compiled loop's
+    # round-off ends at another iterate (one that follow() does not hold within 0.1 rad)
+    plan = pik.optimize(
+        q0, table[:, 6:], DT, np.zeros((steps, 9)), max_iterations=300, tolerance=1e-9, backend="python"
+    ).rollout
+    deviation: dict[float, float] = {}
+    speed: dict[float, float] = {}
     for gain in (0.0, float(grasp.config.gain)):
         q, worst = q0.copy(), 0.0
         for k in range(steps):
@@ -239,10 +246,10 @@ def test_compiled_optimize_takes_the_python_loops_iterates(problem: str, method:
     u_b = rng.normal(size=n) * 0.1 if augmented else None
     for iterations in (0, 1, 6):
         a = pik.optimize(
-            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, compiled=False
+            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, backend="python"
         )
         b = pik.optimize(
-            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, compiled=True
+            q0, wdot, DT, initial, u_b=u_b, max_iterations=iterations, tolerance=0.0, method=method, backend="compiled"
         )
         assert (a.status, a.iterations, a.rollouts) == (b.status, b.iterations, b.rollouts)
         np.testing.assert_allclose(b.costs, a.costs, rtol=1e-11)
@@ -261,8 +268,12 @@ def test_compiled_optimize_takes_the_python_loops_iterates(problem: str, method:
 def test_compiled_optimize_stops_and_fails_like_the_python_loop() -> None:
     pik, q0, wdot = _planar()
     for tolerance in (1e-3, 0.0):
-        a = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance)
-        b = pik.optimize(q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance, compiled=True)
+        a = pik.optimize(
+            q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance, backend="python"
+        )
+        b = pik.optimize(
+            q0, wdot[:80], DT, np.zeros((80, 4)), max_iterations=200, tolerance=tolerance, backend="compiled"
+        )
         assert a.status == b.status and (a.status == "converged") == (tolerance > 0.0)
         if tolerance > 0.0:
             assert a.iterations == b.iterations
@@ -270,11 +281,13 @@ def test_compiled_optimize_stops_and_fails_like_the_python_loop() -> None:
         assert b.costs[-1] == pytest.approx(a.costs[-1], rel=1e-5)
     # a first guess that leaves the arm's reach: the kinematics fail on both paths
     with pytest.raises(ControllerError):
-        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2)
+        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2, backend="python")
     with pytest.raises(ControllerError, match="overflowed"):
-        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2, compiled=True)
+        pik.optimize(q0, wdot[:80], DT, np.full((80, 4), 1e200), max_iterations=2, backend="compiled")
     with pytest.raises(ControllerError, match="u_b"):
-        _planar(augmented=True)[0].optimize(q0, wdot[:80], DT, np.zeros((80, 4)), u_b=np.full(4, np.nan), compiled=True)
+        _planar(augmented=True)[0].optimize(
+            q0, wdot[:80], DT, np.zeros((80, 4)), u_b=np.full(4, np.nan), backend="compiled"
+        )
 
 
 def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum() -> None:
@@ -286,7 +299,7 @@ def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum
     pik, q0, wdot = _planar(augmented=True, input_weight=0.01)
     horizons = {
         name: RecedingHorizon(pik, 100, DT, iterations=2, **kwargs)
-        for name, kwargs in (("python", {"compiled": False}), ("compiled", {}), ("warm", {"warm_step": True}))
+        for name, kwargs in (("python", {"backend": "python"}), ("compiled", {}), ("warm", {"warm_step": True}))
     }
     q = {name: q0.copy() for name in horizons}
     rollouts = {name: 0 for name in horizons}
@@ -302,9 +315,78 @@ def test_receding_horizon_compiled_equals_python_and_warm_step_keeps_the_optimum
     params, u_b = warm._params, warm._u_b
     best = [
         pik.optimize(
-            q["warm"], wdot[30:130], DT, params, u_b=u_b, max_iterations=150, tolerance=1e-12, step=step, compiled=True
+            q["warm"],
+            wdot[30:130],
+            DT,
+            params,
+            u_b=u_b,
+            max_iterations=150,
+            tolerance=1e-12,
+            step=step,
+            backend="compiled",
         )
         for step in (warm._step, 1.0)
     ]
     assert best[0].costs[-1] == pytest.approx(best[1].costs[-1], rel=1e-4)
     assert cold._step == 1.0 and warm._step != 1.0
+
+
+# ------------------------------------------------------------------ the backend switch
+def test_backend_defaults_to_the_compiled_twin_and_is_checked_naming_the_choices(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """One switch with one default: ``optimize`` and the receding horizon run the compiled loop unless told
+    ``backend="python"``; an unknown backend is named with the valid choices."""
+    from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon  # noqa: PLC0415
+    from redundancy_gym.kernel_options import BACKENDS, DEFAULT_BACKEND  # noqa: PLC0415
+
+    assert BACKENDS == ("compiled", "python") and DEFAULT_BACKEND == "compiled"
+    pik, q0, wdot = _planar()
+    args = (q0, wdot[:40], DT, np.full((40, 4), 0.05))
+    calls: list[str] = []
+    fused = PredictiveIk._optimize_compiled
+
+    def spy(self: PredictiveIk, *a: object) -> object:
+        calls.append("compiled")
+        return fused(self, *a)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(PredictiveIk, "_optimize_compiled", spy)
+    default = pik.optimize(*args, max_iterations=3, tolerance=0.0)
+    assert calls == ["compiled"]
+    python = pik.optimize(*args, max_iterations=3, tolerance=0.0, backend="python")
+    assert calls == ["compiled"]  # the reference loop, not the fused kernel
+    np.testing.assert_allclose(default.params, python.params, rtol=0.0, atol=1e-9)
+    RecedingHorizon(pik, 40, DT, iterations=1).update(q0, wdot[:40])
+    assert calls == ["compiled", "compiled"]
+    assert RecedingHorizon(pik, 10, DT).backend == DEFAULT_BACKEND
+    message = r"backend must be one of compiled, python; got 'gpu'"
+    with pytest.raises(ControllerError, match=message):
+        pik.optimize(*args, backend="gpu")
+    with pytest.raises(ControllerError, match=message):
+        RecedingHorizon(pik, 10, DT, backend="gpu")
+    with pytest.raises(ControllerError, match=r"backend must be one of compiled, python; got True"):
+        pik.optimize(*args, backend=True)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_deprecated_compiled_keyword_still_chooses_the_twin_and_warns(compiled: bool) -> None:
+    from redundancy_gym.controllers.predictive.receding_horizon import RecedingHorizon  # noqa: PLC0415
+
+    pik, q0, wdot = _planar(augmented=True, input_weight=0.01)
+    backend = "compiled" if compiled else "python"
+    args = (q0, wdot[:40], DT, np.full((40, 4), 0.05))
+    with pytest.warns(DeprecationWarning, match=f"compiled={compiled} is deprecated.*backend='{backend}'"):
+        old = pik.optimize(*args, u_b=np.zeros(4), max_iterations=3, tolerance=0.0, compiled=compiled)
+    new = pik.optimize(*args, u_b=np.zeros(4), max_iterations=3, tolerance=0.0, backend=backend)
+    np.testing.assert_array_equal(old.params, new.params)
+    assert old.rollouts == new.rollouts
+    with pytest.warns(DeprecationWarning, match="compiled=.*is deprecated"):
+        horizon = RecedingHorizon(pik, 10, DT, compiled=compiled)
+    assert horizon.backend == backend
+    with pytest.warns(DeprecationWarning, match="RecedingHorizon.compiled is deprecated"):
+        assert horizon.compiled is compiled
+    # a backend other than the default that contradicts the old keyword is an error, not a silent choice
+    if not compiled:
+        return
+    with pytest.warns(DeprecationWarning), pytest.raises(ControllerError, match="contradicts backend='python'"):
+        pik.optimize(*args, u_b=np.zeros(4), backend="python", compiled=True)

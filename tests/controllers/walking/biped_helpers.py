@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from redundancy_gym.assets import BIPED_JOINTS, BIPED_SOFT_LIMIT_MARGIN
@@ -21,7 +23,7 @@ def standing(model: RobotModel, **joints: float) -> np.ndarray:
     return q
 
 
-def walking_controller(model: RobotModel, **ik: object) -> WalkingController:
+def walking_controller(model: RobotModel, **ik: Any) -> WalkingController:
     """A 4 ms controller on the soft limits with one correction rollout and the IK options ``ik``."""
     lower, upper = model.lower_limits[7:], model.upper_limits[7:]
     return WalkingController(

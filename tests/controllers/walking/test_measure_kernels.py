@@ -1,13 +1,17 @@
 """The walking controller's compiled measurement (CompiledMeasurement) agrees with the pinocchio/NumPy path it
-replaces, and the controller's step takes the checked path for inputs the kernel does not read."""
+replaces; the controller's ``backend`` chooses one of the two (the kernel checks and converts the inputs it does
+not read as they are, and never hands them to the pinocchio path); a bad input is named alike in both."""
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import pytest
 
 from redundancy_gym.assets import BIPED_XML
-from redundancy_gym.controllers.walking import CompiledMeasurement
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.controllers.walking import CompiledMeasurement, WalkingCommand
 from redundancy_gym.controllers.walking.zmp_estimator import estimate_zmp
 from redundancy_gym.model import ModelError, RobotModel
 
@@ -40,7 +44,7 @@ def reference(
     planned: tuple[float, float, float],
     stance_frame: bool,
     ground: float,
-) -> dict[str, object]:
+) -> dict[str, np.ndarray | None]:
     """What WalkingController measured through pinocchio and NumPy before the kernel (its _in_stance_frame)."""
     com, com_velocity, rotations, positions = model.measure(q, v, FRAMES)
     turn, shift = np.eye(3), np.zeros(3)
@@ -123,7 +127,7 @@ def test_non_finite_inputs_and_a_zero_quaternion_give_none(model: RobotModel) ->
     measurement = CompiledMeasurement(model, FRAMES)
     q, v = random_state(model, np.random.default_rng(0))
     sensors = np.zeros(12)
-    kwargs = {"stance_frame": True, "stance": 0, "planned": (0.0, 0.0, 0.0), "ground": 0.0}
+    kwargs: dict[str, Any] = {"stance_frame": True, "stance": 0, "planned": (0.0, 0.0, 0.0), "ground": 0.0}
     assert measurement.measure(q, v, sensors, mujoco=False, **kwargs) is not None
     for k in range(3):  # a NaN in q, in v, in the sensors
         args = [q.copy(), v.copy(), sensors.copy()]
@@ -138,8 +142,8 @@ def test_step_mujoco_is_step_on_the_converted_state(model: RobotModel) -> None:
     """step_mujoco (the policy's path) and step on from_mujoco_state give the same walk; lists take the checked
     path with the same result; a NaN configuration is named as before."""
     controllers = [walking_controller(model) for _ in range(3)]
-    for c in controllers:
-        c.start(standing(model), 0.5)
+    for controller in controllers:
+        controller.start(standing(model), 0.5)
     rng = np.random.default_rng(1)
     forces = np.array([[0.0, 0.0, -300.0], [0.0, 0.0, -290.0]])
     torques = np.array([[1.0, -2.0, 0.0], [0.5, 3.0, 0.0]])
@@ -150,14 +154,131 @@ def test_step_mujoco_is_step_on_the_converted_state(model: RobotModel) -> None:
         qpos, qvel = to_mujoco(q, v)
         a = controllers[0].step_mujoco(qpos, qvel, wrenches)
         b = controllers[1].step(*model.from_mujoco_state(qpos, qvel), forces, torques)
-        c = controllers[2].step(
-            *(x.tolist() for x in model.from_mujoco_state(qpos, qvel)), forces.tolist(), torques.tolist()
-        )
+        q_list, v_list = (x.tolist() for x in model.from_mujoco_state(qpos, qvel))
+        c = controllers[2].step(q_list, v_list, forces.tolist(), torques.tolist())
         np.testing.assert_allclose(a.joint_targets, b.joint_targets, rtol=0.0, atol=1e-12)
         np.testing.assert_allclose(c.joint_targets, b.joint_targets, rtol=0.0, atol=1e-12)
+        assert a.contact.zmp is not None and b.contact.zmp is not None  # both feet loaded
         np.testing.assert_allclose(a.contact.zmp, b.contact.zmp, rtol=0.0, atol=1e-12)
         q = a.ik.q
     bad = q.copy()
     bad[9] = np.nan
     with pytest.raises(ModelError, match="non-finite"):
         controllers[1].step(bad, np.zeros(model.nv), forces, torques)
+
+
+# ------------------------------------------------------------------ the backend switch
+def _walked(model: RobotModel, backend: str, steps: int, convert: bool = False) -> list[WalkingCommand]:
+    """``steps`` periods of a walk on one recorded state sequence (lists instead of arrays with ``convert``)."""
+    controller = walking_controller(model, backend=backend)
+    controller.start(standing(model), 0.5)
+    rng = np.random.default_rng(4)
+    forces = np.array([[0.0, 0.0, -300.0], [0.0, 0.0, -290.0]])
+    torques = np.array([[1.0, -2.0, 0.0], [0.5, 3.0, 0.0]])
+    q, commands = controller.q_ref.copy(), []
+    for _ in range(steps):
+        v = rng.normal(scale=0.05, size=model.nv)
+        inputs = (q, v, forces, torques)
+        command = controller.step(*(x.tolist() for x in inputs) if convert else inputs)
+        commands.append(command)
+        q = command.ik.q
+    return commands
+
+
+def test_python_backend_measures_on_the_reference_and_agrees_with_the_kernel(
+    model: RobotModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``backend="python"`` runs the pinocchio/NumPy measurement (and no kernel), ``"compiled"`` the kernel (and never
+    the pinocchio path, lists included): the same walk to round-off."""
+    from redundancy_gym.controllers.walking import WalkingController  # noqa: PLC0415
+
+    reference = WalkingController._measure_python
+    calls = {"python": 0, "compiled": 0}
+
+    def counted(self: WalkingController, *args: object) -> object:
+        calls["python"] += 1
+        return reference(self, *args)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(WalkingController, "_measure_python", counted)
+    python = _walked(model, "python", 25)
+    assert calls["python"] == 25
+    calls["python"] = 0
+    compiled, converted = _walked(model, "compiled", 25), _walked(model, "compiled", 25, convert=True)
+    assert calls["python"] == 0  # no fallback: the kernel measured every period, lists too
+    for a, b, c in zip(python, compiled, converted, strict=True):
+        np.testing.assert_allclose(b.joint_targets, a.joint_targets, rtol=0.0, atol=1e-9)
+        assert a.contact.zmp is not None and b.contact.zmp is not None  # both feet loaded
+        np.testing.assert_allclose(b.contact.zmp, a.contact.zmp, rtol=0.0, atol=1e-9)
+        np.testing.assert_array_equal(c.joint_targets, b.joint_targets)  # the same kernel on the same numbers
+
+
+@pytest.mark.parametrize("backend", ["compiled", "python"])
+@pytest.mark.parametrize(
+    ("bad", "error", "match"),
+    [
+        ("q", ModelError, "configuration contains non-finite values"),
+        ("v", ModelError, "velocity contains non-finite values"),
+        ("forces", ControllerError, "the ankle sensor forces must be finite"),
+        ("torques", ControllerError, "the ankle sensor torques must be finite"),
+        ("torques_shape", ControllerError, "torques"),
+        ("quaternion", ModelError, "base quaternion of qpos is zero"),
+    ],
+)
+def test_a_bad_measurement_input_raises_the_same_named_error_in_both_backends(
+    model: RobotModel, backend: str, bad: str, error: type[Exception], match: str
+) -> None:
+    """The kernel's rejection (a non-finite input, a zero quaternion) is no fallback: the input is named, with the
+    error of the reference path, whichever backend runs."""
+    controller = walking_controller(model, backend=backend)
+    controller.start(standing(model), 0.5)
+    q, v = controller.q_ref.copy(), np.zeros(model.nv)
+    forces, torques = np.array([[0.0, 0.0, -300.0], [0.0, 0.0, -290.0]]), np.zeros((2, 3))
+    if bad == "quaternion":
+        qpos, qvel = to_mujoco(q, v)
+        qpos[3:7] = 0.0
+        with pytest.raises(error, match=match):
+            controller.step_mujoco(qpos, qvel, np.concatenate([forces, torques], axis=1).reshape(-1))
+        return
+    inputs = {"q": q, "v": v, "forces": forces, "torques": torques}
+    if bad == "torques_shape":
+        inputs["torques"] = np.zeros(3)
+    else:
+        inputs[bad] = inputs[bad].copy()
+        inputs[bad].flat[2] = np.nan
+    with pytest.raises(error, match=match):
+        controller.step(**inputs)
+
+
+def test_compiled_backend_says_at_construction_that_it_does_not_cover_the_model(
+    model: RobotModel, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A model the compiled kinematics do not cover (here: its serial chain refused as for a spherical joint) was
+    measured through pinocchio without a word; now ``backend="compiled"`` raises naming the joint and the way out,
+    and ``backend="python"`` builds the controller."""
+    other = RobotModel.from_mjcf(BIPED_XML)
+
+    def refused() -> None:
+        raise ModelError("joint 'r_hip' is JointModelSpherical; compiled kinematics support JointModelRX, ...")
+
+    monkeypatch.setattr(other, "serial_chain", refused)
+    with pytest.raises(ControllerError, match=r"backend='compiled' needs .*JointModelSpherical.*backend='python'"):
+        walking_controller(other, backend="compiled")
+    assert walking_controller(other, backend="python")._measurement is None
+
+
+def test_backends_are_the_one_shared_tuple_and_the_old_names_still_import() -> None:
+    import redundancy_gym.controllers.walking as walking  # noqa: PLC0415
+    from redundancy_gym import kernel_options  # noqa: PLC0415
+    from redundancy_gym.controllers.walking import WalkingIkConfig, measure_kernels  # noqa: PLC0415
+    from redundancy_gym.policies import options  # noqa: PLC0415
+
+    assert walking.BACKENDS is kernel_options.BACKENDS and options.BACKENDS is kernel_options.BACKENDS
+    assert WalkingIkConfig().backend == kernel_options.DEFAULT_BACKEND
+    with pytest.raises(ControllerError, match=r"backend must be one of compiled, python; got 'fortran'"):
+        WalkingIkConfig(backend="fortran")
+    for module in (walking, measure_kernels):
+        with pytest.warns(DeprecationWarning, match="Measurement is now MeasurementResult"):
+            assert module.Measurement is walking.MeasurementResult
+    assert "Measurement" not in walking.__all__
+    with pytest.raises(AttributeError):
+        _ = walking.NoSuchName
