@@ -1,6 +1,7 @@
-"""The learned baselines of ``baselines/``: one YAML file per trained model, named like the model
-(``<learner>-<action>-<env>.yaml`` -> ``baselines/models/<learner>-<action>-<env>.zip``), trained reproducibly by
-:func:`train_baseline` (``redundancy-gym baselines``, ``make baselines``).
+"""The learned baselines of ``redundancy_gym/baselines/`` (``baselines/`` of a clone, installed with the package):
+one YAML file per trained model, named like the model (``<learner>-<action>-<env>.yaml`` ->
+``baselines/models/<learner>-<action>-<env>.zip``), trained reproducibly by :func:`train_baseline`
+(``redundancy-gym baselines``, ``make baselines``).
 
 A file holds one section in the layout of ``configs/`` (rl-zoo3), keyed by the env id trained on (the wrapped id
 for a wrapper's action, e.g. ``redundancy_gym/AgriReach-Residual-v0``); for ``bc`` its keys are
@@ -27,7 +28,8 @@ from .training_record import TrainingRecord, read_training_record, record_path
 __all__ = ["BASELINES_DIR", "Baseline", "baselines", "train_baseline"]
 
 BASELINES_DIR = SHIPPED_MODELS_DIR.parent
-"""``baselines/`` of the source checkout: the YAML files, ``models/`` and ``results/``."""
+"""``redundancy_gym/baselines/`` (package data; ``baselines/`` of a clone is a symlink to it): the YAML files and
+``models/``, which the wheel ships, and the generated ``results/`` of a clone, which it does not."""
 EVALUATIONS = 10  # evaluations of the callback over a run
 CHECKPOINTS = 4  # checkpoints over a run
 EVAL_EPISODES = 5

@@ -1,9 +1,9 @@
 """Training stable-baselines3 agents on the registered envs (the ``learn`` extra).
 
-Hyperparameters are read from the YAML files of ``configs/`` in the rl-zoo3 layout: one file per algorithm,
-keyed by env id, each section holding SB3 constructor keyword arguments plus rl-zoo3's own keys
-(``policy``, ``n_timesteps``, ``n_envs``, ``normalize``, ``env_kwargs``, ...). The same file trains with
-``redundancy-gym train --config`` and with ``python -m rl_zoo3.train -conf``.
+Hyperparameters are read from the YAML files of ``configs/`` (:data:`CONFIGS_DIR`, installed with the package) in
+the rl-zoo3 layout: one file per algorithm, keyed by env id, each section holding SB3 constructor keyword arguments
+plus rl-zoo3's own keys (``policy``, ``n_timesteps``, ``n_envs``, ``normalize``, ``env_kwargs``, ...). The same
+file trains with ``redundancy-gym train --config`` and with ``python -m rl_zoo3.train -conf``.
 
 While it trains, :func:`train` prints a line every ``print_every`` steps with the mean return, success rate
 and length of the recent episodes, and a summary at the end.
@@ -28,6 +28,7 @@ from .training_record import CpuClock, TrainingRecord, machine
 
 __all__ = [
     "ALGOS",
+    "CONFIGS_DIR",
     "EVAL_CALLBACK_SEED",
     "KEEP",
     "LEARN_EXTRA_HINT",
@@ -49,6 +50,10 @@ VEC_ENVS: tuple[str, ...] = ("dummy", "subproc", "sync", "async")
 """SB3's vector envs by name: ``dummy`` (= ``sync``, every env in this process) and ``subproc`` (= ``async``, one
 process per env), as Gymnasium's ``make_vec`` names them too."""
 DEFAULT_POLICY = "MlpPolicy"
+CONFIGS_DIR = Path(__file__).resolve().parents[1] / "configs"
+"""``redundancy_gym/configs/``: the rl-zoo3 configs, package data (``configs/`` of a clone is a symlink to it)."""
+# the folders of package data that the README's commands name relative to a clone (configs/..., baselines/...)
+_PACKAGE_DATA_DIRS = {"configs": CONFIGS_DIR, "baselines": CONFIGS_DIR.parent / "baselines"}
 RECENT_EPISODES = 20  # episodes averaged in the printed statistics
 
 # rl-zoo3 keys that change the training set-up in ways `redundancy-gym train` does not reproduce
@@ -114,8 +119,21 @@ def _policy_kwargs(value: Any, path: Path) -> dict[str, Any]:
     raise LearningError(f"{path}: policy_kwargs must be a mapping or a dict(...) expression, got {value!r}")
 
 
+def _config_path(path: Path) -> Path:
+    """``path``; where no such file exists and it reads ``configs/NAME`` or ``baselines/NAME`` (as the README writes
+    them, relative to a clone), the package's own copy, so that an installed package runs those commands from any
+    folder. A file that exists always wins: a user's own ``configs/`` is never shadowed."""
+    if path.is_file() or path.is_absolute() or len(path.parts) < 2 or path.parts[0] not in _PACKAGE_DATA_DIRS:
+        return path
+    shipped = _PACKAGE_DATA_DIRS[path.parts[0]].joinpath(*path.parts[1:])
+    return shipped if shipped.is_file() else path
+
+
 def load_config(path: str | Path, env_id: str) -> TrainingConfig:
     """Read the section of ``env_id`` (or ``default``) from an rl-zoo3 hyperparameter YAML file.
+
+    ``path`` is a file, or ``configs/NAME`` / ``baselines/NAME`` of the package's data where no such file exists
+    (an installed package has no clone to run from).
 
     Raises:
         LearningError: unreadable file, no section for the env, or rl-zoo3 options this trainer does not reproduce
@@ -123,7 +141,7 @@ def load_config(path: str | Path, env_id: str) -> TrainingConfig:
     """
     import yaml
 
-    path = Path(path)
+    path = _config_path(Path(path))
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
@@ -235,7 +253,7 @@ def _mean(values: list[float]) -> float:
 def _statistics_callback(base_callback: type, total: int, every: int, log: Callable[[str], None]) -> Any:
     """An SB3 callback printing the recent episodes' statistics every ``every`` steps and a summary at the end."""
 
-    class TrainingLog(base_callback):  # type: ignore[misc, valid-type]
+    class TrainingLog(base_callback):
         def __init__(self) -> None:
             super().__init__()
             self.recent: deque[tuple[float, float, float]] = deque(maxlen=RECENT_EPISODES)

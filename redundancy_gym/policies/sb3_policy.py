@@ -1,7 +1,14 @@
-"""A stable-baselines3 model loaded from a ``.zip`` as a policy."""
+"""A stable-baselines3 model loaded from a ``.zip`` as a policy.
+
+A ``.zip`` is code, not data: stable-baselines3 unpickles the objects it holds (the policy class, schedules,
+spaces), and unpickling can run any code the file's author put there. Loading one from outside the package's
+shipped models (:data:`~redundancy_gym.policies.shipped_models.SHIPPED_MODELS_DIR`) logs where it came from, once
+per file and process, so that a user sees which file ran.
+"""
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 from typing import Any
 
@@ -11,17 +18,43 @@ from numpy.typing import NDArray
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .exceptions import PolicyError
 from .options import env_name
+from .shipped_models import SHIPPED_MODELS_DIR
 
-__all__ = ["SB3_ALGOS", "Sb3Policy"]
+__all__ = ["SB3_ALGOS", "Sb3Policy", "is_shipped_model_file"]
 
 SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
+
+_LOG = logging.getLogger(__name__)
+# Without a logging configuration, Python's last-resort handler prints WARNING records to stderr: the CLI and a
+# plain script show the line with no setup, and an application that configures logging routes or silences it.
+_ANNOUNCED: set[Path] = set()
+
+
+def is_shipped_model_file(path: str | Path) -> bool:
+    """Whether ``path`` is one of the package's own shipped models (in ``SHIPPED_MODELS_DIR``, symlinks resolved)."""
+    return Path(path).resolve().parent == SHIPPED_MODELS_DIR.resolve()
+
+
+def _announce_origin(path: Path) -> None:
+    """Log, once per file in this process, that ``path`` is loaded from outside the shipped models: unpickling it
+    can run code from the file."""
+    where = path.resolve()
+    if is_shipped_model_file(where) or where in _ANNOUNCED:
+        return
+    _ANNOUNCED.add(where)
+    _LOG.warning(
+        "loading the policy %s (not one of redundancy_gym's shipped models): an SB3 .zip holds pickled objects "
+        "and loading it can run code from the file; load only files you trust",
+        where,
+    )
 
 
 class Sb3Policy:
     """A stable-baselines3 model loaded from a ``.zip``; ``predict`` is the model's own.
 
     Args:
-        path: the ``.zip`` written by ``model.save``.
+        path: the ``.zip`` written by ``model.save``. Loading it can run code from the file (SB3 unpickles its
+            objects): load only files you trust; one from outside the shipped models is logged with its path.
         env: the environment (checked against the model's spaces by SB3).
         algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG when omitted.
     """
@@ -34,6 +67,7 @@ class Sb3Policy:
             sb3 = import_stable_baselines3()
         except ImportError as exc:  # the 'learn' extra
             raise PolicyError(f"loading a .zip policy needs stable-baselines3: {LEARN_EXTRA_HINT}") from exc
+        _announce_origin(path)  # before the load: a file that runs code has been named by then
         names = (algo,) if algo else SB3_ALGOS
         errors = []
         for name in names:

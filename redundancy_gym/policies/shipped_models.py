@@ -1,5 +1,6 @@
-"""The learned baselines shipped in the repository (``baselines/models/<learner>-<action>-<env>.zip``), by short
-name: ``make_policy("ppo-nullspace", env)`` loads ``ppo-nullspace-planar_reach.zip`` on a PlanarReach env."""
+"""The learned baselines shipped with the package (``redundancy_gym/baselines/models/<learner>-<action>-<env>.zip``,
+``baselines/models/`` of a clone), by short name: ``make_policy("ppo-nullspace", env)`` loads
+``ppo-nullspace-planar_reach.zip`` on a PlanarReach env."""
 
 from __future__ import annotations
 
@@ -19,8 +20,11 @@ __all__ = [
     "shipped_models",
 ]
 
-SHIPPED_MODELS_DIR = Path(__file__).resolve().parents[2] / "baselines" / "models"
-"""Where the trained baselines live: ``baselines/models/`` of the source checkout (``make baselines`` writes it)."""
+# Package data, beside the code: the same folder in a wheel's install, an editable install and a clone (whose
+# top-level baselines/ is a symlink to redundancy_gym/baselines/), so one copy serves all three.
+SHIPPED_MODELS_DIR = Path(__file__).resolve().parents[1] / "baselines" / "models"
+"""Where the trained baselines live: ``redundancy_gym/baselines/models/``, installed with the package
+(``make baselines`` writes it in a clone)."""
 LEARNERS: tuple[str, ...] = ("ppo", "sac", "bc")
 """The learners of the shipped models."""
 ACTIONS: tuple[str, ...] = ("joint", "nullspace", "task_space", "residual", "walking_command")
@@ -80,7 +84,7 @@ def shipped_model_path(name: str, env: Any) -> Path:
     available = (
         ", ".join(shipped_models())
         or f"none ({SHIPPED_MODELS_DIR} is empty or absent: the models ship "
-        "with the source checkout; `make baselines` trains them)"
+        "with the package; `make baselines` trains them in a clone)"
     )
     raise PolicyError(
         f"no shipped model {name!r} for {type(getattr(env, 'unwrapped', env)).__name__} "
