@@ -374,7 +374,8 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
             (:class:`~redundancy_gym.policies.WalkingPolicy`); ``"predictive"`` or ``"global"``
             (:class:`~redundancy_gym.policies.PredictivePolicy`); ``"zero"``; ``"random"``), or the path of a
             stable-baselines3 ``.zip``, or a shipped learned baseline by short name ``<learner>-<action>``
-            (``"ppo-nullspace"``, ``"bc-joint"``: ``baselines/models/<name>-<env>.zip`` of the source checkout).
+            (``"ppo-nullspace"``, ``"bc-joint"``: ``redundancy_gym/baselines/models/<name>-<env>.zip``, shipped
+            in the wheel).
         env: the environment the policy will act in (or a stable-baselines3 ``DummyVecEnv`` of such envs). The
             policy takes one observation of it or a batch (a VecEnv's, one controller state per env index).
         **kwargs: options of the policy (the fields of its options dataclass: ``ClikPolicyConfig`` for ``clik``,
