@@ -4,18 +4,12 @@ from __future__ import annotations
 
 import json
 
-import numpy as np
 import pytest
 
-from redundancy_gym.bench.pik import (
-    JUMP_SAMPLE_TIME,
-    format_pik_bench,
-    planar_kinematic_traces,
-    plot_pseudoenergy,
-    run_pik_bench,
-)
+from redundancy_gym.bench.pik import format_pik_bench, run_pik_bench
 from redundancy_gym.eval.exceptions import EvalError
 from redundancy_gym.eval.json_writer import write_json
+from redundancy_gym.studies.predictive_figures import JUMP_SAMPLE_TIME
 
 
 def test_pik_bench_report(tmp_path) -> None:
@@ -61,12 +55,3 @@ def test_pik_bench_report(tmp_path) -> None:
         run_pik_bench(episodes=0, progress=False)
     with pytest.raises(EvalError, match="rounds"):
         run_pik_bench(rounds=0, progress=False)
-
-
-def test_kinematic_traces_track_the_line_and_plot(tmp_path) -> None:
-    traces = planar_kinematic_traces(global_iterations=30, augmented=(True,))
-    for trace in traces.values():
-        assert np.max(trace.task_error) < 2e-3 and np.min(trace.clearance) > 0.0
-    assert traces["MPC 1 s (augmented)"].pseudoenergy() < traces["local CLIK"].pseudoenergy()
-    path = plot_pseudoenergy(traces, tmp_path / "p.png", "fig. 5.31")
-    assert path.stat().st_size > 1000
