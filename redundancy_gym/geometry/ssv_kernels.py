@@ -22,6 +22,8 @@ import numpy as np
 from numba import carray, njit, types
 from numba.extending import intrinsic
 
+from ..kernel_options import BORROW, JIT
+
 __all__ = [
     "BORROW",
     "GROUPS",
@@ -58,37 +60,31 @@ _SCALE_LOW = 2.0**-100
 _SUBNORMAL = 2.0**-1000  # below, the scale 2^-exponent itself overflows: such a pair is left as it is (distance ~0)
 _SCALE_HIGH = 2.0**100
 
-# error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
-# here is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
-# multiplication and ignoring the sign of zero; it keeps IEEE NaN/inf semantics, which the guards rely on.
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
-# Kernels that only borrow arrays (they never allocate, keep or return one) are compiled without numba's
-# reference counting: with it, every call paid an NRT_incref and an NRT_decref per array argument, 26 calls for
-# a pair loop's 13 arrays, about 200 ns per batch on AMD Zen 5 whatever its size (as much as 40 sphere pairs).
-BORROW = {**_JIT, "_nrt": False}
+# every division here is guarded or measured afterwards and the guards rely on IEEE NaN/inf: the package's numba
+# options (JIT), and BORROW (no reference counting) for the kernels that only borrow their arrays
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _sub(a, b):
     return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _add_scaled(a, s, d):
     return (a[0] + s * d[0], a[1] + s * d[1], a[2] + s * d[2])
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _dot(a, b):
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _cross(a, b):
     return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _dist2(a, b):
     dx = a[0] - b[0]
     dy = a[1] - b[1]
@@ -96,7 +92,7 @@ def _dist2(a, b):
     return dx * dx + dy * dy + dz * dz
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def point_segment(p, a, b):
     """Closest point on segment ``[a, b]`` to ``p`` (5.38)-(5.43): ``(squared distance, point)``."""
     d = _sub(b, a)
@@ -112,7 +108,7 @@ def point_segment(p, a, b):
     return _dist2(p, q), q
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def segment_segment(a0, a1, b0, b1):
     """Closest points of segments ``[a0, a1]`` and ``[b0, b1]`` (5.44)-(5.48): ``(d2, point_a, point_b)``.
 
@@ -181,7 +177,7 @@ def segment_segment(a0, a1, b0, b1):
     return best, pa, pb
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _triangle(v0, v1, v2):
     """Per-triangle quantities reused by every query: ``(v0, e0, e1, aa, bb, cc, det, n, regular)``."""
     e0 = _sub(v1, v0)
@@ -193,7 +189,7 @@ def _triangle(v0, v1, v2):
     return v0, e0, e1, aa, bb, cc, det, _cross(e0, e1), det > _SINGULAR * aa * cc
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _project(x, tri):
     """Projection of ``x`` onto the plane of a regular triangle: ``(inside, point)``."""
     v0, e0, e1, aa, bb, cc, det = tri[0], tri[1], tri[2], tri[3], tri[4], tri[5], tri[6]
@@ -206,7 +202,7 @@ def _project(x, tri):
     return (s >= 0.0 and t >= 0.0 and s + t <= 1.0), q
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _vertex_plane(p, tri):
     """Vertex/plane query: squared distance to the projection when it falls inside the triangle, else inf."""
     if not tri[8]:
@@ -217,7 +213,7 @@ def _vertex_plane(p, tri):
     return _INF, p
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def point_triangle(p, v0, v1, v2):
     """Closest point of triangle ``(v0, v1, v2)`` to ``p``: ``(squared distance, point)``.
 
@@ -240,7 +236,7 @@ def point_triangle(p, v0, v1, v2):
     return best, q
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _pierce(p0, p1, h0, h1, tri):
     """Where the segment ``[p0, p1]`` with plane heights ``h0, h1`` crosses a regular triangle."""
     if h0 * h1 > 0.0 or h0 == h1:  # same side, or parallel to the plane (in-plane cases are edge/edge cases)
@@ -249,12 +245,12 @@ def _pierce(p0, p1, h0, h1, tri):
     return _project(x, tri)
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _heights(p, tri):
     return _dot(tri[7], _sub(p, tri[0]))
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def segment_triangle(p0, p1, v0, v1, v2):
     """Closest points of a segment and a triangle: ``(d2, point_on_segment, point_on_triangle)``.
 
@@ -285,7 +281,7 @@ def segment_triangle(p0, p1, v0, v1, v2):
     return best, pa, pb
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _edges_pierce(a0, a1, a2, tri):
     """Whether an edge of triangle ``a`` crosses the regular triangle ``tri``: ``(hit, point)``."""
     h0 = _heights(a0, tri)
@@ -301,7 +297,7 @@ def _edges_pierce(a0, a1, a2, tri):
     return hit, x
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _edge_pair(best, pa, pb, dist, u0, u1, pu0, pu1, w0, w1, pw0, pw1):
     """Edge/edge candidate, skipped when the projections on the current normal are ``dist`` or more apart:
     for unit ``n``, ``|y - x| >= min(n.y) - max(n.x)`` bounds every pair of points of the two edges."""
@@ -313,7 +309,7 @@ def _edge_pair(best, pa, pb, dist, u0, u1, pu0, pu1, w0, w1, pw0, pw1):
     return best, pa, pb
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def triangle_triangle(a0, a1, a2, b0, b1, b2):
     """Closest points of two triangles: ``(d2, point_a, point_b)``.
 
@@ -377,7 +373,7 @@ def triangle_triangle(a0, a1, a2, b0, b1, b2):
     return best, pa, pb
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _centroid(p0, p1, p2, kind):
     if kind == KIND_PSS:
         return p0
@@ -386,7 +382,7 @@ def _centroid(p0, p1, p2, kind):
     return ((p0[0] + p1[0] + p2[0]) / 3.0, (p0[1] + p1[1] + p2[1]) / 3.0, (p0[2] + p1[2] + p2[2]) / 3.0)
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _fallback_normal(a0, a1, a2, ka, b0, b1, b2, kb):
     """Normal for touching or intersecting primitives (coinciding witnesses): the centroid direction."""
     c = _sub(_centroid(b0, b1, b2, kb), _centroid(a0, a1, a2, ka))
@@ -439,8 +435,29 @@ def _vertex(v, i, c):
 
 
 @njit(inline="always", **BORROW)
-def _write(r, swap, dist, pa, pb, n, out_d, out_pa, out_pb, out_n):
-    """Row ``r`` of the outputs, with the witnesses swapped and the normal reversed where ``swap``."""
+def _volume_pair_result(v, kinds, radii, i, j, g):
+    """:func:`_pair_result` of volumes ``i`` and ``j`` (group ``g``, the lower kind first), their vertices read
+    from ``v`` (inlined into the pair loops, which thus read them themselves)."""
+    return _pair_result(
+        _vertex(v, i, 0),
+        _vertex(v, i, 1),
+        _vertex(v, i, 2),
+        kinds[i],
+        radii[i],
+        _vertex(v, j, 0),
+        _vertex(v, j, 1),
+        _vertex(v, j, 2),
+        kinds[j],
+        radii[j],
+        g,
+    )
+
+
+@njit(inline="always", **BORROW)
+def _write(r, swap, dist, pa, pb, n, out):
+    """Row ``r`` of the outputs ``out`` (``(out_d, out_pa, out_pb, out_n)``), with the witnesses swapped and the
+    normal reversed where ``swap``."""
+    out_d, out_pa, out_pb, out_n = out
     if swap:
         pa, pb = pb, pa
         n = (-n[0], -n[1], -n[2])
@@ -470,7 +487,7 @@ def _sphere_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d, 
         apart = q > _CONTACT_GAP2
         dist = np.sqrt(q)
         inv = 1.0 / (dist if apart else 1.0)  # square roots and divisions bound these loops: one of each
-        _write(slot[k], False, dist - radii[i] - radii[j], a, b, _times(d, inv), out_d, out_pa, out_pb, out_n)
+        _write(slot[k], False, dist - radii[i] - radii[j], a, b, _times(d, inv), (out_d, out_pa, out_pb, out_n))
         todo[nt] = k
         nt += 0 if (apart and active[k] != 0) else 1
     return nt
@@ -512,10 +529,7 @@ def _point_segment_pairs_fast(
             o,
             _add_scaled(o, 1.0, p),
             _times(p, inv),
-            out_d,
-            out_pa,
-            out_pb,
-            out_n,
+            (out_d, out_pa, out_pb, out_n),
         )
         todo[nt] = k
         nt += 0 if (apart and active[k] != 0 and _SCALE_LOW <= extent <= _SCALE_HIGH) else 1
@@ -566,10 +580,7 @@ def _segment_pairs_fast(v, radii, index_a, index_b, slot, active, lo, hi, out_d,
             _add_scaled(o, 1.0, pa),
             _add_scaled(o, 1.0, _add_scaled(pa, 1.0, d)),
             _times(d, inv),
-            out_d,
-            out_pa,
-            out_pb,
-            out_n,
+            (out_d, out_pa, out_pb, out_n),
         )
         todo[nt] = k
         nt += 0 if (regular and apart and active[k] != 0) else 1
@@ -621,35 +632,23 @@ def ssv_pairs_grouped(
                 continue
             i = index_a[k]
             j = index_b[k]
-            dist, pa, pb, n = _pair_result(
-                _vertex(v, i, 0),
-                _vertex(v, i, 1),
-                _vertex(v, i, 2),
-                kinds[i],
-                radii[i],
-                _vertex(v, j, 0),
-                _vertex(v, j, 1),
-                _vertex(v, j, 2),
-                kinds[j],
-                radii[j],
-                g,
-            )
-            _write(slot[k], swap[k] != 0, dist, pa, pb, n, out_d, out_pa, out_pb, out_n)
+            dist, pa, pb, n = _volume_pair_result(v, kinds, radii, i, j, g)
+            _write(slot[k], swap[k] != 0, dist, pa, pb, n, (out_d, out_pa, out_pb, out_n))
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _times(p, f):
     return (p[0] * f, p[1] * f, p[2] * f)
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _extent(p0, p1, p2):
     return max(
         abs(p0[0]), abs(p0[1]), abs(p0[2]), abs(p1[0]), abs(p1[1]), abs(p1[2]), abs(p2[0]), abs(p2[1]), abs(p2[2])
     )
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _closest_relative(a1, a2, b0, b1, b2, g):
     """Closest points of the generating primitives of a pair of group ``g``, given relative to the first vertex
     of the lower-kind volume (its ``a0`` is the origin): ``(squared distance, point on a, point on b)``.
@@ -693,7 +692,7 @@ def _closest_relative(a1, a2, b0, b1, b2, g):
     return d2, pa, pb
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _pair_result(a0, a1, a2, ka, ra, b0, b1, b2, kb, rb, g):
     """SSV distance of two volumes given by world vertices, kinds and radii (``ka <= kb``, group ``g``):
     ``(distance, point on a, point on b, unit normal from a to b)`` [m], the normal of touching primitives being
@@ -743,7 +742,7 @@ def volume_pair_distance(v, radii, kinds, i, j):
     return dist, pa, pb, n
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def ssv_pairs_at(header):
     """:func:`ssv_pairs_grouped` on buffers described by the int64 array at address ``header``.
 
@@ -756,7 +755,7 @@ def ssv_pairs_at(header):
     ssv_pairs_grouped(v, r, k, ia, ib, sl, sw, st, ac, d, pa, pb, nn, td)
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _header_buffers(h):
     """The 14 pair-batch buffers named by the addresses in a header (see :func:`ssv_pairs_at`)."""
     m = h[14]
@@ -874,25 +873,13 @@ def near_pairs(
             i = index_a[k]
             j = index_b[k]
             v = vertices
-            dist, pa, pb, n = _pair_result(
-                _vertex(v, i, 0),
-                _vertex(v, i, 1),
-                _vertex(v, i, 2),
-                kinds[i],
-                radii[i],
-                _vertex(v, j, 0),
-                _vertex(v, j, 1),
-                _vertex(v, j, 2),
-                kinds[j],
-                radii[j],
-                g,
-            )
-            _write(slot[k], swap[k] != 0, dist, pa, pb, n, out_d, out_pa, out_pb, out_n)
+            dist, pa, pb, n = _volume_pair_result(v, kinds, radii, i, j, g)
+            _write(slot[k], swap[k] != 0, dist, pa, pb, n, (out_d, out_pa, out_pb, out_n))
             smallest = min(smallest, dist)
     return smallest
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def cull_pairs_at(header, margin):
     """:func:`cull_pairs` on the buffers of a :func:`ssv_pairs_at` header followed by two scratch addresses."""
     h = carray(_int64_pointer(header), (18,))
@@ -925,7 +912,7 @@ def frames_to_volumes(positions, rotations, half_lengths, vertices):
             vertices[i, 2, c] = p + a
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def near_pairs_at(header, margin, moving, frames):
     """:func:`near_pairs` on the buffers of a :func:`cull_pairs_at` header; first, when ``frames`` is nonzero,
     :func:`frames_to_volumes` from the int64 array at that address: positions, rotations, half lengths, count."""

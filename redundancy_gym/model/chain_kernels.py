@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..kernel_options import JIT
+
 __all__ = [
     "FREE",
     "JOINT_DOFS",
@@ -33,11 +35,8 @@ REVOLUTE, PRISMATIC, FREE = 0, 1, 2
 JOINT_DOFS: dict[int, tuple[int, int]] = {REVOLUTE: (1, 1), PRISMATIC: (1, 1), FREE: (7, 6)}
 """``(nq, nv)`` of each joint type."""
 
-# same numerics contract as the SSV kernels: no checked divisions; FMA contraction allowed
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
-
-@njit(**_JIT)
+@njit(**JIT)
 def chain_forward(
     parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation, position, world_axis
 ):
@@ -107,7 +106,7 @@ def chain_forward(
             rotation[j, r, 2] = m0 * e02 + m1 * e12 + m2 * e22
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def place_frame(rotation, position, joint, local_rotation, local_translation, out_rotation, out_translation):
     """``M_joint * (R_local, p_local)`` into ``out_rotation`` (3, 3) and ``out_translation`` (3,); ``joint`` < 0
     is the world."""
@@ -131,7 +130,7 @@ def place_frame(rotation, position, joint, local_rotation, local_translation, ou
             )
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, joint, px, py, pz, out):
     """World-aligned 6 x nv Jacobian ``[J_T; J_R]`` of the point ``(px, py, pz)`` [m] moving with ``joint``
     into ``out`` (the columns of joints that do not carry it are set to zero)."""
@@ -170,7 +169,7 @@ def chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, 
         k = parent[k]
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def chain_jacobian_transpose_times(
     parent, joint_type, v_index, rotation, position, world_axis, joint, px, py, pz, nx, ny, nz, scale, out
 ):
@@ -196,11 +195,14 @@ def chain_jacobian_transpose_times(
         k = parent[k]
 
 
-@njit(**_JIT)
-def _momentum_column(composite, j, ox, oy, oz, vx, vy, vz, cx, cy, cz, mass, column, jac_com, jac_angular):
+@njit(**JIT)
+def _momentum_column(composite, j, o, v, c, mass, column, jac_com, jac_angular):
     """Column ``column`` of the CoM Jacobian and of the centroidal angular momentum rows for a unit motion of
-    the subtree ``j`` with angular velocity ``o`` and velocity ``v`` of the point at the world origin:
-    ``p = m v + o x h``, ``L_0 = K o + h x v``, ``L_c = L_0 - c x p``."""
+    the subtree ``j`` with angular velocity ``o`` and velocity ``v`` of the point at the world origin (3-tuples;
+    ``c`` the CoM): ``p = m v + o x h``, ``L_0 = K o + h x v``, ``L_c = L_0 - c x p``."""
+    ox, oy, oz = o
+    vx, vy, vz = v
+    cx, cy, cz = c
     m = composite[j, 0]
     hx, hy, hz = composite[j, 1], composite[j, 2], composite[j, 3]
     px = m * vx + oy * hz - oz * hy
@@ -217,7 +219,7 @@ def _momentum_column(composite, j, ox, oy, oz, vx, vy, vz, cx, cy, cz, mass, col
     jac_angular[2, column] = lz - (cx * py - cy * px)
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def chain_centroidal(
     parent,
     joint_type,
@@ -298,74 +300,29 @@ def chain_centroidal(
     com[0], com[1], com[2] = cx, cy, cz
     jac_com[:, :] = 0.0
     jac_angular[:, :] = 0.0
+    centre, still = (cx, cy, cz), (0.0, 0.0, 0.0)
     for j in range(nj):
         col = v_index[j]
         ox, oy, oz = position[j, 0], position[j, 1], position[j, 2]
         if joint_type[j] == FREE:
             for i in range(3):
                 wx, wy, wz = rotation[j, 0, i], rotation[j, 1, i], rotation[j, 2, i]
-                _momentum_column(
-                    composite, j, 0.0, 0.0, 0.0, wx, wy, wz, cx, cy, cz, mass, col + i, jac_com, jac_angular
-                )
+                w = (wx, wy, wz)
+                _momentum_column(composite, j, still, w, centre, mass, col + i, jac_com, jac_angular)
                 # rotation about the joint origin o: the origin point moves with o x w
-                _momentum_column(
-                    composite,
-                    j,
-                    wx,
-                    wy,
-                    wz,
-                    oy * wz - oz * wy,
-                    oz * wx - ox * wz,
-                    ox * wy - oy * wx,
-                    cx,
-                    cy,
-                    cz,
-                    mass,
-                    col + 3 + i,
-                    jac_com,
-                    jac_angular,
-                )
+                moved = (oy * wz - oz * wy, oz * wx - ox * wz, ox * wy - oy * wx)
+                _momentum_column(composite, j, w, moved, centre, mass, col + 3 + i, jac_com, jac_angular)
         elif joint_type[j] == PRISMATIC:
-            _momentum_column(
-                composite,
-                j,
-                0.0,
-                0.0,
-                0.0,
-                world_axis[j, 0],
-                world_axis[j, 1],
-                world_axis[j, 2],
-                cx,
-                cy,
-                cz,
-                mass,
-                col,
-                jac_com,
-                jac_angular,
-            )
+            axis = (world_axis[j, 0], world_axis[j, 1], world_axis[j, 2])
+            _momentum_column(composite, j, still, axis, centre, mass, col, jac_com, jac_angular)
         else:
             wx, wy, wz = world_axis[j, 0], world_axis[j, 1], world_axis[j, 2]
-            _momentum_column(
-                composite,
-                j,
-                wx,
-                wy,
-                wz,
-                oy * wz - oz * wy,
-                oz * wx - ox * wz,
-                ox * wy - oy * wx,
-                cx,
-                cy,
-                cz,
-                mass,
-                col,
-                jac_com,
-                jac_angular,
-            )
+            moved = (oy * wz - oz * wy, oz * wx - ox * wz, ox * wy - oy * wx)
+            _momentum_column(composite, j, (wx, wy, wz), moved, centre, mass, col, jac_com, jac_angular)
     return mass
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def chain_integrate(joint_type, q_index, v_index, q, v, dt, out):
     """``out = q (+) v dt`` on the configuration manifold, as ``pinocchio.integrate``: a free flyer moves by
     ``M exp6(v dt)`` (its quaternion renormalized), 1-DoF joints by ``q + v dt``. ``out`` may be ``q``."""

@@ -16,6 +16,7 @@ from numba import njit
 
 from ..controllers.clik.clik_kernels import OK, clik_fields, clik_step
 from ..geometry.grasp_path import sample_grasp_path
+from ..kernel_options import BORROW_EXACT
 
 __all__ = ["BAD_OBSERVATION", "grasp_clik_action"]
 
@@ -25,14 +26,15 @@ BAD_OBSERVATION = -1
 
 # no fast-math here: the action must be the NumPy ``clip(qdot / speeds, -1, 1)`` to the last bit (a reciprocal
 # multiplication could differ by one unit in the last place); the CLIK step keeps its own flags. It only borrows
-# arrays: no reference counting (controllers.kernel_buffers.BORROW)
-@njit(cache=True, error_model="numpy", _nrt=False)
+# arrays: no reference counting (BORROW_EXACT)
+@njit(**BORROW_EXACT)
 def grasp_clik_action(f, i, obs, q_start, time_index, path, speeds, action, result):  # pragma: no cover - compiled
     """One step of the grasp CLIK policy on the :class:`~redundancy_gym.controllers.CompiledClik` buffers
     ``f``, ``i`` (a :class:`FrameAxisTask`, so the target is ``[p, a]`` and its velocity ``[v, omega]``).
 
     Reads the configuration ``obs[q_start:q_start + nq]`` and the time ``obs[time_index]`` [s], samples the
-    path (its constants ``path``: :attr:`GraspPath.params <redundancy_gym.geometry.grasp_path.GraspPath.params>`) into the step's
+    path (its constants ``path``:
+    :attr:`GraspPath.params <redundancy_gym.geometry.grasp_path.GraspPath.params>`) into the step's
     target and target velocity, runs :func:`clik_step` and, when it succeeds, writes ``clip(qdot / speeds, -1,
     1)`` (``speeds`` [rad/s or m/s]) into the float32 ``action`` (nv) and a copy of the step's outputs into
     ``result`` (for the :class:`~redundancy_gym.controllers.ClikResult`). Returns ``clik_step``'s code, or

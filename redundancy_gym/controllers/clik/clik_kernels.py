@@ -20,9 +20,18 @@ from numba import njit
 from numpy.typing import NDArray
 
 from ...geometry.potentials import piecewise_potential_kernel
-from ...model.chain_kernels import chain_forward, chain_jacobian, place_frame
-from ..kernels.buffers import BORROW, borrowed_float_field, borrowed_int_field, pack_fields
-from ..objectives.collision_kernels import close_pair_rows, collision_potential
+from ...kernel_options import BORROW
+from ...model.chain_kernels import chain_jacobian, place_frame
+from ..kernels.buffers import borrowed_float_field, borrowed_int_field, pack_fields
+from ..kernels.chain_fields import chain_views, forward_chain
+from ..kernels.linalg import cholesky_factor, cholesky_solve
+from ..objectives.collision_kernels import (
+    COLLISION_FLOAT_FIELDS,
+    COLLISION_INT_FIELDS,
+    close_pair_rows,
+    collision_potential,
+    collision_views,
+)
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
 __all__ = [
@@ -56,15 +65,7 @@ FLOAT_FIELDS: tuple[str, ...] = (
     "limit_parameters",
     "posture_reference",
     "posture_weights",
-    "segment_rotation",
-    "segment_translation",
-    "segment_center",
-    "segment_radius",
-    "segment_world_center",
-    "local",
-    "vertices",
-    "radii",
-    "collision_parameters",
+    *COLLISION_FLOAT_FIELDS,
     "inputs",
     "outputs",
     "jacobian6",
@@ -82,13 +83,7 @@ INT_FIELDS: tuple[str, ...] = (
     "q_index",
     "v_index",
     "task_rows",
-    "segment_joint",
-    "segment_starts",
-    "kinds",
-    "segment_pairs",
-    "pair_starts",
-    "volume_a",
-    "volume_b",
+    *COLLISION_INT_FIELDS,
     "position_q_index",
     "position_v_index",
 )
@@ -140,15 +135,8 @@ _NF = len(FLOAT_FIELDS)
     _F_LIMIT_PARAMETERS,
     _F_POSTURE_REFERENCE,
     _F_POSTURE_WEIGHTS,
-    _F_SEGMENT_ROTATION,
-    _F_SEGMENT_TRANSLATION,
-    _F_SEGMENT_CENTER,
-    _F_SEGMENT_RADIUS,
-    _F_SEGMENT_WORLD_CENTER,
-    _F_LOCAL,
-    _F_VERTICES,
-    _F_RADII,
-    _F_COLLISION_PARAMETERS,
+    _F_COLLISION,  # the first of COLLISION_FLOAT_FIELDS (the rest unnamed: collision_views takes the block)
+    *_,
     _F_INPUTS,
     _F_OUTPUTS,
     _F_JACOBIAN6,
@@ -166,22 +154,58 @@ _NF = len(FLOAT_FIELDS)
     _I_Q_INDEX,
     _I_V_INDEX,
     _I_TASK_ROWS,
-    _I_SEGMENT_JOINT,
-    _I_SEGMENT_STARTS,
-    _I_KINDS,
-    _I_SEGMENT_PAIRS,
-    _I_PAIR_STARTS,
-    _I_VOLUME_A,
-    _I_VOLUME_B,
+    _I_COLLISION,  # the first of COLLISION_INT_FIELDS (the rest unnamed: collision_views takes the block)
+    *_,
     _I_POSITION_Q_INDEX,
     _I_POSITION_V_INDEX,
 ) = range(_NF, _NF + len(INT_FIELDS))
 
+# the chain's fields, in the order of kernels.chain_fields
+_CHAIN_FLOATS = (_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS)
+_CHAIN_INTS = (_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX)
+
 # return codes of clik_step
 OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
 
-# every kernel here only borrows the buffers' arrays: no reference counting (see kernel_buffers.BORROW)
-_JIT = BORROW
+# The kernels index the buffers by these module-level ints, which numba folds into constants.
+(
+    _D_JOINTS,
+    _D_NV,
+    _D_NQ,
+    _D_TASK_DIM,
+    _D_LIMIT_OBJECTIVES,
+    _D_POSTURE_OBJECTIVES,
+    _D_SEGMENTS,
+    _D_VOLUMES,
+    _D_PAIRS,
+    _D_VOLUME_PAIRS,
+    _D_TASK_KIND,
+    _D_TASK_JOINT,
+    _D_TASK_AXIS,
+    _D_METHOD,
+    _D_COLLISION,
+    _D_OBJECTIVES,
+    _D_BOUNDED_JOINTS,
+) = range(len(DIMS))
+_DLS, _TRANSPOSE = METHOD_CODES["dls"], METHOD_CODES["transpose"]
+# the status codes as the float outputs hold them
+_STATUS_OK, _STATUS_DAMPED, _STATUS_SINGULAR = (
+    float(STATUS_NAMES.index(name)) for name in ("ok", "damped", "singular")
+)
+_NULLSPACE_GAIN, _SINGULAR_THRESHOLD, _DLS_THRESHOLD, _DLS_MAX_DAMPING, _PERIOD = range(len(SCALARS))
+# the extra outputs after qdot and the task error (OUTPUT_EXTRA of them, the last STEPPED)
+_X_ERROR_NORM, _X_SIGMA, _X_DAMPING, _X_OBJECTIVE, _X_STATUS, _X_MIN_DISTANCE, _X_LIMITED = range(STEPPED)
+# offsets of the "scratch" field: its first 12 entries are collision_potential's
+_S_FRAME_ROTATION = 12  # the task frame's rotation (3 x 3)
+_S_FRAME_POSITION = _S_FRAME_ROTATION + 9  # and origin (3)
+_S_RHS = _S_FRAME_POSITION + 3  # the effective task velocity wdot_d + K e (at most 6 rows)
+_S_GRAM = _S_RHS + 6  # J W^-1 J^T (+ damping), 6 x 6
+_S_EIGEN = _S_GRAM + 36  # the Jacobi rotations' matrix of _min_eigenvalue (6 x 6)
+_S_LAMBDA = _S_EIGEN + 36  # the multipliers (6)
+_S_FACTOR = _S_LAMBDA + 6  # the Cholesky factor of the Gram matrix (6 x 6)
+assert _S_FACTOR + 36 <= SCRATCH_SIZE
+
+# every kernel here only borrows the buffers' arrays: compiled with BORROW (no reference counting)
 
 
 def pack_buffers(
@@ -195,7 +219,7 @@ _fv = borrowed_float_field
 _iv = borrowed_int_field
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _min_eigenvalue(b, m, a):
     """Smallest eigenvalue of the symmetric m x m matrix ``b`` by cyclic Jacobi rotations (``a``: m*m scratch)."""
     for r in range(m):
@@ -236,109 +260,36 @@ def _min_eigenvalue(b, m, a):
     return smallest
 
 
-@njit(**_JIT)
-def _cholesky_solve(b, m, rhs, low):
-    """Solve ``b x = rhs`` in place (``rhs`` becomes x) by a Cholesky factor in ``low`` (m*m scratch); False when
-    ``b`` is not positive definite."""
-    for r in range(m):
-        for c in range(r + 1):
-            acc = b[r, c]
-            for k in range(c):
-                acc -= low[r * m + k] * low[c * m + k]
-            if r == c:
-                if not acc > 0.0:
-                    return False
-                low[r * m + r] = np.sqrt(acc)
-            else:
-                low[r * m + c] = acc / low[c * m + c]
-    for r in range(m):  # L y = rhs
-        acc = rhs[r]
-        for k in range(r):
-            acc -= low[r * m + k] * rhs[k]
-        rhs[r] = acc / low[r * m + r]
-    for r in range(m - 1, -1, -1):  # L^T x = y
-        acc = rhs[r]
-        for k in range(r + 1, m):
-            acc -= low[k * m + r] * rhs[k]
-        rhs[r] = acc / low[r * m + r]
-    return True
+@njit(inline="always", **BORROW)  # inlined: it returns views (see kernels.buffers.borrowed_float_field)
+def _collision_views(f, i, dims):
+    """:func:`~.collision_kernels.collision_views` of the buffer's collision fields."""
+    return collision_views(f, i, _F_COLLISION, _I_COLLISION, dims[_D_SEGMENTS], dims[_D_VOLUMES], dims[_D_PAIRS])
 
 
-@njit(**_JIT)
-def _collision(f, i, dims, parent, joint_type, v_index, position, world_axis, q_rotation, gradient, scratch):
-    """:func:`~.collision_kernels.collision_potential` on the buffer's collision fields."""
-    ns, nvol, npairs = dims[6], dims[7], dims[8]
-    return collision_potential(
-        _iv(i, _I_SEGMENT_JOINT),
-        _iv(i, _I_SEGMENT_STARTS),
-        _iv(i, _I_KINDS),
-        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
-        _iv(i, _I_PAIR_STARTS),
-        _iv(i, _I_VOLUME_A),
-        _iv(i, _I_VOLUME_B),
-        _fv(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
-        _fv(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)),
-        _fv(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
-        _fv(f, i, _F_SEGMENT_RADIUS),
-        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
-        _fv(f, i, _F_LOCAL).reshape((nvol, 3, 3)),
-        _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-        _fv(f, i, _F_RADII),
-        _fv(f, i, _F_COLLISION_PARAMETERS),
-        parent,
-        joint_type,
-        v_index,
-        q_rotation,
-        position,
-        world_axis,
-        gradient,
-        scratch,
-    )
-
-
-@njit(**_JIT)
+@njit(**BORROW)
 def clik_close_pairs(f, i, limit, distances, rows):
     """:func:`~.collision_kernels.close_pair_rows` at the configuration of the last :func:`clik_step` (which placed
     the volumes and computed the kinematics in the buffers); returns how many pairs it filled."""
     dims = _iv(i, _I_DIMS)
-    nj, ns, nvol, npairs = dims[0], dims[6], dims[7], dims[8]
-    return close_pair_rows(
-        _iv(i, _I_SEGMENT_JOINT),
-        _iv(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
-        _iv(i, _I_PAIR_STARTS),
-        _iv(i, _I_VOLUME_A),
-        _iv(i, _I_VOLUME_B),
-        _fv(f, i, _F_SEGMENT_RADIUS),
-        _fv(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
-        _fv(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-        _fv(f, i, _F_RADII),
-        _iv(i, _I_KINDS),
-        _iv(i, _I_PARENT),
-        _iv(i, _I_JOINT_TYPE),
-        _iv(i, _I_V_INDEX),
-        _fv(f, i, _F_ROTATION).reshape((nj, 3, 3)),
-        _fv(f, i, _F_POSITION).reshape((nj, 3)),
-        _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3)),
-        limit,
-        distances,
-        rows,
-    )
+    coll_i, coll_f, _ = _collision_views(f, i, dims)
+    chain = chain_views(f, i, dims[_D_JOINTS], _CHAIN_FLOATS, _CHAIN_INTS)
+    return close_pair_rows(coll_i, coll_f, chain, limit, distances, rows)
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _task(
     f, i, dims, has_velocity, q_rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac, scratch
 ):
     """Task error, Jacobian and effective velocity ``wdot_d + K e`` (5.5); returns a clik_step code."""
-    nv, m, kind, joint, ax = dims[1], dims[3], dims[10], dims[11], dims[12]
-    nq = dims[2]
+    nv, nq, m = dims[_D_NV], dims[_D_NQ], dims[_D_TASK_DIM]
+    kind, joint, ax = dims[_D_TASK_KIND], dims[_D_TASK_JOINT], dims[_D_TASK_AXIS]
     inputs = _fv(f, i, _F_INPUTS)
     target = inputs[nq : nq + 6]
     velocity = inputs[nq + 6 : nq + 12]
     gain = _fv(f, i, _F_GAIN)
     jac6 = _fv(f, i, _F_JACOBIAN6).reshape((6, nv))
-    rot = scratch[12:21].reshape((3, 3))
-    pos = scratch[21:24]
+    rot = scratch[_S_FRAME_ROTATION:_S_FRAME_POSITION].reshape((3, 3))
+    pos = scratch[_S_FRAME_POSITION : _S_FRAME_POSITION + 3]
     place_frame(
         q_rotation,
         position,
@@ -392,7 +343,7 @@ def _task(
     return OK
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _bound(f, i, nv, nb, q, x):
     """:meth:`~.redundancy_resolution.JointBounds.apply` in place on ``x``: hold each bounded joint inside its
     range (``q + x period`` inside with a period, else no velocity further out of a limit it has reached), then
@@ -403,7 +354,7 @@ def _bound(f, i, nv, nb, q, x):
     for k in range(nv):
         largest = max(largest, abs(x[k]))
     tolerance = BOUND_ROUND_OFF * largest
-    period = _fv(f, i, _F_SCALARS)[4]
+    period = _fv(f, i, _F_SCALARS)[_PERIOD]
     lower = _fv(f, i, _F_POSITION_LOWER)
     upper = _fv(f, i, _F_POSITION_UPPER)
     q_index = _iv(i, _I_POSITION_Q_INDEX)
@@ -433,16 +384,16 @@ def _bound(f, i, nv, nb, q, x):
     return limited
 
 
-@njit(inline="always", **_JIT)  # inlined: it returns views (see kernel_buffers.borrowed_float_field)
+@njit(inline="always", **BORROW)  # inlined: it returns views (see kernel_buffers.borrowed_float_field)
 def clik_fields(f, i):
     """``(inputs, outputs, nq, nv, task_dim)`` of the buffers: the views and sizes that a compiled caller of
     :func:`clik_step` fills and reads (``inputs``: q, target (6), target velocity (6), nullspace input (nv);
     ``outputs``: qdot, task error, :data:`OUTPUT_EXTRA` diagnostics)."""
     dims = _iv(i, _I_DIMS)
-    return _fv(f, i, _F_INPUTS), _fv(f, i, _F_OUTPUTS), dims[2], dims[1], dims[3]
+    return _fv(f, i, _F_INPUTS), _fv(f, i, _F_OUTPUTS), dims[_D_NQ], dims[_D_NV], dims[_D_TASK_DIM]
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def clik_step(f, i, has_velocity, has_input):
     """One CLIK step on the buffers of :func:`pack_buffers`: reads ``inputs`` (q, target (6), target velocity
     (6), nullspace input ``u`` of (5.100) (nv), used where ``has_input``) and writes ``outputs`` (qdot, bounded
@@ -450,7 +401,7 @@ def clik_step(f, i, has_velocity, has_input):
     returns a code (0 ok, 1 non-finite q, 2 non-finite target, 3 zero target axis, 4 non-finite target
     velocity, 5 non-finite nullspace input)."""
     dims = _iv(i, _I_DIMS)
-    flag = dims[1] + dims[3] + STEPPED
+    flag = dims[_D_NV] + dims[_D_TASK_DIM] + STEPPED
     outputs = _fv(f, i, _F_OUTPUTS)
     outputs[flag] = 0.0  # a failed step leaves the kinematics half done: close pairs must not read them
     code = _step(f, i, has_velocity, has_input)
@@ -459,13 +410,13 @@ def clik_step(f, i, has_velocity, has_input):
     return code
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def clik_step_arrays(f, i, q, target, velocity, has_velocity):
     """:func:`clik_step` (no nullspace input) on ``q`` (nq), ``target`` and ``velocity`` (the task's target
     width: 6 for a :class:`FrameAxisTask`, else its rows; ``velocity`` read where ``has_velocity``), copied into
     ``inputs`` here: one call instead of three NumPy slice assignments and the step."""
     dims = _iv(i, _I_DIMS)
-    nq = dims[2]
+    nq = dims[_D_NQ]
     inputs = _fv(f, i, _F_INPUTS)
     for k in range(nq):
         inputs[k] = q[k]
@@ -477,41 +428,26 @@ def clik_step_arrays(f, i, q, target, velocity, has_velocity):
     return clik_step(f, i, has_velocity, False)
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _step(f, i, has_velocity, has_input):
     """The body of :func:`clik_step` (which records whether it succeeded)."""
     dims = _iv(i, _I_DIMS)
-    nj, nv, nq, m = dims[0], dims[1], dims[2], dims[3]
-    n_limits, n_postures, method, collision, objectives = dims[4], dims[5], dims[13], dims[14], dims[15]
+    nj, nv, nq, m = dims[_D_JOINTS], dims[_D_NV], dims[_D_NQ], dims[_D_TASK_DIM]
+    n_limits, n_postures = dims[_D_LIMIT_OBJECTIVES], dims[_D_POSTURE_OBJECTIVES]
+    method, collision, objectives = dims[_D_METHOD], dims[_D_COLLISION], dims[_D_OBJECTIVES]
     inputs = _fv(f, i, _F_INPUTS)
     q = inputs[:nq]
     for k in range(nq):
         if not abs(q[k]) <= MAX_COORDINATE:  # NaN, inf or beyond the coordinates a controller accepts
             return BAD_CONFIGURATION
-    parent = _iv(i, _I_PARENT)
-    joint_type = _iv(i, _I_JOINT_TYPE)
-    v_index = _iv(i, _I_V_INDEX)
-    rotation = _fv(f, i, _F_ROTATION).reshape((nj, 3, 3))
-    position = _fv(f, i, _F_POSITION).reshape((nj, 3))
-    world_axis = _fv(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(
-        parent,
-        _fv(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-        _fv(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
-        _fv(f, i, _F_AXIS).reshape((nj, 3)),
-        joint_type,
-        _iv(i, _I_Q_INDEX),
-        q,
-        rotation,
-        position,
-        world_axis,
-    )
+    chain = forward_chain(f, i, nj, q, _CHAIN_FLOATS, _CHAIN_INTS)
+    parent, joint_type, v_index, rotation, position, world_axis = chain
     scratch = _fv(f, i, _F_SCRATCH)
     outputs = _fv(f, i, _F_OUTPUTS)
     x = outputs[:nv]
     error = outputs[nv : nv + m]
     extra = outputs[nv + m :]
-    rhs = scratch[24:30]
+    rhs = scratch[_S_RHS:_S_GRAM]
     jac = _fv(f, i, _F_JACOBIAN).reshape((m, nv))
     code = _task(
         f, i, dims, has_velocity, rotation, position, world_axis, parent, joint_type, v_index, error, rhs, jac, scratch
@@ -541,15 +477,15 @@ def _step(f, i, has_velocity, has_input):
             gradient[k] += pw[o * nq + k] * delta
     smallest = np.inf
     if collision:
-        h, smallest = _collision(
-            f, i, dims, parent, joint_type, v_index, position, world_axis, rotation, gradient, scratch
-        )
+        coll_i, coll_f, params = _collision_views(f, i, dims)
+        h, smallest = collision_potential(coll_i, coll_f, params, chain, gradient, scratch)
         value += h
     # weighted minimum norm with nullspace vector z = alpha dH/dq (Algorithm 10, (5.14), (5.22))
     scalars = _fv(f, i, _F_SCALARS)
-    alpha, singular_threshold, dls_threshold, dls_max = scalars[0], scalars[1], scalars[2], scalars[3]
+    alpha, singular_threshold = scalars[_NULLSPACE_GAIN], scalars[_SINGULAR_THRESHOLD]
+    dls_threshold, dls_max = scalars[_DLS_THRESHOLD], scalars[_DLS_MAX_DAMPING]
     winv = _fv(f, i, _F_INVERSE_WEIGHTS)
-    b = scratch[30:66].reshape((6, 6))
+    b = scratch[_S_GRAM:_S_EIGEN].reshape((6, 6))
     for r in range(m):
         for c in range(r + 1):
             acc = 0.0
@@ -557,18 +493,18 @@ def _step(f, i, has_velocity, has_input):
                 acc += jac[r, k] * winv[k] * jac[c, k]
             b[r, c] = acc
             b[c, r] = acc
-    sigma = np.sqrt(max(_min_eigenvalue(b, m, scratch[66:102]), 0.0))
+    sigma = np.sqrt(max(_min_eigenvalue(b, m, scratch[_S_EIGEN:_S_LAMBDA]), 0.0))
     damping = 0.0
-    status = 0
+    status = _STATUS_OK
     e2 = 0.0
     for r in range(m):
         e2 += error[r] * error[r]
-    extra[0] = np.sqrt(e2)
-    extra[3] = value
-    extra[5] = smallest
-    extra[6] = 0.0
+    extra[_X_ERROR_NORM] = np.sqrt(e2)
+    extra[_X_OBJECTIVE] = value
+    extra[_X_MIN_DISTANCE] = smallest
+    extra[_X_LIMITED] = 0.0
     x[:] = 0.0
-    if method == 2:  # transpose (5.24): x = W^-1 J^T rhs, objectives ignored
+    if method == _TRANSPOSE:  # transpose (5.24): x = W^-1 J^T rhs, objectives ignored
         finite = True
         for k in range(nv):
             acc = 0.0
@@ -578,19 +514,19 @@ def _step(f, i, has_velocity, has_input):
             finite = finite and np.isfinite(x[k])
         if not finite:
             x[:] = 0.0
-            status = 2
-        extra[1], extra[2], extra[4] = sigma, 0.0, float(status)
-        if finite and _bound(f, i, nv, dims[16], q, x):
-            extra[6] = 1.0
+            status = _STATUS_SINGULAR
+        extra[_X_SIGMA], extra[_X_DAMPING], extra[_X_STATUS] = sigma, 0.0, status
+        if finite and _bound(f, i, nv, dims[_D_BOUNDED_JOINTS], q, x):
+            extra[_X_LIMITED] = 1.0
         return OK
-    if method == 1:
+    if method == _DLS:
         if sigma < dls_threshold:
             damping = dls_max * (1.0 - (sigma / dls_threshold) ** 2)
-            status = 1
+            status = _STATUS_DAMPED
         for r in range(m):
             b[r, r] += damping
     elif not sigma >= singular_threshold:
-        extra[1], extra[2], extra[4] = sigma, 0.0, 2.0
+        extra[_X_SIGMA], extra[_X_DAMPING], extra[_X_STATUS] = sigma, 0.0, _STATUS_SINGULAR
         return OK
     # z = alpha dH/dq - W u: the nullspace term -N W^-1 z is the objectives' descent plus N u (5.100)
     u = inputs[nq + 12 : nq + 12 + nv]
@@ -599,7 +535,7 @@ def _step(f, i, has_velocity, has_input):
             if not np.isfinite(u[k]):
                 return BAD_INPUT
     nullspace = objectives or has_input
-    lam = scratch[102:108]
+    lam = scratch[_S_LAMBDA:_S_FACTOR]
     for r in range(m):
         lam[r] = rhs[r]
         if nullspace:
@@ -610,9 +546,11 @@ def _step(f, i, has_velocity, has_input):
                     z -= u[k] / winv[k]
                 acc += jac[r, k] * winv[k] * z
             lam[r] += acc
-    if not _cholesky_solve(b, m, lam, scratch[108:144]):
-        extra[1], extra[2], extra[4] = sigma, damping, 2.0
+    low = scratch[_S_FACTOR : _S_FACTOR + m * m].reshape((m, m))
+    if not cholesky_factor(b, m, low) > 0.0:
+        extra[_X_SIGMA], extra[_X_DAMPING], extra[_X_STATUS] = sigma, damping, _STATUS_SINGULAR
         return OK
+    cholesky_solve(low, m, lam)
     finite = True
     for k in range(nv):
         acc = 0.0
@@ -626,8 +564,8 @@ def _step(f, i, has_velocity, has_input):
         finite = finite and np.isfinite(x[k])
     if not finite:
         x[:] = 0.0
-        status = 2
-    extra[1], extra[2], extra[4] = sigma, damping, float(status)
-    if finite and _bound(f, i, nv, dims[16], q, x):
-        extra[6] = 1.0
+        status = _STATUS_SINGULAR
+    extra[_X_SIGMA], extra[_X_DAMPING], extra[_X_STATUS] = sigma, damping, status
+    if finite and _bound(f, i, nv, dims[_D_BOUNDED_JOINTS], q, x):
+        extra[_X_LIMITED] = 1.0
     return OK

@@ -4,25 +4,24 @@ prescribed contact moment exactly, with the horizontal CoM as the unknown task c
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numpy as np
 from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
+from ...constants import GRAVITY
 from ...geometry.potentials import PiecewisePotential, piecewise_potential_kernel
+from ...kernel_options import JIT_EXACT
 from ...model import AccelerationTerms, RobotModel
 from ..clik.redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
 from ..exceptions import ControllerError
-from ..kernels.linalg import rotation_error_into
+from ..kernels.linalg import cholesky_factor, cholesky_solve, rotation_error_into
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
 from ..objectives.objective import Objective, sum_objectives
 
 __all__ = ["BipedIkd", "BipedIkdReference", "BipedIkdResult", "GRAVITY"]
-
-GRAVITY = 9.81
-"""Gravitational acceleration [m/s^2], acting along -z."""
 
 
 class BipedIkdReference(NamedTuple):
@@ -204,20 +203,21 @@ class BipedIkd:
                 fast = _valid(*arrays, model.nq, model.nv, MAX_COORDINATE)
             except TypeError:  # an array with another number of dimensions
                 pass
-        if fast:
-            ref = reference
+        if fast:  # _valid found float64 arrays of the documented shapes
+            q, qdot, ref = cast(NDArray[np.float64], q), cast(NDArray[np.float64], qdot), reference
         else:
             q, qdot, ref, plan, support = self._checked(q, qdot, reference, stabilize)
         terms = model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
         self.terms = terms
-        has_posture = self.posture is not None
-        offset = model.difference(self.posture, q) if has_posture else qdot
+        posture = self.posture
+        has_posture = posture is not None
+        offset = model.difference(posture, q) if posture is not None else qdot
         stiffness = self.posture_stiffness
         if self.objectives:  # the kernel's preferred -K offset then carries -K (q - posture) - k_H dH/dq
             limits = _joint_limits(self.objectives, model.nq, model.nv)
             combined = None
             if limits is not None:  # the walking controller's one joint-limit objective: one compiled call
-                combined = _limit_offset(q, offset, *limits, self.objective_gain, stiffness, has_posture)
+                combined = _limit_offset(q, offset, limits, self.objective_gain, stiffness, has_posture)
             if combined is None:  # other objectives, or non-finite distances (the objective's own error)
                 gradient = sum_objectives(self.objectives, model, np.asarray(q, dtype=np.float64)).gradient
                 combined = (stiffness * offset if has_posture else 0.0) + self.objective_gain * gradient
@@ -311,7 +311,11 @@ class BipedIkd:
 
 
 def _rows(
-    value: ArrayLike, count: int, shape: tuple[int, ...], name: str, broadcast: bool = True
+    value: Sequence[ArrayLike] | NDArray[np.float64],
+    count: int,
+    shape: tuple[int, ...],
+    name: str,
+    broadcast: bool = True,
 ) -> NDArray[np.float64]:
     """``value``'s first ``count`` rows (the ones the step reads), each broadcast to ``shape`` (or required to have
     it), as one float64 C array (``count``, ``*shape``)."""
@@ -321,7 +325,9 @@ def _rows(
             raise ValueError
         return np.array([np.broadcast_to(row, shape) for row in rows], dtype=np.float64)
     except (IndexError, TypeError, ValueError):
-        raise ControllerError(f"reference.{name} must have shape {(count, *shape)}, got {np.shape(value)}") from None
+        raise ControllerError(
+            f"reference.{name} must have shape {(count, *shape)}, got {np.shape(cast(ArrayLike, value))}"
+        ) from None
 
 
 _FLOAT64 = np.dtype(np.float64)
@@ -329,7 +335,6 @@ _NO_PLAN = np.zeros(4)
 _NO_SUPPORT = np.zeros((2, 2))
 _NO_DIAGONAL = np.ones(0)
 _NO_INVERSE = np.zeros((0, 0))
-_JIT = {"cache": True, "error_model": "numpy"}
 # the kernels' arrays: float64 of any layout, writable or not (the caller's of other types take BipedIkd._checked);
 # their results are C arrays
 _V, _M, _T = (types.Array(types.float64, n, "A", readonly=True) for n in (1, 2, 3))
@@ -337,9 +342,11 @@ _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
 
 
-def _joint_limits(
-    objectives: tuple[Objective, ...], nq: int, nv: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float] | None:
+_JointLimits = tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float]
+"""``(lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight)`` of :func:`_joint_limits`."""
+
+
+def _joint_limits(objectives: tuple[Objective, ...], nq: int, nv: int) -> _JointLimits | None:
     """``(lower, upper, base_nq, base_nv, activation_distance, slope, switch_ratio, weight)`` when ``objectives``
     are exactly one :class:`ActuatedObjective` of a :class:`JointLimitObjective` (with its
     :class:`PiecewisePotential`) whose limits fit the actuated joints, read at each call (so a changed objective
@@ -382,44 +389,22 @@ def _joint_limits(
 def _limit_offset(
     q: NDArray[np.float64],
     offset: NDArray[np.float64],
-    lower: NDArray[np.float64],
-    upper: NDArray[np.float64],
-    base_nq: int,
-    base_nv: int,
-    activation_distance: float,
-    slope: float,
-    switch_ratio: float,
-    weight: float,
+    limits: _JointLimits,
     gain: float,
     stiffness: float,
     has_posture: bool,
 ) -> NDArray[np.float64] | None:
-    """``(stiffness offset if has_posture else 0) + gain dH/dq`` of the joint-limit objective (5.58)
-    (:class:`JointLimitObjective` on the joints after the base's, as :class:`ActuatedObjective` evaluates it),
-    the same arithmetic as :func:`sum_objectives` and the objective's; None where a distance to a limit is not
-    finite (the objective raises its error there)."""
+    """``(stiffness offset if has_posture else 0) + gain dH/dq`` of the joint-limit objective (5.58) of ``limits``
+    (:func:`_joint_limits`: a :class:`JointLimitObjective` on the joints after the base's, as
+    :class:`ActuatedObjective` evaluates it), the same arithmetic as :func:`sum_objectives` and the objective's;
+    None where a distance to a limit is not finite (the objective raises its error there)."""
     out = np.empty(offset.shape[0])
-    if not _limit_offset_into(
-        q,
-        offset,
-        lower,
-        upper,
-        base_nq,
-        base_nv,
-        activation_distance,
-        slope,
-        switch_ratio,
-        weight,
-        gain,
-        stiffness,
-        has_posture,
-        out,
-    ):
+    if not _limit_offset_into(q, offset, *limits, gain, stiffness, has_posture, out):
         return None
     return out
 
 
-@njit(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **_JIT)
+@njit(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **JIT_EXACT)
 def _limit_offset_into(
     q,
     offset,
@@ -451,7 +436,7 @@ def _limit_offset_into(
     return True
 
 
-@njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **_JIT)
+@njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **JIT_EXACT)
 def _valid(
     q,
     qdot,
@@ -511,45 +496,11 @@ def _valid(
     return np.isfinite(total)
 
 
-@njit(
-    types.Tuple((_CV, _CV, _CV, _F, _F, _B))(
-        _V,
-        _T,
-        _M,
-        _T,
-        _M,
-        _V,
-        _M,
-        _V,
-        _M,
-        _T,
-        _M,
-        _M,
-        _M,
-        _V,
-        _V,
-        _V,
-        _V,
-        _V,
-        _M,
-        _V,
-        _V,
-        _M,
-        _F,
-        _F,
-        _F,
-        _F,
-        _F,
-        _F,
-        _F,
-        _F,
-        _B,
-        _B,
-        _B,
-        _B,
-    ),
-    **_JIT,
-)
+# _solve's argument types: the model's terms, the reference's arrays, offset and weights, then gains and flags
+_SOLVE_ARGUMENTS = (_V, _T, _M, _T, _M, _V, _M, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, _V, _V, _M)
+
+
+@njit(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(*_SOLVE_ARGUMENTS, *(_F,) * 8, *(_B,) * 4), **JIT_EXACT)
 def _solve(
     qdot,
     rotation,
@@ -632,7 +583,7 @@ def _solve(
             j_com[a, c] = centroidal[a, c] / m
             com_velocity[a] += j_com[a, c] * qdot[c]
     z_acceleration = height[2] + kd * (height[1] - com_velocity[2]) + kp * (height[0] - com[2])
-    g = 9.81 + z_acceleration  # GRAVITY
+    g = GRAVITY + z_acceleration  # numba folds the module's float into a constant
     mz = m * com[2]
     # (5.97): T += B [K_p (w_plan - w) + K_d (wdot_plan - wdot)], B = [[0, -m z_c], [m z_c, 0]], its ZMP kept in
     # the support box
@@ -694,20 +645,8 @@ def _solve(
     sigma = np.sqrt(max(np.linalg.eigvalsh(b_mat)[0], 0.0))
     ok = sigma >= singular_threshold
     factor = np.zeros((rows, rows))
-    if ok:  # Cholesky of B, failing where LAPACK's would (a pivot not > 0)
-        for j in range(rows):
-            s = b_mat[j, j]
-            for k in range(j):
-                s -= factor[j, k] * factor[j, k]
-            if not s > 0.0:
-                ok = False
-                break
-            factor[j, j] = np.sqrt(s)
-            for i in range(j + 1, rows):
-                s = b_mat[i, j]
-                for k in range(j):
-                    s -= factor[i, k] * factor[j, k]
-                factor[i, j] = s / factor[j, j]
+    if ok:  # failing where LAPACK's Cholesky would (a pivot not > 0)
+        ok = cholesky_factor(b_mat, rows, factor) > 0.0
     if ok:
         p = np.empty(rows)  # -r + R W^-1 z
         for i in range(rows):
@@ -715,16 +654,7 @@ def _solve(
             for c in range(nv):
                 total += r_mat[i, c] * winv_z[c]
             p[i] = -r_vec[i] + total
-        for i in range(rows):  # L y = p
-            s = p[i]
-            for k in range(i):
-                s -= factor[i, k] * p[k]
-            p[i] = s / factor[i, i]
-        for i in range(rows - 1, -1, -1):  # L^T lambda = y
-            s = p[i]
-            for k in range(i + 1, rows):
-                s -= factor[k, i] * p[k]
-            p[i] = s / factor[i, i]
+        cholesky_solve(factor, rows, p)  # B lambda = p
         finite = 0.0
         for c in range(nv):
             total = 0.0

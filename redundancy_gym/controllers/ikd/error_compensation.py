@@ -10,12 +10,10 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...constants import GRAVITY
 from ..exceptions import ControllerError
 
 __all__ = ["ErrorCompensation", "ErrorCompensationOutput"]
-
-GRAVITY = 9.81
-"""Gravitational acceleration [m/s^2], acting along -z (as :data:`~redundancy_gym.controllers.ikd.biped_ikd.GRAVITY`)."""
 
 
 class ErrorCompensationOutput(NamedTuple):

@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from ...geometry.ssv_kernels import BORROW as _GEOMETRY_BORROW
+from ...kernel_options import BORROW, JIT
 
 __all__ = [
     "BORROW",
@@ -29,12 +29,10 @@ __all__ = [
     "pack_fields",
 ]
 
-BORROW: dict[str, Any] = _GEOMETRY_BORROW
-"""numba options of a fused kernel that only borrows arrays (never allocates, keeps or returns one to a caller
-that counts references): no reference counting; the SSV kernels' flags, defined once in the lowest layer. With
-it, every call between compiled functions paid an atomic NRT_incref and NRT_decref per array argument and per
-view taken, a few hundred per CLIK step: the AgriReach CLIK kernel took 9.1 us with them and 4.5 us without
-(2-core machine shared with other processes)."""
+# BORROW (re-exported): the numba options of a fused kernel that only borrows arrays (never allocates, keeps or
+# returns one to a caller that counts references). With reference counting, every call between compiled functions
+# paid an atomic NRT_incref and NRT_decref per array argument and per view taken, a few hundred per CLIK step: the
+# AgriReach CLIK kernel took 9.1 us with them and 4.5 us without (2-core machine shared with other processes).
 
 
 def pack_fields(
@@ -79,14 +77,14 @@ def compiled_entry_point(kernel: Any, signature: str) -> Callable[..., Any]:
     return kernel.overloads[kernel.signatures[0]].entry_point
 
 
-@njit(cache=True)
+@njit(**JIT)
 def float_field(f, i, k):  # pragma: no cover - compiled
     """View of float field ``k`` (its index in the float field list)."""
     o = i[2 * k]
     return f[o : o + i[2 * k + 1]]
 
 
-@njit(cache=True)
+@njit(**JIT)
 def int_field(i, k):  # pragma: no cover - compiled
     """View of int field ``k`` (the number of float fields plus its index in the int field list)."""
     o = i[2 * k]

@@ -15,19 +15,51 @@ from numpy.typing import NDArray
 from ...geometry import CollisionLayout
 from ...geometry.potentials import piecewise_potential_kernel
 from ...geometry.ssv_kernels import volume_pair_distance
+from ...kernel_options import BORROW
 from ...model import RobotModel
 from ...model.chain_kernels import chain_jacobian_transpose_times, place_frame
-from ..kernels.buffers import BORROW
+from ..kernels.buffers import borrowed_float_field, borrowed_int_field
 from .collision_objective import CollisionObjective
 
-__all__ = ["CollisionFields", "bounding_spheres", "collision_fields", "collision_potential", "close_pair_rows"]
+__all__ = [
+    "COLLISION_FLOAT_FIELDS",
+    "COLLISION_INT_FIELDS",
+    "CollisionFields",
+    "bounding_spheres",
+    "close_pair_rows",
+    "collision_fields",
+    "collision_potential",
+    "collision_views",
+]
 
-# the kernels only borrow their arrays (the callers' buffers): no reference counting (kernel_buffers.BORROW);
-# callers that count references may call them too, since nothing borrowed is returned
-_JIT = BORROW
+COLLISION_FLOAT_FIELDS: tuple[str, ...] = (
+    "segment_rotation",
+    "segment_translation",
+    "segment_center",
+    "segment_radius",
+    "segment_world_center",
+    "local",
+    "vertices",
+    "radii",
+    "collision_parameters",
+)
+"""The float fields of :func:`collision_fields`, in the order a fused kernel's buffer holds them (one block)."""
+COLLISION_INT_FIELDS: tuple[str, ...] = (
+    "segment_joint",
+    "segment_starts",
+    "kinds",
+    "segment_pairs",
+    "pair_starts",
+    "volume_a",
+    "volume_b",
+)
+"""The int fields of :func:`collision_fields`, in the order a fused kernel's buffer holds them (one block)."""
+
+# the kernels only borrow their arrays (the callers' buffers): no reference counting (BORROW); callers that count
+# references may call them too, since nothing borrowed is returned
 
 
-@njit(**_JIT)
+@njit(**BORROW)
 def _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, vertices, radii, kinds, margin):
     """``(distance, p_a, p_b, n)`` of segment pair ``p``'s (segments ``a``, ``b``) closest volume pair, or an
     infinite distance when the segments' bounding spheres are farther apart than ``margin`` (the pair cannot be
@@ -49,44 +81,68 @@ def _closest_volumes(p, a, b, pair_starts, vol_a, vol_b, seg_radius, seg_world, 
     return best, best_pa, best_pb, best_n
 
 
-@njit(**_JIT)
-def collision_potential(
-    seg_joint,
-    seg_starts,
-    kinds,
-    seg_pairs,
-    pair_starts,
-    vol_a,
-    vol_b,
-    seg_rot,
-    seg_pos,
-    seg_center,
-    seg_radius,
-    seg_world,
-    local,
-    vertices,
-    radii,
-    params,
-    parent,
-    joint_type,
-    v_index,
-    rotation,
-    position,
-    world_axis,
-    gradient,
-    scratch,
-):
+@njit(inline="always", **BORROW)  # inlined: it returns views (see kernels.buffers.borrowed_float_field)
+def collision_views(f, i, first_float, first_int, ns, nvol, npairs):
+    """``(coll_i, coll_f, params)`` of :func:`collision_potential` from the buffers of
+    :func:`~redundancy_gym.controllers.kernels.buffers.pack_fields` whose fields :data:`COLLISION_FLOAT_FIELDS`
+    start at field index ``first_float`` and :data:`COLLISION_INT_FIELDS` at ``first_int``; ``ns`` segments,
+    ``nvol`` volumes and ``npairs`` segment pairs."""
+    coll_i = (
+        borrowed_int_field(i, first_int),
+        borrowed_int_field(i, first_int + 1),
+        borrowed_int_field(i, first_int + 2),
+        borrowed_int_field(i, first_int + 3).reshape((npairs, 2)),
+        borrowed_int_field(i, first_int + 4),
+        borrowed_int_field(i, first_int + 5),
+        borrowed_int_field(i, first_int + 6),
+    )
+    coll_f = (
+        borrowed_float_field(f, i, first_float).reshape((ns, 3, 3)),
+        borrowed_float_field(f, i, first_float + 1).reshape((ns, 3)),
+        borrowed_float_field(f, i, first_float + 2).reshape((ns, 3)),
+        borrowed_float_field(f, i, first_float + 3),
+        borrowed_float_field(f, i, first_float + 4).reshape((ns, 3)),
+        borrowed_float_field(f, i, first_float + 5).reshape((nvol, 3, 3)),
+        borrowed_float_field(f, i, first_float + 6).reshape((nvol, 3, 3)),
+        borrowed_float_field(f, i, first_float + 7),
+    )
+    return coll_i, coll_f, borrowed_float_field(f, i, first_float + 8)
+
+
+@njit(inline="always", **BORROW)  # inlined: it ran in the callers' pair loops before they shared it
+def _add_distance_row(chain, seg_joint, a, b, pa, pb, n, scale, out):
+    """``out += scale n^T (J_b(p_b) - J_a(p_a))`` (5.61): ``scale`` times the gradient of the distance of the
+    points ``pa`` on segment ``a`` and ``pb`` on ``b`` along their normal ``n`` (environment segments, joint -1,
+    do not move); segment ``b``'s term first."""
+    for end in range(2):
+        segment, point, sign = (b, pb, scale) if end == 0 else (a, pa, -scale)
+        joint = seg_joint[segment]
+        if joint >= 0:
+            chain_jacobian_transpose_times(*chain, joint, point[0], point[1], point[2], n[0], n[1], n[2], sign, out)
+
+
+@njit(**BORROW)
+def collision_potential(coll_i, coll_f, params, chain, gradient, scratch):
     """Place the robot volumes, then ``H_c`` (5.49) and its gradient (5.61) over the pairs within ``d_a``:
     ``(value, smallest distance computed)``; the gradient is added to ``gradient`` (nv).
 
+    ``coll_i`` is ``(seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b)`` and ``coll_f``
+    ``(seg_rot, seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii)``: the fields of
+    :data:`COLLISION_INT_FIELDS` and :data:`COLLISION_FLOAT_FIELDS` but the last (:func:`collision_views`);
+    ``chain`` is the kinematics ``(parent, joint_type, v_index, rotation, position, world_axis)`` of
+    :func:`~redundancy_gym.model.chain_kernels.chain_forward`.
+
     Segment ``s`` moves with joint ``seg_joint[s]`` at ``(seg_rot[s], seg_pos[s])`` in its frame (-1: an
-    environment segment whose world ``vertices`` and ``seg_world`` centre the owner keeps up to date); its
-    volumes ``seg_starts[s]:seg_starts[s + 1]`` have ``local`` vertices, ``radii`` and ``kinds``; pair ``p``
-    of ``seg_pairs`` checks the volume pairs ``vol_a``/``vol_b`` from ``pair_starts[p]``. ``params`` is
+    environment segment whose world ``vertices`` and ``seg_world`` centre the owner keeps up to date); its volumes
+    ``seg_starts[s]:seg_starts[s + 1]`` have ``local`` vertices, ``radii`` and ``kinds``; pair ``p`` of
+    ``seg_pairs`` checks the volume pairs ``vol_a``/``vol_b`` from ``pair_starts[p]``. ``params`` is
     ``(d_a, slope, switch ratio, weight)``. Pairs whose segments' bounding spheres (``seg_center``,
     ``seg_radius``) are farther apart than ``d_a`` contribute nothing and are skipped (their distance is at
     least the spheres'). ``scratch`` needs 12 entries.
     """
+    seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
+    seg_rot, seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii = coll_f
+    rotation, position = chain[3], chain[4]
     ns, npairs = seg_joint.shape[0], seg_pairs.shape[0]
     da, slope, ratio, weight = params[0], params[1], params[2], params[3]
     rot = scratch[0:9].reshape((3, 3))
@@ -121,72 +177,19 @@ def collision_potential(
             continue
         h, dh, _ = piecewise_potential_kernel(best, da, slope, ratio)
         value += weight * h
-        # dd/dq = n^T (J_b(p_b) - J_a(p_a)) (5.61)
-        if seg_joint[b] >= 0:
-            chain_jacobian_transpose_times(
-                parent,
-                joint_type,
-                v_index,
-                rotation,
-                position,
-                world_axis,
-                seg_joint[b],
-                best_pb[0],
-                best_pb[1],
-                best_pb[2],
-                best_n[0],
-                best_n[1],
-                best_n[2],
-                weight * dh,
-                gradient,
-            )
-        if seg_joint[a] >= 0:
-            chain_jacobian_transpose_times(
-                parent,
-                joint_type,
-                v_index,
-                rotation,
-                position,
-                world_axis,
-                seg_joint[a],
-                best_pa[0],
-                best_pa[1],
-                best_pa[2],
-                best_n[0],
-                best_n[1],
-                best_n[2],
-                -weight * dh,
-                gradient,
-            )
+        _add_distance_row(chain, seg_joint, a, b, best_pa, best_pb, best_n, weight * dh, gradient)
     return value, smallest
 
 
-@njit(**_JIT)
-def close_pair_rows(
-    seg_joint,
-    seg_pairs,
-    pair_starts,
-    vol_a,
-    vol_b,
-    seg_radius,
-    seg_world,
-    vertices,
-    radii,
-    kinds,
-    parent,
-    joint_type,
-    v_index,
-    rotation,
-    position,
-    world_axis,
-    limit,
-    distances,
-    rows,
-):
+@njit(**BORROW)
+def close_pair_rows(coll_i, coll_f, chain, limit, distances, rows):
     """Distances and ``dd/dq = n^T (J_b(p_b) - J_a(p_a))`` rows (5.61) of the pairs nearer than ``limit``, at the
     placement that :func:`collision_potential` last left in ``vertices`` and ``seg_world`` (and the kinematics in
     ``rotation``, ``position``, ``world_axis``); returns how many. At most ``rows.shape[0]`` pairs are kept: the
-    nearest ones. ``distances`` (K) and ``rows`` (K x nv) are filled from the start."""
+    nearest ones. ``distances`` (K) and ``rows`` (K x nv) are filled from the start. The arguments are
+    :func:`collision_potential`'s."""
+    seg_joint, _, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
+    seg_radius, seg_world, vertices, radii = coll_f[3], coll_f[4], coll_f[6], coll_f[7]
     count = 0
     capacity = rows.shape[0]
     for p in range(seg_pairs.shape[0]):
@@ -209,42 +212,7 @@ def close_pair_rows(
             count += 1
         distances[slot] = best
         rows[slot, :] = 0.0
-        if seg_joint[b] >= 0:
-            chain_jacobian_transpose_times(
-                parent,
-                joint_type,
-                v_index,
-                rotation,
-                position,
-                world_axis,
-                seg_joint[b],
-                best_pb[0],
-                best_pb[1],
-                best_pb[2],
-                best_n[0],
-                best_n[1],
-                best_n[2],
-                1.0,
-                rows[slot],
-            )
-        if seg_joint[a] >= 0:
-            chain_jacobian_transpose_times(
-                parent,
-                joint_type,
-                v_index,
-                rotation,
-                position,
-                world_axis,
-                seg_joint[a],
-                best_pa[0],
-                best_pa[1],
-                best_pa[2],
-                best_n[0],
-                best_n[1],
-                best_n[2],
-                -1.0,
-                rows[slot],
-            )
+        _add_distance_row(chain, seg_joint, a, b, best_pa, best_pb, best_n, 1.0, rows[slot])
     return count
 
 

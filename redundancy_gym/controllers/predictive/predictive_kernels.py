@@ -34,8 +34,9 @@ import numpy as np
 from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
+from ...kernel_options import BORROW, JIT
 from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, chain_jacobian
-from ..kernels.buffers import BORROW
+from ..kernels.linalg import cholesky_factor, cholesky_solve
 from ..objectives.collision_kernels import collision_potential
 
 __all__ = [
@@ -54,10 +55,9 @@ __all__ = [
     "slot_size",
 ]
 
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 # The per-sample functions (and the forward and adjoint passes over a slot) only borrow their arrays: compiled
-# without reference counting (kernel_buffers.BORROW), they skip an atomic incref/decref per array argument and per
-# view, hundreds per sample. The entry points allocate, so they keep it.
+# without reference counting (BORROW), they skip an atomic incref/decref per array argument and per view, hundreds
+# per sample. The entry points allocate, so they keep it (JIT).
 
 
 @njit(**BORROW)
@@ -116,39 +116,6 @@ def _task(chain_f, chain_i, task_i, task_f, q, wdot, rotation, position, world_a
 
 
 @njit(**BORROW)
-def _cholesky(a, m, low):
-    """Lower Cholesky factor of the m x m ``a`` into ``low``; False when not positive definite."""
-    for j in range(m):
-        s = a[j, j]
-        for k in range(j):
-            s -= low[j, k] * low[j, k]
-        if not s > 0.0:
-            return False
-        low[j, j] = np.sqrt(s)
-        for i in range(j + 1, m):
-            t = a[i, j]
-            for k in range(j):
-                t -= low[i, k] * low[j, k]
-            low[i, j] = t / low[j, j]
-    return True
-
-
-@njit(**BORROW)
-def _solve(low, m, x):
-    """``x <- A^-1 x`` with the factor of :func:`_cholesky`."""
-    for i in range(m):
-        t = x[i]
-        for k in range(i):
-            t -= low[i, k] * x[k]
-        x[i] = t / low[i, i]
-    for i in range(m - 1, -1, -1):
-        t = x[i]
-        for k in range(i + 1, m):
-            t -= low[k, i] * x[k]
-        x[i] = t / low[i, i]
-
-
-@njit(**BORROW)
 def _velocity(jac, b, u, rho, a, low, y, qdot):
     """``qdot = u + J^T y`` with ``y = (J J^T + rho I)^-1 (b - J u)``; the factor stays in ``low``."""
     m, n = jac.shape
@@ -160,14 +127,14 @@ def _velocity(jac, b, u, rho, a, low, y, qdot):
             a[r, c] = acc
             a[c, r] = acc
         a[r, r] += rho
-    if not _cholesky(a, m, low):
+    if not cholesky_factor(a, m, low) > 0.0:
         return False
     for r in range(m):
         acc = b[r]
         for k in range(n):
             acc -= jac[r, k] * u[k]
         y[r] = acc
-    _solve(low, m, y)
+    cholesky_solve(low, m, y)
     for k in range(n):
         acc = u[k]
         for r in range(m):
@@ -194,39 +161,13 @@ def _limits(q, lower, upper, lp, gradient):
 @njit(**BORROW)
 def _collision(coll_i, coll_f, coll_p, chain_i, rotation, position, world_axis, gradient, scratch):
     """(5.49) over the collision pairs, gradient added (the arrays of :func:`collision_fields`)."""
-    seg_joint, seg_starts, kinds, seg_pairs, pair_starts, vol_a, vol_b = coll_i
-    seg_rot, seg_pos, seg_center, seg_radius, seg_world, local, vertices, radii = coll_f
     parent, joint_type, _, v_index = chain_i
-    value, _ = collision_potential(
-        seg_joint,
-        seg_starts,
-        kinds,
-        seg_pairs,
-        pair_starts,
-        vol_a,
-        vol_b,
-        seg_rot,
-        seg_pos,
-        seg_center,
-        seg_radius,
-        seg_world,
-        local,
-        vertices,
-        radii,
-        coll_p,
-        parent,
-        joint_type,
-        v_index,
-        rotation,
-        position,
-        world_axis,
-        gradient,
-        scratch,
-    )
+    chain = (parent, joint_type, v_index, rotation, position, world_axis)
+    value, _ = collision_potential(coll_i, coll_f, coll_p, chain, gradient, scratch)
     return value
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _vjp_scratch(nj):
     """The work arrays of :func:`_vjp` for a chain of ``nj`` joints: the path, suffix sums, ``dv``, ``dw``."""
     return (np.empty(nj, dtype=np.int64), np.empty((nj + 1, 2, 3)), np.empty((nj + 1, 2, 3)), np.empty(3), np.empty(3))
@@ -331,7 +272,7 @@ def _vjp(chain_i, task_i, position, world_axis, frame, wdot, y, a1, mu, a2, out,
         out[c] += acc
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _workspace(chain_i, task_i, n):
     """Task size and the per-step arrays: joint frames, Jacobians, task velocity, frame, ``A``, its factor, ``y``."""
     m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
@@ -351,7 +292,7 @@ def _workspace(chain_i, task_i, n):
     )
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def pik_rollout(
     chain_f,
     chain_i,
@@ -399,7 +340,7 @@ def pik_rollout(
     return True
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def pik_gradient(
     chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q_traj, u, wdot, dt, grad_u, lam0
 ):
@@ -426,7 +367,7 @@ def pik_gradient(
             for i in range(n):
                 acc += jac[r, i] * v[i]
             mu[r] = acc
-        _solve(low, m, mu)
+        cholesky_solve(low, m, mu)
         for i in range(n):
             acc = v[i]
             for r in range(m):
@@ -444,7 +385,7 @@ def pik_gradient(
     return True
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def pik_command(chain_f, chain_i, task_i, task_f, rho, q, u, wdot, target, gain, qdot_out, error_out):
     """The CLIK command with the nullspace input ``u``: ``qdot = J# (wdot + K e) + N u`` at ``q`` (5.5), (5.100),
     with the task error ``e`` into ``error_out`` (m). ``target`` is the task's rows (position task) or
@@ -487,14 +428,14 @@ SLOTS = 3
 parabolic step's trial."""
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def slot_size(steps, n, nj, m):
     """Floats of one rollout slot of the workspace (see :func:`_slot`) for ``steps`` samples, ``n`` joints, ``nj``
     chain joints and a task of ``m`` rows."""
     return steps * (5 * n + 6 * nj + 12 + m * n + m + m * m) + n
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _slot(work, index, steps, n, nj, m):
     """Views of rollout slot ``index`` of the flat workspace ``work``: the decision variables ``params`` (N, n), the
     inputs ``u`` (N, n), ``q`` (N + 1, n), ``qdot`` (N, n), and what the adjoint pass needs of each sample, kept by
@@ -536,33 +477,10 @@ def _total(terms):
 
 
 @njit(**BORROW)
-def _rollout_slot(
-    chain_f,
-    chain_i,
-    task_i,
-    task_f,
-    objective_f,
-    coll_i,
-    coll_f,
-    coll_p,
-    collision,
-    q0,
-    wdot,
-    dt,
-    augmented,
-    u_b,
-    input_weight,
-    slot,
-    limit,
-    terms,
-    rotation,
-    jac6,
-    b,
-    a,
-    scratch,
-    running,
-):
-    """:func:`pik_rollout` of the slot's ``params`` (the inputs ``u`` formed from them when ``augmented``:
+def _rollout_slot(problem, run, slot, limit, terms, temps):
+    """:func:`pik_rollout` of the problem ``(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f,
+    coll_p, collision)`` from ``run``: ``(q0, wdot, dt, augmented, u_b, input_weight)`` (:func:`pik_optimize`'s
+    arguments) on the slot's ``params`` (the inputs ``u`` formed from them when ``augmented``:
     ``u_k = u_b + dt sum_{l<k} udot_l`` (5.121)), keeping each sample's kinematics and potential gradient in the
     slot for :func:`_adjoint_slot`; the cost terms into ``terms`` (4).
 
@@ -570,7 +488,12 @@ def _rollout_slot(
     the cost is infinite) or ``_ABOVE``: the cost so far exceeds ``limit`` and the rest is not integrated. Every
     term is >= 0 (squares and potentials (5.58), (5.49) with weights >= 0), so the partial sum only grows: a trial
     stopped above the line search's threshold would have been rejected with its whole cost too.
+
+    ``temps``: ``(rotation, jac6, b, a, scratch, running)``, the work arrays of :func:`pik_optimize`.
     """
+    chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision = problem
+    q0, wdot, dt, augmented, u_b, input_weight = run
+    rotation, jac6, b, a, scratch, running = temps
     params, u, q, qdot, grad_h, position, world_axis, frame, jac, y, low = slot
     steps, n = params.shape
     rho, wv = objective_f[0], objective_f[1]
@@ -662,7 +585,7 @@ def _adjoint_slot(
             for i in range(n):
                 acc += jk[r, i] * v[i]
             mu[r] = acc
-        _solve(low[k], m, mu)
+        cholesky_solve(low[k], m, mu)
         for i in range(n):
             acc = v[i]
             for r in range(m):
@@ -685,7 +608,7 @@ def _adjoint_slot(
             grad[k, i] = dt * later + rate * params[k, i]
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def pik_optimize(
     chain_f,
     chain_i,
@@ -743,35 +666,13 @@ def pik_optimize(
     lam, v, nv, mu, grad_q, running = np.empty(n), np.empty(n), np.empty(n), np.empty(m), np.empty(n), np.empty(n)
     vjp_scratch = _vjp_scratch(nj)
     terms = np.zeros((SLOTS, 4))
+    problem = (chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision)
+    run = (q0, wdot, dt, augmented, u_b, input_weight)
+    temps = (rotation, jac6, b, a, scratch, running)
     cur, trial, other = 0, 1, 2
     slot = _slot(work, cur, steps, n, nj, m)
     slot[0][:, :] = initial
-    code = _rollout_slot(
-        chain_f,
-        chain_i,
-        task_i,
-        task_f,
-        objective_f,
-        coll_i,
-        coll_f,
-        coll_p,
-        collision,
-        q0,
-        wdot,
-        dt,
-        augmented,
-        u_b,
-        input_weight,
-        slot,
-        np.inf,
-        terms[cur],
-        rotation,
-        jac6,
-        b,
-        a,
-        scratch,
-        running,
-    )
+    code = _rollout_slot(problem, run, slot, np.inf, terms[cur], temps)
     rollouts = 1
     if code != _OK:
         return code, 0, step, rollouts
@@ -815,32 +716,7 @@ def pik_optimize(
                 for i in range(n):
                     candidate[k, i] = current[k, i] + alpha * direction[k, i]
             threshold = cost + 1e-4 * alpha * slope
-            code = _rollout_slot(
-                chain_f,
-                chain_i,
-                task_i,
-                task_f,
-                objective_f,
-                coll_i,
-                coll_f,
-                coll_p,
-                collision,
-                q0,
-                wdot,
-                dt,
-                augmented,
-                u_b,
-                input_weight,
-                slot,
-                threshold,
-                terms[trial],
-                rotation,
-                jac6,
-                b,
-                a,
-                scratch,
-                running,
-            )
+            code = _rollout_slot(problem, run, slot, threshold, terms[trial], temps)
             rollouts += 1
             if code == SINGULAR:
                 return SINGULAR, iterations, alpha, rollouts
@@ -863,32 +739,7 @@ def pik_optimize(
                 for k in range(steps):
                     for i in range(n):
                         candidate[k, i] = current[k, i] + best * direction[k, i]
-                code = _rollout_slot(
-                    chain_f,
-                    chain_i,
-                    task_i,
-                    task_f,
-                    objective_f,
-                    coll_i,
-                    coll_f,
-                    coll_p,
-                    collision,
-                    q0,
-                    wdot,
-                    dt,
-                    augmented,
-                    u_b,
-                    input_weight,
-                    slot,
-                    trial_cost,
-                    terms[other],
-                    rotation,
-                    jac6,
-                    b,
-                    a,
-                    scratch,
-                    running,
-                )
+                code = _rollout_slot(problem, run, slot, trial_cost, terms[other], temps)
                 rollouts += 1
                 if code == SINGULAR:
                     return SINGULAR, iterations, alpha, rollouts

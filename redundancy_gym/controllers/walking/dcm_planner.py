@@ -26,12 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...constants import GRAVITY
 from ..exceptions import ControllerError
 
 __all__ = ["GRAVITY", "MAX_EXPONENT", "OMEGA_RANGE", "ComState", "DcmPlan", "DcmPlanner", "horizontal_point"]
 
-GRAVITY = 9.81
-"""Gravitational acceleration [m/s^2] of the reduced model."""
 OMEGA_RANGE = (0.1, 100.0)
 """``omega = sqrt(g / z_c)`` [1/s] the planner accepts: a CoM 0.1 mm to 1 km above the ground under Earth's gravity.
 Outside it the exponentials of a step over- or underflow."""

@@ -12,9 +12,11 @@ import numpy as np
 from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
+from ...constants import GRAVITY
+from ...kernel_options import JIT_EXACT
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..ikd.biped_ikd import GRAVITY, BipedIkd, BipedIkdReference
+from ..ikd.biped_ikd import BipedIkd, BipedIkdReference, BipedIkdResult
 from ..ikd.plan_stabilizer import PlanStabilizer
 from ..objectives.objective import Objective
 
@@ -300,14 +302,7 @@ class WalkingIkd:
         dt, model, c = self.dt, self.model, self.config
         shift_x, shift_y = -shift[0], -shift[1]
         t = float(start.time)
-        if (
-            c.planning
-            and double_support is not None
-            and start.step >= 0
-            and start.step != self._step
-            and t >= double_support[0] - 0.5 * dt
-        ):
-            self._replan(start, t, double_support)
+        self._replan_at_new_step(start, t, double_support)
         com, com_velocity = start.com, start.com_velocity
         plan_x, plan_y = float(com[0]), float(com[1])
         plan_xdot, plan_ydot = float(com_velocity[0]), float(com_velocity[1])
@@ -342,31 +337,8 @@ class WalkingIkd:
         views = self._views
         if not views or views[0].base is not self._buffer:  # first use, or a copy's views (copies, not views)
             views = self._views = _buffer_views(self._buffer)
-        (
-            position,
-            rotation,
-            velocity,
-            acceleration,
-            torso_rotation,
-            torso_rate,
-            torso_acceleration,
-            height,
-            moment,
-            plan,
-        ) = views
-        reference = BipedIkdReference(
-            position,
-            rotation,
-            velocity,
-            acceleration,
-            torso_rotation,
-            torso_rate,
-            torso_acceleration,
-            height,
-            moment,
-            plan if c.moment_gain > 0.0 else None,
-            support,
-        )
+        # the views are BipedIkdReference's arrays in its order up to the CoM plan
+        reference = BipedIkdReference._make((*views[:-1], views[-1] if c.moment_gain > 0.0 else None, support))
         result = self.ikd.step(self.q, self.qdot, reference)
         terms = self.ikd.terms
         assert terms is not None
@@ -385,23 +357,18 @@ class WalkingIkd:
         self.qdot = qdot
         if result.success:
             self.q = model.integrate(self.q, qdot, dt)
-        return WalkingIkdStep(
-            self.q.copy(),
-            qdot.copy(),
-            result.qddot,
-            terms.com,
-            com_velocity,
-            realized,
-            ideal.copy(),
-            planning_shift,
-            result.moment,
-            support,
-            lz,
-            result.residual,
-            result.sigma_min,
-            result.success,
-            limited,
-        )
+        return self._period(result, terms.com, com_velocity, realized, ideal, planning_shift, support, lz, limited)
+
+    def _replan_at_new_step(self, start: PatternSample, t: float, double_support: tuple[float, float] | None) -> None:
+        """:meth:`_replan` once per step, at the first period of its double support (planning on)."""
+        if (
+            self.config.planning
+            and double_support is not None
+            and start.step >= 0
+            and start.step != self._step
+            and t >= double_support[0] - 0.5 * self.dt
+        ):
+            self._replan(start, t, double_support)
 
     def _replan(self, start: PatternSample, t: float, double_support: tuple[float, float]) -> None:
         """Restart the plan from the IKD's CoM at the double support's start (once per step)."""
@@ -418,9 +385,9 @@ class WalkingIkd:
         start_reference: NDArray[np.float64],
         end_reference: NDArray[np.float64],
         double_support: tuple[float, float] | None,
-        feet_shift: ArrayLike = (0.0, 0.0),
-        feet_shift_rate: ArrayLike = (0.0, 0.0),
-        zmp: ArrayLike | None = None,
+        feet_shift: ArrayLike,
+        feet_shift_rate: ArrayLike,
+        zmp: ArrayLike | None,
     ) -> WalkingIkdStep:
         """:meth:`step` for any inputs, on NumPy arrays (the fast path's arithmetic, entry by entry)."""
         dt, model, c = self.dt, self.model, self.config
@@ -436,14 +403,7 @@ class WalkingIkd:
         torso_rate = ref[51:54]
         torso_acceleration = (ahead[51:54] - torso_rate) / dt
         t = float(start.time)
-        if (
-            c.planning
-            and double_support is not None
-            and start.step >= 0
-            and start.step != self._step
-            and t >= double_support[0] - 0.5 * dt
-        ):
-            self._replan(start, t, double_support)
+        self._replan_at_new_step(start, t, double_support)
         planned = self.planner.advance(t, dt) if c.planning else None
         ideal = np.asarray(start.zmp if zmp is None else zmp, dtype=np.float64)
         zmp = ideal + (planned.zmp_shift if planned is not None else 0.0)
@@ -484,6 +444,24 @@ class WalkingIkd:
             self.q = model.integrate(self.q, self.qdot, dt)
         else:  # a singular task: hold still rather than integrate zeros into a moving state
             self.qdot = np.zeros(model.nv)
+        planning_shift = planned.zmp_shift if planned is not None else np.zeros(2)
+        return self._period(result, com, com_velocity, realized, ideal, planning_shift, support, lz, limited)
+
+    def _period(
+        self,
+        result: BipedIkdResult,
+        com: NDArray[np.float64],
+        com_velocity: NDArray[np.float64],
+        realized: NDArray[np.float64],
+        ideal: NDArray[np.float64],
+        planning_shift: NDArray[np.float64],
+        support: NDArray[np.float64],
+        lz: float,
+        limited: bool,
+    ) -> WalkingIkdStep:
+        """The period's :class:`WalkingIkdStep`: the state the step left (``q``, ``qdot``), the IKD's ``result``
+        and the period's CoM (at its start), realized and ideal ZMP [m], planning shift [m], support box and
+        ``L_z`` [kg m^2/s]."""
         return WalkingIkdStep(
             self.q.copy(),
             self.qdot.copy(),
@@ -492,7 +470,7 @@ class WalkingIkd:
             com_velocity,
             realized,
             ideal.copy(),
-            planned.zmp_shift if planned is not None else np.zeros(2),
+            planning_shift,
             result.moment,
             support,
             lz,
@@ -543,14 +521,13 @@ def _pair(value: object) -> tuple[float, float] | None:
     return None
 
 
-_JIT = {"cache": True, "error_model": "numpy"}
 _V = types.Array(types.float64, 1, "A", readonly=True)
 _M = types.Array(types.float64, 2, "A", readonly=True)
 _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
 
 
-@njit(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **_JIT)
+@njit(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **JIT_EXACT)
 def _assemble(
     ref,
     ahead,
@@ -593,7 +570,7 @@ def _assemble(
     buffer[68], buffer[69], buffer[70], buffer[71] = plan_x, plan_y, plan_xdot, plan_ydot
 
 
-@njit(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **_JIT)
+@njit(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **JIT_EXACT)
 def _finish(
     centroidal, qdot, qddot, com_acceleration, moment, dt, mass, max_velocity, hold_force, success
 ):  # pragma: no cover - compiled
@@ -610,7 +587,7 @@ def _finish(
     lz = 0.0
     for c in range(nv):
         lz += centroidal[5, c] * qdot[c]
-    force = mass * (9.81 + com_acceleration[2]) if success else hold_force  # GRAVITY
+    force = mass * (GRAVITY + com_acceleration[2]) if success else hold_force
     zmp = np.empty(2)
     zmp[0], zmp[1] = -moment[1] / force, moment[0] / force
     following = np.zeros(nv)

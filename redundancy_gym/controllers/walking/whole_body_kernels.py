@@ -16,10 +16,17 @@ import numpy as np
 from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
-from ...model.chain_kernels import chain_centroidal, chain_forward, chain_integrate, chain_jacobian, place_frame
+from ...kernel_options import JIT
+from ...model.chain_kernels import chain_centroidal, chain_integrate, chain_jacobian, place_frame
 from ..kernels.buffers import float_field, int_field
+from ..kernels.chain_fields import chain_views, forward_chain
 from ..kernels.linalg import rotation_error_into
-from ..objectives.collision_kernels import collision_potential
+from ..objectives.collision_kernels import (
+    COLLISION_FLOAT_FIELDS,
+    COLLISION_INT_FIELDS,
+    collision_potential,
+    collision_views,
+)
 from .ik_kernels import weighted_solve
 
 __all__ = [
@@ -52,15 +59,7 @@ FLOAT_FIELDS: tuple[str, ...] = (
     "limit_parameters",
     "posture_reference",
     "posture_weights",
-    "segment_rotation",
-    "segment_translation",
-    "segment_center",
-    "segment_radius",
-    "segment_world_center",
-    "local",
-    "vertices",
-    "radii",
-    "collision_parameters",
+    *COLLISION_FLOAT_FIELDS,
     "scalars",
     "inputs",
     "outputs",
@@ -80,13 +79,7 @@ INT_FIELDS: tuple[str, ...] = (
     "q_index",
     "v_index",
     "frame_joint",
-    "segment_joint",
-    "segment_starts",
-    "kinds",
-    "segment_pairs",
-    "pair_starts",
-    "volume_a",
-    "volume_b",
+    *COLLISION_INT_FIELDS,
 )
 DIMS: tuple[str, ...] = (
     "joints",
@@ -150,15 +143,8 @@ _NF = len(FLOAT_FIELDS)
     _F_LIMIT_PARAMETERS,
     _F_POSTURE_REFERENCE,
     _F_POSTURE_WEIGHTS,
-    _F_SEGMENT_ROTATION,
-    _F_SEGMENT_TRANSLATION,
-    _F_SEGMENT_CENTER,
-    _F_SEGMENT_RADIUS,
-    _F_SEGMENT_WORLD_CENTER,
-    _F_LOCAL,
-    _F_VERTICES,
-    _F_RADII,
-    _F_COLLISION_PARAMETERS,
+    _F_COLLISION,  # the first of COLLISION_FLOAT_FIELDS (the rest unnamed: collision_views takes the block)
+    *_,
     _F_SCALARS,
     _F_INPUTS,
     _F_OUTPUTS,
@@ -178,40 +164,21 @@ _NF = len(FLOAT_FIELDS)
     _I_Q_INDEX,
     _I_V_INDEX,
     _I_FRAME_JOINT,
-    _I_SEGMENT_JOINT,
-    _I_SEGMENT_STARTS,
-    _I_KINDS,
-    _I_SEGMENT_PAIRS,
-    _I_PAIR_STARTS,
-    _I_VOLUME_A,
-    _I_VOLUME_B,
+    _I_COLLISION,  # the first of COLLISION_INT_FIELDS
+    *_,
 ) = range(_NF, _NF + len(INT_FIELDS))
+# the chain's fields, in the order of kernels.chain_fields
+_CHAIN_FLOATS = (_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS)
+_CHAIN_INTS = (_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX)
 
-_JIT = {"cache": True, "error_model": "numpy", "fastmath": {"contract", "arcp", "nsz"}}
 
-
-@njit(**_JIT)
+@njit(**JIT)
 def _build(f, i, dims, q, reference):
-    """Task Jacobian, error (reference - actual) and ``J_Lz`` at ``q`` into the buffer (as :meth:`WholeBodyIk.build`)."""
+    """Task Jacobian, error (reference - actual) and ``J_Lz`` at ``q`` into the buffer
+    (as :meth:`WholeBodyIk.build`)."""
     nj = dims[0]
-    parent = int_field(i, _I_PARENT)
-    joint_type = int_field(i, _I_JOINT_TYPE)
-    v_index = int_field(i, _I_V_INDEX)
-    rotation = float_field(f, i, _F_ROTATION).reshape((nj, 3, 3))
-    position = float_field(f, i, _F_POSITION).reshape((nj, 3))
-    world_axis = float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(
-        parent,
-        float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-        float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
-        float_field(f, i, _F_AXIS).reshape((nj, 3)),
-        joint_type,
-        int_field(i, _I_Q_INDEX),
-        q,
-        rotation,
-        position,
-        world_axis,
-    )
+    chain = forward_chain(f, i, nj, q, _CHAIN_FLOATS, _CHAIN_INTS)
+    parent, joint_type, v_index, rotation, position, world_axis = chain
     nv = dims[2]
     jac = float_field(f, i, _F_JACOBIAN).reshape((_M, nv))
     jac6 = float_field(f, i, _F_JACOBIAN6).reshape((6, nv))
@@ -221,12 +188,7 @@ def _build(f, i, dims, q, reference):
     scratch = float_field(f, i, _F_SCRATCH)
     com = scratch[0:3]
     chain_centroidal(
-        parent,
-        joint_type,
-        v_index,
-        rotation,
-        position,
-        world_axis,
+        *chain,
         float_field(f, i, _F_BODY_MASS),
         float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
         float_field(f, i, _F_BODY_INERTIA).reshape((nj, 3, 3)),
@@ -263,7 +225,7 @@ def _build(f, i, dims, q, reference):
             rotation_error_into(reference[42:51].reshape((3, 3)), rot, err[15:18])
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def _objectives(f, i, dims, q, gradient):
     """Joint-limit (5.58), posture and self-collision (5.49) gradients at ``q`` (after :func:`_build` at ``q``)
     into ``gradient``; returns ``(value, smallest collision distance computed)``."""
@@ -293,37 +255,14 @@ def _objectives(f, i, dims, q, gradient):
     smallest = np.inf
     if collision:
         nj, ns, nvol, npairs = dims[0], dims[7], dims[8], dims[9]
-        h, smallest = collision_potential(
-            int_field(i, _I_SEGMENT_JOINT),
-            int_field(i, _I_SEGMENT_STARTS),
-            int_field(i, _I_KINDS),
-            int_field(i, _I_SEGMENT_PAIRS).reshape((npairs, 2)),
-            int_field(i, _I_PAIR_STARTS),
-            int_field(i, _I_VOLUME_A),
-            int_field(i, _I_VOLUME_B),
-            float_field(f, i, _F_SEGMENT_ROTATION).reshape((ns, 3, 3)),
-            float_field(f, i, _F_SEGMENT_TRANSLATION).reshape((ns, 3)),
-            float_field(f, i, _F_SEGMENT_CENTER).reshape((ns, 3)),
-            float_field(f, i, _F_SEGMENT_RADIUS),
-            float_field(f, i, _F_SEGMENT_WORLD_CENTER).reshape((ns, 3)),
-            float_field(f, i, _F_LOCAL).reshape((nvol, 3, 3)),
-            float_field(f, i, _F_VERTICES).reshape((nvol, 3, 3)),
-            float_field(f, i, _F_RADII),
-            float_field(f, i, _F_COLLISION_PARAMETERS),
-            int_field(i, _I_PARENT),
-            int_field(i, _I_JOINT_TYPE),
-            int_field(i, _I_V_INDEX),
-            float_field(f, i, _F_ROTATION).reshape((nj, 3, 3)),
-            float_field(f, i, _F_POSITION).reshape((nj, 3)),
-            float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3)),
-            gradient,
-            float_field(f, i, _F_SCRATCH),
-        )
+        coll_i, coll_f, params = collision_views(f, i, _F_COLLISION, _I_COLLISION, ns, nvol, npairs)
+        chain = chain_views(f, i, nj, _CHAIN_FLOATS, _CHAIN_INTS)
+        h, smallest = collision_potential(coll_i, coll_f, params, chain, gradient, float_field(f, i, _F_SCRATCH))
         value += h
     return value, smallest
 
 
-@njit(**_JIT)
+@njit(**JIT)
 def whole_body_step(f, i):
     """One :meth:`WholeBodyIk.step` on the buffers: reads ``inputs`` (q, the start and the end reference) and
     writes ``outputs`` (q at the end of the period, qdot, then :data:`OUTPUT_EXTRA` diagnostics); returns
