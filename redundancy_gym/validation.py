@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,6 +27,8 @@ from numpy.typing import NDArray
 from .kernel_options import BACKENDS
 
 __all__ = [
+    "IntRange",
+    "RealRange",
     "as_real_array",
     "check_backend",
     "check_bool",
@@ -35,11 +37,41 @@ __all__ = [
     "check_range_pair",
     "check_real",
     "check_real_array",
+    "check_required_int",
+    "check_required_real",
     "describe_range",
     "is_real",
 ]
 
 ErrorType = type[Exception]
+
+
+class RealRange(TypedDict, total=False):
+    """The range of a real argument, as :func:`check_real` and :func:`check_range_pair` take it (keywords)."""
+
+    low: float | None
+    """Lower bound (None: unbounded)."""
+    high: float | None
+    """Upper bound (None: unbounded)."""
+    low_open: bool
+    """Exclude ``low`` itself (``> low`` instead of ``>= low``)."""
+    high_open: bool
+    """Exclude ``high`` itself."""
+    unit: str | None
+    """Unit of the bounds in the message (``"m"``, ``"m/s"``)."""
+    note: str | None
+    """Why the range is what it is, said in parentheses after the range."""
+
+
+class IntRange(TypedDict, total=False):
+    """The range of an int argument, as :func:`check_int` takes it (keywords)."""
+
+    low: int | None
+    """Lower bound, included (None: unbounded)."""
+    high: int | None
+    """Upper bound, included (None: unbounded)."""
+    note: str | None
+    """Why the range is what it is, said in parentheses after the range."""
 
 
 def _show(value: Any) -> str:
@@ -130,7 +162,7 @@ def check_real(
     optional: bool = False,
     note: str | None = None,
     error: ErrorType = ValueError,
-) -> float | None:  # type: ignore[return]
+) -> float | None:
     """``value`` as a float when it is a finite real number inside the range; otherwise ``error``.
 
     Args:
@@ -162,7 +194,7 @@ def check_int(
     optional: bool = False,
     note: str | None = None,
     error: ErrorType = ValueError,
-) -> int | None:  # type: ignore[return]
+) -> int | None:
     """``value`` as an int when it is an int (numpy's too; not a bool, not ``3.0``) inside ``[low, high]``."""
     if value is None and optional:
         return None
@@ -175,6 +207,23 @@ def check_int(
     bounds = describe_range(low, high)
     what = f"{'None or ' if optional else ''}an int{' ' + bounds if bounds else ''}"
     raise error(f"{name} must be {what}{_suffix(note)}, got {_show(value)}")
+
+
+def check_required_real(name: str, value: Any, *, error: ErrorType, **bounds: Unpack[RealRange]) -> float:
+    """:func:`check_real` of an argument that has no None: always a float, else ``error`` (for the packages that
+    bind their own exception class)."""
+    x = check_real(name, value, error=error, **bounds)
+    if x is None:  # cannot happen without optional=True; narrows the Optional result
+        raise error(f"{name} must be a finite real number, got None")
+    return x
+
+
+def check_required_int(name: str, value: Any, *, error: ErrorType, **bounds: Unpack[IntRange]) -> int:
+    """:func:`check_int` of an argument that has no None: always an int, else ``error``."""
+    n = check_int(name, value, error=error, **bounds)
+    if n is None:  # cannot happen without optional=True; narrows the Optional result
+        raise error(f"{name} must be an int, got None")
+    return n
 
 
 def check_choice(name: str, value: Any, choices: Sequence[Any], *, error: ErrorType = ValueError) -> Any:
@@ -251,20 +300,12 @@ def as_real_array(name: str, value: Any, *, error: ErrorType = ValueError) -> ND
 
 
 def check_range_pair(
-    name: str,
-    value: Any,
-    *,
-    low: float | None = None,
-    high: float | None = None,
-    low_open: bool = False,
-    high_open: bool = False,
-    integer: bool = False,
-    unit: str | None = None,
-    note: str | None = None,
-    error: ErrorType = ValueError,
+    name: str, value: Any, *, integer: bool = False, error: ErrorType = ValueError, **bounds: Unpack[RealRange]
 ) -> tuple[float, float] | tuple[int, int]:
     """``(low, high)`` of a range argument: two finite real numbers (ints with ``integer``) with
-    ``value[0] <= value[1]``, both inside the bounds ``low``/``high``."""
+    ``value[0] <= value[1]``, both inside the bounds ``low``/``high`` (``bounds``: :class:`RealRange`)."""
+    low, high = bounds.get("low"), bounds.get("high")
+    low_open, high_open = bounds.get("low_open", False), bounds.get("high_open", False)
     pair: Sequence[Any] | None = None
     if isinstance(value, (Sequence, np.ndarray)) and not isinstance(value, (str, bytes)) and len(value) == 2:
         pair = list(value)
@@ -276,10 +317,11 @@ def check_range_pair(
         if good:
             a, b = (int(v) for v in pair) if integer else (float(v) + 0.0 for v in pair)  # no negative zeros
             if a <= b and _within(a, low, high, low_open, high_open) and _within(b, low, high, low_open, high_open):
-                return (a, b)  # type: ignore[return-value]
+                return (a, b)
     kind = "ints" if integer else "finite real numbers"
-    bounds = describe_range(low, high, low_open, high_open, unit)
-    both = f", both {bounds}" if bounds else ""
+    described = describe_range(low, high, low_open, high_open, bounds.get("unit"))
+    both = f", both {described}" if described else ""
     raise error(
-        f"{name} must be a (low, high) pair of {kind} with low <= high{both}{_suffix(note)}, got {_show(value)}"
+        f"{name} must be a (low, high) pair of {kind} with low <= high{both}{_suffix(bounds.get('note'))}, "
+        f"got {_show(value)}"
     )

@@ -4,10 +4,8 @@ The core never imports gymnasium, mujoco, envs, policies, wrappers or eval: :mod
 :mod:`redundancy_gym.wrappers` join controllers and envs.
 """
 
-from .clik.acceleration_clik import AccelerationClik, AccelerationClikResult
-from .clik.clik import Clik, ClikProblem, ClikResult
-from .clik.compiled_clik import CompiledClik
-from .clik.redundancy_resolution import METHODS, Resolution, WeightMatrix, resolve
+from .clik import *  # noqa: F403 - the parent re-exports every name of clik (listed once: clik/__init__.py)
+from .clik import __all__ as _clik_names
 from .exceptions import ControllerError
 from .objectives.collision_objective import CollisionObjective
 from .objectives.joint_limit_objective import JointLimitObjective
@@ -18,16 +16,11 @@ from .tasks.frame_axis_task import FrameAxisTask
 from .tasks.frame_position_task import FramePositionTask
 from .tasks.task import Task
 
+# every name of the clik subpackage, then the others (listed once: clik/__init__.py)
 __all__ = [
+    *_clik_names,
     "DESCENT_METHODS",
-    "METHODS",
-    "AccelerationClik",
-    "AccelerationClikResult",
-    "Clik",
-    "ClikProblem",
-    "ClikResult",
     "CollisionObjective",
-    "CompiledClik",
     "ControllerError",
     "FrameAxisTask",
     "FramePositionTask",
@@ -38,9 +31,6 @@ __all__ = [
     "PredictiveIk",
     "PredictiveResult",
     "PredictiveRollout",
-    "Resolution",
     "Task",
-    "WeightMatrix",
-    "resolve",
     "sum_objectives",
 ]

@@ -21,11 +21,12 @@ from ..assets import (
 )
 from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
-from .exceptions import EnvConfigError, InvalidActionError
+from .exceptions import EnvConfigError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
 from .validation import (
     MAX_FRAME_SKIP,
+    as_action,
     check_bool,
     check_int,
     check_known_arguments,
@@ -34,7 +35,7 @@ from .validation import (
     check_render_arguments,
     constructor_arguments,
     constructor_defaults,
-    render_modes,
+    init_mujoco_env,
 )
 
 __all__ = [
@@ -315,20 +316,13 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         )
         self._push = None if push is None else PushSchedule(push, "torso")
         width, height = check_render_arguments(render_mode, width, height, camera_name)
-        self.metadata = {
-            "render_modes": render_modes("rgb_array", "depth_array"),
-            "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip))),
-        }
-        observation_space = spaces.Box(-np.inf, np.inf, shape=(self.OBSERVATION_SIZE,), dtype=np.float64)
-        MujocoEnv.__init__(
+        init_mujoco_env(
             self,
             str(BIPED_XML),
-            int(frame_skip),
-            observation_space=observation_space,
-            render_mode=render_mode,
-            width=width,
-            height=height,
-            camera_name=camera_name if render_mode is not None else None,
+            frame_skip,
+            _TIMESTEP,
+            self.OBSERVATION_SIZE,
+            (render_mode, width, height, camera_name),
         )
         self._resolve_names()
         if self._push is not None:
@@ -373,14 +367,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     def step(  # type: ignore[override]
         self, action: NDArray[np.floating]
     ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        try:
-            action = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
-            raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
-        if action.shape != (len(BIPED_JOINTS),):
-            raise InvalidActionError(f"action must have shape ({len(BIPED_JOINTS)},), got {action.shape}")
-        if not np.all(np.isfinite(action)):
-            raise InvalidActionError("action must be finite")
+        action = as_action(action, len(BIPED_JOINTS))
         targets = self.targets_from_action(action)
         ctrl = targets.copy()
         if self._velocity_feedforward:

@@ -21,9 +21,10 @@ from ..assets import (
     PLANAR_OBSTACLE_GEOM,
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
-from .exceptions import EnvConfigError, InvalidActionError
+from .exceptions import EnvConfigError
 from .validation import (
     MAX_FRAME_SKIP,
+    as_action,
     check_bool,
     check_int,
     check_known_arguments,
@@ -33,7 +34,7 @@ from .validation import (
     check_render_arguments,
     constructor_arguments,
     constructor_defaults,
-    render_modes,
+    init_mujoco_env,
     warn_if_time_limit_short,
 )
 
@@ -222,21 +223,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
             line_start=self._line_start.tolist(),
             line_end=self._line_end.tolist(),
         )
-        self.metadata = {
-            "render_modes": render_modes("rgb_array", "depth_array"),
-            "render_fps": int(np.round(1.0 / (_TIMESTEP * frame_skip))),
-        }
-        observation_space = spaces.Box(-np.inf, np.inf, shape=(20,), dtype=np.float64)
-        MujocoEnv.__init__(
-            self,
-            str(PLANAR_ARM_XML),
-            int(frame_skip),
-            observation_space=observation_space,
-            render_mode=render_mode,
-            width=width,
-            height=height,
-            camera_name=camera_name if render_mode is not None else None,
-        )
+        init_mujoco_env(self, str(PLANAR_ARM_XML), frame_skip, _TIMESTEP, 20, (render_mode, width, height, camera_name))
         self._resolve_names()
         self._time = 0.0
         self._max_tracking_error = 0.0
@@ -275,14 +262,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     def step(  # type: ignore[override]
         self, action: NDArray[np.floating]
     ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        try:
-            action = np.asarray(action, dtype=np.float64)
-        except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
-            raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
-        if action.shape != (4,):
-            raise InvalidActionError(f"action must have shape (4,), got {action.shape}")
-        if not np.all(np.isfinite(action)):
-            raise InvalidActionError(f"action must be finite, got {action}")
+        action = as_action(action, 4)
         qdot_cmd = self._max_joint_speed * np.clip(action, -1.0, 1.0)
         self.do_simulation(np.concatenate([qdot_cmd, qdot_cmd]), self.frame_skip)
         self._time += self.dt

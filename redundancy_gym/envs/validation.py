@@ -13,14 +13,15 @@ from __future__ import annotations
 import inspect
 from collections.abc import Callable, Mapping
 from functools import partial
-from typing import Any
+from typing import Any, Unpack
 
 import gymnasium as gym
 import numpy as np
+from numpy.typing import NDArray
 
 from .. import validation as _checks
 from ..rendering_backend import can_open_window, require_render_backend, require_window
-from .exceptions import EnvConfigError
+from .exceptions import EnvConfigError, InvalidActionError
 
 __all__ = [
     "MAX_FRAME_SKIP",
@@ -92,49 +93,61 @@ def check_render_backend(render_mode: str | None) -> None:
         require_window()
 
 
-def check_real(
-    name: str,
-    value: Any,
-    *,
-    low: float | None = None,
-    high: float | None = None,
-    low_open: bool = False,
-    high_open: bool = False,
-    unit: str | None = None,
-    note: str | None = None,
-) -> float:
+def init_mujoco_env(
+    env: Any,
+    xml: str,
+    frame_skip: int,
+    timestep: float,
+    observation_size: int,
+    rendering: tuple[str | None, int, int, str | None],
+) -> None:
+    """Gymnasium's ``MujocoEnv.__init__`` for ``env`` on the model ``xml``: ``metadata`` (offscreen render modes,
+    frames per second of the control period ``timestep * frame_skip`` [s]) and an unbounded float64 observation
+    space of ``observation_size``. ``rendering``: ``(render_mode, width, height, camera_name)``, checked by
+    :func:`check_render_arguments` (the camera is passed only when rendering)."""
+    from gymnasium import spaces
+    from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+
+    render_mode, width, height, camera_name = rendering
+    env.metadata = {
+        "render_modes": render_modes("rgb_array", "depth_array"),
+        "render_fps": int(np.round(1.0 / (timestep * frame_skip))),
+    }
+    MujocoEnv.__init__(
+        env,
+        xml,
+        int(frame_skip),
+        observation_space=spaces.Box(-np.inf, np.inf, shape=(observation_size,), dtype=np.float64),
+        render_mode=render_mode,
+        width=width,
+        height=height,
+        camera_name=camera_name if render_mode is not None else None,
+    )
+
+
+def as_action(action: Any, size: int) -> NDArray[np.float64]:
+    """``action`` as a finite float64 vector of ``size`` entries, else :class:`InvalidActionError` saying why."""
+    try:
+        array = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
+        raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
+    if array.shape != (size,):
+        raise InvalidActionError(f"action must have shape ({size},), got {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise InvalidActionError(f"action must be finite, got {array}")
+    return array
+
+
+def check_real(name: str, value: Any, **bounds: Unpack[_checks.RealRange]) -> float:
     """``value`` as a float when it is a finite real number inside the range, else :class:`EnvConfigError`
     (:func:`redundancy_gym.validation.check_real`; no env argument takes None where a number is asked for)."""
-    x = _checks.check_real(
-        name,
-        value,
-        low=low,
-        high=high,
-        low_open=low_open,
-        high_open=high_open,
-        unit=unit,
-        note=note,
-        error=EnvConfigError,
-    )
-    if x is None:  # cannot happen without optional=True; narrows the shared check's Optional result
-        raise EnvConfigError(f"{name} must be a finite real number, got None")
-    return x
+    return _checks.check_required_real(name, value, error=EnvConfigError, **bounds)
 
 
-def check_int(
-    name: str,
-    value: Any,
-    *,
-    low: int | None = None,
-    high: int | None = None,
-    note: str | None = None,
-) -> int:
+def check_int(name: str, value: Any, **bounds: Unpack[_checks.IntRange]) -> int:
     """``value`` as an int when it is an int inside ``[low, high]``, else :class:`EnvConfigError`
     (:func:`redundancy_gym.validation.check_int`)."""
-    n = _checks.check_int(name, value, low=low, high=high, note=note, error=EnvConfigError)
-    if n is None:  # cannot happen without optional=True; narrows the shared check's Optional result
-        raise EnvConfigError(f"{name} must be an int, got None")
-    return n
+    return _checks.check_required_int(name, value, error=EnvConfigError, **bounds)
 
 
 def positive(value: float, name: str) -> float:

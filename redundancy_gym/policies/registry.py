@@ -178,12 +178,12 @@ def lookup(name: Any, kind: str, error: type[Exception] = PolicyError) -> Regist
 
 
 def action_wrapper(env: Any) -> Any:
-    """The outermost wrapper in ``env``'s chain that declares ``CAPABILITIES`` itself (an action wrapper of this
-    package), or None."""
+    """The outermost wrapper in ``env``'s chain whose own class hierarchy declares ``CAPABILITIES`` (an action
+    wrapper of this package; a plain ``gym.Wrapper`` only forwards the env's), or None."""
     current, seen = env, 0
     while current is not None and seen < 64:
         if (
-            "CAPABILITIES" in type(current).__dict__
+            any("CAPABILITIES" in vars(cls) for cls in type(current).__mro__)
             and hasattr(current, "env")
             and current is not getattr(current, "unwrapped", current)
         ):

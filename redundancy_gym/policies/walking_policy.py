@@ -24,6 +24,7 @@ from ..model import RobotModel
 from .exceptions import PolicyError
 from .options import config_from_options, env_with_attributes
 from .per_env_policy import PerEnvPolicy
+from .registry import CAPABILITY_ATTRIBUTES
 
 __all__ = ["WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
 
@@ -125,19 +126,7 @@ class WalkingPolicy(PerEnvPolicy):
 
     def __init__(self, env: Any, **kwargs: Any) -> None:
         self.config = config_from_options(WalkingPolicyConfig, kwargs)
-        base = env_with_attributes(
-            env,
-            (
-                "OBSERVATION_LAYOUT",
-                "ROBOT_XML",
-                "SOFT_LIMIT_MARGIN",
-                "joint_limits",
-                "nominal_configuration",
-                "action_scale",
-                "dt",
-            ),
-            "walking",
-        )
+        base = env_with_attributes(env, CAPABILITY_ATTRIBUTES["biped"], "walking")  # what a biped env promises
         layout = base.OBSERVATION_LAYOUT
         needed = ("base_position", "q", "qdot", "right_force", "left_torque", "command")
         if any(k not in layout for k in needed):

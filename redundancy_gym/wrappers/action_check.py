@@ -4,7 +4,7 @@ reference policy's options."""
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
 from gymnasium import spaces
@@ -75,27 +75,13 @@ def check_bool(name: str, value: Any) -> bool:
     return validation.check_bool(name, value, error=WrapperError)
 
 
-def check_real(
-    name: str,
-    value: Any,
-    *,
-    low: float | None = None,
-    high: float | None = None,
-    low_open: bool = False,
-    unit: str | None = None,
-) -> float:
+def check_real(name: str, value: Any, **bounds: Unpack[validation.RealRange]) -> float:
     """``value`` as a float when it is a finite real number inside the range, else :class:`WrapperError`
     (:func:`redundancy_gym.validation.check_real`; no wrapper option takes None where a number is asked for)."""
-    x = validation.check_real(name, value, low=low, high=high, low_open=low_open, unit=unit, error=WrapperError)
-    if x is None:  # cannot happen without optional=True; narrows the shared check's Optional result
-        raise WrapperError(f"{name} must be a finite real number, got None")
-    return x
+    return validation.check_required_real(name, value, error=WrapperError, **bounds)
 
 
-def check_int(name: str, value: Any, *, low: int | None = None, high: int | None = None) -> int:
+def check_int(name: str, value: Any, **bounds: Unpack[validation.IntRange]) -> int:
     """``value`` as an int when it is an int inside ``[low, high]``, else :class:`WrapperError`
     (:func:`redundancy_gym.validation.check_int`)."""
-    n = validation.check_int(name, value, low=low, high=high, error=WrapperError)
-    if n is None:  # cannot happen without optional=True; narrows the shared check's Optional result
-        raise WrapperError(f"{name} must be an int, got None")
-    return n
+    return validation.check_required_int(name, value, error=WrapperError, **bounds)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -14,6 +14,7 @@ from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
 from .action_check import check_action, check_bool, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
+from .reference_wrapper import ReferenceActionWrapper
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
 
@@ -46,7 +47,7 @@ def _without_objectives(env: gym.Env) -> dict[str, Any]:
     return {"joint_limit_weight": 0.0, "collision_avoidance": "off", **({} if grasp else {"posture_weight": 0.0})}
 
 
-class NullspaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class NullspaceAction(ReferenceActionWrapper):
     """The redundancy resolution as the action: CLIK tracks the env's reference, the learner chooses ``u``.
 
     ## Description
@@ -71,22 +72,15 @@ class NullspaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``nullspace_fraction`` (the fraction of ``u`` applied, 1 unless a speed limit scaled it).
 
     ## Arguments
-    ``env`` and the fields of :class:`NullspaceActionConfig` as keyword arguments.
-
-    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
-    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
-    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
+    ``env`` and the options (recorded as :class:`~redundancy_gym.wrappers.reference_wrapper.ReferenceActionWrapper`
+    records them, instead of the env): the fields of :class:`NullspaceActionConfig` as keyword arguments.
 
     ## Version History
     - v0: initial version.
     """
 
-    # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
-    CAPABILITIES: frozenset[str] = frozenset()
-
-    # the ``clik`` reference this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
+    # reference: the ``clik`` policy this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
     # controller, task reference and joint speeds), used by duck typing as the registry builds it
-    reference: Any
 
     def __init__(
         self,
@@ -95,9 +89,7 @@ class NullspaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         objectives: bool = False,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        gym.Wrapper.__init__(self, env)
-        self.controller_time_us = 0.0
-        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
+        self._wrap(env)
         self.config = NullspaceActionConfig(
             max_nullspace_speed=check_real(
                 "max_nullspace_speed", max_nullspace_speed, low=0.0, high=1.0, low_open=True
@@ -105,8 +97,7 @@ class NullspaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
             objectives=check_bool("objectives", objectives),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "NullspaceAction"),
         )
-        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
-        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
+        self._record(self.config)
         options = (
             dict(self.config.policy_kwargs) if objectives else {**_without_objectives(env), **self.config.policy_kwargs}
         )

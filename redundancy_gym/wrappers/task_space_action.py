@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -17,6 +17,7 @@ from ..geometry import SSV, Segment
 from ..policies import PolicyError, make_policy
 from .action_check import check_action, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
+from .reference_wrapper import ReferenceActionWrapper
 
 __all__ = ["TaskSpaceAction", "TaskSpaceActionConfig"]
 
@@ -124,7 +125,7 @@ def _scene_obstacles(base: Any) -> list[Segment] | None:
     return segments
 
 
-class TaskSpaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class TaskSpaceAction(ReferenceActionWrapper):
     """The action is a task-space velocity; the compiled CLIK of the ``clik`` reference, with joint-limit and
     collision avoidance (self and environment) in its nullspace, turns it into the env's joint command.
 
@@ -153,22 +154,15 @@ class TaskSpaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``clik_limited`` and ``target_lag`` (distance of the TCP target from the TCP [m]).
 
     ## Arguments
-    ``env`` and the fields of :class:`TaskSpaceActionConfig` as keyword arguments.
-
-    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
-    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
-    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
+    ``env`` and the options (recorded as :class:`~redundancy_gym.wrappers.reference_wrapper.ReferenceActionWrapper`
+    records them, instead of the env): the fields of :class:`TaskSpaceActionConfig` as keyword arguments.
 
     ## Version History
     - v0: initial version.
     """
 
-    # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
-    CAPABILITIES: frozenset[str] = frozenset()
-
-    # the ``clik`` reference this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
+    # reference: the ``clik`` policy this wrapper drives (ClikPolicy on PlanarReach, GraspClikPolicy on AgriReach: their
     # controller, model, collision model and obstacle planning differ), used by duck typing as the registry builds it
-    reference: Any
 
     def __init__(
         self,
@@ -181,9 +175,7 @@ class TaskSpaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         stop_distance: float = TaskSpaceActionConfig.stop_distance,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        gym.Wrapper.__init__(self, env)
-        self.controller_time_us = 0.0
-        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
+        self._wrap(env)
         self.config = TaskSpaceActionConfig(
             max_speed=check_real("max_speed", max_speed, low=0.0, high=2.0, low_open=True, unit="m/s"),
             max_turn_rate=check_real("max_turn_rate", max_turn_rate, low=0.0, high=6.0, low_open=True, unit="rad/s"),
@@ -193,8 +185,7 @@ class TaskSpaceAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
             stop_distance=check_real("stop_distance", stop_distance, low=0.0, unit="m"),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "TaskSpaceAction"),
         )
-        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
-        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
+        self._record(self.config)
         if self.config.stop_distance >= self.config.guard_distance:
             raise WrapperError(f"stop_distance={stop_distance!r} must be below guard_distance={guard_distance!r} [m]")
         options = {"collision_avoidance": "on", **self.config.policy_kwargs}

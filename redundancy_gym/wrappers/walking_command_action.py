@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any, SupportsFloat
 
 import gymnasium as gym
@@ -13,6 +13,7 @@ from numpy.typing import NDArray
 from ..policies import PolicyError, make_policy
 from .action_check import check_action, check_int, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
+from .reference_wrapper import ReferenceActionWrapper
 
 __all__ = ["WalkingCommandAction", "WalkingCommandActionConfig"]
 
@@ -63,7 +64,7 @@ def _hold(held: dict[str, Any], info: dict[str, Any]) -> None:
             held[key] = min(held.get(key, np.inf), float(value))
 
 
-class WalkingCommandAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
+class WalkingCommandAction(ReferenceActionWrapper):
     """The action is a walking velocity and yaw rate; the ``walking`` reference (DCM pattern, stabilizer, step
     adjustment, whole-body CLIK) turns it into the biped's joint targets every control period.
 
@@ -92,22 +93,15 @@ class WalkingCommandAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
     ``commanded_yaw_rate`` [rad/s] and ``step_adjusted`` (the push-recovery step adjustment acted in this period).
 
     ## Arguments
-    ``env`` and the fields of :class:`WalkingCommandActionConfig` as keyword arguments.
-
-    The wrapper records these arguments (``gymnasium.utils.RecordConstructorArgs``), checked and with their defaults
-    filled in (``policy_kwargs=None`` as ``{}``), not the env: ``env.spec`` lists them, so ``gym.make(env.spec)``
-    rebuilds the whole stack and Gymnasium's ``check_env`` accepts the wrapper applied by hand.
+    ``env`` and the options (recorded as :class:`~redundancy_gym.wrappers.reference_wrapper.ReferenceActionWrapper`
+    records them, instead of the env): the fields of :class:`WalkingCommandActionConfig` as keyword arguments.
 
     ## Version History
     - v0: initial version; the yaw rate (the action's third entry) was added later under the same id.
     """
 
-    # the action is no longer the env's joint command: no reference policy reads it (redundancy_gym.policies)
-    CAPABILITIES: frozenset[str] = frozenset()
-
-    # the ``walking`` reference this wrapper drives (WalkingPolicy: its controller, commands and episode start),
+    # reference: the ``walking`` policy this wrapper drives (WalkingPolicy: its controller, commands, episode start),
     # used by duck typing as the registry builds it
-    reference: Any
 
     def __init__(
         self,
@@ -119,9 +113,7 @@ class WalkingCommandAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         command_period: int = WalkingCommandActionConfig.command_period,
         policy_kwargs: dict[str, Any] | None = None,
     ) -> None:
-        gym.Wrapper.__init__(self, env)
-        self.controller_time_us = 0.0
-        """Compute time of this wrapper's controller in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
+        self._wrap(env)
         self.config = WalkingCommandActionConfig(
             min_forward_speed=check_real("min_forward_speed", min_forward_speed, low=0.0, high=0.75, unit="m/s"),
             max_forward_speed=check_real("max_forward_speed", max_forward_speed, low=0.0, high=0.75, unit="m/s"),
@@ -130,8 +122,7 @@ class WalkingCommandAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
             command_period=check_int("command_period", command_period, low=1, high=1000),
             policy_kwargs=check_policy_kwargs(policy_kwargs, "WalkingCommandAction"),
         )
-        # the validated options, not the env: env.spec lists them, so gym.make(env.spec) rebuilds this wrapper
-        gym.utils.RecordConstructorArgs.__init__(self, _disable_deepcopy=True, **asdict(self.config))
+        self._record(self.config)
         if self.config.min_forward_speed >= self.config.max_forward_speed:
             raise WrapperError(
                 f"min_forward_speed={min_forward_speed!r} must be below max_forward_speed={max_forward_speed!r} [m/s]"

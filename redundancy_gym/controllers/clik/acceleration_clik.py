@@ -1,18 +1,17 @@
-"""Acceleration-level closed-loop inverse kinematics, resolved acceleration control (monograph 5.1.3, (5.18), (5.19))."""
+"""Acceleration-level closed-loop inverse kinematics: resolved acceleration control (monograph 5.1.3, (5.18)-(5.19))."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import NamedTuple, Protocol
+from typing import NamedTuple, Protocol, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
 from ..exceptions import ControllerError
-from ..objectives.objective import Objective, sum_objectives
+from ..objectives.objective import sum_objectives
 from ..tasks.task import Task
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
+from .redundancy_resolution import METHODS, ResolutionOptions, ResolvedController, check_configuration, check_finite
 
 __all__ = ["AccelerationClik", "AccelerationClikResult", "DriftTask"]
 
@@ -54,7 +53,7 @@ class AccelerationClikResult(NamedTuple):
     limited: bool = False
 
 
-class AccelerationClik:
+class AccelerationClik(ResolvedController[DriftTask]):
     """``J qddot = wddot_d + K_D (wdot_d - J qdot) + K_P (w_d - w) - Jdot qdot`` (5.18), (5.19).
 
     Redundancy is resolved as at velocity level with the nullspace vector
@@ -94,13 +93,9 @@ class AccelerationClik:
         weights: ArrayLike | float = 1.0,
         nullspace_gain: float = 1.0,
         nullspace_damping: float = 10.0,
-        objectives: Sequence[Objective] = (),
-        singular_threshold: float = 1e-6,
-        dls_threshold: float = 0.05,
-        dls_max_damping: float = 0.01,
-        max_joint_velocity: ArrayLike | float | None = None,
-        period: float | None = None,
+        **options: Unpack[ResolutionOptions],
     ) -> None:
+        objectives, thresholds, max_joint_velocity, period = self._read_options(options)
         if method not in METHODS:
             raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
         if not hasattr(task, "drift"):
@@ -115,17 +110,9 @@ class AccelerationClik:
         ):
             if not np.all(np.isfinite(value)) or np.any(np.asarray(value) < 0.0):
                 raise ControllerError(f"{name} must be finite and >= 0")
-        self.model = model
-        self.task = task
-        self.method = method
-        self.weights = WeightMatrix(weights, model.nv)
-        self.nullspace_gain = float(nullspace_gain)
+        self._set_resolution(model, task, method, weights, nullspace_gain)
         self.nullspace_damping = float(nullspace_damping)
-        self.objectives = tuple(objectives)
-        self.singular_threshold = float(singular_threshold)
-        self.dls_threshold = float(dls_threshold)
-        self.dls_max_damping = float(dls_max_damping)
-        self.bounds = JointBounds(model, max_joint_velocity, period)
+        self._set_options(objectives, thresholds, max_joint_velocity, period)
 
     def step(
         self,
@@ -150,16 +137,7 @@ class AccelerationClik:
         acceleration = target_acceleration + self.kd * velocity_error + self.kp * error  # (5.19)
         value, gradient = sum_objectives(self.objectives, self.model, q)
         z = self.nullspace_gain * gradient + self.nullspace_damping * self.weights.apply(qdot)
-        res = resolve(
-            jacobian,
-            acceleration - drift,
-            z,
-            self.weights,
-            method=self.method,
-            singular_threshold=self.singular_threshold,
-            dls_threshold=self.dls_threshold,
-            dls_max_damping=self.dls_max_damping,
-        )
+        res = self._resolve(jacobian, acceleration - drift, z)
         qddot, limited = self.bound(res.x, q, qdot)
         return AccelerationClikResult(
             qddot,

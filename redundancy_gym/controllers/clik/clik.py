@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import NamedTuple
+from typing import NamedTuple, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -12,7 +11,7 @@ from ...model import RobotModel
 from ..exceptions import ControllerError
 from ..objectives.objective import Objective, sum_objectives
 from ..tasks.task import Task
-from .redundancy_resolution import METHODS, JointBounds, WeightMatrix, check_configuration, check_finite, resolve
+from .redundancy_resolution import METHODS, ResolutionOptions, ResolvedController, check_configuration, check_finite
 
 __all__ = ["Clik", "ClikProblem", "ClikResult"]
 
@@ -67,7 +66,7 @@ class ClikResult(NamedTuple):
     limited: bool = False
 
 
-class Clik:
+class Clik(ResolvedController[Task]):
     """Velocity-level CLIK ``qdot = J#_W (wdot_d + K e) - alpha N_W W^-1 (dH/dq)^T`` (5.5), (5.14), plus an
     optional nullspace input ``N_W u`` (5.100) given to :meth:`step`.
 
@@ -109,13 +108,9 @@ class Clik:
         gain: ArrayLike | float = 10.0,
         weights: ArrayLike | float = 1.0,
         nullspace_gain: float = 1.0,
-        objectives: Sequence[Objective] = (),
-        singular_threshold: float = 1e-6,
-        dls_threshold: float = 0.05,
-        dls_max_damping: float = 0.01,
-        max_joint_velocity: ArrayLike | float | None = None,
-        period: float | None = None,
+        **options: Unpack[ResolutionOptions],
     ) -> None:
+        objectives, thresholds, max_joint_velocity, period = self._read_options(options)
         if method not in METHODS:
             raise ControllerError(f"unknown method {method!r}; valid methods: {', '.join(METHODS)}")
         gain_arr = np.broadcast_to(np.asarray(gain, dtype=np.float64), (task.dim,)).copy()
@@ -123,27 +118,15 @@ class Clik:
             raise ControllerError("gain must be finite and >= 0")
         if not np.isfinite(nullspace_gain) or nullspace_gain < 0.0:
             raise ControllerError(f"nullspace_gain must be finite and >= 0, got {nullspace_gain!r}")
-        for name, value in (
-            ("singular_threshold", singular_threshold),
-            ("dls_threshold", dls_threshold),
-            ("dls_max_damping", dls_max_damping),
-        ):
+        for name, value in zip(("singular_threshold", "dls_threshold", "dls_max_damping"), thresholds, strict=True):
             if not np.isfinite(value) or value <= 0.0:
                 raise ControllerError(f"{name} must be finite and > 0, got {value!r}")
         for objective in objectives:
             if not isinstance(objective, Objective):
                 raise ControllerError(f"{objective!r} has no evaluate(model, q) method")
-        self.model = model
-        self.task = task
-        self.method = method
+        self._set_resolution(model, task, method, weights, nullspace_gain)
+        self._set_options(objectives, thresholds, max_joint_velocity, period)
         self.gain = gain_arr
-        self.weights = WeightMatrix(weights, model.nv)
-        self.nullspace_gain = float(nullspace_gain)
-        self.objectives = tuple(objectives)
-        self.singular_threshold = float(singular_threshold)
-        self.dls_threshold = float(dls_threshold)
-        self.dls_max_damping = float(dls_max_damping)
-        self.bounds = JointBounds(model, max_joint_velocity, period)
 
     @property
     def max_joint_velocity(self) -> NDArray[np.float64]:
@@ -183,16 +166,7 @@ class Clik:
                 raise ControllerError(f"nullspace_input must be finite with shape ({self.model.nv},), got {u.shape}")
             wu = self.weights.apply(u)
             z = -wu if z is None else z - wu
-        res = resolve(
-            problem.jacobian,
-            problem.velocity,
-            z,
-            self.weights,
-            method=self.method,
-            singular_threshold=self.singular_threshold,
-            dls_threshold=self.dls_threshold,
-            dls_max_damping=self.dls_max_damping,
-        )
+        res = self._resolve(problem.jacobian, problem.velocity, z)
         qdot, limited = self.bounds.apply(res.x, problem.q)
         return ClikResult(
             qdot,

@@ -22,16 +22,14 @@ from numpy.typing import NDArray
 from ...geometry.potentials import piecewise_potential_kernel
 from ...kernel_options import BORROW
 from ...model.chain_kernels import chain_jacobian, place_frame
+from ..kernels import chain_fields as _chain
 from ..kernels.buffers import borrowed_float_field, borrowed_int_field, pack_fields
-from ..kernels.chain_fields import chain_views, forward_chain
+from ..kernels.chain_fields import chain_indices, chain_views, field_index, forward_chain
 from ..kernels.linalg import cholesky_factor, cholesky_solve
-from ..objectives.collision_kernels import (
-    COLLISION_FLOAT_FIELDS,
-    COLLISION_INT_FIELDS,
-    close_pair_rows,
-    collision_potential,
-    collision_views,
-)
+from ..objectives import collision_kernels as _collision
+from ..objectives import objective_fields as _objective_fields
+from ..objectives.collision_kernels import close_pair_rows, collision_potential, collision_views
+from ..objectives.objective_fields import LIMIT_LOWER, LIMIT_PARAMETERS, LIMIT_UPPER, POSTURE_REFERENCE, POSTURE_WEIGHTS
 from .redundancy_resolution import BOUND_ROUND_OFF, MAX_COORDINATE
 
 __all__ = [
@@ -49,23 +47,15 @@ __all__ = [
 ]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation",
-    "placement_translation",
-    "axis",
-    "rotation",
-    "position",
-    "world_axis",
+    *_chain.CHAIN_PLACEMENT_FIELDS,
+    *_chain.CHAIN_STATE_FIELDS,
     "task_rotation",
     "task_translation",
     "gain",
     "inverse_weights",
     "scalars",
-    "limit_lower",
-    "limit_upper",
-    "limit_parameters",
-    "posture_reference",
-    "posture_weights",
-    *COLLISION_FLOAT_FIELDS,
+    *_objective_fields.OBJECTIVE_FLOAT_FIELDS,
+    *_collision.COLLISION_FLOAT_FIELDS,
     "inputs",
     "outputs",
     "jacobian6",
@@ -78,12 +68,9 @@ FLOAT_FIELDS: tuple[str, ...] = (
 )
 INT_FIELDS: tuple[str, ...] = (
     "dims",
-    "parent",
-    "joint_type",
-    "q_index",
-    "v_index",
+    *_chain.CHAIN_INT_FIELDS,
     "task_rows",
-    *COLLISION_INT_FIELDS,
+    *_collision.COLLISION_INT_FIELDS,
     "position_q_index",
     "position_v_index",
 )
@@ -93,12 +80,8 @@ DIMS: tuple[str, ...] = (
     "nv",
     "nq",
     "task_dim",
-    "limit_objectives",
-    "posture_objectives",
-    "segments",
-    "volumes",
-    "pairs",
-    "volume_pairs",
+    *_objective_fields.OBJECTIVE_DIMS,
+    *_collision.COLLISION_COUNTS,
     "task_kind",
     "task_joint",
     "task_axis",
@@ -117,52 +100,30 @@ STEPPED = 7  # index of the stepped flag among the extra outputs
 # entries of the "scalars" field
 SCALARS: tuple[str, ...] = ("nullspace_gain", "singular_threshold", "dls_threshold", "dls_max_damping", "period")
 
-_NF = len(FLOAT_FIELDS)
-(
-    _F_PLACEMENT_ROTATION,
-    _F_PLACEMENT_TRANSLATION,
-    _F_AXIS,
-    _F_ROTATION,
-    _F_POSITION,
-    _F_WORLD_AXIS,
-    _F_TASK_ROTATION,
-    _F_TASK_TRANSLATION,
-    _F_GAIN,
-    _F_INVERSE_WEIGHTS,
-    _F_SCALARS,
-    _F_LIMIT_LOWER,
-    _F_LIMIT_UPPER,
-    _F_LIMIT_PARAMETERS,
-    _F_POSTURE_REFERENCE,
-    _F_POSTURE_WEIGHTS,
-    _F_COLLISION,  # the first of COLLISION_FLOAT_FIELDS (the rest unnamed: collision_views takes the block)
-    *_,
-    _F_INPUTS,
-    _F_OUTPUTS,
-    _F_JACOBIAN6,
-    _F_JACOBIAN,
-    _F_GRADIENT,
-    _F_SCRATCH,
-    _F_MAX_VELOCITY,
-    _F_POSITION_LOWER,
-    _F_POSITION_UPPER,
-) = range(_NF)
-(
-    _I_DIMS,
-    _I_PARENT,
-    _I_JOINT_TYPE,
-    _I_Q_INDEX,
-    _I_V_INDEX,
-    _I_TASK_ROWS,
-    _I_COLLISION,  # the first of COLLISION_INT_FIELDS (the rest unnamed: collision_views takes the block)
-    *_,
-    _I_POSITION_Q_INDEX,
-    _I_POSITION_V_INDEX,
-) = range(_NF, _NF + len(INT_FIELDS))
-
-# the chain's fields, in the order of kernels.chain_fields
-_CHAIN_FLOATS = (_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS)
-_CHAIN_INTS = (_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX)
+_F = field_index(FLOAT_FIELDS)
+_F_TASK_ROTATION = _F["task_rotation"]
+_F_TASK_TRANSLATION = _F["task_translation"]
+_F_GAIN = _F["gain"]
+_F_INVERSE_WEIGHTS = _F["inverse_weights"]
+_F_SCALARS = _F["scalars"]
+_F_INPUTS = _F["inputs"]
+_F_OUTPUTS = _F["outputs"]
+_F_JACOBIAN6 = _F["jacobian6"]
+_F_JACOBIAN = _F["jacobian"]
+_F_GRADIENT = _F["gradient"]
+_F_SCRATCH = _F["scratch"]
+_F_MAX_VELOCITY = _F["max_velocity"]
+_F_POSITION_LOWER = _F["position_lower"]
+_F_POSITION_UPPER = _F["position_upper"]
+_F_OBJECTIVES = _F[_objective_fields.OBJECTIVE_FLOAT_FIELDS[0]]  # the objectives' block: + LIMIT_LOWER, ...
+_F_COLLISION = _F[_collision.COLLISION_FLOAT_FIELDS[0]]  # the collision block (collision_views takes it)
+_I = field_index(INT_FIELDS, len(FLOAT_FIELDS))
+_I_DIMS = _I["dims"]
+_I_TASK_ROWS = _I["task_rows"]
+_I_POSITION_Q_INDEX = _I["position_q_index"]
+_I_POSITION_V_INDEX = _I["position_v_index"]
+_I_COLLISION = _I[_collision.COLLISION_INT_FIELDS[0]]  # and its int block
+_CHAIN_FLOATS, _CHAIN_INTS = chain_indices(FLOAT_FIELDS, INT_FIELDS)  # in the order of kernels.chain_fields
 
 # return codes of clik_step
 OK, BAD_CONFIGURATION, BAD_TARGET, ZERO_AXIS, BAD_VELOCITY, BAD_INPUT = range(6)
@@ -458,9 +419,9 @@ def _step(f, i, has_velocity, has_input):
     gradient = _fv(f, i, _F_GRADIENT)
     gradient[:] = 0.0
     value = 0.0
-    lower = _fv(f, i, _F_LIMIT_LOWER)
-    upper = _fv(f, i, _F_LIMIT_UPPER)
-    lp = _fv(f, i, _F_LIMIT_PARAMETERS)
+    lower = _fv(f, i, _F_OBJECTIVES + LIMIT_LOWER)
+    upper = _fv(f, i, _F_OBJECTIVES + LIMIT_UPPER)
+    lp = _fv(f, i, _F_OBJECTIVES + LIMIT_PARAMETERS)
     for o in range(n_limits):  # (5.58) on the distance to each limit
         da, slope, ratio, weight = lp[4 * o], lp[4 * o + 1], lp[4 * o + 2], lp[4 * o + 3]
         for k in range(nq):
@@ -468,8 +429,8 @@ def _step(f, i, has_velocity, has_input):
             h1, d1, _ = piecewise_potential_kernel(upper[o * nq + k] - q[k], da, slope, ratio)
             value += weight * (h0 + h1)
             gradient[k] += weight * (d0 - d1)
-    reference = _fv(f, i, _F_POSTURE_REFERENCE)
-    pw = _fv(f, i, _F_POSTURE_WEIGHTS)
+    reference = _fv(f, i, _F_OBJECTIVES + POSTURE_REFERENCE)
+    pw = _fv(f, i, _F_OBJECTIVES + POSTURE_WEIGHTS)
     for o in range(n_postures):
         for k in range(nq):
             delta = q[k] - reference[o * nq + k]

@@ -9,9 +9,11 @@ from ...geometry import PackedVolumes
 from ...model import ModelError
 from ..exceptions import ControllerError
 from ..kernels.buffers import buffer_view, compiled_entry_point
-from ..objectives.collision_kernels import bounding_spheres, collision_fields
+from ..kernels.chain_fields import chain_arrays
+from ..objectives.collision_kernels import bounding_spheres, collision_fields, no_collision_arrays
 from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.objective_fields import objective_arrays
 from ..objectives.posture_objective import PostureObjective
 from ..tasks.frame_axis_task import FrameAxisTask
 from ..tasks.frame_position_task import FramePositionTask
@@ -40,6 +42,7 @@ from .redundancy_resolution import as_float_array, check_configuration, check_fi
 __all__ = ["CompiledClik"]
 
 SUPPORTED_TASKS = (FrameAxisTask, FramePositionTask)
+_OptionalArray = ArrayLike | None
 SUPPORTED_OBJECTIVES = (JointLimitObjective, PostureObjective, CollisionObjective)
 
 
@@ -112,17 +115,12 @@ class CompiledClik:
         for o in limits:
             if o.lower.shape != (nq,):
                 raise ControllerError(f"joint-limit objective has {o.lower.size} joints, the model {nq}")
-        for o in postures:
-            if o.reference.shape != (nq,):
-                raise ControllerError(f"posture objective has {o.reference.size} joints, the model {nq}")
+        for p in postures:
+            if p.reference.shape != (nq,):
+                raise ControllerError(f"posture objective has {p.reference.size} joints, the model {nq}")
         self.collision: CollisionObjective | None = collisions[0] if collisions else None
-        floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation,
-            "placement_translation": chain.placement_translation,
-            "axis": chain.axis,
-            "rotation": np.zeros((nj, 3, 3)),
-            "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)),
+        floats, ints = chain_arrays(chain)
+        floats |= {
             "task_rotation": frame_rotation,
             "task_translation": frame_translation,
             "gain": clik.gain,
@@ -136,16 +134,7 @@ class CompiledClik:
                     clik.bounds.period or 0.0,
                 ]
             ),
-            "limit_lower": np.array([o.lower for o in limits]),
-            "limit_upper": np.array([o.upper for o in limits]),
-            "limit_parameters": np.array(
-                [
-                    (o.potential.activation_distance, o.potential.slope, o.potential.switch_ratio, o.weight)
-                    for o in limits
-                ]
-            ),
-            "posture_reference": np.array([o.reference for o in postures]),
-            "posture_weights": np.array([o.weights for o in postures]),
+            **objective_arrays(limits, postures),
             "inputs": np.zeros(nq + 12 + nv),
             "outputs": np.zeros(nv + m + OUTPUT_EXTRA),
             "jacobian6": np.zeros((6, nv)),
@@ -156,11 +145,7 @@ class CompiledClik:
             "position_lower": clik.bounds.lower,
             "position_upper": clik.bounds.upper,
         }
-        ints: dict[str, NDArray[np.int64]] = {
-            "parent": chain.parent,
-            "joint_type": chain.joint_type,
-            "q_index": chain.q_index,
-            "v_index": chain.v_index,
+        ints |= {
             "task_rows": task.rows if isinstance(task, FramePositionTask) else np.zeros(0, dtype=np.int64),
             "position_q_index": clik.bounds.q_index,
             "position_v_index": clik.bounds.v_index,
@@ -207,29 +192,10 @@ class CompiledClik:
     ) -> dict[str, int]:
         """The collision model's segments, volumes and pairs into the kernel fields; returns their counts."""
         if self.collision is None:
-            for name in (
-                "segment_rotation",
-                "segment_translation",
-                "segment_center",
-                "segment_radius",
-                "segment_world_center",
-                "local",
-                "vertices",
-                "radii",
-                "collision_parameters",
-            ):
-                floats[name] = np.zeros(0)
-            for name in (
-                "segment_joint",
-                "segment_starts",
-                "kinds",
-                "segment_pairs",
-                "pair_starts",
-                "volume_a",
-                "volume_b",
-            ):
-                ints[name] = np.zeros(0, dtype=np.int64)
-            return {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
+            empty_floats, empty_ints, counts = no_collision_arrays()
+            floats.update(empty_floats)
+            ints.update(empty_ints)
+            return counts
         fields = collision_fields(self.collision, self.model)
         floats.update(fields.floats)
         ints.update(fields.ints)
@@ -304,8 +270,8 @@ class CompiledClik:
         self,
         q: ArrayLike,
         target: ArrayLike,
-        target_velocity: ArrayLike | None = None,
-        nullspace_input: ArrayLike | None = None,
+        target_velocity: _OptionalArray = None,
+        nullspace_input: _OptionalArray = None,
     ) -> ClikResult:
         """:meth:`Clik.step` (same arguments, same result to round-off) in one kernel call."""
         if self.collision is not None and self.collision.collision_model.version != self._version:
@@ -315,7 +281,9 @@ class CompiledClik:
         target = _vector(target, "target", width, ControllerError)
         has_velocity = target_velocity is not None
         velocity = (
-            _vector(target_velocity, "target_velocity", width, ControllerError) if has_velocity else self._no_velocity
+            self._no_velocity
+            if target_velocity is None
+            else _vector(target_velocity, "target_velocity", width, ControllerError)
         )
         if nullspace_input is None:  # the common step: the arrays go straight to the kernel
             code = self._array_kernel(self._f, self._i, q, target, velocity, has_velocity)

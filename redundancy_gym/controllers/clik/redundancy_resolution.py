@@ -12,7 +12,8 @@ tested against (5.14)).
 from __future__ import annotations
 
 import math
-from typing import Literal, NamedTuple
+from collections.abc import Sequence
+from typing import Generic, Literal, NamedTuple, TypedDict, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,8 @@ from numpy.typing import ArrayLike, NDArray
 from ...model import RobotModel
 from ...validation import as_real_array
 from ..exceptions import ControllerError
+from ..objectives.objective import Objective
+from ..tasks.task import Task
 
 __all__ = [
     "JointBounds",
@@ -27,6 +30,8 @@ __all__ = [
     "Method",
     "METHODS",
     "Resolution",
+    "ResolutionOptions",
+    "ResolvedController",
     "WeightMatrix",
     "all_finite",
     "check_configuration",
@@ -224,12 +229,12 @@ class WeightMatrix:
             if not np.all(np.isfinite(w)) or np.any(w <= 0.0):
                 raise ControllerError("diagonal weights must be finite and > 0")
             self.diagonal: NDArray[np.float64] | None = w
-            self._factor = None
+            self._factor: NDArray[np.float64] = np.zeros((0, 0))  # unused: W^-1 is a division
         elif w.shape == (n, n):
             if not np.allclose(w, w.T) or not np.all(np.isfinite(w)):
                 raise ControllerError("the weight matrix must be finite and symmetric")
             try:
-                self._factor = np.linalg.cholesky(w)
+                self._factor = np.asarray(np.linalg.cholesky(w), dtype=np.float64)
             except np.linalg.LinAlgError:
                 raise ControllerError("the weight matrix must be positive definite") from None
             self.diagonal = None
@@ -324,3 +329,92 @@ def _sigma_min(b_mat: NDArray[np.float64]) -> float:
     # sigma_min(J W^-1/2)^2 = lambda_min(J W^-1 J^T); clip round-off below zero
     eig = np.linalg.eigvalsh(b_mat)
     return float(np.sqrt(max(eig[0], 0.0)))
+
+
+TaskT = TypeVar("TaskT", bound=Task)
+
+
+class ResolutionOptions(TypedDict, total=False):
+    """The keyword options every :class:`ResolvedController` takes alike (defaults: ``_read_options``)."""
+
+    objectives: Sequence[Objective]
+    """Nullspace objectives ``H`` (summed); default none."""
+    singular_threshold: float
+    """Smallest singular value below which ``"pseudoinverse"`` reports a singularity (default 1e-6)."""
+    dls_threshold: float
+    """``eps`` of the DLS damping law (default 0.05)."""
+    dls_max_damping: float
+    """``k_max`` of the DLS damping law (default 0.01)."""
+    max_joint_velocity: ArrayLike | float | None
+    """Joint speed limits [rad/s or m/s]; None (default): the model's."""
+    period: float | None
+    """Control period [s] the command is bounded for, or None (default)."""
+
+
+class ResolvedController(Generic[TaskT]):
+    """The settings of a controller that resolves its task with :func:`resolve` (velocity- and acceleration-level
+    CLIK), set and used in one place so that both read them alike."""
+
+    model: RobotModel
+    task: TaskT
+    method: str
+    weights: WeightMatrix
+    nullspace_gain: float
+    objectives: tuple[Objective, ...]
+    singular_threshold: float
+    dls_threshold: float
+    dls_max_damping: float
+    bounds: JointBounds
+
+    def _read_options(
+        self, options: ResolutionOptions
+    ) -> tuple[Sequence[Objective], tuple[float, float, float], ArrayLike | float | None, float | None]:
+        """``(objectives, (singular_threshold, dls_threshold, dls_max_damping), max_joint_velocity, period)`` of
+        ``options`` with the defaults filled in (unchecked); ``TypeError`` for an unknown option, as Python words it
+        for an explicit signature."""
+        for name in options:
+            if name not in ResolutionOptions.__optional_keys__:
+                raise TypeError(f"{type(self).__name__}.__init__() got an unexpected keyword argument {name!r}")
+        thresholds = (
+            options.get("singular_threshold", 1e-6),
+            options.get("dls_threshold", 0.05),
+            options.get("dls_max_damping", 0.01),
+        )
+        return options.get("objectives", ()), thresholds, options.get("max_joint_velocity"), options.get("period")
+
+    def _set_resolution(
+        self, model: RobotModel, task: TaskT, method: str, weights: ArrayLike | float, nullspace_gain: float
+    ) -> None:
+        """Store the (already checked) settings but :class:`ResolutionOptions` (:meth:`_set_options`)."""
+        self.model = model
+        self.task = task
+        self.method = method
+        self.weights = WeightMatrix(weights, model.nv)
+        self.nullspace_gain = float(nullspace_gain)
+
+    def _set_options(
+        self,
+        objectives: Sequence[Objective],
+        thresholds: tuple[float, float, float],
+        max_joint_velocity: ArrayLike | float | None,
+        period: float | None,
+    ) -> None:
+        """Store the (already checked) :meth:`_read_options`, after :meth:`_set_resolution`."""
+        self.objectives = tuple(objectives)
+        self.singular_threshold, self.dls_threshold, self.dls_max_damping = (float(t) for t in thresholds)
+        self.bounds = JointBounds(self.model, max_joint_velocity, period)
+
+    def _resolve(
+        self, jacobian: NDArray[np.float64], rhs: NDArray[np.float64], z: NDArray[np.float64] | None
+    ) -> Resolution:
+        """:func:`resolve` with this controller's weights, method and thresholds."""
+        return resolve(
+            jacobian,
+            rhs,
+            z,
+            self.weights,
+            method=self.method,
+            singular_threshold=self.singular_threshold,
+            dls_threshold=self.dls_threshold,
+            dls_max_damping=self.dls_max_damping,
+        )

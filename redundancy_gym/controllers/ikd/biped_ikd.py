@@ -4,7 +4,7 @@ prescribed contact moment exactly, with the horizontal CoM as the unknown task c
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple, cast
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numba import njit, types
@@ -181,32 +181,20 @@ class BipedIkd:
         stabilize = reference.com_plan is not None and self.moment_gain > 0.0
         plan = _NO_PLAN if reference.com_plan is None else reference.com_plan
         support = _NO_SUPPORT if reference.support is None else reference.support
-        arrays = (
-            q,
-            qdot,
-            reference.feet_position,
-            reference.feet_rotation,
-            reference.feet_velocity,
-            reference.feet_acceleration,
-            reference.torso_rotation,
-            reference.torso_angular_velocity,
-            reference.torso_angular_acceleration,
-            reference.com_height,
-            reference.moment,
-            plan,
-            support,
-        )
+        goal = _goal(reference, plan, support)
+        arrays = (q, qdot, *goal)
         fast = False
         # numba's TypeError for other types costs some 100 us, so lists and other dtypes are not offered to it
         if all([type(a) is np.ndarray and a.dtype == _FLOAT64 for a in arrays]):
             try:
-                fast = _valid(*arrays, model.nq, model.nv, MAX_COORDINATE)
+                fast = _valid(q, qdot, goal, model.nq, model.nv, MAX_COORDINATE)
             except TypeError:  # an array with another number of dimensions
                 pass
         if fast:  # _valid found float64 arrays of the documented shapes
             q, qdot, ref = cast(NDArray[np.float64], q), cast(NDArray[np.float64], qdot), reference
         else:
             q, qdot, ref, plan, support = self._checked(q, qdot, reference, stabilize)
+            goal = _goal(ref, plan, support)
         terms = model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
         self.terms = terms
         posture = self.posture
@@ -240,17 +228,7 @@ class BipedIkd:
             terms.com,
             terms.centroidal,
             terms.centroidal_drift,
-            ref.feet_position,
-            ref.feet_rotation,
-            ref.feet_velocity,
-            ref.feet_acceleration,
-            ref.torso_rotation,
-            ref.torso_angular_velocity,
-            ref.torso_angular_acceleration,
-            ref.com_height,
-            ref.moment,
-            plan,
-            support,
+            goal,
             offset,
             weights,
             inverse_weights,
@@ -310,6 +288,24 @@ class BipedIkd:
         return np.array(q), np.array(qdot), checked, np.array(plan), np.array(support)
 
 
+def _goal(reference: BipedIkdReference, plan: NDArray[np.float64], support: NDArray[np.float64]) -> tuple[Any, ...]:
+    """The reference's arrays with the CoM ``plan`` and ``support`` box, packed as the kernels take them
+    (``_GOAL``)."""
+    return (
+        reference.feet_position,
+        reference.feet_rotation,
+        reference.feet_velocity,
+        reference.feet_acceleration,
+        reference.torso_rotation,
+        reference.torso_angular_velocity,
+        reference.torso_angular_acceleration,
+        reference.com_height,
+        reference.moment,
+        plan,
+        support,
+    )
+
+
 def _rows(
     value: Sequence[ArrayLike] | NDArray[np.float64],
     count: int,
@@ -340,6 +336,9 @@ _NO_INVERSE = np.zeros((0, 0))
 _V, _M, _T = (types.Array(types.float64, n, "A", readonly=True) for n in (1, 2, 3))
 _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
+# the reference as the kernels take it (_goal): feet position, rotation, velocity, acceleration, torso rotation,
+# angular velocity, angular acceleration, CoM height, moment, CoM plan, support box
+_GOAL = types.Tuple((_M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M))
 
 
 _JointLimits = tuple[NDArray[np.float64], NDArray[np.float64], int, int, float, float, float, float]
@@ -436,26 +435,13 @@ def _limit_offset_into(
     return True
 
 
-@njit(_B(_V, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, types.int64, types.int64, _F), **JIT_EXACT)
-def _valid(
-    q,
-    qdot,
-    feet_position,
-    feet_rotation,
-    feet_velocity,
-    feet_acceleration,
-    torso_rotation,
-    torso_velocity,
-    torso_acceleration,
-    height,
-    moment,
-    plan,
-    support,
-    nq,
-    nv,
-    max_coordinate,
-):  # pragma: no cover - compiled
-    """Whether the inputs have the documented shapes and are finite, ``|q|`` within ``max_coordinate``."""
+@njit(_B(_V, _V, _GOAL, types.int64, types.int64, _F), **JIT_EXACT)
+def _valid(q, qdot, goal, nq, nv, max_coordinate):  # pragma: no cover - compiled
+    """Whether the inputs have the documented shapes and are finite, ``|q|`` within ``max_coordinate``
+    (``goal``: as :func:`_goal` packs it)."""
+    feet_position, feet_rotation, feet_velocity, feet_acceleration = goal[:4]
+    torso_rotation, torso_velocity, torso_acceleration = goal[4:7]
+    height, moment, plan, support = goal[7:]
     if (
         q.shape[0] != nq
         or qdot.shape[0] != nv
@@ -497,7 +483,7 @@ def _valid(
 
 
 # _solve's argument types: the model's terms, the reference's arrays, offset and weights, then gains and flags
-_SOLVE_ARGUMENTS = (_V, _T, _M, _T, _M, _V, _M, _V, _M, _T, _M, _M, _M, _V, _V, _V, _V, _V, _M, _V, _V, _M)
+_SOLVE_ARGUMENTS = (_V, _T, _M, _T, _M, _V, _M, _V, _GOAL, _V, _V, _M)
 
 
 @njit(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(*_SOLVE_ARGUMENTS, *(_F,) * 8, *(_B,) * 4), **JIT_EXACT)
@@ -510,17 +496,7 @@ def _solve(
     com,
     centroidal,
     centroidal_drift,
-    feet_position,
-    feet_rotation,
-    feet_velocity,
-    feet_acceleration,
-    torso_rotation,
-    torso_velocity,
-    torso_acceleration,
-    height,
-    moment,
-    plan,
-    support,
+    goal,
     offset,
     weights,
     inverse_weights,
@@ -548,6 +524,8 @@ def _solve(
     ``singular_threshold`` or the Cholesky factorization or the solution fails. ``stabilize``: apply (5.97) with
     ``plan``; ``saturate``: keep its ZMP in the ``support`` box.
     """
+    feet_position, feet_rotation, feet_velocity, feet_acceleration, torso_rotation = goal[:5]
+    torso_velocity, torso_acceleration, height, moment, plan, support = goal[5:]
     nv = qdot.shape[0]
     rows = 18
     r_mat = np.empty((rows, nv))

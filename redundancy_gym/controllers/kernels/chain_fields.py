@@ -4,13 +4,66 @@ forward kinematics on them, for the kernels that carry a chain (:mod:`~redundanc
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
+import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from ...kernel_options import BORROW
+from ...model import SerialChain
 from ...model.chain_kernels import chain_forward
 from .buffers import borrowed_float_field, borrowed_int_field
 
-__all__ = ["chain_views", "forward_chain"]
+__all__ = [
+    "CHAIN_INT_FIELDS",
+    "CHAIN_PLACEMENT_FIELDS",
+    "CHAIN_STATE_FIELDS",
+    "chain_arrays",
+    "chain_indices",
+    "chain_views",
+    "field_index",
+    "forward_chain",
+]
+
+CHAIN_PLACEMENT_FIELDS: tuple[str, ...] = ("placement_rotation", "placement_translation", "axis")
+"""The chain's constant float fields (its joints' placements and axes), in buffer order."""
+CHAIN_STATE_FIELDS: tuple[str, ...] = ("rotation", "position", "world_axis")
+"""The float fields the forward kinematics writes (each joint's world rotation, origin and axis), in buffer order."""
+CHAIN_INT_FIELDS: tuple[str, ...] = ("parent", "joint_type", "q_index", "v_index")
+"""The chain's int fields, in buffer order."""
+
+
+def chain_arrays(chain: SerialChain) -> tuple[dict[str, NDArray[np.float64]], dict[str, NDArray[np.int64]]]:
+    """The fields of :data:`CHAIN_PLACEMENT_FIELDS`, :data:`CHAIN_STATE_FIELDS` (zeros) and
+    :data:`CHAIN_INT_FIELDS` of ``chain``, as :func:`~.buffers.pack_fields` takes them."""
+    nj = chain.num_joints
+    floats = {
+        "placement_rotation": chain.placement_rotation,
+        "placement_translation": chain.placement_translation,
+        "axis": chain.axis,
+        "rotation": np.zeros((nj, 3, 3)),
+        "position": np.zeros((nj, 3)),
+        "world_axis": np.zeros((nj, 3)),
+    }
+    ints = {"parent": chain.parent, "joint_type": chain.joint_type, "q_index": chain.q_index, "v_index": chain.v_index}
+    return floats, ints
+
+
+def chain_indices(float_fields: Sequence[str], int_fields: Sequence[str]) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    """``(floats, ints)``: the field indices of the chain in buffers of ``float_fields`` and ``int_fields``, in the
+    order :func:`chain_views` and :func:`forward_chain` take them."""
+    f, i = field_index(float_fields), field_index(int_fields, len(float_fields))
+    return (
+        tuple(f[name] for name in (*CHAIN_PLACEMENT_FIELDS, *CHAIN_STATE_FIELDS)),
+        tuple(i[name] for name in CHAIN_INT_FIELDS),
+    )
+
+
+def field_index(fields: Sequence[str], start: int = 0) -> dict[str, int]:
+    """Each field's index in the buffers' header (:func:`~.buffers.pack_fields`): ``start`` plus its position in
+    ``fields`` (``start``: the number of float fields, for the int fields)."""
+    return {name: start + k for k, name in enumerate(fields)}
 
 
 @njit(inline="always", **BORROW)  # inlined: it returns views (see buffers.borrowed_float_field)

@@ -22,6 +22,7 @@ from ..kernels.buffers import borrowed_float_field, borrowed_int_field
 from .collision_objective import CollisionObjective
 
 __all__ = [
+    "COLLISION_COUNTS",
     "COLLISION_FLOAT_FIELDS",
     "COLLISION_INT_FIELDS",
     "CollisionFields",
@@ -30,6 +31,7 @@ __all__ = [
     "collision_fields",
     "collision_potential",
     "collision_views",
+    "no_collision_arrays",
 ]
 
 COLLISION_FLOAT_FIELDS: tuple[str, ...] = (
@@ -54,6 +56,19 @@ COLLISION_INT_FIELDS: tuple[str, ...] = (
     "volume_b",
 )
 """The int fields of :func:`collision_fields`, in the order a fused kernel's buffer holds them (one block)."""
+COLLISION_COUNTS: tuple[str, ...] = ("segments", "volumes", "pairs", "volume_pairs")
+"""The counts :func:`collision_fields` gives (``CollisionFields.counts``), in a fused kernel's ``dims``."""
+
+
+def no_collision_arrays() -> tuple[dict[str, NDArray[np.float64]], dict[str, NDArray[np.int64]], dict[str, int]]:
+    """``(floats, ints, counts)`` of a controller without a collision objective: every field of
+    :data:`COLLISION_FLOAT_FIELDS` and :data:`COLLISION_INT_FIELDS` empty, every count 0."""
+    return (
+        {name: np.zeros(0) for name in COLLISION_FLOAT_FIELDS},
+        {name: np.zeros(0, dtype=np.int64) for name in COLLISION_INT_FIELDS},
+        dict.fromkeys(COLLISION_COUNTS, 0),
+    )
+
 
 # the kernels only borrow their arrays (the callers' buffers): no reference counting (BORROW); callers that count
 # references may call them too, since nothing borrowed is returned

@@ -17,7 +17,7 @@ cost adds ``w_a udot^T udot`` (A.62).
 from __future__ import annotations
 
 import warnings
-from typing import NamedTuple, cast
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -297,6 +297,22 @@ class PredictiveIk:
         self._version = model.version
 
     # ------------------------------------------------------------------ problem
+    def _problem(self) -> tuple[Any, ...]:
+        """The arguments that state the problem to every kernel of :mod:`.predictive_kernels`, in their order: the
+        chain, the task, the objectives and the collision fields (arrays the kernels read; the environment's are
+        updated in place by :meth:`_refresh_environment`), and whether there is a collision objective."""
+        return (
+            self._chain_f,
+            self._chain_i,
+            self._task_i,
+            self._task_f,
+            self._objective_f,
+            self._coll_i,
+            self._coll_f,
+            self._coll_p,
+            self.collision is not None,
+        )
+
     def inputs(self, params: ArrayLike, dt: float, u_b: ArrayLike | None = None) -> NDArray[np.float64]:
         """The nullspace inputs ``u`` (N, n) of the decision variables: ``params`` itself, or for the augmented
         problem ``u_k = u_b + dt sum_{l<k} udot_l``."""
@@ -369,15 +385,7 @@ class PredictiveIk:
         steps = params.shape[0]
         q, qdot, terms = np.empty((steps + 1, self.n)), np.empty((steps, self.n)), np.zeros(3)
         ok = pik_rollout(
-            self._chain_f,
-            self._chain_i,
-            self._task_i,
-            self._task_f,
-            self._objective_f,
-            self._coll_i,
-            self._coll_f,
-            self._coll_p,
-            self.collision is not None,
+            self._problem(),
             q0,
             u,
             wdot,
@@ -418,15 +426,7 @@ class PredictiveIk:
         wdot = np.ascontiguousarray(wdot, dtype=np.float64)
         grad_u, lam0 = np.empty_like(roll.u), np.empty(self.n)
         ok = pik_gradient(
-            self._chain_f,
-            self._chain_i,
-            self._task_i,
-            self._task_f,
-            self._objective_f,
-            self._coll_i,
-            self._coll_f,
-            self._coll_p,
-            self.collision is not None,
+            self._problem(),
             roll.q,
             roll.u,
             wdot,
@@ -632,15 +632,7 @@ class PredictiveIk:
         costs = np.empty(max_iterations + 1)
         out = (np.empty((steps, n)), np.empty((steps, n)), np.empty((steps + 1, n)), np.empty((steps, n)), np.empty(4))
         code, iterations, alpha, rollouts = pik_optimize(
-            self._chain_f,
-            self._chain_i,
-            self._task_i,
-            self._task_f,
-            self._objective_f,
-            self._coll_i,
-            self._coll_f,
-            self._coll_p,
-            self.collision is not None,
+            self._problem(),
             q0,
             wdot,
             float(dt),

@@ -294,15 +294,7 @@ def _workspace(chain_i, task_i, n):
 
 @njit(**JIT)
 def pik_rollout(
-    chain_f,
-    chain_i,
-    task_i,
-    task_f,
-    objective_f,
-    coll_i,
-    coll_f,
-    coll_p,
-    collision,
+    problem,
     q0,
     u,
     wdot,
@@ -314,7 +306,10 @@ def pik_rollout(
     """Integrate (5.112) from ``q0`` under the inputs ``u`` (N x n) and references ``wdot`` (N x 6) into
     ``q_out`` (N + 1 x n) and ``qdot_out`` (N x n); the cost terms (velocity, joint limits, collision) into
     ``cost_out`` (3). ``objective_f`` is ``[rho, w_v, lower (n), upper (n), d_a, slope, ratio, weight]``.
-    Returns False when ``J J^T + rho I`` is not positive definite somewhere (the outputs are then partial)."""
+    Returns False when ``J J^T + rho I`` is not positive definite somewhere (the outputs are then partial).
+    ``problem``: ``(chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision)``, as
+    :meth:`PredictiveIk._problem <redundancy_gym.controllers.PredictiveIk>` gives it."""
+    chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision = problem
     steps, n = u.shape
     m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
@@ -341,12 +336,11 @@ def pik_rollout(
 
 
 @njit(**JIT)
-def pik_gradient(
-    chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision, q_traj, u, wdot, dt, grad_u, lam0
-):
+def pik_gradient(problem, q_traj, u, wdot, dt, grad_u, lam0):
     """The adjoint recursion (5.113), (5.115) backward along ``q_traj`` (from :func:`pik_rollout`): the exact
     gradient of the cost with respect to every ``u_k`` into ``grad_u`` (N x n), and ``lambda_0`` into ``lam0``.
-    Returns False when ``J J^T + rho I`` is not positive definite somewhere."""
+    Returns False when ``J J^T + rho I`` is not positive definite somewhere (``problem``: as :func:`pik_rollout`)."""
+    chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision = problem
     steps, n = u.shape
     m, rotation, position, world_axis, jac6, jac, b, frame, a, low, y = _workspace(chain_i, task_i, n)
     rho, wv = objective_f[0], objective_f[1]
@@ -610,15 +604,7 @@ def _adjoint_slot(
 
 @njit(**JIT)
 def pik_optimize(
-    chain_f,
-    chain_i,
-    task_i,
-    task_f,
-    objective_f,
-    coll_i,
-    coll_f,
-    coll_p,
-    collision,
+    problem,
     q0,
     wdot,
     dt,
@@ -647,6 +633,7 @@ def pik_optimize(
     the threshold it has to meet; and the gradient at the last iterate, which no direction uses, is not formed.
 
     Args:
+        problem: as :func:`pik_rollout`.
         initial: the first decision variables (N, n); method: index into :data:`METHODS`; step: first trial
             step size; costs: (max_iterations + 1) the cost after each iteration, the initial cost first.
         params_out, u_out, q_out, qdot_out: the final iterate (N, n), its inputs, configurations (N + 1, n) and
@@ -657,6 +644,7 @@ def pik_optimize(
         or a failure code (``SINGULAR``, ``OVERFLOW``), the descent steps taken, the step size the next line
         search would try first, and the forward integrations started (those stopped early included).
     """
+    chain_i, task_i, objective_f = problem[1], problem[2], problem[4]
     steps, n = initial.shape
     nj = chain_i[0].shape[0]
     m = task_i.shape[0] - 3 if task_i[0] == 0 else 5
@@ -666,7 +654,6 @@ def pik_optimize(
     lam, v, nv, mu, grad_q, running = np.empty(n), np.empty(n), np.empty(n), np.empty(m), np.empty(n), np.empty(n)
     vjp_scratch = _vjp_scratch(nj)
     terms = np.zeros((SLOTS, 4))
-    problem = (chain_f, chain_i, task_i, task_f, objective_f, coll_i, coll_f, coll_p, collision)
     run = (q0, wdot, dt, augmented, u_b, input_weight)
     temps = (rotation, jac6, b, a, scratch, running)
     cur, trial, other = 0, 1, 2

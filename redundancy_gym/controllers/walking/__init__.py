@@ -5,7 +5,7 @@ each a separate layer."""
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
-from .measure_kernels import CompiledMeasurement, MeasurementResult
+from .measure_kernels import CompiledMeasurement, MeasurementResult, renamed_attribute
 from .quintic import PiecewiseQuintic, Quintic
 from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
 from .ssta import (
@@ -89,13 +89,4 @@ __all__ = [
 def __getattr__(name: str) -> object:
     """``Measurement``, the old name of :class:`MeasurementResult` (a result, not the measurement), for one release
     with a :class:`DeprecationWarning`."""
-    if name == "Measurement":
-        import warnings
-
-        warnings.warn(
-            f"{__name__}.Measurement is now MeasurementResult; the old name goes in redundancy_gym 0.3",
-            DeprecationWarning,
-            stacklevel=2,
-        )
-        return MeasurementResult
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return renamed_attribute(__name__, name)

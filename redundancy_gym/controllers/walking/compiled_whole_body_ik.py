@@ -4,6 +4,7 @@ the time)."""
 from __future__ import annotations
 
 import math
+from typing import TypeGuard
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -11,10 +12,12 @@ from numpy.typing import ArrayLike, NDArray
 from ...model import ModelError
 from ..exceptions import ControllerError
 from ..kernels.buffers import buffer_view, compiled_entry_point, pack_fields
+from ..kernels.chain_fields import chain_arrays
 from ..objectives.actuated_objective import ActuatedObjective
-from ..objectives.collision_kernels import bounding_spheres, collision_fields
+from ..objectives.collision_kernels import bounding_spheres, collision_fields, no_collision_arrays
 from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
+from ..objectives.objective_fields import objective_arrays
 from ..objectives.posture_objective import PostureObjective
 from .whole_body_ik import Reference, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
 from .whole_body_kernels import (
@@ -35,31 +38,9 @@ _FLOAT64 = np.dtype(np.float64)
 _REFERENCE_SHAPE = (REFERENCE_SIZE,)
 
 
-def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
+def _is_float_array(value: object, shape: tuple[int, ...]) -> TypeGuard[NDArray[np.float64]]:
     """Whether ``value`` is a float64 array of ``shape`` (copied into the kernel's buffer as it is)."""
     return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
-
-
-_EMPTY_COLLISION_FLOATS = (
-    "segment_rotation",
-    "segment_translation",
-    "segment_center",
-    "segment_radius",
-    "segment_world_center",
-    "local",
-    "vertices",
-    "radii",
-    "collision_parameters",
-)
-_EMPTY_COLLISION_INTS = (
-    "segment_joint",
-    "segment_starts",
-    "kinds",
-    "segment_pairs",
-    "pair_starts",
-    "volume_a",
-    "volume_b",
-)
 
 
 class CompiledWholeBodyIk:
@@ -108,29 +89,15 @@ class CompiledWholeBodyIk:
         self._nq, self._nv = nq, nv
         self._q_shape = (nq,)
         frames = [model.frame_attachment(f) for f in (*ik.feet_frames, ik.torso_frame)]
-        floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation,
-            "placement_translation": chain.placement_translation,
-            "axis": chain.axis,
+        floats, ints = chain_arrays(chain)
+        floats |= {
             "body_mass": chain.body_mass,
             "body_com": chain.body_com,
             "body_inertia": chain.body_inertia,
-            "rotation": np.zeros((nj, 3, 3)),
-            "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)),
             "composite": np.zeros((nj, 13)),
             "frame_rotation": np.array([r for _, r, _ in frames]),
             "frame_translation": np.array([p for _, _, p in frames]),
-            "limit_lower": np.array([o.lower for o in limits]),
-            "limit_upper": np.array([o.upper for o in limits]),
-            "limit_parameters": np.array(
-                [
-                    (o.potential.activation_distance, o.potential.slope, o.potential.switch_ratio, o.weight)
-                    for o in limits
-                ]
-            ),
-            "posture_reference": np.array([o.reference for o in postures]),
-            "posture_weights": np.array([o.weights for o in postures]),
+            **objective_arrays(limits, postures),
             "scalars": np.zeros(len(SCALARS)),
             "inputs": np.zeros(nq + 2 * REFERENCE_SIZE),
             "outputs": np.zeros(nq + nv + OUTPUT_EXTRA),
@@ -143,18 +110,12 @@ class CompiledWholeBodyIk:
             "gradient": np.zeros(nv),
             "scratch": np.zeros(SCRATCH_SIZE),
         }
-        ints: dict[str, NDArray[np.int64]] = {
-            "parent": chain.parent,
-            "joint_type": chain.joint_type,
-            "q_index": chain.q_index,
-            "v_index": chain.v_index,
-            "frame_joint": np.array([j for j, _, _ in frames], dtype=np.int64),
-        }
+        ints["frame_joint"] = np.array([j for j, _, _ in frames], dtype=np.int64)
         self.collision: CollisionObjective | None = collisions[0] if collisions else None
         if self.collision is None:
-            floats.update({name: np.zeros(0) for name in _EMPTY_COLLISION_FLOATS})
-            ints.update({name: np.zeros(0, dtype=np.int64) for name in _EMPTY_COLLISION_INTS})
-            counts = {"segments": 0, "volumes": 0, "pairs": 0, "volume_pairs": 0}
+            empty_floats, empty_ints, counts = no_collision_arrays()
+            floats.update(empty_floats)
+            ints.update(empty_ints)
         else:
             fields = collision_fields(self.collision, model)
             if fields.world_fixed:

@@ -24,28 +24,33 @@ from numpy.typing import NDArray
 
 from ...kernel_options import JIT
 from ...model import RobotModel
-from ...model.chain_kernels import FREE, PRISMATIC, chain_forward, place_frame
+from ...model.chain_kernels import FREE, PRISMATIC, place_frame
 from ..exceptions import ControllerError
 from ..kernels.buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
+from ..kernels.chain_fields import (
+    CHAIN_INT_FIELDS,
+    CHAIN_PLACEMENT_FIELDS,
+    CHAIN_STATE_FIELDS,
+    chain_arrays,
+    chain_indices,
+    field_index,
+    forward_chain,
+)
 
 __all__ = ["BAD_INPUT", "OK", "CompiledMeasurement", "MeasurementResult"]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation",
-    "placement_translation",
-    "axis",
+    *CHAIN_PLACEMENT_FIELDS,
     "body_mass",
     "body_com",
-    "rotation",
-    "position",
-    "world_axis",
+    *CHAIN_STATE_FIELDS,
     "velocities",
     "frame_rotation",
     "frame_translation",
     "inputs",
     "outputs",
 )
-INT_FIELDS: tuple[str, ...] = ("dims", "parent", "joint_type", "q_index", "v_index", "frame_joint")
+INT_FIELDS: tuple[str, ...] = ("dims", *CHAIN_INT_FIELDS, "frame_joint")
 FRAMES = 4
 """Frames measured: the ankle sensors (right, left), then the soles (right, left)."""
 PARAMETERS = ("mujoco", "stance_frame", "stance", "planned_x", "planned_y", "planned_yaw", "ground", "min_force")
@@ -69,23 +74,19 @@ OUTPUT_SIZES = (
 y and 1.0 where valid)."""
 OK, BAD_INPUT = 0, 1
 
-_NF = len(FLOAT_FIELDS)
-(
-    _F_PLACEMENT_ROTATION,
-    _F_PLACEMENT_TRANSLATION,
-    _F_AXIS,
-    _F_BODY_MASS,
-    _F_BODY_COM,
-    _F_ROTATION,
-    _F_POSITION,
-    _F_WORLD_AXIS,
-    _F_VELOCITIES,
-    _F_FRAME_ROTATION,
-    _F_FRAME_TRANSLATION,
-    _F_INPUTS,
-    _F_OUTPUTS,
-) = range(_NF)
-(_I_DIMS, _I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX, _I_FRAME_JOINT) = range(_NF, _NF + len(INT_FIELDS))
+_F = field_index(FLOAT_FIELDS)
+_F_BODY_MASS = _F["body_mass"]
+_F_BODY_COM = _F["body_com"]
+_F_VELOCITIES = _F["velocities"]
+_F_FRAME_ROTATION = _F["frame_rotation"]
+_F_FRAME_TRANSLATION = _F["frame_translation"]
+_F_INPUTS = _F["inputs"]
+_F_OUTPUTS = _F["outputs"]
+_I = field_index(INT_FIELDS, len(FLOAT_FIELDS))
+_I_DIMS = _I["dims"]
+_CHAIN_FLOATS, _CHAIN_INTS = chain_indices(FLOAT_FIELDS, INT_FIELDS)  # in the order of kernels.chain_fields
+_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX = _CHAIN_INTS
+_I_FRAME_JOINT = _I["frame_joint"]
 
 # JIT: the chain kernels' numerics contract (FMA contraction allowed): agreement to round-off, not bit for bit
 
@@ -138,27 +139,11 @@ def measure_step(f, i):
     v = outputs[nq : nq + nv]
     q[:] = inputs[:nq]
     v[:] = inputs[nq : nq + nv]
-    parent = int_field(i, _I_PARENT)
     joint_type = int_field(i, _I_JOINT_TYPE)
-    q_index = int_field(i, _I_Q_INDEX)
-    v_index = int_field(i, _I_V_INDEX)
-    if params[0] != 0.0 and not _from_mujoco(joint_type, q_index, v_index, q, v):
+    if params[0] != 0.0 and not _from_mujoco(joint_type, int_field(i, _I_Q_INDEX), int_field(i, _I_V_INDEX), q, v):
         return BAD_INPUT
-    rotation = float_field(f, i, _F_ROTATION).reshape((nj, 3, 3))
-    position = float_field(f, i, _F_POSITION).reshape((nj, 3))
-    world_axis = float_field(f, i, _F_WORLD_AXIS).reshape((nj, 3))
-    chain_forward(
-        parent,
-        float_field(f, i, _F_PLACEMENT_ROTATION).reshape((nj, 3, 3)),
-        float_field(f, i, _F_PLACEMENT_TRANSLATION).reshape((nj, 3)),
-        float_field(f, i, _F_AXIS).reshape((nj, 3)),
-        joint_type,
-        q_index,
-        q,
-        rotation,
-        position,
-        world_axis,
-    )
+    chain = forward_chain(f, i, nj, q, _CHAIN_FLOATS, _CHAIN_INTS)
+    rotation, position = chain[3], chain[4]
     o = nq + nv
     com = outputs[o : o + 3]
     com_velocity = outputs[o + 3 : o + 6]
@@ -173,12 +158,7 @@ def measure_step(f, i):
     normal_force = outputs[o + 19 : o + 21]
     moment = outputs[o + 21 : o + 27].reshape((2, 3))
     _com_and_velocity(
-        parent,
-        joint_type,
-        v_index,
-        rotation,
-        position,
-        world_axis,
+        chain,
         float_field(f, i, _F_BODY_MASS),
         float_field(f, i, _F_BODY_COM).reshape((nj, 3)),
         v,
@@ -246,13 +226,12 @@ def measure_step(f, i):
 
 
 @njit(**JIT)
-def _com_and_velocity(
-    parent, joint_type, v_index, rotation, position, world_axis, body_mass, body_com, v, scratch, com, com_velocity
-):
+def _com_and_velocity(chain, body_mass, body_com, v, scratch, com, com_velocity):
     """The CoM [m] and its velocity [m/s] (world frame) after :func:`chain_forward`, as ``pinocchio.centerOfMass(q,
     v)``: each joint's angular velocity and its origin's velocity propagated from the root (``scratch[j, :6]``), then
     the mass-weighted mean of the bodies' CoMs and their velocities (no Jacobians, no composite inertias: cheaper
-    than ``chain_centroidal``)."""
+    than ``chain_centroidal``). ``chain``: the kinematics as :func:`~..kernels.chain_fields.chain_views` gives them."""
+    parent, joint_type, v_index, rotation, position, world_axis = chain
     mass = 0.0
     cx = cy = cz = 0.0
     vx = vy = vz = 0.0
@@ -377,29 +356,18 @@ class CompiledMeasurement:
         nj, nq, nv = chain.num_joints, model.nq, model.nv
         attachments = [model.frame_attachment(f) for f in frames]
         outputs = nq + nv + sum(size for _, size in OUTPUT_SIZES)
-        floats: dict[str, NDArray[np.float64]] = {
-            "placement_rotation": chain.placement_rotation,
-            "placement_translation": chain.placement_translation,
-            "axis": chain.axis,
+        floats, ints = chain_arrays(chain)
+        floats |= {
             "body_mass": chain.body_mass,
             "body_com": chain.body_com,
-            "rotation": np.zeros((nj, 3, 3)),
-            "position": np.zeros((nj, 3)),
-            "world_axis": np.zeros((nj, 3)),
             "velocities": np.zeros((nj, 6)),
             "frame_rotation": np.array([r for _, r, _ in attachments]),
             "frame_translation": np.array([p for _, _, p in attachments]),
             "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)),
             "outputs": np.zeros(outputs),
         }
-        ints: dict[str, NDArray[np.int64]] = {
-            "dims": np.array([nj, nq, nv, FRAMES], dtype=np.int64),
-            "parent": chain.parent,
-            "joint_type": chain.joint_type,
-            "q_index": chain.q_index,
-            "v_index": chain.v_index,
-            "frame_joint": np.array([j for j, _, _ in attachments], dtype=np.int64),
-        }
+        ints["dims"] = np.array([nj, nq, nv, FRAMES], dtype=np.int64)
+        ints["frame_joint"] = np.array([j for j, _, _ in attachments], dtype=np.int64)
         self._nq, self._nv = nq, nv
         self._f, self._i = pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
         inputs = buffer_view(self._f, self._i, FLOAT_FIELDS, "inputs")
@@ -479,14 +447,20 @@ class CompiledMeasurement:
         )
 
 
-def __getattr__(name: str) -> Any:
-    """``Measurement``: the old name of :class:`MeasurementResult` (a result, not the measurement), kept for one
-    release with a :class:`DeprecationWarning`."""
+def renamed_attribute(module: str, name: str) -> Any:
+    """The module ``__getattr__`` of ``module`` (this one and :mod:`redundancy_gym.controllers.walking`):
+    ``Measurement``, the old name of :class:`MeasurementResult` (a result, not the measurement), kept for one
+    release with a :class:`DeprecationWarning` (pointing at the caller of ``__getattr__``)."""
     if name == "Measurement":
         warnings.warn(
-            f"{__name__}.Measurement is now MeasurementResult; the old name goes in redundancy_gym 0.3",
+            f"{module}.Measurement is now MeasurementResult; the old name goes in redundancy_gym 0.3",
             DeprecationWarning,
-            stacklevel=2,
+            stacklevel=3,
         )
         return MeasurementResult
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    raise AttributeError(f"module {module!r} has no attribute {name!r}")
+
+
+def __getattr__(name: str) -> Any:
+    """``Measurement``: the old name of :class:`MeasurementResult` (:func:`renamed_attribute`)."""
+    return renamed_attribute(__name__, name)

@@ -18,15 +18,14 @@ from numba import njit
 from ...geometry.potentials import piecewise_potential_kernel
 from ...kernel_options import JIT
 from ...model.chain_kernels import chain_centroidal, chain_integrate, chain_jacobian, place_frame
+from ..kernels import chain_fields as _chain
 from ..kernels.buffers import float_field, int_field
-from ..kernels.chain_fields import chain_views, forward_chain
+from ..kernels.chain_fields import chain_indices, chain_views, field_index, forward_chain
 from ..kernels.linalg import rotation_error_into
-from ..objectives.collision_kernels import (
-    COLLISION_FLOAT_FIELDS,
-    COLLISION_INT_FIELDS,
-    collision_potential,
-    collision_views,
-)
+from ..objectives import collision_kernels as _collision
+from ..objectives import objective_fields as _objective_fields
+from ..objectives.collision_kernels import collision_potential, collision_views
+from ..objectives.objective_fields import LIMIT_LOWER, LIMIT_PARAMETERS, LIMIT_UPPER, POSTURE_REFERENCE, POSTURE_WEIGHTS
 from .ik_kernels import weighted_solve
 
 __all__ = [
@@ -42,24 +41,16 @@ __all__ = [
 ]
 
 FLOAT_FIELDS: tuple[str, ...] = (
-    "placement_rotation",
-    "placement_translation",
-    "axis",
+    *_chain.CHAIN_PLACEMENT_FIELDS,
     "body_mass",
     "body_com",
     "body_inertia",
-    "rotation",
-    "position",
-    "world_axis",
+    *_chain.CHAIN_STATE_FIELDS,
     "composite",
     "frame_rotation",
     "frame_translation",
-    "limit_lower",
-    "limit_upper",
-    "limit_parameters",
-    "posture_reference",
-    "posture_weights",
-    *COLLISION_FLOAT_FIELDS,
+    *_objective_fields.OBJECTIVE_FLOAT_FIELDS,
+    *_collision.COLLISION_FLOAT_FIELDS,
     "scalars",
     "inputs",
     "outputs",
@@ -74,12 +65,9 @@ FLOAT_FIELDS: tuple[str, ...] = (
 )
 INT_FIELDS: tuple[str, ...] = (
     "dims",
-    "parent",
-    "joint_type",
-    "q_index",
-    "v_index",
+    *_chain.CHAIN_INT_FIELDS,
     "frame_joint",
-    *COLLISION_INT_FIELDS,
+    *_collision.COLLISION_INT_FIELDS,
 )
 DIMS: tuple[str, ...] = (
     "joints",
@@ -87,12 +75,8 @@ DIMS: tuple[str, ...] = (
     "nv",
     "base_nq",
     "base_nv",
-    "limit_objectives",
-    "posture_objectives",
-    "segments",
-    "volumes",
-    "pairs",
-    "volume_pairs",
+    *_objective_fields.OBJECTIVE_DIMS,
+    *_collision.COLLISION_COUNTS,
     "collision",
     "momentum_minimization",
 )
@@ -124,52 +108,32 @@ SCRATCH_SIZE = 16
 OK, BAD_INPUT = 0, 1
 
 _M = 18
-_NF = len(FLOAT_FIELDS)
-(
-    _F_PLACEMENT_ROTATION,
-    _F_PLACEMENT_TRANSLATION,
-    _F_AXIS,
-    _F_BODY_MASS,
-    _F_BODY_COM,
-    _F_BODY_INERTIA,
-    _F_ROTATION,
-    _F_POSITION,
-    _F_WORLD_AXIS,
-    _F_COMPOSITE,
-    _F_FRAME_ROTATION,
-    _F_FRAME_TRANSLATION,
-    _F_LIMIT_LOWER,
-    _F_LIMIT_UPPER,
-    _F_LIMIT_PARAMETERS,
-    _F_POSTURE_REFERENCE,
-    _F_POSTURE_WEIGHTS,
-    _F_COLLISION,  # the first of COLLISION_FLOAT_FIELDS (the rest unnamed: collision_views takes the block)
-    *_,
-    _F_SCALARS,
-    _F_INPUTS,
-    _F_OUTPUTS,
-    _F_JACOBIAN,
-    _F_JACOBIAN6,
-    _F_JACOBIAN_COM,
-    _F_JACOBIAN_ANGULAR,
-    _F_ERROR,
-    _F_RHS,
-    _F_GRADIENT,
-    _F_SCRATCH,
-) = range(_NF)
-(
-    _I_DIMS,
-    _I_PARENT,
-    _I_JOINT_TYPE,
-    _I_Q_INDEX,
-    _I_V_INDEX,
-    _I_FRAME_JOINT,
-    _I_COLLISION,  # the first of COLLISION_INT_FIELDS
-    *_,
-) = range(_NF, _NF + len(INT_FIELDS))
-# the chain's fields, in the order of kernels.chain_fields
-_CHAIN_FLOATS = (_F_PLACEMENT_ROTATION, _F_PLACEMENT_TRANSLATION, _F_AXIS, _F_ROTATION, _F_POSITION, _F_WORLD_AXIS)
-_CHAIN_INTS = (_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX)
+_F = field_index(FLOAT_FIELDS)
+_F_BODY_MASS = _F["body_mass"]
+_F_BODY_COM = _F["body_com"]
+_F_BODY_INERTIA = _F["body_inertia"]
+_F_COMPOSITE = _F["composite"]
+_F_FRAME_ROTATION = _F["frame_rotation"]
+_F_FRAME_TRANSLATION = _F["frame_translation"]
+_F_SCALARS = _F["scalars"]
+_F_INPUTS = _F["inputs"]
+_F_OUTPUTS = _F["outputs"]
+_F_JACOBIAN = _F["jacobian"]
+_F_JACOBIAN6 = _F["jacobian6"]
+_F_JACOBIAN_COM = _F["jacobian_com"]
+_F_JACOBIAN_ANGULAR = _F["jacobian_angular"]
+_F_ERROR = _F["error"]
+_F_RHS = _F["rhs"]
+_F_GRADIENT = _F["gradient"]
+_F_SCRATCH = _F["scratch"]
+_F_OBJECTIVES = _F[_objective_fields.OBJECTIVE_FLOAT_FIELDS[0]]  # the objectives' block: + LIMIT_LOWER, ...
+_F_COLLISION = _F[_collision.COLLISION_FLOAT_FIELDS[0]]  # the collision block (collision_views takes it)
+_I = field_index(INT_FIELDS, len(FLOAT_FIELDS))
+_I_DIMS = _I["dims"]
+_I_FRAME_JOINT = _I["frame_joint"]
+_I_COLLISION = _I[_collision.COLLISION_INT_FIELDS[0]]  # and its int block
+_CHAIN_FLOATS, _CHAIN_INTS = chain_indices(FLOAT_FIELDS, INT_FIELDS)  # in the order of kernels.chain_fields
+_I_PARENT, _I_JOINT_TYPE, _I_Q_INDEX, _I_V_INDEX = _CHAIN_INTS
 
 
 @njit(**JIT)
@@ -234,9 +198,9 @@ def _objectives(f, i, dims, q, gradient):
     na = nv - base_nv
     gradient[:] = 0.0
     value = 0.0
-    lower = float_field(f, i, _F_LIMIT_LOWER)
-    upper = float_field(f, i, _F_LIMIT_UPPER)
-    lp = float_field(f, i, _F_LIMIT_PARAMETERS)
+    lower = float_field(f, i, _F_OBJECTIVES + LIMIT_LOWER)
+    upper = float_field(f, i, _F_OBJECTIVES + LIMIT_UPPER)
+    lp = float_field(f, i, _F_OBJECTIVES + LIMIT_PARAMETERS)
     for o in range(n_limits):
         da, slope, ratio, weight = lp[4 * o], lp[4 * o + 1], lp[4 * o + 2], lp[4 * o + 3]
         for k in range(na):
@@ -245,8 +209,8 @@ def _objectives(f, i, dims, q, gradient):
             h1, d1, _ = piecewise_potential_kernel(upper[o * na + k] - x, da, slope, ratio)
             value += weight * (h0 + h1)
             gradient[base_nv + k] += weight * (d0 - d1)
-    reference = float_field(f, i, _F_POSTURE_REFERENCE)
-    pw = float_field(f, i, _F_POSTURE_WEIGHTS)
+    reference = float_field(f, i, _F_OBJECTIVES + POSTURE_REFERENCE)
+    pw = float_field(f, i, _F_OBJECTIVES + POSTURE_WEIGHTS)
     for o in range(n_postures):
         for k in range(na):
             delta = q[base_nq + k] - reference[o * na + k]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -54,6 +55,7 @@ def estimate_zmp(
     # Scalar math on Python lists: on (2, 3) arrays numpy's per-call overhead cost several times the arithmetic, in
     # the walking controller's per-period budget. The results agree with the matrix form to round-off (numpy's
     # matmul may sum in another order or fuse multiply and add).
+    lists: Sequence[Any]  # the four inputs as nested lists
     if all(map(_is_float_array, (rotations, ankles, forces, torques), _SHAPES)):  # the controller's arrays
         lists = rotations.tolist(), ankles.tolist(), forces.tolist(), torques.tolist()  # type: ignore[union-attr]
     else:
@@ -96,7 +98,10 @@ def _is_float_array(value: object, shape: tuple[int, ...]) -> bool:
 
 def _negated_in_world(rotations: list[list[list[float]]], vectors: list[list[float]]) -> list[list[float]]:
     """``-R_i v_i`` for each foot ``i`` (rows right, left): a sensor reading turned into the world frame, negated."""
-    return [[-(r[0] * v[0] + r[1] * v[1] + r[2] * v[2]) for r in rotation] for rotation, v in zip(rotations, vectors, strict=False)]
+    return [
+        [-(r[0] * v[0] + r[1] * v[1] + r[2] * v[2]) for r in rotation]
+        for rotation, v in zip(rotations, vectors, strict=False)
+    ]
 
 
 def _checked_lists(*values: ArrayLike) -> list[list[Any]]:
