@@ -27,7 +27,9 @@ EPILOG = """examples:
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
 POLICY_HELP = (
     "clik | walking | predictive | global | zero | random | path to an SB3 .zip | a shipped learned "
-    "baseline <learner>-<action>, e.g. ppo-nullspace (redundancy-gym list shows which envs each accepts)"
+    "baseline <learner>-<action>, e.g. ppo-nullspace (redundancy-gym list shows which envs each accepts). "
+    "A .zip policy is code: SB3 unpickles it, and loading it can run code from the file, so load only files "
+    "you trust (one from outside the shipped models is named on stderr)"
 )
 WRAPPER_HELP = (
     "task_space | nullspace | residual | walking_command: the env in that action wrapper (the same as "

@@ -233,7 +233,7 @@ def _predictive(out: Path, *, seed: int) -> list[Path]:
     (PlanarReach obstacle scene, 1 s horizon), the fig. 5.35 analogue (the fig. 5.10 self-collision move of the
     9-DoF arm, 0.15 s and 2 s horizons) and the figs. 5.33/5.34 analogue (the second joint's velocity with and
     without the augmented state at a 0.2 s prediction sample)."""
-    from .bench.pik import (  # noqa: PLC0415
+    from .studies.predictive_figures import (  # noqa: PLC0415
         JUMP_SAMPLE_TIME,
         agri_self_collision_traces,
         planar_kinematic_traces,
@@ -338,7 +338,8 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers
     """Time against error, one markdown section and plot per setting: every PlanarReach reference variant and the
     trivial policies (obstacle off; tracking error max), local against predictive and global IK on PlanarReach
     with its obstacle and on AgriReach (pseudoenergy; tracking and goal error in the tables), and the walking
-    reference's variants on BipedWalk, the IKD walker among them (speed error). Each controller runs one untimed warm-up episode first."""
+    reference's variants on BipedWalk, the IKD walker among them (speed error). Each controller runs one untimed
+    warm-up episode first."""
     from .eval.speed_error import plot_speed_error_panels  # noqa: PLC0415
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:

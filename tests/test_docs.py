@@ -15,8 +15,10 @@ PAGES = [ROOT / "README.md", ROOT / "CHANGELOG.md", *sorted((ROOT / "docs").glob
 
 def _anchors(page: Path) -> set[str]:
     """GitHub's anchors of a page's headings."""
-    return {re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-")
-            for h in re.findall(r"^#+ (.*)$", page.read_text(), re.M)}
+    return {
+        re.sub(r"[^\w\- ]", "", h.strip().lower()).replace(" ", "-")
+        for h in re.findall(r"^#+ (.*)$", page.read_text(), re.M)
+    }
 
 
 def _broken_links(page: Path) -> list[str]:
@@ -52,11 +54,15 @@ def test_the_link_check_sees_a_broken_link(tmp_path: Path) -> None:
 
 def test_docs_index_lists_every_page() -> None:
     index = (ROOT / "docs" / "index.md").read_text()
-    missing = [p.name for p in sorted((ROOT / "docs").glob("*.md")) if p.name != "index.md" and f"({p.name})" not in index]
+    pages = sorted((ROOT / "docs").glob("*.md"))
+    missing = [p.name for p in pages if p.name != "index.md" and f"({p.name})" not in index]
     assert not missing
 
 
 def test_no_code_cites_a_file_outside_the_repository() -> None:
-    citing = [str(p.relative_to(ROOT)) for p in sorted((ROOT / "redundancy_gym").rglob("*.py"))
-              if "DESIGN.md" in p.read_text()]
+    citing = [
+        str(p.relative_to(ROOT))
+        for p in sorted((ROOT / "redundancy_gym").rglob("*.py"))
+        if "DESIGN.md" in p.read_text()
+    ]
     assert not citing

@@ -238,8 +238,9 @@ class Obstacle:
           that extent, the rectangle the box's other two extents less ``r`` on each side: the box with its edges
           rounded by ``r``. It lies inside the box and touches all six faces, so its bounding box is the box's (what
           the walking controller's step planning reads); a box point lies at most ``(sqrt 2 - 1) r`` outside it
-          along an edge, ``(sqrt 3 - 1) r`` at a corner. (A rectangle spanning the full extents would contain the box but overhang every face by
-          ``r``: a 15 cm deep, 18 cm high block would plan as 30 cm deep and 25 cm high, deeper than a step.)
+          along an edge, ``(sqrt 3 - 1) r`` at a corner. (A rectangle spanning the full extents would contain the box
+          but overhang every face by ``r``: a 15 cm deep, 18 cm high block would plan as 30 cm deep and 25 cm high,
+          deeper than a step.)
         - prism: one TSS, the triangle in the mid-plane ``x = 0`` of its frame, radius ``depth / 2``: it contains
           the prism (the triangle extruded by ``+-depth / 2``), overhanging its faces by the radius (a thin
           triangle has no inset triangle of that radius).
@@ -255,7 +256,8 @@ class Obstacle:
             triangle = np.array(
                 [[0.0, -0.5 * width, -0.5 * height], [0.0, 0.5 * width, -0.5 * height], [0.0, 0.0, 0.5 * height]]
             )
-            return (TSS(*self.to_world(triangle), radius=0.5 * depth),)
+            p0, p1, p2 = self.to_world(triangle)
+            return (TSS(p0, p1, p2, radius=0.5 * depth),)
         extents = np.asarray(self.size)
         thin = int(np.argmin(extents))  # the rectangle is perpendicular to the smallest extent
         a, b = (k for k in range(3) if k != thin)
@@ -322,13 +324,14 @@ def random_course(
     low, high = check_range_pair("n_obstacles", n_obstacles, low=1, integer=True)
     gap = check_range_pair("spacing", spacing, low=0.0, low_open=True, unit="m")
     x = check_real("first_obstacle_distance", first_obstacle_distance, low=0.0, low_open=True, unit="m")
-    count = int(rng.integers(low, high + 1))
+    assert x is not None  # not optional: a float or ValueError
+    count = int(rng.integers(int(low), int(high) + 1))  # ints already (integer=True); int() tells the type checker
     course = []
     for k in range(count):
         if k:
             x += float(rng.uniform(*gap))
         kind = COURSE_KINDS[int(rng.integers(len(COURSE_KINDS)))]
-        course.append(_draw(kind, float(x), rng))  # type: ignore[arg-type]
+        course.append(_draw(kind, float(x), rng))
     return tuple(course)
 
 

@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import Any
+from functools import partial
+from typing import Any, Protocol, cast
 
 import gymnasium as gym
 import numpy as np
+from gymnasium import spaces
 from tqdm.auto import tqdm
 
 from ..eval.machine import finish_machine_info, machine_info
@@ -50,6 +52,15 @@ _SHORT = {
 }
 
 
+class _ControlPeriod(Protocol):
+    """What :class:`_Stepper` reads of a base env beside gymnasium's ``Env``: every env benchmarked here (ours and
+    gymnasium's MuJoCo envs) has a control period."""
+
+    @property
+    def dt(self) -> float:
+        """Seconds of simulated time per step [s]."""
+
+
 class _Stepper:
     """One env stepped with the zero action in timed windows, resetting when an episode ends; keeps each window's
     steps, resets and duration."""
@@ -57,8 +68,10 @@ class _Stepper:
     def __init__(self, env_id: str, seed: int, env_kwargs: dict[str, Any] | None = None) -> None:
         self.env = gym.make(env_id, **(env_kwargs or {}))
         self.env.reset(seed=seed)
-        self.action = np.zeros(self.env.action_space.shape, dtype=self.env.action_space.dtype)
-        self.dt = float(self.env.unwrapped.dt)
+        space = self.env.action_space
+        assert isinstance(space, spaces.Box)  # every env benchmarked here takes a Box action
+        self.action = np.zeros(space.shape, dtype=space.dtype)
+        self.dt = float(cast(_ControlPeriod, self.env.unwrapped).dt)
         self.windows: list[tuple[int, int, float]] = []
         self._run(0.0, warmup=50)  # compiled kernels and caches
         self.env.reset(seed=seed)
@@ -110,7 +123,8 @@ def wrapped_rates(
         raw, inner = _Stepper(raw_id, seed), _Stepper(wrapped_id, seed)
         try:
             timed = alternating_rounds(
-                {"raw": lambda: raw.window(seconds / rounds), "wrapped": lambda: inner.window(seconds / rounds)},
+                # partial binds this iteration's steppers (a closure would read the loop's latest)
+                {"raw": partial(raw.window, seconds / rounds), "wrapped": partial(inner.window, seconds / rounds)},
                 rounds=rounds,
             )
         finally:
@@ -174,7 +188,7 @@ def run_envs_bench(
             steppers[label] = _Stepper(env_id, seed, kwargs)
         window = seconds / rounds
         timed = alternating_rounds(
-            {label: (lambda s=stepper: s.window(window)) for label, stepper in steppers.items()},
+            {label: partial(stepper.window, window) for label, stepper in steppers.items()},
             rounds=rounds,
             progress=progress,
             desc="bench envs rounds",

@@ -26,7 +26,8 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Sequence
-from typing import Any
+from functools import partial
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -39,6 +40,9 @@ from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..sb3_import import install_hint
 from .exceptions import BenchError
 from .timing import CLOCK, TimedPasses, alternating_rounds, timed_call
+
+if TYPE_CHECKING:
+    from ..envs.agri_reach import AgriReachEnv
 
 __all__ = ["format_ik_bench", "run_ik_bench"]
 
@@ -113,6 +117,7 @@ class _MinkSolver:
         """Time [s] of one update + solve_ik at ``obs``."""
         mink, lay = self.mink, self.layout
         q = obs[lay["q"]]
+        assert self.policy.path is not None  # planned by the episode that recorded ``obs``
         target, _ = self.policy.path(float(obs[lay["time"]][0]))
 
         def solve() -> None:
@@ -159,22 +164,25 @@ def _scaling(
     the arm's workspace as obstacles, for each ``n`` in ``counts``."""
     big = gym.make(ENV_ID, prune=False, row_length=60.0)
     big.reset(seed=seed)
-    row = big.unwrapped.crop_row
+    row = cast("AgriReachEnv", big.unwrapped).crop_row  # gym.make returns the base Env type
     big.close()
+    assert row is not None  # the reset generated it
     hard = np.flatnonzero(row.hard)
     if hard.size < max(counts):
         raise BenchError(f"the long row has only {hard.size} hard parts, fewer than {max(counts)}")
     reach = LSS([0.0, 0.0, 0.55], [0.0, 0.0, 1.35], 0.0)
-    order = hard[np.argsort([distance(_volume(row, k), reach).distance for k in hard])]
+    order = hard[np.argsort([distance(_volume(row, int(k)), reach).distance for k in hard])]
     out = []
     for n in tqdm(counts, desc="bench ik scaling", disable=not progress):
         environment = [Segment(f"obstacle_{i}", (_volume(row, k),)) for i, k in enumerate(order[:n])]
         controller = policy.build_controller(environment)
         times = []
         for obs in observations:
+            assert policy.path is not None  # planned by the episodes that recorded the observations
             target, velocity = policy.path(float(obs[layout["time"]][0]))
             q = obs[layout["q"]]
-            times.append(timed_call(lambda: controller.step(q, target, velocity))[1] * 1e6)
+            # partial binds this iteration's controller and state (a closure would read the loop's latest)
+            times.append(timed_call(partial(controller.step, q, target, velocity))[1] * 1e6)
         out.append(
             {
                 "primitives": int(n),
@@ -237,7 +245,11 @@ def run_ik_bench(
             {"ours": ours, "mink": mink}, rounds=rounds, progress=progress, desc="bench ik rounds"
         )
         scale = (
-            _scaling(policy, observations, env.unwrapped.observation_layout, scaling, seed, progress) if scaling else []
+            _scaling(
+                policy, observations, cast("AgriReachEnv", env.unwrapped).observation_layout, scaling, seed, progress
+            )
+            if scaling
+            else []
         )
     finally:
         env.close()

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import gymnasium as gym
 import numpy as np
@@ -28,6 +28,9 @@ from tqdm.auto import tqdm
 
 from ..eval.machine import machine_info
 from .exceptions import BenchError
+
+if TYPE_CHECKING:
+    from ..envs.biped_walk import BipedWalkEnv
 
 __all__ = [
     "AFTER",
@@ -88,7 +91,7 @@ def push_trial(
     try:
         policy = make_policy("walking", env, push_recovery=push_recovery)
         obs, _ = env.reset(seed=int(env_seed))
-        dt = float(env.unwrapped.dt)
+        dt = float(cast("BipedWalkEnv", env.unwrapped).dt)  # gym.make returns the base Env type
         steps = int(np.ceil((start + AFTER) / dt))
         first = np.array([True])
         for i in range(steps):

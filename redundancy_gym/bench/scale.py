@@ -207,8 +207,9 @@ def format_scale_bench(report: dict[str, Any]) -> str:
     ]
     for case, row in report["eval"].items():
         lines.append(
-            f"{case} ({row['policy']}, {row['episodes']} episodes per run): serial fraction {row['serial_fraction']:.3f}, predicted speedup "
-            f"on 64 cores {row['predicted_speedup_64']:.1f}x"
+            f"{case} ({row['policy']}, {row['episodes']} episodes per run): "
+            f"serial fraction {row['serial_fraction']:.3f}, "
+            f"predicted speedup on 64 cores {row['predicted_speedup_64']:.1f}x"
         )
         for kind, rows in (("workers", row["workers"]), ("Ray actors (num_cpus as many)", row.get("ray", {}))):
             for n, r in rows.items():

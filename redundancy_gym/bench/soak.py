@@ -221,7 +221,8 @@ def _soak_source(
         return _source_report(counter, source, policy_name, time.perf_counter() - start_time)
     next_seed = seed
     attempts = 0  # steps tried, raised or not: ends a step budget even when every step raises
-    reported = 0
+    reported: float = 0  # progress shown so far: steps, or seconds of a time budget
+    time_limit = math.inf if seconds is None else seconds  # [s]; read only without a step budget
 
     def reset() -> Any:
         nonlocal next_seed
@@ -248,7 +249,7 @@ def _soak_source(
             if steps is not None:
                 if attempts >= steps:
                     break
-            elif attempts and attempts % _CHECK_EVERY == 0 and time.perf_counter() - start_time >= seconds:
+            elif attempts and attempts % _CHECK_EVERY == 0 and time.perf_counter() - start_time >= time_limit:
                 break
             attempts += 1
             try:
@@ -267,7 +268,7 @@ def _soak_source(
                 counter.episodes += 1
                 obs, start = reset(), True
             if bar is not None and attempts % _CHECK_EVERY == 0:
-                now = attempts if steps is not None else min(time.perf_counter() - start_time, seconds)
+                now = attempts if steps is not None else min(time.perf_counter() - start_time, time_limit)
                 bar.update(now - reported)
                 reported = now
         if obs is None:
@@ -276,7 +277,7 @@ def _soak_source(
         env.close()
     elapsed = time.perf_counter() - start_time
     if bar is not None:
-        bar.update((steps if steps is not None else seconds) - reported)
+        bar.update((steps if steps is not None else time_limit) - reported)
     return _source_report(counter, source, policy_name, elapsed)
 
 
@@ -342,7 +343,11 @@ def run_soak_bench(
     documented_nan = DOCUMENTED_NAN if documented_nan is None else documented_nan
     env_kwargs = env_kwargs or {}
     policy_kwargs = policy_kwargs or {}
-    budget = float(seconds) if seconds is not None else int(steps)
+    if seconds is not None:
+        budget: float = float(seconds)
+    else:
+        assert steps is not None  # exactly one of the two, checked above
+        budget = int(steps)
     plan = []
     for env_id in envs:
         split = _split(budget, shares.get(env_id, {}), sources)
@@ -379,7 +384,7 @@ def run_soak_bench(
                 env_id,
                 source,
                 seconds=None if steps is not None else amount,
-                steps=amount if steps is not None else None,
+                steps=int(amount) if steps is not None else None,  # an int already: whole steps
                 seed=seed,
                 env_kwargs=env_kwargs.get(env_id, {}),
                 policy_name=report_envs[env_id]["reference_policy"],
@@ -480,7 +485,10 @@ def format_soak_bench(report: Mapping[str, Any]) -> str:
         )
     )
     widths = [max(len(r[i]) for r in rows) for i in range(len(header))]
-    lines = ["  ".join(c.rjust(w) if i >= 2 else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=False))) for r in rows]
+    lines = [
+        "  ".join(c.rjust(w) if i >= 2 else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=False)))
+        for r in rows
+    ]
     lines.insert(1, "-" * len(lines[0]))
     verdict = "OK: no exception, no non-finite value" if report["ok"] else "FAILED: see below"
     if t.get("documented_nan"):

@@ -173,7 +173,7 @@ def run_ssv_bench(
         "benchmark": "ssv",
         "seed": seed,
         "batch_sizes": sizes,
-        "peer": "coal %s (coal.distance loop and pinocchio.computeDistances)" % coal.__version__,
+        "peer": f"coal {coal.__version__} (coal.distance loop and pinocchio.computeDistances)",
         "timing": {
             "rounds": rounds,
             "warmup": 1,

@@ -10,15 +10,22 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, TypedDict
 
 from ..eval.json_writer import write_json
 from .exceptions import BenchError
 
-__all__ = ["BENCHES", "OPTIONS", "Bench", "BenchArgs", "bench", "run_bench"]
+__all__ = ["BENCHES", "OPTIONS", "Bench", "BenchArgs", "RoundsKwargs", "bench", "run_bench"]
 
 OPTIONS: tuple[str, ...] = ("rounds", "seconds", "steps", "trials", "episodes", "workers", "ray", "envs")
 """The options that only some benches take (``--seed``, ``--quick``, ``--json`` and ``--no-progress`` apply to all)."""
+
+
+class RoundsKwargs(TypedDict, total=False):
+    """The ``rounds`` keyword of a bench's run function, or nothing (the bench's default); typed so that a call
+    unpacking it passes an int to ``rounds`` and nothing else."""
+
+    rounds: int
 
 
 @dataclass(frozen=True)
@@ -42,7 +49,7 @@ class BenchArgs:
         """``--seed``, or ``default``."""
         return default if self.seed is None else self.seed
 
-    def rounds_kwargs(self) -> dict[str, int]:
+    def rounds_kwargs(self) -> RoundsKwargs:
         """``{"rounds": N}`` from ``--rounds``, or 3 with ``--quick``; empty: the bench's default."""
         if self.rounds is not None:
             return {"rounds": self.rounds}
@@ -67,7 +74,7 @@ def _wrote(path: Path | str) -> None:
 def _ssv(a: BenchArgs) -> int:
     from .ssv import format_ssv_bench, run_ssv_bench
 
-    timing = {"min_time": 0.002} if a.quick else {}
+    timing: dict[str, Any] = {"min_time": 0.002} if a.quick else {}
     report = run_ssv_bench(seed=a.seed_or(), progress=a.progress, **timing, **a.rounds_kwargs())
     print(format_ssv_bench(report))
     _wrote(write_json(report, a.json_path))

@@ -187,8 +187,8 @@ def alternating_rounds(
 
 def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 << 20) -> Sampler:
     """A sampler of ``fn``'s time per call [s]: each sample times (:func:`timed_call`) a fixed number of calls
-    lasting at least ``min_time`` [s]. The number is found on the first sample (which is therefore slower: run it in a warm-up
-    round) by doubling from one call, at most ``max_calls``.
+    lasting at least ``min_time`` [s]. The number is found on the first sample (which is therefore slower: run it in a
+    warm-up round) by doubling from one call, at most ``max_calls``.
 
     Raises:
         BenchError: ``min_time`` not finite and > 0, or ``max_calls < 1``.

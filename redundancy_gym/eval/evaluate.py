@@ -1,4 +1,5 @@
-"""The evaluation harness: run a policy for N seeded episodes and report the evaluation contract (docs/evaluation.md)."""
+"""The evaluation harness: run a policy for N seeded episodes and report the evaluation contract
+(docs/evaluation.md)."""
 
 from __future__ import annotations
 

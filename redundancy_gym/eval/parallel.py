@@ -1,6 +1,6 @@
 """The episodes of one evaluation across worker processes: each worker runs a setup once (``eval`` builds the env and
-the policy and runs the warm-up episodes there), then one episode per seed it is given. Every episode keeps its seed, so the evaluation's JSON is
-the serial run's, timings excepted.
+the policy and runs the warm-up episodes there), then one episode per seed it is given. Every episode keeps its seed,
+so the evaluation's JSON is the serial run's, timings excepted.
 
 A worker that raises inside an episode, or dies (killed, out of memory), fails the episodes it had not finished;
 those seeds run again in a fresh pool ``retries`` times, and a run that still has failed episodes raises

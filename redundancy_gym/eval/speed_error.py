@@ -463,8 +463,8 @@ def plot_speed_error_panels(
     (the panel title gets the episodes and seeds appended); labels in ``learned`` get the learned markers."""
     for _, _, error in panels:
         _metric(error)
-    fig, axes = plt.subplots(1, len(panels), figsize=(7.2 * len(panels), 6.2), squeeze=False)
-    axes = list(axes[0])
+    fig, grid = plt.subplots(1, len(panels), figsize=(7.2 * len(panels), 6.2), squeeze=False)
+    axes = list(grid[0])
     labels = [
         _draw_panel(ax, reports, error, _run_title(panel_title, reports), learned)
         for ax, (reports, panel_title, error) in zip(axes, panels, strict=True)

@@ -110,7 +110,8 @@ class CollisionLayout:
         frames: (S,) each segment's robot frame, ``None`` for the environment; robot segments come first.
         segment_starts: (S + 1,) segment ``s`` owns volumes ``segment_starts[s]:segment_starts[s + 1]``.
         local: (M, 3, 3) volume vertices in their segment's frame (environment: before its placement) [m].
-        radii: (M,) volume radii [m] (environment radii can change later; see :meth:`CollisionModel.environment_volumes`).
+        radii: (M,) volume radii [m] (environment radii can change later; see
+            :meth:`CollisionModel.environment_volumes`).
         kinds: (M,) volume kinds (0 PSS, 1 LSS, 2 TSS).
         segment_pairs: (P, 2) segment indices of each collision pair, in :attr:`CollisionModel.pairs` order.
         pair_starts: (P + 1,) pair ``p`` owns volume pairs ``pair_starts[p]:pair_starts[p + 1]``.

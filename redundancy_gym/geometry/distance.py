@@ -326,7 +326,8 @@ class PairBatch:
     def compute_near(self, margin: float) -> float:
         """Broad and narrow phase in one compiled pass: the pairs whose bounding spheres are at most ``margin``
         [m] apart get their exact distance in :attr:`result`, the others +inf (their witnesses are stale);
-        returns the smallest distance [m] (+inf when no pair is near). Faster than :meth:`cull` + :meth:`compute` when few pairs are near.
+        returns the smallest distance [m] (+inf when no pair is near). Faster than :meth:`cull` + :meth:`compute`
+        when few pairs are near.
         Only the first ``moving`` volumes (constructor) may have moved since the last :meth:`cull` or
         construction; attached frames (:meth:`attach_frames`) are read first."""
         return float(self._near_kernel(self._header_address, float(margin), self._moving, self._frames_address))

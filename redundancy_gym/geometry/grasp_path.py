@@ -32,13 +32,17 @@ class GraspPathTiming(NamedTuple):
     approach_speed: float = 0.12
 
 
+# one shared default instead of a call in the signatures (ruff B008); a NamedTuple is immutable, so sharing it is safe
+_DEFAULT_TIMING = GraspPathTiming()
+
+
 def grasp_path_durations(
     start: NDArray[np.float64],
     start_axis: NDArray[np.float64],
     pregrasp: NDArray[np.float64],
     grasp: NDArray[np.float64],
     approach: NDArray[np.float64],
-    timing: GraspPathTiming = GraspPathTiming(),
+    timing: GraspPathTiming = _DEFAULT_TIMING,
 ) -> tuple[float, float]:
     """Durations [s] of the move to the pre-grasp pose and of the approach, from the distances, the turn of the
     tool axis and ``timing`` (the approach takes at least 0.5 s)."""
@@ -104,7 +108,7 @@ class GraspPath:
         self._out = np.empty(12)
         if not sample_grasp_path.signatures:
             sample_grasp_path.compile("void(float64[::1], float64, float64[::1])")
-        self._sampler = sample_grasp_path.overloads[sample_grasp_path.signatures[0]].entry_point
+        self._sampler = sample_grasp_path.get_overload(sample_grasp_path.signatures[0])
 
     @classmethod
     def plan(
@@ -114,7 +118,7 @@ class GraspPath:
         pregrasp: NDArray[np.float64],
         grasp: NDArray[np.float64],
         approach: NDArray[np.float64],
-        timing: GraspPathTiming = GraspPathTiming(),
+        timing: GraspPathTiming = _DEFAULT_TIMING,
     ) -> GraspPath:
         """The path with durations from :func:`grasp_path_durations`."""
         return cls(

@@ -38,7 +38,9 @@ def _point(value: ArrayLike, name: str) -> NDArray[np.float64]:
 
 
 def _radius(value: float) -> float:
-    return check_real("radius", value, low=0.0, unit="m", error=GeometryError)  # type: ignore[return-value]
+    radius = check_real("radius", value, low=0.0, unit="m", error=GeometryError)
+    assert radius is not None  # not optional: a float or GeometryError
+    return radius
 
 
 class SSV:
@@ -77,7 +79,7 @@ class SSV:
         if rot.shape != (3, 3):
             raise GeometryError(f"rotation must be 3 x 3, got {rot.shape}")
         moved = self.points @ rot.T + _point(translation, "translation")
-        return type(self)(*moved, radius=self.radius)  # type: ignore[call-arg]
+        return SSV.from_kind(self.kind, moved, self.radius)
 
     def __repr__(self) -> str:
         pts = ", ".join(np.array2string(p, precision=4) for p in self.points)
@@ -86,9 +88,9 @@ class SSV:
     def __eq__(self, other: object) -> bool:
         return (
             type(other) is type(self)
-            and self.radius == other.radius  # type: ignore[attr-defined]
+            and self.radius == other.radius
             and bool(np.array_equal(self.vertices, other.vertices))
-        )  # type: ignore[attr-defined]
+        )
 
     def __hash__(self) -> int:
         return hash((self.kind, self.radius, self.vertices.tobytes()))

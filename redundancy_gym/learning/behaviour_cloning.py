@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from gymnasium import spaces
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
@@ -127,15 +128,15 @@ def train_behaviour_cloning(
         import torch
     except ImportError as exc:
         raise LearningError(f"behaviour cloning needs the learn extra: {LEARN_EXTRA_HINT}") from exc
-    for name, value, low in (
+    for name, value, least in (
         ("episodes", episodes, 1),
         ("dagger_rounds", dagger_rounds, 0),
         ("dagger_episodes", dagger_episodes, 1),
         ("epochs", epochs, 1),
         ("batch_size", batch_size, 1),
     ):
-        if not isinstance(value, int) or value < low:
-            raise LearningError(f"{name} must be an int >= {low}, got {value!r}")
+        if not isinstance(value, int) or value < least:
+            raise LearningError(f"{name} must be an int >= {least}, got {value!r}")
     if not math.isfinite(learning_rate) or learning_rate <= 0.0:
         raise LearningError(f"learning_rate must be finite and > 0, got {learning_rate!r}")
     clock = CpuClock().__enter__()
@@ -154,7 +155,10 @@ def train_behaviour_cloning(
     )
     policy = model.policy
     optimizer = torch.optim.Adam(policy.parameters(), lr=learning_rate)
-    low, high = env.action_space.low, env.action_space.high
+    action_space = env.action_space
+    if not isinstance(action_space, spaces.Box):  # the labels are clipped into its bounds
+        raise LearningError(f"behaviour cloning needs a Box action space; {env_id} has {action_space}")
+    low, high = action_space.low, action_space.high
     rng = np.random.default_rng(seed)
 
     def fit(observations: NDArray[np.float32], labels: NDArray[np.float32]) -> float:

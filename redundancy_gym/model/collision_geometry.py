@@ -2,11 +2,11 @@
 
 Sphere geoms become PSS, capsule geoms LSS, and mesh geoms whose name starts with ``triangle_prefix`` TSS
 (a triangle mesh of 3 vertices, or a thin triangular prism of 6 whose mid-plane triangle is the TSS and whose
-half thickness is the radius: MuJoCo simulates the prism, the controller sees the TSS). Geoms moving with one joint form
-one segment, named after their body and attached to the joint's frame; world geoms form environment segments. Other geom types are
-left out and listed, since a scene "models only what it needs". Pairs never checked: a segment and its nearest
-ancestor segment (joints without geoms in between, as in a compact wrist, do not separate them), and the body
-pairs of the MJCF's ``<contact><exclude/>`` entries (``world`` standing for every world geom).
+half thickness is the radius: MuJoCo simulates the prism, the controller sees the TSS). Geoms moving with one joint
+form one segment, named after their body and attached to the joint's frame; world geoms form environment segments.
+Other geom types are left out and listed, since a scene "models only what it needs". Pairs never checked: a segment
+and its nearest ancestor segment (joints without geoms in between, as in a compact wrist, do not separate them), and
+the body pairs of the MJCF's ``<contact><exclude/>`` entries (``world`` standing for every world geom).
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Literal, NamedTuple
+from typing import Literal, NamedTuple, TypeGuard
 
 import numpy as np
 import pinocchio as pin
@@ -196,13 +196,14 @@ class RobotModel:
         for j in range(1, m.njoints):
             joint = m.joints[j]
             kind = joint.shortname()
+            axis: tuple[float, ...]
             if kind == "JointModelFreeFlyer":
                 joint_type, axis = FREE, (0.0, 0.0, 0.0)
             elif kind in _CHAIN_JOINTS and joint.nq == 1 and joint.nv == 1:
-                joint_type, axis = _CHAIN_JOINTS[kind]
-                if axis is None:
-                    axis = tuple(np.asarray(joint.extract().axis, dtype=np.float64))
-                axis = tuple(np.asarray(axis, dtype=np.float64) / np.linalg.norm(axis))
+                joint_type, fixed_axis = _CHAIN_JOINTS[kind]
+                # an unaligned joint (fixed_axis None) carries its own axis
+                given = np.asarray(joint.extract().axis if fixed_axis is None else fixed_axis, dtype=np.float64)
+                axis = tuple(given / np.linalg.norm(given))
             else:
                 raise ModelError(
                     f"joint {m.names[j]!r} is {kind}; compiled kinematics support "
@@ -401,7 +402,7 @@ class RobotModel:
         return np.array(self._data.com[0], dtype=np.float64), ag
 
     def measure(
-        self, q: ArrayLike, v: ArrayLike, frames: tuple[str | int, ...] = ()
+        self, q: ArrayLike, v: ArrayLike, frames: Sequence[str | int] = ()
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(c, c_dot, R, p)`` of a measured state in one forward pass: CoM [m], its velocity [m/s] and the
         world rotations (k, 3, 3) and positions (k, 3) [m] of ``frames``.
@@ -424,12 +425,14 @@ class RobotModel:
         # copies: C-contiguous, and not views of one another's array
         return com, com_velocity, placements[:, :3, :3].copy(), placements[:, :3, 3].copy()
 
-    def _frame_indices(self, frames: tuple[str | int, ...]) -> tuple[int, ...]:
+    def _frame_indices(self, frames: Sequence[str | int]) -> tuple[int, ...]:
         """The indices of ``frames`` (:meth:`_resolve` each), cached per hashable tuple of frames."""
-        try:
-            return self._frame_tuples[frames]
-        except (KeyError, TypeError):  # TypeError: an unhashable sequence, resolved each time
-            indices = tuple(self._resolve(f) for f in frames)
+        if isinstance(frames, tuple):  # another sequence (a list) is resolved each time
+            try:
+                return self._frame_tuples[frames]
+            except (KeyError, TypeError):  # TypeError: a tuple holding an unhashable item
+                pass
+        indices = tuple(self._resolve(f) for f in frames)
         if isinstance(frames, tuple) and len(self._frame_tuples) < _FRAME_TUPLES_CACHED:
             self._frame_tuples[frames] = indices
         return indices
@@ -461,10 +464,13 @@ class RobotModel:
 
     # ------------------------------------------------------------------ integration
     def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
-        """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration manifold)."""
+        """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration
+        manifold)."""
         q = self.check_configuration(q)
         qdot = self._check_velocity(qdot)
-        step = qdot * check_real("dt", dt, unit="s", error=ModelError)
+        duration = check_real("dt", dt, unit="s", error=ModelError)
+        assert duration is not None  # not optional: a float or ModelError
+        step = qdot * duration
         if not math.isfinite(float(step.sum())):
             raise ModelError(f"qdot * dt overflows (dt = {dt!r})")
         q_next = np.array(pin.integrate(self._model, q, step), dtype=np.float64)
@@ -572,7 +578,7 @@ def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
-def _is_float_vector(value: object, size: int) -> bool:
+def _is_float_vector(value: object, size: int) -> TypeGuard[NDArray[np.float64]]:
     """Whether ``value`` is a float64 array of shape ``(size,)`` (what :func:`_as_float_array` would return as is)."""
     return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == (size,)
 

@@ -407,7 +407,7 @@ class _Recorder:
         arrays = {k: np.array(v, dtype=np.float64).reshape(n, 2) for k, v in self.rows.items()}
         return IkdWalk(
             label,
-            np.arange(n) * w.period,
+            np.arange(n, dtype=np.float64) * w.period,
             arrays["moment"],
             arrays["inverse_dynamics_moment"],
             w.ideal[:n].copy(),

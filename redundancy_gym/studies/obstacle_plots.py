@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import matplotlib
 
@@ -20,6 +20,9 @@ from numpy.typing import NDArray  # noqa: E402
 from .. import make_policy  # noqa: E402
 from ..eval.evaluate import make_env  # noqa: E402
 from ..eval.plots import save_figure  # noqa: E402
+
+if TYPE_CHECKING:
+    from ..envs.biped_obstacles import BipedObstaclesEnv
 
 __all__ = [
     "FOOT_COLORS",
@@ -119,7 +122,7 @@ def record_obstacle_walk(
         policy = make_policy("walking", env, **policy_kwargs)
         free = make_policy("walking", env, **{**policy_kwargs, "ssta": False, "rca": False})
         obs, info = env.reset(seed=seed)
-        base = env.unwrapped
+        base = cast("BipedObstaclesEnv", env.unwrapped)  # make_env returns the base Env type
         free.begin(obs)
         nominal_pattern = free.controller.pattern
         sites = (base.data.site("r_sole"), base.data.site("l_sole"))

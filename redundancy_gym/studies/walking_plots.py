@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import matplotlib
 
@@ -16,6 +16,9 @@ from numpy.typing import NDArray  # noqa: E402
 from .. import make_policy  # noqa: E402
 from ..eval.evaluate import make_env  # noqa: E402
 from ..eval.plots import save_figure  # noqa: E402
+
+if TYPE_CHECKING:
+    from ..envs.biped_walk import BipedWalkEnv
 
 __all__ = ["WalkTrace", "plot_angular_momentum", "plot_com_zmp", "record_walk"]
 
@@ -51,7 +54,7 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
     }
     start = True
     try:
-        for _ in range(int(round(duration / env.unwrapped.dt))):
+        for _ in range(int(round(duration / cast("BipedWalkEnv", env.unwrapped).dt))):
             action, _ = policy.predict(obs, episode_start=np.array([start]))
             start = False
             obs, _, terminated, truncated, info = env.step(action)

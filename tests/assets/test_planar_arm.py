@@ -25,9 +25,13 @@ def test_documented_dimensions() -> None:
 
 
 def test_scene_includes_obstacle_only_when_asked() -> None:
-    kwargs = dict(obstacle_radius=0.1, line_start=(0.9, 0.4), line_end=(0.9, -0.4))
-    with_obstacle = mujoco.MjModel.from_xml_string(planar_arm_scene_xml(obstacle_center=(0.5, 0.0), **kwargs))
-    without = mujoco.MjModel.from_xml_string(planar_arm_scene_xml(obstacle_center=None, **kwargs))
+    def scene(obstacle_center: tuple[float, float] | None) -> str:
+        return planar_arm_scene_xml(
+            obstacle_center=obstacle_center, obstacle_radius=0.1, line_start=(0.9, 0.4), line_end=(0.9, -0.4)
+        )
+
+    with_obstacle = mujoco.MjModel.from_xml_string(scene((0.5, 0.0)))
+    without = mujoco.MjModel.from_xml_string(scene(None))
     assert with_obstacle.geom(PLANAR_OBSTACLE_GEOM).size[0] == 0.1
     names = {without.geom(i).name for i in range(without.ngeom)}
     assert PLANAR_OBSTACLE_GEOM not in names and set(PLANAR_ARM_LINK_GEOMS) <= names

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import itertools
 import time
+from collections.abc import Callable
+from functools import partial
 
 import pytest
 
@@ -40,7 +42,7 @@ def test_order_alternates_and_warmup_is_not_recorded() -> None:
     calls: list[str] = []
     values = itertools.count(1)
 
-    def sampler(name: str):  # type: ignore[no-untyped-def]
+    def sampler(name: str) -> Callable[[], float]:
         def sample() -> float:
             calls.append(name)
             return float(next(values))
@@ -58,7 +60,7 @@ def test_order_alternates_and_warmup_is_not_recorded() -> None:
 
 def test_ratio_against_the_fastest_peer_takes_each_rounds_smaller_time() -> None:
     samples = {"ours": iter([2.0, 4.0, 3.0]), "p": iter([4.0, 2.0, 6.0]), "q": iter([8.0, 8.0, 1.0])}
-    rounds = alternating_rounds({k: (lambda it=it: next(it)) for k, it in samples.items()}, rounds=3, warmup=0)
+    rounds = alternating_rounds({k: partial(next, it) for k, it in samples.items()}, rounds=3, warmup=0)
     assert rounds.round_ratios("ours", ("p", "q")) == [0.5, 2.0, 3.0]
     assert rounds.ratio("ours", ("p", "q")) == RatioStats(2.0, 0.5, 3.0, 3)
     assert rounds.median("p") == 4.0

@@ -16,6 +16,7 @@ from redundancy_gym.controllers import (
     ControllerError,
     FramePositionTask,
     JointLimitObjective,
+    Objective,
     PostureObjective,
 )
 from redundancy_gym.geometry import PSS, Segment
@@ -28,7 +29,7 @@ from .strategies import hostile_vectors, vectors
 def _planar(method: str) -> Clik:
     model = RobotModel.from_mjcf(PLANAR_ARM_XML)
     ball = Segment("ball", (PSS([0.7, 0.0, -0.12], 0.1),))
-    objectives = [
+    objectives: list[Objective] = [
         JointLimitObjective.from_model(model, activation_distance=0.3),
         PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
         CollisionObjective(collision_model_from_mjcf(model, [ball]), activation_distance=0.15, slope=2.0, weight=3.0),

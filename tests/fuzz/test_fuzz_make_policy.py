@@ -4,6 +4,7 @@ action inside the action space or the package's error."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import MISSING, fields
 
 import gymnasium as gym
@@ -37,7 +38,7 @@ IDS = [f"{env.split('/')[1].split('-')[0]}-{name}" for env, name, _, _ in CASES]
 
 
 @pytest.fixture(scope="module")
-def envs() -> dict:
+def envs() -> Iterator[dict]:
     made = {}
     for env_id in (PLANAR, AGRI, BIPED):
         env = gym.make(env_id)
@@ -50,8 +51,8 @@ def envs() -> dict:
 def _default(field) -> object:
     if field.default is not MISSING:
         return field.default
-    if field.default_factory is not MISSING:  # type: ignore[misc]
-        return field.default_factory()  # type: ignore[misc]
+    if field.default_factory is not MISSING:
+        return field.default_factory()
     return None
 
 

@@ -4,7 +4,9 @@ a finite step or the env's InvalidActionError, never a crash or a silent NaN."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import fields
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -47,7 +49,7 @@ IDS = [f"{env.split('/')[1].split('-')[0]}-{cls.__name__}" for env, cls, _, _ in
 
 
 @pytest.fixture(scope="module")
-def bases() -> dict:
+def bases() -> Iterator[dict]:
     made = {env_id: gym.make(env_id) for env_id in (PLANAR, AGRI, BIPED)}
     yield made
     for env in made.values():
@@ -56,7 +58,7 @@ def bases() -> dict:
 
 def options(config) -> st.SearchStrategy:
     """1-3 fields of ``config`` mutated (``policy_kwargs`` as junk or an empty dict), sometimes an unknown name."""
-    defaults = {f.name: (f.default if f.name != "policy_kwargs" else {}) for f in fields(config)}
+    defaults: dict[str, Any] = {f.name: (f.default if f.name != "policy_kwargs" else {}) for f in fields(config)}
     keys = sorted(defaults)
 
     def mutate(name: str) -> st.SearchStrategy:
@@ -91,7 +93,7 @@ def test_wrapper_with_fuzzed_options_is_valid_or_wrapper_error(bases, env_id, wr
 
 
 @pytest.fixture(scope="module")
-def wrapped() -> dict:
+def wrapped() -> Iterator[dict]:
     made = {}
     for env_id in WRAPPED_ENV_IDS:
         env = gym.make(env_id)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from numpy.typing import ArrayLike, NDArray
 
 from redundancy_gym.geometry import LSS, PSS, TSS, CollisionModel, GeometryError, Segment, bounding_lss, distance
 from redundancy_gym.model import RobotModel, collision_geometry_from_mjcf, collision_model_from_mjcf
@@ -40,10 +41,11 @@ def test_distances_match_direct_queries(planar_model: RobotModel, rng: np.random
         state = model.evaluate(planar_model)
         for p, (a, b) in enumerate(state.pairs):
             va, vb = segments[a].volumes[0], segments[b].volumes[0]
-            if segments[a].frame:
-                va = va.transformed(*planar_model.frame_placement(segments[a].frame))
-            if segments[b].frame:
-                vb = vb.transformed(*planar_model.frame_placement(segments[b].frame))
+            frame_a, frame_b = segments[a].frame, segments[b].frame
+            if frame_a:
+                va = va.transformed(*planar_model.frame_placement(frame_a))
+            if frame_b:
+                vb = vb.transformed(*planar_model.frame_placement(frame_b))
             assert state.distance[p] == pytest.approx(distance(va, vb).distance, abs=1e-12)
 
 
@@ -79,7 +81,7 @@ def test_bounding_capsule_contains_its_volumes_and_skips_far_pairs() -> None:
         TSS([0, 0, 0.1], [0.2, 0, 0.1], [0, 0.1, 0.1], 0.01),
     )
     bound = bounding_lss(volumes)
-    axis = LSS(*bound.points, radius=0.0)
+    axis = LSS(bound.points[0], bound.points[1], 0.0)
     for v in volumes:  # every vertex ball of every volume lies inside the capsule
         for p in v.points:
             assert distance(PSS(p, 0.0), axis).distance + v.radius <= bound.radius + 1e-12
@@ -90,10 +92,10 @@ def test_bounding_capsule_contains_its_volumes_and_skips_far_pairs() -> None:
     class World:
         nv = 0
 
-        def frame_placement(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        def frame_placement(self, frame: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
             return np.eye(3), np.zeros(3)
 
-        def point_jacobian(self, frame: str, point: np.ndarray) -> np.ndarray:
+        def point_jacobian(self, frame: str, point: ArrayLike) -> NDArray[np.float64]:
             return np.zeros((3, 0))
 
     near = Segment("near", (PSS([0.5, 0, 0], 0.05),))
@@ -142,9 +144,9 @@ def test_layout_and_environment_volumes_describe_the_model(planar_model: RobotMo
     radii[first:] = env.radii
     for s, frame in enumerate(layout.frames):
         if frame is not None:
-            r, p = planar_model.frame_placement(frame)
+            rotation, position = planar_model.frame_placement(frame)
             sl = slice(layout.segment_starts[s], layout.segment_starts[s + 1])
-            vertices[sl] = layout.local[sl] @ r.T + p
+            vertices[sl] = layout.local[sl] @ rotation.T + position
     packed = PackedVolumes(vertices, radii, layout.kinds)
     for p in range(model.num_pairs):
         ks = range(layout.pair_starts[p], layout.pair_starts[p + 1])

@@ -193,8 +193,8 @@ def test_tiny_features(kind_a: str, kind_b: str) -> None:
     for _ in range(20):
         a = random_volume(rng, kind_a, spread=1e-6, size=1e-6)
         b = random_volume(rng, kind_b, spread=1e-6, size=1e-6)
-        a = type(a)(*a.points, radius=1e-7)
-        b = type(b)(*b.points, radius=1e-7)
+        a = SSV.from_kind(a.kind, a.points, 1e-7)
+        b = SSV.from_kind(b.kind, b.points, 1e-7)
         check_pair(a, b, tol=1e-15)
 
 

@@ -8,6 +8,7 @@ accepted, or raised an unrelated error) before the checks were shared.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import fields
 from typing import Any
 
@@ -26,7 +27,7 @@ BIPED = "redundancy_gym/BipedWalk-v0"
 
 
 @pytest.fixture(scope="module")
-def envs() -> dict[str, gym.Env]:
+def envs() -> Iterator[dict[str, gym.Env]]:
     made = {env_id: gym.make(env_id) for env_id in (PLANAR, AGRI, BIPED)}
     yield made
     for env in made.values():
@@ -219,8 +220,9 @@ def test_every_numeric_policy_option_has_a_range() -> None:
 
 # ---------------------------------------------------------------------------------------------- geometry
 def test_pss_radius_as_a_string_is_rejected() -> None:
+    radius: Any = "0.1"  # the wrong type on purpose: the runtime check is under test
     with pytest.raises(GeometryError, match=r"radius must be a finite real number >= 0.*'0\.1'"):
-        PSS([0.0, 0.0, 0.0], radius="0.1")
+        PSS([0.0, 0.0, 0.0], radius=radius)
 
 
 @pytest.mark.parametrize(
@@ -278,6 +280,7 @@ def test_shared_checks_raise_the_callers_exception_naming_argument_value_and_ran
     class MyError(ValueError):
         pass
 
+    bad: Any  # each loop below goes through values of other types, most of them wrong on purpose
     assert v.check_bool("flag", np.bool_(True), error=MyError) is True
     for bad in ("no", 1, 0.0, None):
         with pytest.raises(MyError, match=r"flag must be a bool \(True or False\), got"):

@@ -42,7 +42,7 @@ def _brute_force(a, b) -> tuple[float, float]:
         sum(max((np.linalg.norm(x - y) for x, y in itertools.combinations(v.points, 2)), default=0.0) for v in (a, b))
         / GRID
     )
-    return float(gaps.min()) - a.radius - b.radius, spacing
+    return float(gaps.min()) - a.radius - b.radius, float(spacing)
 
 
 def _check_against_brute_force(a, b) -> None:
@@ -168,9 +168,8 @@ def test_far_from_the_origin_a_pair_keeps_its_distance() -> None:
     offset = np.array([3e7, -1e7, 2e7])
     a, b = LSS([0, 0, 0], [1, 0.1, 0], 0.05), TSS([0.2, 0.5, -0.1], [0.8, 0.6, 0.2], [0.5, 0.9, 0.0], 0.05)
     near = distance(a, b).distance
-    far = distance(
-        LSS(a.points[0] + offset, a.points[1] + offset, 0.05), TSS(*(b.points + offset), radius=0.05)
-    ).distance
+    p0, p1, p2 = b.points + offset
+    far = distance(LSS(a.points[0] + offset, a.points[1] + offset, 0.05), TSS(p0, p1, p2, 0.05)).distance
     assert far == pytest.approx(near, abs=1e-8)  # ulp(3e7) ~ 4e-9
 
 

@@ -7,6 +7,8 @@ Found by the nightly fuzz (``tests/fuzz/test_fuzz_policies.py``): the ``walking`
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -20,7 +22,7 @@ BIPED = "redundancy_gym/BipedWalk-v0"
 
 
 @pytest.fixture(scope="module")
-def biped() -> tuple[gym.Env, np.ndarray]:
+def biped() -> Iterator[tuple[gym.Env, np.ndarray]]:
     env = gym.make(BIPED)
     obs, _ = env.reset(seed=0)
     yield env, obs
@@ -93,7 +95,7 @@ def test_empty_batch_gives_no_actions() -> None:
     try:
         obs, _ = env.reset(seed=0)
         actions, _ = redundancy_gym.make_policy("clik", env).predict(obs[None, :][:0])
-        assert actions.shape == (0, *env.action_space.shape)
+        assert actions.shape[0] == 0 and actions.shape[1:] == env.action_space.shape
     finally:
         env.close()
 

@@ -51,7 +51,8 @@ def test_horizon_of_one_sample(planar) -> None:
     result = pik.optimize(q0, wdot[100:101], DT, np.zeros((1, 4)), max_iterations=5)
     assert result.success and result.params.shape == (1, 4) and result.rollout.q.shape == (2, 4)
     assert np.all(np.isfinite(result.rollout.q)) and len(result.costs) == result.iterations + 1
-    assert all(b <= a for a, b in zip(result.costs, result.costs[1:], strict=False))  # the line search never raises the cost
+    # the line search never raises the cost
+    assert all(b <= a for a, b in zip(result.costs, result.costs[1:], strict=False))
     horizon = RecedingHorizon(pik, 1, DT)
     update = horizon.update(q0, wdot[100:101])
     assert update.u.shape == (4,) and np.all(np.isfinite(update.u)) and update.seconds >= 0.0
@@ -156,11 +157,12 @@ def test_predictive_policy_on_a_line_at_the_edge_of_the_reach_keeps_its_actions_
     try:
         obs, _ = env.reset(seed=0)
         policy = redundancy_gym.make_policy("predictive", env, horizon=0.2)
+        assert env.spec is not None and env.spec.max_episode_steps is not None  # registered with a time limit
         for _ in range(env.spec.max_episode_steps):
             action, _ = policy.predict(obs)
             assert np.all(np.isfinite(action)) and np.all(np.abs(action) <= 1.0)
             obs, reward, terminated, truncated, _ = env.step(action)
-            assert np.all(np.isfinite(obs)) and np.isfinite(reward)
+            assert np.all(np.isfinite(obs)) and np.isfinite(float(reward))
             if terminated or truncated:
                 break
         assert policy.last_update is not None and policy.last_update.result.success

@@ -7,6 +7,8 @@ turns into a failure (XPASS) when fixed, so the mark is removed with the fix.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -100,7 +102,8 @@ def test_foot_of_two_entries_is_a_controller_error() -> None:
 )
 def test_gait_config_rejects_bad_values_naming_the_field(field: str, value: float) -> None:
     with pytest.raises(ControllerError, match=field):
-        GaitConfig(**{field: value})
+        kwargs: dict[str, Any] = {field: value}
+        GaitConfig(**kwargs)
 
 
 @pytest.mark.parametrize("value", ["0.8", None])
@@ -206,7 +209,9 @@ def test_pattern_with_a_tiny_com_height_is_rejected_or_finite() -> None:
 @pytest.mark.parametrize("argument", ["dt", "com"])
 def test_stabilizer_non_finite_measurement_raises(argument: str) -> None:
     stabilizer = Stabilizer(StabilizerGains(), DcmPlanner(0.9).omega)
-    inputs = {"dt": 0.004, "com": [np.nan, 0.0]} if argument == "com" else {"dt": np.nan, "com": [0.01, 0.0]}
+    inputs: dict[str, Any] = (
+        {"dt": 0.004, "com": [np.nan, 0.0]} if argument == "com" else {"dt": np.nan, "com": [0.01, 0.0]}
+    )
     with pytest.raises(ControllerError, match=argument):
         stabilizer.update(inputs["dt"], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], inputs["com"], [0.0, 0.0], [0.0, 0.0])
 

@@ -211,7 +211,7 @@ def test_measure_is_the_com_its_velocity_and_the_frame_placements_of_a_full_upda
     """measure() updates only the frames it is asked for: each agrees with update() and the frame queries, the
     CoM velocity with the CoM Jacobian, and afterwards the kinematic cache is empty."""
     biped = RobotModel.from_mjcf(BIPED_XML)
-    frames = ("r_sole", "l_sole", biped.frame_id("imu"), "r_sole")
+    frames: tuple[str | int, ...] = ("r_sole", "l_sole", biped.frame_id("imu"), "r_sole")
     for _ in range(5):
         q, v = _random_biped_state(biped, rng)
         com, com_velocity, rotations, positions = biped.measure(q, v, frames)
@@ -347,7 +347,7 @@ def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
     along q(t) = q + v t)."""
     biped = RobotModel.from_mjcf(BIPED_XML)
     other = RobotModel.from_mjcf(BIPED_XML)
-    frames = ("r_sole", "l_sole", "imu", biped.frame_id("r_sole"))
+    frames: tuple[str | int, ...] = ("r_sole", "l_sole", "imu", biped.frame_id("r_sole"))
     for _ in range(4):
         q, v = _random_biped_state(biped, rng)
         terms = biped.acceleration_terms(q, v, frames)

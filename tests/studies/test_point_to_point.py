@@ -30,8 +30,8 @@ def test_without_avoidance_the_arm_hits_itself_and_with_it_stays_clear(traces: d
 
 def test_the_start_and_goal_postures_are_collision_free_and_within_limits(traces: dict) -> None:
     model = RobotModel.from_mjcf(AGRI_ARM_XML)
-    for q in (FIG_5_10.q_start, FIG_5_10.q_goal):
-        q = np.asarray(q)
+    for posture in (FIG_5_10.q_start, FIG_5_10.q_goal):
+        q = np.asarray(posture)
         assert np.all(q > model.lower_limits) and np.all(q < model.upper_limits)
     assert traces[False].self_clearance[0] > 0.0 and traces[True].self_clearance[-1] > 0.0
 
