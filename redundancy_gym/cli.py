@@ -14,7 +14,8 @@ from collections.abc import Sequence
 from typing import Any
 
 from . import __version__
-from .bench.table import BENCHES, BenchArgs, run_bench
+from .bench.exceptions import BenchError
+from .bench.table import BENCHES, BenchArgs, check_bench_args
 
 __all__ = ["main"]
 
@@ -640,6 +641,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     from .eval.exceptions import EvalError
     from .policies import PolicyError
 
+    if args.command == "bench":
+        bench_args = BenchArgs(
+            json_path=args.json_path or f"results/bench_{args.name}.json",
+            seed=args.seed,
+            quick=args.quick,
+            progress=not args.no_progress,
+            rounds=args.rounds,
+            seconds=args.seconds,
+            steps=args.steps,
+            trials=args.trials,
+            episodes=args.episodes,
+            workers=args.workers,
+            ray=args.ray,
+            envs=None if args.envs is None else tuple(args.envs),
+        )
+        try:  # an option the bench does not take is a usage error, as argparse reports them
+            bench_entry = check_bench_args(args.name, bench_args)
+        except BenchError as exc:
+            parser.error(str(exc))
     try:
         if args.command in ("eval", "train", "render"):
             _apply_wrapper(args)
@@ -689,23 +709,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             )
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
-            return run_bench(
-                args.name,
-                BenchArgs(
-                    json_path=args.json_path or f"results/bench_{args.name}.json",
-                    seed=args.seed,
-                    quick=args.quick,
-                    progress=not args.no_progress,
-                    rounds=args.rounds,
-                    seconds=args.seconds,
-                    steps=args.steps,
-                    trials=args.trials,
-                    episodes=args.episodes,
-                    workers=args.workers,
-                    ray=args.ray,
-                    envs=None if args.envs is None else tuple(args.envs),
-                ),
-            )
+            return bench_entry.run(bench_args)
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -15,7 +15,7 @@ from typing import Any, TypedDict
 from ..eval.json_writer import write_json
 from .exceptions import BenchError
 
-__all__ = ["BENCHES", "OPTIONS", "Bench", "BenchArgs", "RoundsKwargs", "bench", "run_bench"]
+__all__ = ["BENCHES", "OPTIONS", "Bench", "BenchArgs", "RoundsKwargs", "bench", "check_bench_args", "run_bench"]
 
 OPTIONS: tuple[str, ...] = ("rounds", "seconds", "steps", "trials", "episodes", "workers", "ray", "envs")
 """The options that only some benches take (``--seed``, ``--quick``, ``--json`` and ``--no-progress`` apply to all)."""
@@ -275,11 +275,11 @@ def bench(name: str) -> Bench:
     return BENCHES[name]
 
 
-def run_bench(name: str, args: BenchArgs) -> int:
-    """Run the bench ``name`` with ``args`` after checking that it takes every option given; the exit status.
+def check_bench_args(name: str, args: BenchArgs) -> Bench:
+    """The row of ``name`` after checking that it takes every option given in ``args``.
 
     Raises:
-        BenchError: unknown bench, an option it does not take, or ``rounds < 1``.
+        BenchError: unknown bench, an option it does not take (naming the benches that take it), or ``rounds < 1``.
     """
     entry = bench(name)
     given = [option for option in OPTIONS if getattr(args, option) is not None]
@@ -291,4 +291,9 @@ def run_bench(name: str, args: BenchArgs) -> int:
         )
     if args.rounds is not None and args.rounds < 1:
         raise BenchError(f"--rounds must be >= 1, got {args.rounds}")
-    return entry.run(args)
+    return entry
+
+
+def run_bench(name: str, args: BenchArgs) -> int:
+    """Run the bench ``name`` with ``args`` after :func:`check_bench_args`; the exit status."""
+    return check_bench_args(name, args).run(args)
