@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import gymnasium as gym
@@ -76,23 +77,15 @@ def _eval_rate(
 
 
 def _speedup_rounds(
-    env_id: str,
-    policy: str,
-    env_kwargs: dict[str, Any],
-    episodes: int,
-    seed: int,
-    workers: int,
-    ray_address: str | None,
-    rounds: int,
-    bar: Any,
+    rate: Callable[[int, str | None], float], workers: int, ray_address: str | None, rounds: int, bar: Any
 ) -> dict[str, float]:
     """The serial loop and ``workers`` (local processes, or Ray actors at ``ray_address``) in ``rounds``
     alternating rounds, so that a load change hits both alike: their episodes/s and the speedup (medians over
-    the rounds; the speedup's smallest and largest round)."""
+    the rounds; the speedup's smallest and largest round). ``rate(workers, ray_address)`` measures episodes/s."""
     serial, parallel = [], []
     for _ in range(rounds):
-        serial.append(_eval_rate(env_id, policy, env_kwargs, episodes, seed, 1))
-        parallel.append(_eval_rate(env_id, policy, env_kwargs, episodes, seed, workers, ray_address))
+        serial.append(rate(1, None))
+        parallel.append(rate(workers, ray_address))
         bar.update(1)
     speedups = [p / s for s, p in zip(serial, parallel, strict=True)]
     return {
@@ -160,9 +153,10 @@ def run_scale_bench(
         for case in cases:
             env_id, policy, kwargs, own_episodes = SCALE_CASES[case]
             n_episodes = episodes or own_episodes
+            rate = partial(_eval_rate, env_id, policy, kwargs, n_episodes, seed)
             rows = {}
             for n in workers:
-                rows[str(n)] = _speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n, None, rounds, bar)
+                rows[str(n)] = _speedup_rounds(rate, n, None, rounds, bar)
             largest = max(workers)
             f = amdahl_serial_fraction(rows[str(largest)]["speedup"], largest)
             on_ray = {}
@@ -173,7 +167,7 @@ def run_scale_bench(
                 try:
                     on_ray[str(n)] = {
                         "num_cpus": n,
-                        **_speedup_rounds(env_id, policy, kwargs, n_episodes, seed, n, LOCAL_RAY, rounds, bar),
+                        **_speedup_rounds(rate, n, LOCAL_RAY, rounds, bar),
                     }
                 finally:
                     ray.shutdown()

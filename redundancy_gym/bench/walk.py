@@ -33,6 +33,7 @@ distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_c
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -93,7 +94,8 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     try:
         obs, _ = env.reset(seed=seed)
         while True:
-            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([not times])))
+            # partial binds this period's observation (a closure would read the loop's latest)
+            (action, _), seconds = timed_call(partial(policy.predict, obs, episode_start=np.array([not times])))
             times.append(seconds * 1e6)
             avoidance = policy.last_command.avoidance if policy.last_command is not None else None
             active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
@@ -124,7 +126,8 @@ def _walk(
             if k == 1 and record:  # after start(), which builds the IK
                 recorder = _Recorder(policy.controller.solver)
                 policy.controller.solver = recorder  # type: ignore[assignment]
-            (action, _), seconds = timed_call(lambda: policy.predict(obs, episode_start=np.array([k == 0])))
+            # partial binds this period's observation and step (a closure would read the loop's latest)
+            (action, _), seconds = timed_call(partial(policy.predict, obs, episode_start=np.array([k == 0])))
             times.append(seconds * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
             controller = policy.controller
@@ -143,7 +146,7 @@ def _walk(
     finally:
         env.close()
     if recorder is not None:
-        policy.controller.solver = recorder.solver  # type: ignore[assignment]
+        policy.controller.solver = recorder.solver
     return times, recorder.calls if recorder is not None else [], policy, fell
 
 
@@ -325,8 +328,8 @@ def format_walk_bench(report: dict[str, Any]) -> str:
             + _rounds_text(report.get("ik_compiled_vs_python_rounds")),
             f"controller_vs_lola = {report['controller_vs_lola']:.3f}  (Lola: {LOLA_CYCLE_US:.0f} us per cycle)"
             + _rounds_text(report.get("controller_vs_lola_rounds")),
-            f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  p99 {report['ikd']['step_us_p99']:.1f} us"
-            + ("  (fell)" if report["ikd"]["fell"] else ""),
+            f"IKD controller   median {report['ikd']['step_us_median']:.1f} us  "
+            f"p99 {report['ikd']['step_us_p99']:.1f} us" + ("  (fell)" if report["ikd"]["fell"] else ""),
             "measured ZMP from the reference, rms: "
             + ", ".join(
                 f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")

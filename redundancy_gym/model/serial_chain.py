@@ -70,36 +70,19 @@ class SerialChain:
         """World-aligned ``[J_T; J_R]`` (6 x nv) of the world point ``point`` [m] moving with ``joint`` at ``q``."""
         if not -1 <= int(joint) < self.num_joints:
             raise ModelError(f"joint must lie in [-1, {self.num_joints}), got {joint}")
-        rotation, position, world_axis = self._forward(q)
+        frames = self._frames(q)
         p = np.asarray(point, dtype=np.float64)
         out = np.zeros((6, self.nv))
-        chain_jacobian(
-            self.parent,
-            self.joint_type,
-            self.v_index,
-            rotation,
-            position,
-            world_axis,
-            int(joint),
-            float(p[0]),
-            float(p[1]),
-            float(p[2]),
-            out,
-        )
+        chain_jacobian(*frames, int(joint), float(p[0]), float(p[1]), float(p[2]), out)
         return out
 
     def centroidal(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """``(c, J_c, A_L)`` at ``q``: CoM [m], its Jacobian (3 x nv) and the angular rows of the centroidal
         momentum matrix (3 x nv, ``L_G = A_L qdot`` [kg m^2/s] about the CoM)."""
-        rotation, position, world_axis = self._forward(q)
+        frames = self._frames(q)
         com, jac_com, jac_angular = np.zeros(3), np.zeros((3, self.nv)), np.zeros((3, self.nv))
         chain_centroidal(
-            self.parent,
-            self.joint_type,
-            self.v_index,
-            rotation,
-            position,
-            world_axis,
+            *frames,
             self.body_mass,
             self.body_com,
             self.body_inertia,
@@ -124,6 +107,20 @@ class SerialChain:
         if x.shape != (n,) or not np.all(np.isfinite(x)):
             raise ModelError(f"{name} must be finite with shape ({n},), got {x.shape}")
         return x
+
+    def _frames(
+        self, q: ArrayLike
+    ) -> tuple[
+        NDArray[np.int64],
+        NDArray[np.int64],
+        NDArray[np.int64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+    ]:
+        """The leading arguments of the kernels that read the frames (:func:`chain_jacobian`,
+        :func:`chain_centroidal`): parent, joint type and velocity index, then :meth:`_forward` at ``q``."""
+        return (self.parent, self.joint_type, self.v_index, *self._forward(q))
 
     def _forward(self, q: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Joint rotations, positions and world axes at a checked ``q``."""

@@ -3,7 +3,7 @@ observation or a VecEnv's batch, one controller state per env index, a new episo
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
@@ -104,7 +104,9 @@ class PerEnvPolicy:
 
     def _new_core(self, index: int) -> PerEnvPolicy:
         """A fresh controller state for env ``index`` (> 0)."""
-        return type(self)(self._env, **self._options)
+        # the concrete policy's constructor (the mixin itself declares none)
+        build: Callable[..., PerEnvPolicy] = type(self)
+        return build(self._env, **self._options)
 
     def core(self, index: int) -> Any:
         """The policy object that keeps env ``index``'s controller state (``self`` for index 0; built on first use),

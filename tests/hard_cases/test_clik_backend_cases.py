@@ -24,6 +24,7 @@ from redundancy_gym.controllers import (
     ControllerError,
     FramePositionTask,
     JointLimitObjective,
+    Objective,
     PostureObjective,
     resolve,
 )
@@ -86,7 +87,7 @@ def test_a_limit_acting_on_a_real_command_is_still_limited(planar: RobotModel) -
 @pytest.mark.parametrize("backend", ["python", "compiled"])
 @pytest.mark.parametrize("value", [1e300, -1e300, 1.5 * MAX_COORDINATE, 1e150])
 def test_huge_configuration_is_rejected_naming_q(planar: RobotModel, method: str, backend: str, value: float) -> None:
-    objectives = [
+    objectives: list[Objective] = [
         JointLimitObjective.from_model(planar, activation_distance=0.3),
         PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
     ]
@@ -101,15 +102,19 @@ def test_huge_configuration_is_rejected_naming_q(planar: RobotModel, method: str
 
 def test_huge_configuration_backends_agree_just_inside_the_accepted_range(planar: RobotModel) -> None:
     """At ``|q| = MAX_COORDINATE`` the gradients' round-off is still far below the command: both backends agree."""
-    objectives = [
+    objectives: list[Objective] = [
         JointLimitObjective.from_model(planar, activation_distance=0.3),
         PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
     ]
     for method in METHODS:
         clik = Clik(planar, FramePositionTask(PLANAR_ARM_TCP, "xz"), method=method, objectives=objectives)
         compiled = CompiledClik(clik)
-        for q in ([MAX_COORDINATE, 1.0, 0.0, 0.0], [-MAX_COORDINATE, 0.0, 0.0, 0.0], [0.3, 0.0, MAX_COORDINATE, 0.0]):
-            q = np.array(q)
+        for entries in (
+            [MAX_COORDINATE, 1.0, 0.0, 0.0],
+            [-MAX_COORDINATE, 0.0, 0.0, 0.0],
+            [0.3, 0.0, MAX_COORDINATE, 0.0],
+        ):
+            q = np.array(entries)
             reference, result = clik.step(q, np.zeros(2)), compiled.step(q, np.zeros(2))
             np.testing.assert_allclose(result.qdot, reference.qdot, atol=1e-6)
             assert (result.status, result.limited) == (reference.status, reference.limited)

@@ -3,6 +3,8 @@ in physics without touching it, and needs its SSTA layer to do so."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -19,7 +21,8 @@ def walk(policy_kwargs: dict, obstacles: list = LOW_BEAM, seed: int = 0, limit: 
     env = gym.make(ENV_ID, obstacles=obstacles)
     policy = make_policy("walking", env, **policy_kwargs)
     obs, _ = env.reset(seed=seed)
-    contacts, info = 0, {}
+    contacts = 0
+    info: dict[str, Any] = {}
     for _ in range(limit):
         action, _ = policy.predict(obs)
         obs, _, terminated, truncated, info = env.step(action)

@@ -3,6 +3,8 @@ objectives as u avoid the obstacle."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -15,8 +17,10 @@ PLANAR = "redundancy_gym/PlanarReach-Nullspace-v0"
 
 def _episode(env: gym.Env, seed: int, actions: np.random.Generator | None = None) -> dict:
     env.reset(seed=seed)
+    shape = env.action_space.shape
+    assert shape is not None
     while True:
-        a = np.zeros(env.action_space.shape) if actions is None else actions.uniform(-1, 1, env.action_space.shape)
+        a = np.zeros(shape) if actions is None else actions.uniform(-1, 1, shape)
         _, _, terminated, truncated, info = env.step(a.astype(np.float32))
         if terminated or truncated:
             return info
@@ -48,6 +52,7 @@ def test_u_changes_the_joint_motion_but_not_the_task_velocity() -> None:
     moved, fraction = inner.command(u)
     assert fraction == 1.0
     model = inner.reference.model
+    assert inner._obs is not None
     model.update(inner._obs[:4])  # OBSERVATION_LAYOUT["q"]
     jacobian = inner.reference.controller.clik.task.jacobian(model)
     assert np.abs(moved.qdot - plain.qdot).max() > 0.05
@@ -58,5 +63,6 @@ def test_bad_options_raise_naming_them() -> None:
     env = gym.make("redundancy_gym/PlanarReach-v0")
     with pytest.raises(WrapperError, match="max_nullspace_speed"):
         NullspaceAction(env, max_nullspace_speed=2.0)
+    not_a_bool: Any = "yes"
     with pytest.raises(WrapperError, match="objectives"):
-        NullspaceAction(env, objectives="yes")
+        NullspaceAction(env, objectives=not_a_bool)

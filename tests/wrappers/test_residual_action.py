@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -39,6 +41,7 @@ def test_zero_residual_is_the_reference_policy_bitwise(env_id: str, policy: str,
     expected_actions, expected_rewards = _reference_episode(env_id, policy, make_kwargs, seed=11)
     env = gym.make(wrapped_id, **make_kwargs)
     env.reset(seed=11)
+    assert env.action_space.shape is not None
     zero = np.zeros(env.action_space.shape, dtype=np.float32)
     actions, rewards = [], []
     while True:
@@ -78,8 +81,9 @@ def test_bad_options_and_actions_raise_naming_them() -> None:
         ResidualAction(env, scale=0.0)
     with pytest.raises(WrapperError, match="walking"):
         ResidualAction(env, policy="walking")
+    not_a_dict: Any = [1, 2]
     with pytest.raises(WrapperError, match="policy_kwargs must be a dict"):  # found by tests/fuzz
-        ResidualAction(env, policy_kwargs=[1, 2])
+        ResidualAction(env, policy_kwargs=not_a_dict)
     wrapped = ResidualAction(env)
     with pytest.raises(WrapperError, match="reset"):
         wrapped.step(np.zeros(4))

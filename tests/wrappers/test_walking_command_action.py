@@ -70,7 +70,7 @@ def test_random_commands_changed_every_step_do_not_make_it_fall(seed: int) -> No
 @pytest.mark.parametrize("seed", range(600, 610))
 def test_random_commands_held_for_a_step_do_not_make_it_fall(seed: int) -> None:
     rng = np.random.default_rng(seed)
-    held = {}
+    held: dict[int, np.ndarray] = {}
     fell, steps, _ = _walk(
         gym.make(ID),
         seed,
@@ -98,7 +98,7 @@ def test_a_held_command_keeps_the_ten_second_episode() -> None:
     while True:
         _, reward, terminated, truncated, info = env.step(np.array([0.5, 0.0, 0.0], dtype=np.float32))
         steps += 1
-        total += reward
+        total += float(reward)
         if terminated or truncated:
             break
     assert truncated and not terminated and steps == 625 and info["time"] == pytest.approx(10.0)

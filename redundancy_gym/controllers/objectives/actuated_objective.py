@@ -26,7 +26,7 @@ class ActuatedObjective:
         self.objective = objective
         self._nq, self._nv = model.base_dofs
 
-    def evaluate(self, model: RobotModel | None, q: NDArray[np.float64]) -> ObjectiveValue:
+    def evaluate(self, model: RobotModel, q: NDArray[np.float64]) -> ObjectiveValue:
         """Value and gradient (length nv) at the full configuration ``q``."""
         value, gradient = self.objective.evaluate(model, np.asarray(q, dtype=np.float64)[self._nq :])
         return ObjectiveValue(value, np.concatenate([np.zeros(self._nv), gradient]))

@@ -452,7 +452,7 @@ class Ssta:
         c = self.config
         y = 0.5 * float(a[1] + b[1])
         low, high = min(a[0], b[0]), max(a[0], b[0])
-        kind: str | None = None
+        kind: Literal["over", "around"] | None = None
         height, lateral = c.step_height, 0.0
         band = (np.inf, -np.inf)
         for box in boxes:
@@ -688,7 +688,7 @@ class Ssta:
             straddles.append(straddle)
         zero = int(np.argmin(np.abs(offsets)))
         if free_end or not np.isfinite(value[zero, zero]):
-            b, cc = np.unravel_index(int(np.argmin(value)), value.shape)
+            b, cc = (int(i) for i in np.unravel_index(int(np.argmin(value)), value.shape))
         else:
             b, cc = zero, zero
         cost = float(value[b, cc])

@@ -14,7 +14,9 @@ decays as ``e^(-omega T)`` per step (about 5e-5 of a step after four 0.8 s steps
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import SupportsFloat
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -165,7 +167,7 @@ class WalkingPattern:
         self._center = start[:, :2].mean(axis=0)
         self._single = (1.0 - config.double_support_ratio) * self.step_duration
         self.planner = DcmPlanner(config.com_height)
-        self._swing_cache: dict[int, tuple[PiecewiseQuintic, Quintic]] = {}
+        self._swing_cache: dict[int, tuple[PiecewiseQuintic, Quintic | PiecewiseQuintic]] = {}
         # step adjustments (push recovery, :meth:`adjust_step`): foothold shifts from a foothold index on, the
         # single supports that were shortened, and the re-timed swings
         self._shifts: list[tuple[int, NDArray[np.float64]]] = []
@@ -726,10 +728,10 @@ class WalkingPattern:
             vertical, horizontal, s = retimed.vertical, retimed.horizontal, s - retimed.since
         height, path = vertical.values(s), horizontal.values(s)
         if height is None or path is None:  # not the scalar height and 2-D path of the pattern's swings
-            z, vz, _ = vertical.evaluate(s)
+            z_array, vz_array, _ = vertical.evaluate(s)
             xy, vxy, _ = horizontal.evaluate(s)
             (x, y), (vx, vy) = xy.tolist(), vxy.tolist()
-            return x, y, float(z), vx, vy, float(vz)
+            return x, y, float(z_array), vx, vy, float(vz_array)
         ((z,), (vz,), _), ((x, y), (vx, vy), _) = height, path
         return x, y, z, vx, vy, vz
 
@@ -875,14 +877,15 @@ class WalkingPattern:
         def state(t: float) -> tuple[NDArray[np.float64], ...]:
             """The path's position, velocity and acceleration at ``t`` [s]: the nominal plus the shift."""
             p, v, acc = (np.array(x, dtype=np.float64) for x in base.evaluate(t))
+            w: Sequence[SupportsFloat]  # the shift's (position, velocity, acceleration) [m, m/s, m/s^2]
             if t <= t_in:
                 w = shift_in.evaluate(t)
             elif t >= t_out:
                 w = shift_out.evaluate(t - t_out)
             else:
                 w = (d, 0.0, 0.0)
-            for target, value in zip((p, v, acc), w, strict=True):
-                target[1] += float(value)
+            for target, value in zip((p, v, acc), map(float, w), strict=True):
+                target[1] += value
             return p, v, acc
 
         knots = [t for t in dict.fromkeys([0.0, t_in, t_out, settled])]

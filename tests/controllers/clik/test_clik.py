@@ -46,7 +46,7 @@ def test_nullspace_projection_is_in_the_jacobian_nullspace(planar_model: RobotMo
         x = rng.normal(size=4)
         res = resolve(J, np.zeros(2), x, WeightMatrix(W, 4))
         assert res.success
-        assert np.linalg.norm(J @ res.x) < 1e-12 * max(1.0, np.linalg.norm(x))
+        assert np.linalg.norm(J @ res.x) < 1e-12 * max(1.0, float(np.linalg.norm(x)))
         assert np.linalg.norm(res.x) > 1e-6  # the projection is not trivially zero
 
 

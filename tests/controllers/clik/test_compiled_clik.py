@@ -15,6 +15,7 @@ from redundancy_gym.controllers import (
     FrameAxisTask,
     FramePositionTask,
     JointLimitObjective,
+    Objective,
     ObjectiveValue,
     PostureObjective,
 )
@@ -74,7 +75,7 @@ def test_planar_arm_with_posture_and_a_moving_obstacle_matches_clik(planar_model
     collision = CollisionObjective(
         collision_model_from_mjcf(planar_model, [obstacle]), activation_distance=0.15, slope=2.0, weight=3.0
     )
-    objectives = [
+    objectives: list[Objective] = [
         JointLimitObjective.from_model(planar_model, activation_distance=0.3),
         PostureObjective(np.zeros(4), [1.0, 0.5, 0.2, 0.1]),
         collision,

@@ -48,6 +48,7 @@ def test_fused_step_equals_the_separate_calls_along_an_episode(difficulty: str) 
         assert fused._fused is not None  # noqa: SLF001 - the one-call step ran
         expected, result = _separate_calls(separate, obs)
         assert action.dtype == np.float32 and np.array_equal(action, expected)
+        assert fused.last_result is not None
         _same_result(fused.last_result, result)
         assert isinstance(fused.controller, CompiledClik) and isinstance(separate.controller, CompiledClik)
         assert fused.controller.last_min_distance == separate.controller.last_min_distance
@@ -69,11 +70,14 @@ def test_last_result_is_the_step_that_made_it_across_a_new_episode() -> None:
         obs = env.step(policy.predict(obs)[0])[0]
     policy.predict(obs)
     expected = _separate_calls(separate, obs)[1]
+    assert policy.path is not None
     policy.controller.step(obs[policy._layout["q"]], *policy.path(0.0))  # noqa: SLF001 - another step between
+    assert policy.last_result is not None
     _same_result(policy.last_result, expected)
     policy.predict(obs)  # left unread: the next episode's controller replaces this one
     first, _ = env.reset(seed=1)
     policy.predict(first)
+    assert policy.last_result is not None
     _same_result(policy.last_result, _separate_calls(GraspClikPolicy(env), first)[1])
 
 

@@ -43,9 +43,11 @@ def test_compiled_step_equals_python_step_while_walking(model: RobotModel, momen
     controller = walking_controller(model, momentum_minimization=momentum, backend="python")
     controller.start(standing(model), 0.7)
     ik, pattern = controller.ik, controller.pattern
+    assert ik is not None
     assert any(isinstance(o, CollisionObjective) for o in ik.objectives)
     compiled = CompiledWholeBodyIk(ik)
     q = controller.q_ref
+    assert q is not None
     start = controller._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
     near = False
     for k in range(int(round(pattern.step_start(2) / controller.dt))):

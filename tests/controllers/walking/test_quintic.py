@@ -69,5 +69,5 @@ def test_scalar_evaluation_is_the_array_form_bit_for_bit(shape: tuple[int, ...])
             assert values is None
         else:
             assert values is not None
-            for a, b in zip(values, array, strict=False):
-                np.testing.assert_array_equal(a, np.reshape(b, -1))
+            for listed, b in zip(values, array, strict=False):
+                np.testing.assert_array_equal(listed, np.reshape(b, -1))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -88,10 +90,12 @@ def test_a_bad_period_raises(dt: float) -> None:
 
 
 def test_lists_float32_and_numpy_scalars_give_the_float64_result() -> None:
-    gains = StabilizerGains(dcm=np.float32(1.5), zmp=0.8, com=2, max_offset=1.0)
+    dcm: Any = np.float32(1.5)  # numpy scalars where floats are declared, on purpose
+    dt: Any = np.float32(DT)
+    gains = StabilizerGains(dcm=dcm, zmp=0.8, com=2, max_offset=1.0)
     args = ([0.1, 0.0], [0.12, 0.01], [0.08, -0.05], [0.11, 0.0], [0.3, -0.1], [0.05, -0.04])
     reference = Stabilizer(StabilizerGains(dcm=1.5, zmp=0.8, com=2.0, max_offset=1.0), OMEGA).update(DT, *args)
-    out = Stabilizer(gains, OMEGA).update(np.float32(DT), *(np.asarray(a, dtype=np.float32) for a in args))
+    out = Stabilizer(gains, OMEGA).update(dt, *(np.asarray(a, dtype=np.float32) for a in args))
     for got, expected in zip(out, reference, strict=False):
         assert got.dtype == np.float64
         # float32 inputs are rounded once; the arithmetic is float64 throughout

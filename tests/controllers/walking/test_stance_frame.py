@@ -18,7 +18,8 @@ def model() -> RobotModel:
 
 
 def moved(q: np.ndarray, yaw: float, shift: np.ndarray) -> np.ndarray:
-    """``q`` with its floating base turned by ``yaw`` about the world z axis and shifted (pinocchio: x y z, quat x y z w)."""
+    """``q`` with its floating base turned by ``yaw`` about the world z axis and shifted (pinocchio: x y z,
+    quat x y z w)."""
     c, s = np.cos(yaw), np.sin(yaw)
     turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     out = q.copy()
@@ -48,6 +49,7 @@ def test_a_rigidly_turned_robot_gets_the_same_feedback(model: RobotModel, stance
         worst["dcm_error"] = max(
             worst["dcm_error"], float(np.max(np.abs(a.stabilizer.dcm_error - b.stabilizer.dcm_error)))
         )
+        assert a.contact.zmp is not None and b.contact.zmp is not None
         worst["zmp"] = max(worst["zmp"], float(np.max(np.abs(a.contact.zmp - b.contact.zmp))))
         q = a.ik.q
     if stance_frame:

@@ -39,6 +39,7 @@ def test_kinematic_rollout_tracks_the_pattern_to_1e6(model: RobotModel) -> None:
     controller.start(standing(model), 0.7)
     ik, pattern = controller.ik, controller.pattern
     q = controller.q_ref
+    assert q is not None
     worst = 0.0
     start = controller._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
     for k in range(int(round(pattern.step_start(3) / controller.dt))):
@@ -57,6 +58,7 @@ def test_momentum_minimization_lowers_peak_lz(model: RobotModel) -> None:
         controller = walking_controller(model, momentum_minimization=on)
         controller.start(standing(model), 0.7)
         q, pattern = controller.q_ref, controller.pattern
+        assert q is not None
         lz = []
         start = controller._reference(pattern.sample(0.0), np.zeros(2), np.zeros(2))
         for k in range(int(round(pattern.step_start(4) / controller.dt))):

@@ -26,6 +26,7 @@ def test_the_centre_of_pressure_of_one_foot_by_hand() -> None:
     estimate = estimate_zmp(IDENTITY, ankles, forces, torques)
     np.testing.assert_allclose(estimate.cop[0], [0.13, 0.22], rtol=1e-15)
     assert np.all(np.isnan(estimate.cop[1]))  # the other foot is unloaded
+    assert estimate.zmp is not None
     np.testing.assert_allclose(estimate.zmp, [0.13, 0.22], rtol=1e-15)
     np.testing.assert_allclose(estimate.normal_force, [400.0, 0.0], rtol=1e-15)
     np.testing.assert_allclose(estimate.moment, [[8.0, -12.0, 0.0], [0.0, 0.0, 0.0]], rtol=1e-15)
@@ -43,6 +44,7 @@ def test_a_horizontal_force_acts_through_the_sensor_height_and_the_sensor_frame_
     np.testing.assert_allclose(estimate.cop[0], [-0.1 * 40.0 / 400.0, 0.1], atol=1e-15)
     np.testing.assert_allclose(estimate.cop[1], [0.0, -0.1], atol=1e-15)
     # the ZMP is the F_z-weighted mean of the two feet
+    assert estimate.zmp is not None
     np.testing.assert_allclose(estimate.zmp, (400.0 * estimate.cop[0] + 200.0 * estimate.cop[1]) / 600.0, atol=1e-15)
 
 
@@ -62,7 +64,7 @@ def test_a_non_finite_reading_raises_naming_the_input(index: int) -> None:
     args = [IDENTITY.copy(), np.zeros((2, 3)), np.array([[0.0, 0.0, -300.0]] * 2), np.zeros((2, 3))]
     args[index][(1, 0)] = np.nan
     with pytest.raises(ControllerError, match=f"the ankle sensor {names[index]} must be finite"):
-        estimate_zmp(*args)
+        estimate_zmp(args[0], args[1], args[2], args[3])
     args[index] = np.zeros((3, 3))
     with pytest.raises(ControllerError, match=r"need rotations \(2, 3, 3\)"):
-        estimate_zmp(*args)
+        estimate_zmp(args[0], args[1], args[2], args[3])
