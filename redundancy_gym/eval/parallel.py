@@ -142,7 +142,7 @@ def _keep(
     outcome: Any,
     results: dict[int, Any],
     failures: dict[int, EpisodeFailure],
-    progress: Callable[[int], None] | None,
+    progress: Callable[[int], object] | None,
 ) -> None:
     """File a worker's outcome for ``seed``: a traceback (text) is a failure, anything else the episode's result."""
     if isinstance(outcome, str):
@@ -157,7 +157,7 @@ def _ray_attempt(
     setup: Callable[[], Callable[[int], Any]],
     workers: int,
     address: str,
-    progress: Callable[[int], None] | None,
+    progress: Callable[[int], object] | None,
     pending: Sequence[int],
 ) -> tuple[dict[int, Any], dict[int, EpisodeFailure]]:
     ray = init_ray(address)
@@ -189,7 +189,7 @@ def _pool_attempt(
     setup: Callable[[], Callable[[int], Any]],
     workers: int,
     context: Any,
-    progress: Callable[[int], None] | None,
+    progress: Callable[[int], object] | None,
     pending: Sequence[int],
 ) -> tuple[dict[int, Any], dict[int, EpisodeFailure]]:
     results: dict[int, Any] = {}
@@ -216,7 +216,7 @@ def run_parallel(
     workers: int,
     retries: int = 0,
     start_method: str | None = None,
-    progress: Callable[[int], None] | None = None,
+    progress: Callable[[int], object] | None = None,
     ray_address: str | None = None,
 ) -> list[Any]:
     """Run one episode per seed on ``workers`` processes (or Ray actors); returns each seed's result, in ``seeds``'
