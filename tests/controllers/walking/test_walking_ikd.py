@@ -133,20 +133,23 @@ def _previous_advance(planner, t: float, dt: float):
 
 
 def _previous_support(ikd: WalkingIkd, sample, shift: np.ndarray) -> np.ndarray:
-    """:meth:`WalkingIkd._support` as it was (the corners on arrays)."""
+    """The support box an independent way: each sole in contact as a rectangle (heel to toe, side to side) turned
+    by its yaw matrix and moved to its shifted position, the box of all corners shrunk by the margin."""
     c = ikd.config
+    rectangle = np.array(
+        [
+            [along, across]
+            for along in (-c.heel_length, c.toe_length)
+            for across in (-c.foot_half_width, c.foot_half_width)
+        ]
+    )
     corners = []
-    for i in range(2):
-        if not sample.contact[i]:
-            continue
-        yaw = float(sample.feet_yaw[i])
-        cz, sz = math.cos(yaw), math.sin(yaw)
-        x, y = float(sample.feet[i, 0] + shift[0]), float(sample.feet[i, 1] + shift[1])
-        for along in (-c.heel_length, c.toe_length):
-            for across in (-c.foot_half_width, c.foot_half_width):
-                corners.append((x + cz * along - sz * across, y + sz * along + cz * across))
-    points = np.array(corners)
-    return np.array([points.min(axis=0) + c.support_margin, points.max(axis=0) - c.support_margin])
+    for i in np.flatnonzero(sample.contact):
+        yaw = sample.feet_yaw[i]
+        turn = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+        corners.append(rectangle @ turn.T + (sample.feet[i, :2] + shift))
+    points = np.concatenate(corners)
+    return np.stack([points.min(axis=0), points.max(axis=0)]) + np.array([[1.0], [-1.0]]) * c.support_margin
 
 
 def _previous_step(
