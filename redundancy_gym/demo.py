@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -343,18 +344,11 @@ def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers
     from .eval.speed_error import plot_speed_error_panels  # noqa: PLC0415
 
     def run(env_id: str, variants: dict, env_kwargs: dict, n: int) -> dict:
+        measure = partial(
+            evaluate, env_id, seed=seed, env_kwargs=env_kwargs, progress=progress, warmup=1, workers=workers
+        )
         return {
-            label: evaluate(
-                env_id,
-                policy,
-                episodes=n,
-                seed=seed,
-                env_kwargs=env_kwargs,
-                policy_kwargs=kwargs,
-                progress=progress,
-                warmup=1,
-                workers=workers,
-            ).to_json()
+            label: measure(policy, episodes=n, policy_kwargs=kwargs).to_json()
             for label, (policy, kwargs) in variants.items()
         }
 

@@ -7,7 +7,8 @@ error against it, and the ``clik`` reference policy, which follows it.
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import warnings
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -31,28 +32,28 @@ class GraspPathTiming(NamedTuple):
     min_duration: float = 1.5
     approach_speed: float = 0.12
 
+    def durations(self, move_distance: float, turn: float, approach_distance: float) -> tuple[float, float]:
+        """Durations [s] of the move to the pre-grasp pose (``move_distance`` [m] with a turn of the tool axis by
+        ``turn`` [rad]) and of the straight approach (``approach_distance`` [m], at least 0.5 s)."""
+        move = max(self.min_duration, move_distance / self.max_speed, turn / self.max_turn_rate)
+        return move, max(0.5, approach_distance / self.approach_speed)
+
 
 # one shared default instead of a call in the signatures (ruff B008); a NamedTuple is immutable, so sharing it is safe
 _DEFAULT_TIMING = GraspPathTiming()
 
 
-def grasp_path_durations(
-    start: NDArray[np.float64],
-    start_axis: NDArray[np.float64],
-    pregrasp: NDArray[np.float64],
-    grasp: NDArray[np.float64],
-    approach: NDArray[np.float64],
-    timing: GraspPathTiming = _DEFAULT_TIMING,
-) -> tuple[float, float]:
-    """Durations [s] of the move to the pre-grasp pose and of the approach, from the distances, the turn of the
-    tool axis and ``timing`` (the approach takes at least 0.5 s)."""
-    axis = start_axis / np.linalg.norm(start_axis)
-    turn = float(np.arccos(np.clip(axis @ approach / np.linalg.norm(approach), -1.0, 1.0)))
-    move = max(
-        timing.min_duration, float(np.linalg.norm(pregrasp - start)) / timing.max_speed, turn / timing.max_turn_rate
+def grasp_path_durations(*args: Any, **kwargs: Any) -> tuple[float, float]:
+    """Deprecated: the durations of ``GraspPath.plan(start, start_axis, pregrasp, grasp, approach, timing)``
+    (its ``move_duration`` and ``approach_duration``; :meth:`GraspPathTiming.durations` from the distances)."""
+    warnings.warn(
+        "grasp_path_durations is deprecated; use GraspPath.plan(...).move_duration and .approach_duration, or "
+        "GraspPathTiming.durations(move_distance, turn, approach_distance)",
+        DeprecationWarning,
+        stacklevel=2,
     )
-    approach_time = max(0.5, float(np.linalg.norm(grasp - pregrasp)) / timing.approach_speed)
-    return move, approach_time
+    path = GraspPath.plan(*args, **kwargs)
+    return path.move_duration, path.approach_duration
 
 
 class GraspPath:
@@ -120,15 +121,15 @@ class GraspPath:
         approach: NDArray[np.float64],
         timing: GraspPathTiming = _DEFAULT_TIMING,
     ) -> GraspPath:
-        """The path with durations from :func:`grasp_path_durations`."""
-        return cls(
-            start,
-            start_axis,
-            pregrasp,
-            grasp,
-            approach,
-            *grasp_path_durations(start, start_axis, pregrasp, grasp, approach, timing),
+        """The path with durations from :meth:`GraspPathTiming.durations`."""
+        axis = start_axis / np.linalg.norm(start_axis)
+        turn = float(np.arccos(np.clip(axis @ approach / np.linalg.norm(approach), -1.0, 1.0)))
+        move_distance, approach_distance = (
+            float(np.linalg.norm(pregrasp - start)),
+            float(np.linalg.norm(grasp - pregrasp)),
         )
+        durations = timing.durations(move_distance, turn, approach_distance)
+        return cls(start, start_axis, pregrasp, grasp, approach, *durations)
 
     @property
     def params(self) -> NDArray[np.float64]:

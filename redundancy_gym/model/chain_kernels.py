@@ -138,9 +138,7 @@ def chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, 
     k = joint
     while k >= 0:
         c = v_index[k]
-        rx = px - position[k, 0]
-        ry = py - position[k, 1]
-        rz = pz - position[k, 2]
+        rx, ry, rz = px - position[k, 0], py - position[k, 1], pz - position[k, 2]
         if joint_type[k] == FREE:
             # body-frame twist: linear columns R e_i, angular columns R e_i about the joint origin
             for i in range(3):
@@ -179,9 +177,7 @@ def chain_jacobian_transpose_times(
     while k >= 0:
         c = v_index[k]
         # n . (w x r) = w . (r x n)
-        rx = px - position[k, 0]
-        ry = py - position[k, 1]
-        rz = pz - position[k, 2]
+        rx, ry, rz = px - position[k, 0], py - position[k, 1], pz - position[k, 2]
         cx, cy, cz = ry * nz - rz * ny, rz * nx - rx * nz, rx * ny - ry * nx
         if joint_type[k] == FREE:
             for i in range(3):
