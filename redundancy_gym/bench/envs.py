@@ -16,6 +16,16 @@ AgriReach with ``prune=False``, the whole crop row in the scene and the collisio
 rounds, and ``agri_prune_speedup`` is the pruned rate over the unpruned one. Every wrapped id
 (``<Env>-<Wrapper>-v0``) is measured against its raw env in alternating rounds too (``wrapped``: the ratio
 wrapped / raw, median and range over the rounds): what an action wrapper's controller costs per step.
+
+**Env step against its physics.** Every env (ours and the peers) is also timed as bare physics: ``mujoco.mj_step``
+with ``nstep=frame_skip`` on the env's own model and data, in a window of its own in the same alternating rounds
+(the label ``<id> physics``). ``physics`` in the report gives, per env, ``env_step_us`` and ``physics_us`` (medians
+over the rounds [us]), ``env_vs_physics`` (the median of the per-round ratio env step / physics step) and
+``overhead_us`` (the median of the per-round difference [us]: what the env spends outside MuJoCo, resets
+included). For each of our envs ``bound_us`` is the larger of 1.5 x its physics and its physics plus Pusher-v5's
+overhead measured in the same run, and ``within_bound`` whether its env step is at most that. For every wrapped id,
+``glue_us`` is the wrapped step minus the raw step minus the wrapper's own ``controller_time_us`` (its mean over the
+window's steps), per round, by its median [us]: what the wrapper adds beyond its controller.
 """
 
 from __future__ import annotations
@@ -26,18 +36,24 @@ from functools import partial
 from typing import Any, Protocol, cast
 
 import gymnasium as gym
+import mujoco
 import numpy as np
 from gymnasium import spaces
 from tqdm.auto import tqdm
 
 from ..eval.machine import finish_machine_info, machine_info
 from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS
+from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
 from .exceptions import BenchError
 from .timing import CLOCK, alternating_rounds
 
 __all__ = ["PEERS", "VARIANTS", "format_envs_bench", "run_envs_bench"]
 
-PEERS = ("Pusher-v5", "Humanoid-v5")
+PEERS = ("Pusher-v5", "Ant-v5", "Humanoid-v5")
+OVERHEAD_PEER = "Pusher-v5"
+"""The peer whose overhead (env step - physics step) bounds ours in ``physics``: Gymnasium's leanest MuJoCo env."""
+PHYSICS_FACTOR = 1.5
+"""``bound_us`` is at least this times the env's bare physics step."""
 VARIANTS = {
     "redundancy_gym/AgriReach-v0 (prune=False)": ("redundancy_gym/AgriReach-v0", {"prune": False}, "agri_prune_speedup")
 }
@@ -48,6 +64,7 @@ _SHORT = {
     "redundancy_gym/BipedWalk-v0": "biped",
     "redundancy_gym/BipedObstacles-v0": "biped_obstacles",
     "Pusher-v5": "pusher",
+    "Ant-v5": "ant",
     "Humanoid-v5": "humanoid",
 }
 
@@ -61,6 +78,16 @@ class _ControlPeriod(Protocol):
         """Seconds of simulated time per step [s]."""
 
 
+def _controller_clock(env: gym.Env) -> Any:
+    """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
+    layer: gym.Env | None = env
+    while layer is not None:
+        if CONTROLLER_TIME_ATTRIBUTE in vars(layer):
+            return layer
+        layer = getattr(layer, "env", None)
+    return None
+
+
 class _Stepper:
     """One env stepped with the zero action in timed windows, resetting when an episode ends; keeps each window's
     steps, resets and duration."""
@@ -71,8 +98,12 @@ class _Stepper:
         space = self.env.action_space
         assert isinstance(space, spaces.Box)  # every env benchmarked here takes a Box action
         self.action = np.zeros(space.shape, dtype=space.dtype)
-        self.dt = float(cast(_ControlPeriod, self.env.unwrapped).dt)
+        base = self.env.unwrapped
+        self.dt = float(cast(_ControlPeriod, base).dt)
+        self._physics = (base.model, base.data, int(base.frame_skip))  # type: ignore[attr-defined]
+        self._clock = _controller_clock(self.env)
         self.windows: list[tuple[int, int, float]] = []
+        self.controller_us: list[float] = []
         self._run(0.0, warmup=50)  # compiled kernels and caches
         self.env.reset(seed=seed)
 
@@ -81,6 +112,22 @@ class _Stepper:
         steps, resets, elapsed = self._run(seconds)
         self.windows.append((steps, resets, elapsed))
         return elapsed / steps
+
+    def physics_window(self, seconds: float) -> float:
+        """One window of about ``seconds`` [s] of bare physics, ``mj_step`` with ``nstep=frame_skip`` on the env's
+        own model and data; returns its time per step [s]."""
+        model, data, substeps = self._physics
+        steps = 0
+        cpu = time.process_time()
+        start = time.perf_counter()
+        while True:
+            for _ in range(16):
+                mujoco.mj_step(model, data, nstep=substeps)
+            steps += 16
+            if time.perf_counter() - start >= seconds:
+                break
+        wall = time.perf_counter() - start
+        return min(wall, time.process_time() - cpu) / steps
 
     def totals(self, skip: int) -> tuple[int, int, float]:
         """Steps, resets and seconds of the windows after the first ``skip`` (the warm-up)."""
@@ -91,11 +138,15 @@ class _Stepper:
         """Steps, resets and time [s] (the smaller of wall-clock and process CPU time, as
         :func:`~redundancy_gym.bench.timing.timed_call`) of one window of about ``seconds`` wall time."""
         steps = resets = 0
+        clock = self._clock
+        controller = 0.0
         cpu = time.process_time()
         start = time.perf_counter()
         while True:
             _, _, terminated, truncated, _ = self.env.step(self.action)
             steps += 1
+            if clock is not None:
+                controller += clock.controller_time_us
             if terminated or truncated:
                 self.env.reset()
                 resets += 1
@@ -104,6 +155,8 @@ class _Stepper:
             if not warmup and steps % 16 == 0 and time.perf_counter() - start >= seconds:
                 break
         wall = time.perf_counter() - start
+        if not warmup:
+            self.controller_us.append(controller / steps)
         return steps, resets, min(wall, time.process_time() - cpu)
 
     def close(self) -> None:
@@ -131,6 +184,11 @@ def wrapped_rates(
             raw.close()
             inner.close()
         stats = timed.ratio("raw", "wrapped")  # time per step raw / wrapped = rate wrapped / raw
+        skip = timed.warmup
+        glue = [
+            (w - r) * 1e6 - c
+            for w, r, c in zip(timed.samples["wrapped"], timed.samples["raw"], inner.controller_us[skip:], strict=True)
+        ]
         out[wrapped_id] = {
             "raw": raw_id,
             "raw_steps_per_second": 1.0 / timed.median("raw"),
@@ -139,6 +197,13 @@ def wrapped_rates(
             "ratio_min": stats.min,
             "ratio_max": stats.max,
             "ratio_spread": stats.spread,
+            "step_us": timed.median("wrapped") * 1e6,
+            "raw_step_us": timed.median("raw") * 1e6,
+            "controller_time_us": float(np.median(inner.controller_us[skip:])),
+            "glue_us": float(np.median(glue)),
+            "glue_us_min": float(np.min(glue)),
+            "glue_us_max": float(np.max(glue)),
+            "glue_us_rounds": glue,
             "rounds": rounds,
         }
     return out
@@ -187,8 +252,12 @@ def run_envs_bench(
         for label, env_id, kwargs in runs:
             steppers[label] = _Stepper(env_id, seed, kwargs)
         window = seconds / rounds
+        samplers = {}
+        for label, stepper in steppers.items():
+            samplers[label] = partial(stepper.window, window)
+            samplers[f"{label} physics"] = partial(stepper.physics_window, window)
         timed = alternating_rounds(
-            {label: partial(stepper.window, window) for label, stepper in steppers.items()},
+            samplers,
             rounds=rounds,
             progress=progress,
             desc="bench envs rounds",
@@ -215,6 +284,7 @@ def run_envs_bench(
     for label, (env_id, _, name) in variants.items():
         stats[name] = timed.ratio(label, env_id)
     ratios = {name: s.median for name, s in stats.items()}
+    physics = _physics_report(timed, steppers, envs, peers)
     wrapped_report = wrapped_rates(wrapped, seconds=seconds, rounds=rounds, seed=seed, progress=progress)
     return {
         "benchmark": "envs",
@@ -230,11 +300,39 @@ def run_envs_bench(
         },
         "machine": finish_machine_info(machine),
         "envs": rates,
+        "physics": physics,
         "ratios": ratios,
         "ratio_rounds": {name: s.to_json() for name, s in stats.items()},
         "wrapped": wrapped_report,
         **ratios,
     }
+
+
+def _physics_report(
+    timed: Any, steppers: dict[str, _Stepper], envs: Sequence[str], peers: Sequence[str]
+) -> dict[str, dict[str, Any]]:
+    """Per env: its step and its bare physics step [us], their ratio and difference per round by the median, and
+    for ours the bound of the module's docstring (when :data:`OVERHEAD_PEER` was measured)."""
+    out: dict[str, dict[str, Any]] = {}
+    for label, stepper in steppers.items():
+        env_s = np.asarray(timed.samples[label])
+        physics_s = np.asarray(timed.samples[f"{label} physics"])
+        ratio = timed.ratio(label, f"{label} physics")
+        out[label] = {
+            "substeps": stepper._physics[2],
+            "env_step_us": float(np.median(env_s)) * 1e6,
+            "physics_us": float(np.median(physics_s)) * 1e6,
+            "env_vs_physics": ratio.median,
+            "env_vs_physics_rounds": ratio.to_json(),
+            "overhead_us": float(np.median(env_s - physics_s)) * 1e6,
+        }
+    peer = out.get(OVERHEAD_PEER)
+    if peer is not None:
+        for label in envs:
+            row = out[label]
+            row["bound_us"] = max(PHYSICS_FACTOR * row["physics_us"], row["physics_us"] + peer["overhead_us"])
+            row["within_bound"] = bool(row["env_step_us"] <= row["bound_us"])
+    return out
 
 
 def format_envs_bench(report: dict[str, Any]) -> str:
@@ -248,11 +346,24 @@ def format_envs_bench(report: dict[str, Any]) -> str:
         + (f"  (rounds {spread[name]['min']:.2f}-{spread[name]['max']:.2f})" if name in spread else "")
         for name, value in report["ratios"].items()
     ]
+    if report.get("physics"):
+        lines += ["", "env | step [us] | physics [us] | env / physics | overhead [us] | bound [us]", "-" * 72]
+        for env_id, r in report["physics"].items():
+            bound = f"{r['bound_us']:.1f} ({'met' if r['within_bound'] else 'NOT met'})" if "bound_us" in r else "-"
+            lines.append(
+                f"{env_id} | {r['env_step_us']:.1f} | {r['physics_us']:.1f} ({r['substeps']} substeps) | "
+                f"{r['env_vs_physics']:.2f} | {r['overhead_us']:.1f} | {bound}"
+            )
     if report.get("wrapped"):
-        lines += ["", "wrapped env | steps/s | raw steps/s | wrapped / raw (median, range over rounds)", "-" * 72]
+        lines += [
+            "",
+            "wrapped env | steps/s | raw steps/s | wrapped / raw (median, range) | controller [us] | glue [us]",
+            "-" * 96,
+        ]
         for env_id, r in report["wrapped"].items():
             lines.append(
                 f"{env_id} | {r['steps_per_second']:.0f} | {r['raw_steps_per_second']:.0f} | "
-                f"{r['ratio']:.2f} ({r['ratio_min']:.2f}-{r['ratio_max']:.2f})"
+                f"{r['ratio']:.2f} ({r['ratio_min']:.2f}-{r['ratio_max']:.2f}) | {r['controller_time_us']:.1f} | "
+                f"{r['glue_us']:.1f}"
             )
     return "\n".join(lines)

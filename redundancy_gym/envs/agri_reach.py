@@ -23,10 +23,14 @@ from ..assets import (
 from ..assets.agri_scene import PLANT_COLORS, POOL_CATEGORIES, TARGET_COLOR, agri_scene_xml, pool_geom_name
 from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaults, generate_crop_row
 from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch, indexed_distances
+from .agri_kernels import agri_state
+from .command_kernels import velocity_commands
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
 from .validation import (
     MAX_FRAME_SKIP,
+    as_action,
+    check_backend,
     check_bool,
     check_choice,
     check_int,
@@ -37,6 +41,7 @@ from .validation import (
     check_render_arguments,
     constructor_arguments,
     constructor_defaults,
+    non_finite_action,
     warn_if_time_limit_short,
 )
 
@@ -162,6 +167,9 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       not named get none; the quaternion's entries are not renormalized). The episode constants (grasp,
       approach, pre-grasp, obstacles), ``time`` and the reference entries stay exact (``tcp_error`` is computed
       from the noisy TCP), and ``info`` and the rewards use the true state.
+    - ``backend`` (``"compiled"`` or ``"python"``): how a step computes its commands, its observation and the
+      numbers of ``info``: in two compiled kernels, the reference path sampled once, or with NumPy, the readable
+      reference the tests hold them equal to (bit for bit; ``goal_error`` and ``tracking_error`` to round-off).
     - ``render_mode`` (``"rgb_array"``), ``width``, ``height``, ``camera_name`` (``"side"`` or ``"front"``).
 
     ## Version History
@@ -218,6 +226,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         height: int = 480,
         camera_name: str = "side",
         obs_noise: float | dict[str, float] | None = None,
+        backend: str = "compiled",
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, AgriReachEnv.__init__)
@@ -350,6 +359,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             ("q", "qdot", "tcp"),
         )
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
+        self._backend = check_backend("backend", backend)
+        self._slots = np.array(
+            [
+                lay[k].start
+                for k in ("q", "qdot", "tcp_position", "time", "tcp_reference", "tcp_reference_velocity", "tcp_error")
+            ],
+            dtype=np.int64,
+        )
+        self._quat_slice = lay["tcp_quaternion"]
         self._reset_episode_state()
         self._row: CropRow | None = None
         self._part_geoms = np.zeros(0, dtype=np.int64)
@@ -409,6 +427,26 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         return self._get_obs(), metrics
 
     def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+        if self._backend == "python":
+            return self._step_python(action)
+        action = as_action(action, 9, finite=False)
+        if self._row is None:
+            if not np.isfinite(action).all():
+                raise non_finite_action(action)
+            raise gym.error.ResetNeeded("call reset() before step()")
+        if not velocity_commands(action, self._speed_scale, self.data.ctrl):
+            raise non_finite_action(action)
+        self._advance()
+        observation, metrics = self._compiled_state()
+        reward, terms = self._get_rew(metrics)
+        metrics.update(terms)
+        terminated = bool(metrics["collision"] or metrics["is_success"])
+        return observation, reward, terminated, False, metrics
+
+    def _step_python(
+        self, action: NDArray[np.floating]
+    ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
+        """:meth:`step` with NumPy: the readable reference of the compiled step (``backend="python"``)."""
         try:
             action = np.asarray(action, dtype=np.float64)
         except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
@@ -424,6 +462,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         ctrl = self.data.ctrl
         ctrl[:9] = qdot_cmd  # servo set-points integrate the command; the feed-forwards apply it directly
         ctrl[9:] = qdot_cmd
+        self._advance()
+        metrics = self._metrics(self.data.qvel[self._qvel])
+        reward, terms = self._get_rew(metrics)
+        metrics.update(terms)
+        terminated = bool(metrics["collision"] or metrics["is_success"])
+        return self._get_obs(), reward, terminated, False, metrics
+
+    def _advance(self) -> None:
+        """One control step of the physics for the controls set, and the clock."""
         # mj_step1 of the current state ran at the end of the last step (or in reset): finish that step with
         # mj_step2, then run the new state's position/velocity stages once, for the observation and next step
         mujoco.mj_step2(self.model, self.data)
@@ -431,11 +478,38 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             mujoco.mj_step(self.model, self.data, nstep=self.frame_skip - 1)
         mujoco.mj_step1(self.model, self.data)
         self._time += self.dt
-        metrics = self._metrics(self.data.qvel[self._qvel])
-        reward, terms = self._get_rew(metrics)
-        metrics.update(terms)
-        terminated = bool(metrics["collision"] or metrics["is_success"])
-        return self._get_obs(), reward, terminated, False, metrics
+
+    def _compiled_state(self) -> tuple[NDArray[np.float64], dict[str, Any]]:
+        """:meth:`_get_obs` and :meth:`_metrics` with the path sampled once, in one compiled pass."""
+        d = self.data
+        o = self._obs
+        error, tracking, angle, energy, margin, peak, tcp, ref = agri_state(
+            d.qpos,
+            d.qvel,
+            self._qpos_index,
+            self._qvel_index,
+            self._lower,
+            self._upper,
+            d.site_xpos[self._tcp_site],
+            d.site_xmat[self._tcp_site],
+            self._reference_path.sample(self._time),
+            self._time,
+            self._grasp,
+            self._approach,
+            o,
+            self._slots,
+        )
+        mujoco.mju_mat2Quat(self._quat, d.site_xmat[self._tcp_site])
+        o[self._quat_slice] = self._quat
+        metrics = self._metrics_from(error, tracking, angle, energy * self.dt, margin, peak, tcp, ref)
+        if self._noise is None:
+            return o.copy(), metrics
+        index, std = self._noise
+        obs = o.copy()
+        obs[index] += std * self.np_random.standard_normal(index.size)
+        lay = self.observation_layout
+        obs[lay["tcp_error"]] = o[lay["tcp_reference"]][:3] - obs[lay["tcp_position"]]  # from the observed TCP
+        return obs, metrics
 
     def render(self) -> NDArray[np.uint8] | None:
         """An RGB frame from ``camera_name`` (``render_mode="rgb_array"``)."""
@@ -538,16 +612,39 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         ax, ay, az = self._approach_tuple
         cos_angle = float(m[0]) * ax + float(m[3]) * ay + float(m[6]) * az  # tool axis: the site's local x
         angle = math.acos(min(1.0, max(-1.0, cos_angle)))
-        obstacle_clearance, self_clearance, leaves = self._contacts()
-        clearance = min(obstacle_clearance, self_clearance)
-        collision = clearance <= 0.0
-        self._collided = self._collided or collision
-        self._leaf_total += leaves
         qd = qdot.tolist()
         margin = min(
             min(a - lo, hi - a)
             for a, lo, hi in zip(self.data.qpos[self._qpos].tolist(), self._lower_list, self._upper_list, strict=False)
         )
+        return self._metrics_from(
+            error,
+            tracking,
+            angle,
+            sum(v * v for v in qd) * self.dt,
+            margin,
+            max(map(abs, qd)),
+            np.array((x, y, z)),
+            np.array((rx, ry, rz)),
+        )
+
+    def _metrics_from(
+        self,
+        error: float,
+        tracking: float,
+        angle: float,
+        pseudoenergy: float,
+        margin: float,
+        peak: float,
+        tcp: NDArray[np.float64],
+        reference: NDArray[np.float64],
+    ) -> dict[str, Any]:
+        """The step's ``info`` from its numbers and the clearances; advances the episode's contact counters."""
+        obstacle_clearance, self_clearance, leaves = self._contacts()
+        clearance = min(obstacle_clearance, self_clearance)
+        collision = clearance <= 0.0
+        self._collided = self._collided or collision
+        self._leaf_total += leaves
         at_goal = bool(error <= self._success_position and angle <= self._success_angle)
         success = (not self._collided) and at_goal
         return {
@@ -555,7 +652,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             "goal_error": error,
             "goal_reached": at_goal,
             "orientation_error": angle,
-            "pseudoenergy": sum(v * v for v in qd) * self.dt,
+            "pseudoenergy": pseudoenergy,
             "min_clearance": clearance,
             "min_obstacle_clearance": obstacle_clearance,
             "min_self_clearance": self_clearance,
@@ -563,11 +660,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             "leaf_contacts": leaves,
             "leaf_contacts_total": self._leaf_total,
             "joint_limit_margin": margin,
-            "peak_joint_speed": max(map(abs, qd)),
+            "peak_joint_speed": peak,
             "is_success": success,
             "time": self._time,
-            "tcp": np.array((x, y, z)),
-            "tcp_ref": np.array((rx, ry, rz)),
+            "tcp": tcp,
+            "tcp_ref": reference,
         }
 
     def _contacts(self) -> tuple[float, float, int]:
@@ -757,6 +854,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         # slices: views instead of fancy-indexed copies on the per-step path
         self._qpos = slice(int(qpos[0]), int(qpos[-1]) + 1)
         self._qvel = slice(int(qvel[0]), int(qvel[-1]) + 1)
+        self._qpos_index = np.arange(self._qpos.start, self._qpos.stop, dtype=np.int64)  # for the compiled step
+        self._qvel_index = np.arange(self._qvel.start, self._qvel.stop, dtype=np.int64)
         self._lower = np.array([j.range[0] for j in joints])
         self._upper = np.array([j.range[1] for j in joints])
         self._lower_list, self._upper_list = self._lower.tolist(), self._upper.tolist()

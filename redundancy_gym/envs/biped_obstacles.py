@@ -25,6 +25,7 @@ from ..assets.obstacle_course import (
 )
 from ..geometry import SSV, PackedVolumes, PairBatch
 from .biped_walk import BipedWalkEnv
+from .contact_pressure import compiled_touches_geoms, touches_geoms
 from .exceptions import EnvConfigError
 from .validation import (
     check_choice,
@@ -197,6 +198,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         contact_weight: float = 1.0,
         success_distance: float = 1.0,
         speed_scale: float = 0.25,
+        backend: str = "compiled",
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, BipedObstaclesEnv.__init__)
@@ -301,6 +303,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         self._volume_owner = np.array(owner, dtype=np.int64)
         boxes = [o.bounding_box() for o in self._obstacles]
         self._obstacle_max_x = np.array([upper[0] for _, upper in boxes])
+        self._obstacle_max_x_sorted = sorted(self._obstacle_max_x.tolist())  # obstacles passed: a bisection
         self._course_end = (float(self._obstacle_max_x.max()) if boxes else 0.0) + self._success_distance
         # observation rows, ordered by the volumes' bounding boxes' smallest x
         n_robot = len(self._ssv_geoms)
@@ -319,6 +322,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         self._row_max_x = high_x[order]
         self._max_x_sorted = sorted(high_x.tolist())
         self._blocks: dict[int, NDArray[np.float64]] = {}
+        self._vertex_mirror = self._batch.vertices
         if not volumes:
             self._obstacle_batch: PairBatch | None = None
             return
@@ -332,6 +336,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         index_a = np.repeat(np.arange(n_robot), len(volumes))
         index_b = np.tile(n_robot + np.arange(len(volumes)), n_robot)
         self._obstacle_batch = PairBatch(all_volumes, index_a, index_b, moving=n_robot)
+        self._vertex_mirror = self._obstacle_batch.vertices  # the compiled step places the robot's volumes here too
         self._clearance_hint = 0.25  # [m] the first bounding-sphere margin of _obstacle_clearance
         self._pair_obstacle = self._volume_owner[index_b - n_robot]
 
@@ -416,7 +421,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         """The pelvis x [m] that ends the course: the obstacles' largest x plus ``success_distance``."""
         return self._course_end
 
-    def _get_obs(self) -> NDArray[np.float64]:
+    def _observation_tail(self) -> NDArray[np.float64]:
         # which volumes are observed depends only on how many are left behind: one block per count, made once
         behind = bisect.bisect_left(self._max_x_sorted, float(self.data.qpos[0]) - OBSTACLE_LOOKBEHIND)
         block = self._blocks.get(behind)
@@ -425,7 +430,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
             seen = np.flatnonzero(self._row_max_x >= float(self.data.qpos[0]) - OBSTACLE_LOOKBEHIND)[: self._k]
             rows[: seen.size] = self._rows[seen]
             block = self._blocks[behind] = rows.reshape(-1)
-        return np.concatenate([super()._get_obs(), block])
+        return block
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         _, terms = super()._get_rew(metrics)
@@ -446,7 +451,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
             collision=bool(metrics["self_collision"] or contact),
             obstacle_contact=contact,
             obstacle_contacts=self._contact_steps,
-            obstacles_passed=int(np.count_nonzero(self._obstacle_max_x < x)),
+            obstacles_passed=bisect.bisect_left(self._obstacle_max_x_sorted, x),
             course_end=self._course_end,
             is_success=bool(clean and x >= self._course_end),
         )
@@ -462,28 +467,20 @@ class BipedObstaclesEnv(BipedWalkEnv):
         batch = self._obstacle_batch
         if batch is None:
             return math.inf
-        # the robot's volumes as BipedWalk placed them for this state (_self_clearance, in _metrics)
-        batch.vertices[: len(self._ssv_geoms)] = self._batch.vertices
+        if self._backend == "python":  # the robot's volumes as BipedWalk placed them (_self_clearance, in _metrics)
+            batch.vertices[: len(self._ssv_geoms)] = self._batch.vertices
         # start from the last step's clearance: the robot moves little in a step, so one pass usually does
-        margin = self._clearance_hint
-        while True:
-            d = batch.compute_near(margin)
-            if d <= margin:
-                self._clearance_hint = max(d, 0.0) + 0.05
-                return d
-            if margin == math.inf:  # every pair computed: a non-finite state (NaN) gives its NaN back
-                return d
-            margin = max(2.0 * margin, d) if math.isfinite(d) else 2.0 * margin
-            if margin > 1e6:  # beyond any course: compute every pair
-                margin = math.inf
+        d = batch.smallest(self._clearance_hint)
+        if d <= 1e6:
+            self._clearance_hint = max(d, 0.0) + 0.05
+        return d
 
     def _touching_obstacle(self) -> bool:
         """Whether MuJoCo's current contacts include an obstacle geom (obstacles only collide with the robot)."""
-        if self.data.ncon == 0 or self._obstacle_ids[0] == self._obstacle_ids[1]:
-            return False
         low, high = self._obstacle_ids
-        # a loop over Python ints: for the few contacts of a biped, 4x faster than NumPy's comparisons
-        return any(low <= g < high for g in self.data.contact.geom.ravel().tolist())
+        if self._backend == "python":
+            return touches_geoms(self.data, low, high)
+        return compiled_touches_geoms(self.data, low, high, self._contact_layout)
 
 
 def _longest_random_course_time() -> float:

@@ -21,12 +21,15 @@ from ..assets import (
 )
 from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
+from .biped_kernels import biped_observation, biped_state_numerics, biped_targets
+from .contact_pressure import compiled_contact_pressure, contact_layout, contact_pressure, foot_of_geom
 from .exceptions import EnvConfigError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
 from .validation import (
     MAX_FRAME_SKIP,
     as_action,
+    check_backend,
     check_bool,
     check_int,
     check_known_arguments,
@@ -36,6 +39,7 @@ from .validation import (
     constructor_arguments,
     constructor_defaults,
     init_mujoco_env,
+    non_finite_action,
 )
 
 __all__ = [
@@ -48,6 +52,7 @@ __all__ = [
 ]
 
 _TIMESTEP = 0.002  # [s], the MJCF option
+_NO_ENTRIES = np.zeros(0)
 NOMINAL_POSTURE: dict[str, float] = {
     "r_hip_pitch": -0.5002,
     "r_knee": 0.9921,
@@ -192,6 +197,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
       env's generator. ``info["push_force"]`` is the force [N] applied during the step (zeros without one).
     - ``actuator_torque_scale`` (fault, in (0, 1], default 1): scales every servo's torque limit
       (``actuator_forcerange`` of the MJCF, 30-250 N m) as weak or worn drives; gains are unchanged.
+    - ``backend`` (``"compiled"`` or ``"python"``): how ``info``'s contact metrics (``cop``, ``zmp``,
+      ``normal_force``) are computed: one compiled pass over MuJoCo's contact arrays, or its readable reference,
+      ``mj_contactForce`` per contact; both give the same values (the tests hold them equal bit for bit).
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
@@ -228,6 +236,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     SOFT_LIMIT_MARGIN = BIPED_SOFT_LIMIT_MARGIN
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"biped"})
+    _self_clearance_hint: float  # [m] the bounding-sphere margin of the next compiled self-clearance
 
     def __init__(
         self,
@@ -251,6 +260,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         push: list[dict[str, Any]] | dict[str, Any] | None = None,
         actuator_torque_scale: float = 1.0,
         speed_scale: float = 0.25,
+        backend: str = "compiled",
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, BipedWalkEnv.__init__)
@@ -315,6 +325,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             ("q", "qdot", "force", "torque", "imu"),
         )
         self._push = None if push is None else PushSchedule(push, "torso")
+        self._backend = check_backend("backend", backend)
         width, height = check_render_arguments(render_mode, width, height, camera_name)
         init_mujoco_env(
             self,
@@ -367,18 +378,38 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     def step(  # type: ignore[override]
         self, action: NDArray[np.floating]
     ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        action = as_action(action, len(BIPED_JOINTS))
-        targets = self.targets_from_action(action)
-        ctrl = targets.copy()
-        if self._velocity_feedforward:
-            ctrl += self._servo_lead * (targets - self._targets) / self.dt
+        self._dt = dt = self.dt  # a property reading the model: once per step
+        if self._backend == "python":
+            action = as_action(action, len(BIPED_JOINTS))
+            targets = self.targets_from_action(action)
+            ctrl = targets.copy()
+            if self._velocity_feedforward:
+                ctrl += self._servo_lead * (targets - self._targets) / dt
+        else:
+            action = as_action(action, len(BIPED_JOINTS), finite=False)
+            targets, ctrl = np.empty(len(BIPED_JOINTS)), np.empty(len(BIPED_JOINTS))
+            if not biped_targets(
+                action,
+                self._nominal,
+                self._scale,
+                self._lower,
+                self._upper,
+                self._targets,
+                self._servo_lead,
+                dt,
+                self._velocity_feedforward,
+                targets,
+                ctrl,
+            ):
+                raise non_finite_action(action)
         self._targets = targets
         x_before = float(self.data.qpos[0])
         if self._push is not None:
             self._apply_push(self._push)
-        self.do_simulation(ctrl, self.frame_skip)
-        self._time += self.dt
-        metrics = self._metrics((float(self.data.qpos[0]) - x_before) / self.dt)
+        # MujocoEnv.do_simulation less its check of ctrl's shape, which holds by construction
+        self._step_mujoco_simulation(ctrl, self.frame_skip)
+        self._time += dt
+        metrics = self._metrics((float(self.data.qpos[0]) - x_before) / dt)
         reward, terms = self._get_rew(metrics)
         terminated = self._terminated(metrics)
         if self.render_mode == "human":
@@ -405,6 +436,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._push_force = np.array(force, dtype=np.float64)
 
     def reset_model(self) -> NDArray[np.float64]:
+        self._dt = self.dt
         self._time = 0.0
         self.data.xfrc_applied[:] = 0.0
         self._push_force = np.zeros(3)
@@ -464,11 +496,19 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
 
     def _get_obs(self) -> NDArray[np.float64]:
         d = self.data
-        obs = np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time]])
+        tail = self._observation_tail()
+        if self._backend == "python":
+            obs = np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time], tail])
+        else:
+            obs = biped_observation(d.qpos, d.qvel, d.sensordata, self._sensors, self._target_speed, self._time, tail)
         if self._noise is not None:
             index, std = self._noise
             obs[index] += std * self.np_random.standard_normal(index.size)
         return obs
+
+    def _observation_tail(self) -> NDArray[np.float64]:
+        """The observation's entries after ``time`` (none here; a subclass's own)."""
+        return _NO_ENTRIES
 
     def _get_rew(self, metrics: dict[str, Any]) -> tuple[float, dict[str, float]]:
         """``(reward, terms)`` from the step's metrics: the reward is the sum of ``terms``."""
@@ -486,12 +526,78 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
 
     # ------------------------------------------------------------------ metrics
     def _metrics(self, forward_speed: float) -> dict[str, Any]:
+        if self._backend == "python":
+            return self._metrics_python(forward_speed)
+        m, d = self.model, self.data
+        pressure = compiled_contact_pressure(d, self._floor, self._foot_of_geom, self._contact_layout)
+        mujoco.mj_subtreeVel(m, d)
+        tilt, margin, energy, peak, moments, angmom, com = biped_state_numerics(
+            d.qpos,
+            d.qvel,
+            self._lower,
+            self._upper,
+            d.xmat[self._torso],
+            d.site_xmat,
+            self._ankle_sites_array,
+            d.sensordata,
+            self._torque_adr_array,
+            d.geom_xpos,
+            d.geom_xmat,
+            self._ssv_geoms,
+            self._half_length,
+            self._batch.vertices,
+            self._vertex_mirror,
+            d.subtree_angmom,
+            d.subtree_com,
+            self._pelvis,
+        )
+        # exact, computing only the pairs near the last step's clearance (the limbs move little in a step)
+        clearance = self._batch.smallest(self._self_clearance_hint)
+        if clearance <= 1e6:
+            self._self_clearance_hint = max(clearance, 0.0) + 0.05
+        x = float(d.qpos[0])
+        fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
+        self._fell = self._fell or fell
+        self._self_collided = self._self_collided or clearance <= 0.0
+        distance = x - self._start_x
+        mean_speed = distance / self._time if self._time > 0.0 else 0.0
+        ok = not (self._fell or self._self_collided)
+        speed = float(forward_speed)
+        mean_error = abs(mean_speed - self._target_speed)
+        return {
+            "time": self._time,
+            "forward_speed": speed,
+            "lateral_speed": float(d.qvel[1]),
+            "distance": distance,
+            "cop": pressure.cop,
+            "cop_valid": pressure.cop_valid,
+            "zmp": pressure.zmp,
+            "zmp_valid": pressure.zmp_valid,
+            "normal_force": pressure.normal,
+            "contact_moments": moments,
+            "angular_momentum": angmom,
+            "com": com,
+            "min_self_clearance": clearance,
+            "min_clearance": clearance,
+            "self_collision": clearance <= 0.0,
+            "collision": clearance <= 0.0,
+            "fell": fell,
+            "torso_tilt": tilt,
+            "joint_limit_margin": margin,
+            "pseudoenergy": energy * self._dt,
+            "peak_joint_speed": peak,
+            "speed_error": abs(speed - self._target_speed),
+            "mean_speed_error": mean_error,
+            "is_success": bool(
+                ok and self._time > 0.0 and mean_error <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)
+            ),
+        }
+
+    def _metrics_python(self, forward_speed: float) -> dict[str, Any]:
+        """:meth:`_metrics` with NumPy: the readable reference of the compiled one (``backend="python"``)."""
         m, d = self.model, self.data
         qdot = d.qvel[6:]
-        cop, zmp, normal = self._contact_pressure()
-        # finite values with validity flags rather than NaN: tools that compare infos (Gymnasium's check_env)
-        # take NaN for a difference
-        cop_valid, zmp_valid = ~np.isnan(cop[:, 0]), bool(not np.isnan(zmp[0]))
+        pressure = contact_pressure(m, d, self._floor, self._foot_of_geom)
         torso = d.xmat[self._torso].reshape(3, 3)
         tilt = float(np.arccos(np.clip(torso[2, 2], -1.0, 1.0)))
         fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
@@ -513,11 +619,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "forward_speed": float(forward_speed),
             "lateral_speed": float(d.qvel[1]),
             "distance": distance,
-            "cop": np.where(cop_valid[:, None], cop, 0.0),
-            "cop_valid": cop_valid,
-            "zmp": zmp if zmp_valid else np.zeros(2),
-            "zmp_valid": zmp_valid,
-            "normal_force": normal,
+            "cop": pressure.cop,
+            "cop_valid": pressure.cop_valid,
+            "zmp": pressure.zmp,
+            "zmp_valid": pressure.zmp_valid,
+            "normal_force": pressure.normal,
             "contact_moments": moments,
             "angular_momentum": d.subtree_angmom[self._pelvis].copy(),
             "com": d.subtree_com[self._pelvis].copy(),
@@ -538,30 +644,6 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
                 and abs(mean_speed - self._target_speed) <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)
             ),
         }
-
-    def _contact_pressure(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """Per-foot CoP, ZMP and normal forces from the floor contacts (world frame)."""
-        m, d = self.model, self.data
-        weighted = np.zeros((2, 2))
-        normal = np.zeros(2)
-        force = np.zeros(6)
-        for i in range(d.ncon):
-            contact = d.contact[i]
-            g1, g2 = int(contact.geom1), int(contact.geom2)
-            other = g2 if g1 == self._floor else g1 if g2 == self._floor else -1
-            foot = self._sole_side.get(other, -1)
-            if foot < 0:
-                continue
-            mujoco.mj_contactForce(m, d, i, force)
-            fz = float(contact.frame[2] * force[0] + contact.frame[5] * force[1] + contact.frame[8] * force[2])
-            normal[foot] += fz
-            weighted[foot] += fz * contact.pos[:2]
-        cop = np.full((2, 2), np.nan)
-        loaded = normal > 1e-9
-        cop[loaded] = weighted[loaded] / normal[loaded, None]
-        total = normal.sum()
-        zmp = weighted.sum(axis=0) / total if total > 1e-9 else np.full(2, np.nan)
-        return cop, zmp, normal
 
     def _self_clearance(self) -> float:
         """Smallest SSV distance between non-adjacent robot volumes [m] (capsules -> LSS, spheres -> PSS)."""
@@ -611,13 +693,16 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         )
         self._torque_adr = [int(m.sensor(n).adr[0]) for n in ("r_ankle_torque", "l_ankle_torque")]
         self._ankle_sites = [m.site(s).id for s in BIPED_ANKLE_SITES]
+        self._torque_adr_array = np.array(self._torque_adr, dtype=np.int64)
+        self._ankle_sites_array = np.array(self._ankle_sites, dtype=np.int64)
         self._pelvis = m.body("pelvis").id
         self._torso = m.body("torso").id
         self._floor = m.geom(BIPED_FLOOR_GEOM).id
         self._sole_geoms = [m.geom(g).id for g in BIPED_SOLE_GEOMS]
-        self._sole_side = {
-            g: (0 if BIPED_SOLE_GEOMS[k].startswith("r_") else 1) for k, g in enumerate(self._sole_geoms)
-        }
+        self._contact_layout = contact_layout(self.data)
+        self._foot_of_geom = foot_of_geom(
+            m.ngeom, {g: (0 if BIPED_SOLE_GEOMS[k].startswith("r_") else 1) for k, g in enumerate(self._sole_geoms)}
+        )
         robot = [
             g
             for g in range(m.ngeom)
@@ -632,3 +717,5 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             np.zeros((len(robot), 3, 3)), m.geom_size[self._ssv_geoms, 0].copy(), capsule.astype(np.int64)
         )
         self._batch = PairBatch(volumes, pairs[:, 0], pairs[:, 1])
+        self._vertex_mirror = self._batch.vertices  # where else the compiled step writes the robot's volumes
+        self._self_clearance_hint = 0.05  # [m] the first bounding-sphere margin of the compiled self-clearance

@@ -21,10 +21,13 @@ from ..assets import (
     PLANAR_OBSTACLE_GEOM,
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
+from .command_kernels import velocity_commands
 from .exceptions import EnvConfigError
+from .planar_kernels import planar_state
 from .validation import (
     MAX_FRAME_SKIP,
     as_action,
+    check_backend,
     check_bool,
     check_int,
     check_known_arguments,
@@ -35,6 +38,7 @@ from .validation import (
     constructor_arguments,
     constructor_defaults,
     init_mujoco_env,
+    non_finite_action,
     warn_if_time_limit_short,
 )
 
@@ -134,6 +138,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
       a float std applies to ``q`` [rad], ``qdot`` [rad/s] and ``tcp`` [m] alike, a dict gives one per group
       (``{"q": 0.001, "qdot": 0.01, "tcp": 0.001}``; groups not named get none). The episode constants
       (reference, phase, obstacle) stay exact, and ``info`` and the rewards use the true state.
+    - ``backend`` (``"compiled"`` or ``"python"``): how a step computes its commands, observation and ``info``: in
+      two compiled kernels, or with NumPy, the readable reference the tests hold them equal to (to round-off).
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
 
     ## Version History
@@ -179,6 +185,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         height: int = 480,
         camera_name: str | None = "side",
         obs_noise: float | dict[str, float] | None = None,
+        backend: str = "compiled",
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, PlanarReachEnv.__init__)
@@ -189,6 +196,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
             {k: (self.OBSERVATION_LAYOUT[k],) for k in ("q", "qdot", "tcp")},
             ("q", "qdot", "tcp"),
         )
+        self._backend = check_backend("backend", backend)
         self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
         if np.max(np.abs(self._obstacle_center)) > MAX_OBSTACLE_DISTANCE:
@@ -207,6 +215,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
                 raise EnvConfigError(f"{name} {tuple(p)} is outside the arm's reach of 1.4 m from (0, 0)")
         self._duration = check_real("duration", duration, low=0.0, low_open=True, unit="s")
         self._max_joint_speed = check_real("max_joint_speed", max_joint_speed, low=0.0, low_open=True, unit="rad/s")
+        self._joint_speeds = np.full(4, self._max_joint_speed)  # [rad/s] per joint, for the compiled commands
         self._tracking_weight = check_real("tracking_weight", tracking_weight, low=0.0)
         self._energy_weight = check_real("energy_weight", energy_weight, low=0.0)
         self._collision_penalty = check_real("collision_penalty", collision_penalty, low=0.0)
@@ -262,12 +271,23 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
     def step(  # type: ignore[override]
         self, action: NDArray[np.floating]
     ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        action = as_action(action, 4)
-        qdot_cmd = self._max_joint_speed * np.clip(action, -1.0, 1.0)
-        self.do_simulation(np.concatenate([qdot_cmd, qdot_cmd]), self.frame_skip)
-        self._time += self.dt
-        observation = self._get_obs()
-        metrics = self._metrics(self.data.qvel[self._qvel])
+        if self._backend == "python":
+            action = as_action(action, 4)
+            qdot_cmd = self._max_joint_speed * np.clip(action, -1.0, 1.0)
+            self.do_simulation(np.concatenate([qdot_cmd, qdot_cmd]), self.frame_skip)
+            self._time += self.dt
+            observation = self._get_obs()
+            metrics = self._metrics(self.data.qvel[self._qvel])
+        else:
+            action = as_action(action, 4, finite=False)
+            ctrl = np.empty(8)
+            if not velocity_commands(action, self._joint_speeds, ctrl):
+                raise non_finite_action(action)
+            dt = self.dt
+            # MujocoEnv.do_simulation less its check of ctrl's shape, which holds by construction
+            self._step_mujoco_simulation(ctrl, self.frame_skip)
+            self._time += dt
+            observation, metrics = self._compiled_state(dt)
         reward, terms = self._get_rew(metrics)
         info = {**terms, **metrics}
         if self.render_mode == "human":
@@ -303,11 +323,16 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
 
     def reference(self, time: float) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
         """TCP reference position [m], velocity [m/s] and phase at ``time`` [s] (quintic rest-to-rest law)."""
+        tau, s, sdot = self._law(time)
+        delta = self._line_end - self._line_start
+        return self._line_start + s * delta, sdot * delta, tau
+
+    def _law(self, time: float) -> tuple[float, float, float]:
+        """The reference's phase ``tau`` [-], path parameter ``s(tau)`` [-] and ``ds/dt`` [1/s] at ``time`` [s]."""
         tau = min(max(time / self._duration, 0.0), 1.0)
         s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
         sdot = 30.0 * tau**2 * (1.0 - tau) ** 2 / self._duration if tau < 1.0 else 0.0
-        delta = self._line_end - self._line_start
-        return self._line_start + s * delta, sdot * delta, tau
+        return tau, s, sdot
 
     @property
     def nominal_configuration(self) -> NDArray[np.float64]:
@@ -386,6 +411,47 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
             "tcp_ref": ref_pos,
         }
 
+    def _compiled_state(self, dt: float) -> tuple[NDArray[np.float64], dict[str, Any]]:
+        """:meth:`_get_obs` and :meth:`_metrics` in one compiled pass (``backend="compiled"``)."""
+        d = self.data
+        obs, error, goal, energy, margin, peak, tcp, ref, phase = planar_state(
+            d.qpos,
+            d.qvel,
+            self._qpos,
+            self._qvel,
+            d.site_xpos[self._tcp_site],
+            self._line_start,
+            self._line_end,
+            self._law(self._time),
+            self._obstacle_features,
+            self._lower,
+            self._upper,
+        )
+        if self._noise is not None:
+            index, std = self._noise
+            obs[index] += std * self.np_random.standard_normal(index.size)
+            obs[18:20] = obs[10:12] - obs[8:10]  # from the observed, possibly noisy, TCP
+        clearance = self._min_clearance()
+        self._max_tracking_error = max(self._max_tracking_error, error)
+        self._collided = self._collided or clearance <= 0.0
+        finished = phase >= 1.0
+        return obs, {
+            "tracking_error": error,
+            "goal_error": goal,
+            "goal_reached": goal <= self._success_tolerance,
+            "pseudoenergy": energy * dt,
+            "min_clearance": clearance,
+            "collision": clearance <= 0.0,
+            "joint_limit_margin": margin,
+            "line_finished": finished,
+            "peak_joint_speed": peak,
+            "max_tracking_error": self._max_tracking_error,
+            "is_success": finished and not self._collided and self._max_tracking_error <= self._success_tolerance,
+            "time": self._time,
+            "tcp": tcp,
+            "tcp_ref": ref,
+        }
+
     def _min_clearance(self) -> float:
         if self._obstacle_geom is None:
             return float("inf")
@@ -412,6 +478,9 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._tcp_site = m.site(PLANAR_ARM_TCP).id
         self._link_geoms = [m.geom(n).id for n in PLANAR_ARM_LINK_GEOMS]
         self._obstacle_geom = m.geom(PLANAR_OBSTACLE_GEOM).id if self._obstacle else None
+        self._obstacle_features = (
+            np.array([*self._obstacle_center, self._obstacle_radius]) if self._obstacle else np.zeros(3)
+        )
         self._jacp = np.zeros((3, m.nv))
         self._scratch = mujoco.MjData(m)  # for the start-posture projection, so reset allocates nothing
 

@@ -27,6 +27,7 @@ __all__ = [
     "MAX_FRAME_SKIP",
     "RENDER_ARGUMENTS",
     "RENDER_MODES",
+    "check_backend",
     "check_bool",
     "check_choice",
     "check_int",
@@ -39,6 +40,7 @@ __all__ = [
     "check_render_backend",
     "constructor_arguments",
     "constructor_defaults",
+    "non_finite_action",
     "non_negative",
     "positive",
     "render_modes",
@@ -125,17 +127,24 @@ def init_mujoco_env(
     )
 
 
-def as_action(action: Any, size: int) -> NDArray[np.float64]:
-    """``action`` as a finite float64 vector of ``size`` entries, else :class:`InvalidActionError` saying why."""
+def as_action(action: Any, size: int, *, finite: bool = True) -> NDArray[np.float64]:
+    """``action`` as a float64 vector of ``size`` entries, else :class:`InvalidActionError` saying why; with
+    ``finite`` (the default) its entries must be finite too (a compiled step that checks them itself passes False
+    and raises :func:`non_finite_action`)."""
     try:
         array = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as exc:  # a dict, strings, None: not an action
         raise InvalidActionError(f"action must be an array of numbers, got {type(action).__name__}") from exc
     if array.shape != (size,):
         raise InvalidActionError(f"action must have shape ({size},), got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise InvalidActionError(f"action must be finite, got {array}")
+    if finite and not np.all(np.isfinite(array)):
+        raise non_finite_action(array)
     return array
+
+
+def non_finite_action(action: NDArray[np.float64]) -> InvalidActionError:
+    """The error of an action with a non-finite entry."""
+    return InvalidActionError(f"action must be finite, got {action}")
 
 
 def check_real(name: str, value: Any, **bounds: Unpack[_checks.RealRange]) -> float:
@@ -163,6 +172,7 @@ def non_negative(value: float, name: str) -> float:
 # the shared checks of redundancy_gym.validation, raising EnvConfigError
 check_bool = partial(_checks.check_bool, error=EnvConfigError)
 check_choice = partial(_checks.check_choice, error=EnvConfigError)
+check_backend = partial(_checks.check_backend, error=EnvConfigError)
 check_range_pair = partial(_checks.check_range_pair, error=EnvConfigError)
 check_real_array = partial(_checks.check_real_array, error=EnvConfigError)
 

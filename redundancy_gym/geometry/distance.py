@@ -332,6 +332,20 @@ class PairBatch:
         construction; attached frames (:meth:`attach_frames`) are read first."""
         return float(self._near_kernel(self._header_address, float(margin), self._moving, self._frames_address))
 
+    def smallest(self, margin: float) -> float:
+        """The smallest distance of all pairs [m], exactly, computing only the pairs near it: a
+        :meth:`compute_near` with ``margin`` [m] (a guess of the answer, such as the last step's), repeated with
+        a doubled margin while its minimum lies beyond the margin (a pair farther than the margin may then be
+        nearer than that minimum); beyond 1e6 m every pair is computed. A non-finite vertex gives NaN or +inf
+        back, as :meth:`compute` would."""
+        while True:
+            d = self.compute_near(margin)
+            if d <= margin or margin == math.inf:
+                return d
+            margin = max(2.0 * margin, d) if math.isfinite(d) else 2.0 * margin
+            if margin > 1e6:
+                margin = math.inf
+
     def compute(self) -> SSVDistances:
         """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""
         self._kernel(self._header_address)

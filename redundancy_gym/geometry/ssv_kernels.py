@@ -32,6 +32,7 @@ __all__ = [
     "KIND_PSS",
     "KIND_TSS",
     "cull_pairs_at",
+    "pointer_intrinsic",
     "ssv_pairs_at",
     "ssv_pairs_grouped",
     "volume_pair_distance",
@@ -392,7 +393,7 @@ def _fallback_normal(a0, a1, a2, ka, b0, b1, b2, kb):
     return (0.0, 0.0, 1.0)
 
 
-def _pointer_intrinsic(dtype: types.Type):  # noqa: ANN202 - returns a numba intrinsic
+def pointer_intrinsic(dtype: types.Type):  # noqa: ANN202 - returns a numba intrinsic
     """An intrinsic reinterpreting an integer address as ``dtype*`` (the caller owns and validated the buffer)."""
 
     @intrinsic
@@ -409,8 +410,8 @@ def _pointer_intrinsic(dtype: types.Type):  # noqa: ANN202 - returns a numba int
     return as_pointer
 
 
-_float64_pointer = _pointer_intrinsic(types.float64)
-_int64_pointer = _pointer_intrinsic(types.int64)
+_float64_pointer = pointer_intrinsic(types.float64)
+_int64_pointer = pointer_intrinsic(types.int64)
 
 
 GROUPS = (

@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from .. import validation
 from .exceptions import WrapperActionError, WrapperError
+from .glue_kernels import clipped_finite
 
 __all__ = [
     "CONTROLLER_TIME_ATTRIBUTE",
@@ -35,6 +36,9 @@ def normalized_box(dim: int) -> spaces.Box:
     return spaces.Box(-1.0, 1.0, shape=(dim,), dtype=np.float32)
 
 
+_COMPILED_DTYPES = (np.dtype(np.float32), np.dtype(np.float64))  # the actions clipped_finite is compiled for
+
+
 def check_action(action: Any, space: spaces.Space[Any], wrapper: str) -> NDArray[np.float64]:
     """``action`` as float64 after checking it is an array of ``space``'s shape with finite entries; entries
     outside ``[-1, 1]`` (every wrapper's box, :func:`normalized_box`) are clipped into it, as the envs clip
@@ -44,9 +48,14 @@ def check_action(action: Any, space: spaces.Space[Any], wrapper: str) -> NDArray
         WrapperActionError: not numbers, a wrong shape, or a NaN/inf entry (naming the wrapper and the shape).
     """
     if type(action) is np.ndarray and action.shape == space.shape and action.dtype.kind == "f":  # the hot path
-        a = action.astype(np.float64)
-        if math.isfinite(float(a.sum())):  # finite entries sum to a finite number (or overflow: checked below)
-            return a.clip(-1.0, 1.0)
+        if action.ndim == 1 and action.dtype in _COMPILED_DTYPES:
+            clipped, finite = clipped_finite(action)
+            if finite:
+                return clipped
+        else:
+            a = action.astype(np.float64)
+            if math.isfinite(float(a.sum())):  # finite entries sum to a finite number (or overflow: checked below)
+                return a.clip(-1.0, 1.0)
     try:
         a = np.asarray(action, dtype=np.float64)
     except (TypeError, ValueError) as exc:

@@ -14,6 +14,7 @@ from ..controllers import ClikResult
 from ..policies import PolicyError, make_policy
 from .action_check import check_action, check_bool, check_policy_kwargs, check_real, normalized_box
 from .exceptions import WrapperError
+from .glue_kernels import joint_command
 from .reference_wrapper import ReferenceActionWrapper
 
 __all__ = ["NullspaceAction", "NullspaceActionConfig"]
@@ -143,7 +144,7 @@ class NullspaceAction(ReferenceActionWrapper):
         began = time.perf_counter_ns()
         result, fraction = self.command(a * self._scale)
         self.controller_time_us = (time.perf_counter_ns() - began) * 1e-3
-        joint_action = (result.qdot / self._speeds).clip(-1.0, 1.0).astype(np.float32)
+        joint_action = joint_command(result.qdot, self._speeds)
         obs, reward, terminated, truncated, info = self.env.step(joint_action)
         self._obs = obs if obs.dtype == np.float64 else obs.astype(np.float64)
         info.update(

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from redundancy_gym.bench.envs import format_envs_bench, run_envs_bench
@@ -23,7 +24,8 @@ def test_envs_bench_report(tmp_path) -> None:
     )
     timing = report["timing"]
     assert timing["rounds"] == 3 and timing["warmup"] == 1 and timing["window_s"] == pytest.approx(0.05)
-    labels = ["redundancy_gym/AgriReach-v0", "Pusher-v5", "redundancy_gym/AgriReach-v0 (prune=False)"]
+    envs = ["redundancy_gym/AgriReach-v0", "Pusher-v5", "redundancy_gym/AgriReach-v0 (prune=False)"]
+    labels = [name for env in envs for name in (env, f"{env} physics")]  # each env beside its bare physics
     assert timing["orders"] == [labels, labels[::-1], labels]  # ABC CBA ABC: no env always first
     unpruned = report["envs"]["redundancy_gym/AgriReach-v0 (prune=False)"]
     agri = report["envs"]["redundancy_gym/AgriReach-v0"]
@@ -47,6 +49,25 @@ def test_envs_bench_report(tmp_path) -> None:
     assert wrapped["ratio_min"] <= wrapped["ratio"] <= wrapped["ratio_max"] and wrapped["ratio_spread"] >= 0.0
     assert 0.0 < wrapped["ratio"] < 1.5 and wrapped["steps_per_second"] > 0
     assert "AgriReach-Nullspace-v0" in format_envs_bench(report)
+    # the wrapper's glue: its step less the raw step less its controller, all three measured
+    assert wrapped["controller_time_us"] > 0.0 and wrapped["step_us"] > wrapped["raw_step_us"] > 0.0
+    assert len(wrapped["glue_us_rounds"]) == 3 and wrapped["glue_us"] == pytest.approx(
+        float(np.median(wrapped["glue_us_rounds"]))
+    )
+    assert wrapped["glue_us_min"] <= wrapped["glue_us"] <= wrapped["glue_us_max"]
+    # each env against its own bare physics (mj_step with nstep=frame_skip on its model and data)
+    physics = report["physics"]
+    assert set(physics) == set(envs)
+    for name, row in physics.items():
+        assert row["substeps"] == {"Pusher-v5": 5}.get(name, 1)
+        assert 0.0 < row["physics_us"] < row["env_step_us"]  # a step is its physics and more
+        stats = row["env_vs_physics_rounds"]
+        assert stats["min"] <= row["env_vs_physics"] == stats["median"] <= stats["max"] and stats["rounds"] == 3
+    agri_row = physics["redundancy_gym/AgriReach-v0"]
+    pusher_overhead = physics["Pusher-v5"]["overhead_us"]
+    assert agri_row["bound_us"] == max(1.5 * agri_row["physics_us"], agri_row["physics_us"] + pusher_overhead)
+    assert agri_row["within_bound"] == (agri_row["env_step_us"] <= agri_row["bound_us"])
+    assert "bound_us" not in physics["Pusher-v5"] and "env / physics" in format_envs_bench(report)
 
 
 def test_envs_bench_rejects_bad_options() -> None:

@@ -554,10 +554,14 @@ def test_eval_reports_obstacle_contacts_and_clearance() -> None:
     assert "obstacle contact rate" in text and "to obstacles" in text
 
 
-def test_clearance_search_ends_on_a_non_finite_state() -> None:
+@pytest.mark.parametrize("backend", ["compiled", "python"])
+def test_clearance_search_ends_on_a_non_finite_state(backend: str) -> None:
     """A robot state of NaN (a simulation gone unstable) must not make the widening margin search loop forever."""
-    env = gym.make(ENV_ID, course="beam")
+    env = gym.make(ENV_ID, course="beam", backend=backend)
     env.reset(seed=0)
     base = env.unwrapped
-    base._batch.vertices[:] = np.nan  # the robot's volumes as _self_clearance would place them from NaN frames
+    # the robot's volumes as the step would place them from NaN frames: the reference copies them from the
+    # self-collision batch, the compiled step writes them into the obstacle batch's leading rows too
+    base._batch.vertices[:] = np.nan
+    base._obstacle_batch.vertices[: len(base._ssv_geoms)] = np.nan
     assert not math.isfinite(base._obstacle_clearance())

@@ -50,6 +50,7 @@ _WALK_ARGUMENTS: dict[str, Any] = {
     "push": [{"time": 0.0, "force": (0.0, 20.0, 0.0), "duration": 0.05}],
     "actuator_torque_scale": 0.9,
     "speed_scale": 0.3,
+    "backend": "python",
 }
 
 NON_DEFAULT: dict[str, dict[str, Any]] = {
@@ -73,6 +74,7 @@ NON_DEFAULT: dict[str, dict[str, Any]] = {
         "height": 48,
         "camera_name": None,
         "obs_noise": {"q": 0.001},
+        "backend": "python",
     },
     "redundancy_gym/AgriReach-v0": {
         "difficulty": "easy",
@@ -113,6 +115,7 @@ NON_DEFAULT: dict[str, dict[str, Any]] = {
         "height": 48,
         "camera_name": "front",
         "obs_noise": 0.001,
+        "backend": "python",
     },
     "redundancy_gym/BipedWalk-v0": _WALK_ARGUMENTS,
     "redundancy_gym/BipedObstacles-v0": {

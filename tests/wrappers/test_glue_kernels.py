@@ -1,0 +1,31 @@
+"""The wrappers' glue kernels give the bits of the NumPy expressions they replace, and flag non-finite actions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from redundancy_gym.wrappers.glue_kernels import clipped_finite, joint_command
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_clipped_finite_is_numpys_clip(dtype: type) -> None:
+    action: np.ndarray = (3.0 * np.random.default_rng(0).standard_normal(10_000)).astype(dtype)
+    clipped, finite = clipped_finite(action)
+    assert finite and clipped.dtype == np.float64
+    np.testing.assert_array_equal(clipped, action.astype(np.float64).clip(-1.0, 1.0))
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_clipped_finite_flags_a_non_finite_entry(bad: float) -> None:
+    action = np.zeros(5)
+    action[3] = bad
+    assert not clipped_finite(action)[1]
+
+
+def test_joint_command_is_numpys_expression() -> None:
+    rng = np.random.default_rng(1)
+    qdot, speeds = 5.0 * rng.standard_normal(10_000), rng.uniform(0.1, 3.0, 10_000)
+    command = joint_command(qdot, speeds)
+    assert command.dtype == np.float32
+    np.testing.assert_array_equal(command, (qdot / speeds).clip(-1.0, 1.0).astype(np.float32))
