@@ -12,9 +12,11 @@ import math
 import numpy as np
 from numba import njit
 
+from ..geometry.ssv_kernels import smallest_pair_at
 from ..kernel_options import JIT_EXACT
+from .contact_pressure import contact_pressure_kernel
 
-__all__ = ["biped_observation", "biped_state_numerics", "biped_targets"]
+__all__ = ["biped_metrics", "biped_observation", "biped_state_numerics", "biped_targets"]
 
 
 @njit(**JIT_EXACT)
@@ -119,3 +121,28 @@ def biped_observation(qpos, qvel, sensordata, sensors, command, time, tail):  # 
     obs[nq + nv + ns] = command
     obs[nq + nv + ns + 1] = time
     return obs
+
+
+@njit(**JIT_EXACT)
+def biped_metrics(  # noqa: ANN201
+    state,  # noqa: ANN001
+    contacts,  # noqa: ANN001
+    volumes,  # noqa: ANN001
+):
+    """Every number of the biped's step metrics in one call: :func:`biped_state_numerics` on ``state`` (its
+    arguments), the feet's contact pressure (:func:`~redundancy_gym.envs.contact_pressure.contact_pressure_kernel`
+    on ``contacts``) and the smallest distances of the robot's pair batch and of the batch mirroring its volumes
+    (``volumes``: header address, moving volumes, frames address and first margin [m] of each, the second header
+    0 without one; :func:`~redundancy_gym.geometry.ssv_kernels.smallest_pair_at`).
+
+    Returns ``(tilt, margin, qdot^T qdot, peak speed, moments, angular momentum, CoM, cop, cop_valid, zmp,
+    zmp_valid, normal, self clearance [m], mirror clearance [m] (+inf without one))``.
+    """
+    tilt, margin, energy, peak, moments, angmom, com = biped_state_numerics(*state)
+    cop, cop_valid, zmp, zmp_valid, normal = contact_pressure_kernel(*contacts)
+    own_header, own_moving, own_frames, own_margin, other_header, other_moving, other_frames, other_margin = volumes
+    own = smallest_pair_at(own_header, own_margin, own_moving, own_frames)
+    other = np.inf
+    if other_header != 0:
+        other = smallest_pair_at(other_header, other_margin, other_moving, other_frames)
+    return tilt, margin, energy, peak, moments, angmom, com, cop, cop_valid, zmp, zmp_valid, normal, own, other

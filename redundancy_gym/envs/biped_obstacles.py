@@ -322,7 +322,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         self._row_max_x = high_x[order]
         self._max_x_sorted = sorted(high_x.tolist())
         self._blocks: dict[int, NDArray[np.float64]] = {}
-        self._vertex_mirror = self._batch.vertices
+        self._mirror_batch = None
         if not volumes:
             self._obstacle_batch: PairBatch | None = None
             return
@@ -336,8 +336,8 @@ class BipedObstaclesEnv(BipedWalkEnv):
         index_a = np.repeat(np.arange(n_robot), len(volumes))
         index_b = np.tile(n_robot + np.arange(len(volumes)), n_robot)
         self._obstacle_batch = PairBatch(all_volumes, index_a, index_b, moving=n_robot)
-        self._vertex_mirror = self._obstacle_batch.vertices  # the compiled step places the robot's volumes here too
-        self._clearance_hint = 0.25  # [m] the first bounding-sphere margin of _obstacle_clearance
+        self._mirror_batch = self._obstacle_batch  # the compiled step places the robot's volumes here too
+        self._clearance_hint = self._mirror_clearance_hint = 0.25  # [m] the first bounding-sphere margin
         self._pair_obstacle = self._volume_owner[index_b - n_robot]
 
     def _check_clear_of_standing_robot(self) -> None:
@@ -467,12 +467,14 @@ class BipedObstaclesEnv(BipedWalkEnv):
         batch = self._obstacle_batch
         if batch is None:
             return math.inf
-        if self._backend == "python":  # the robot's volumes as BipedWalk placed them (_self_clearance, in _metrics)
+        if self._backend == "compiled":  # computed with the step's other metrics, from the same first margin
+            d = self._mirror_clearance
+        else:  # the robot's volumes as BipedWalk placed them for this state (_self_clearance, in _metrics)
             batch.vertices[: len(self._ssv_geoms)] = self._batch.vertices
-        # start from the last step's clearance: the robot moves little in a step, so one pass usually does
-        d = batch.smallest(self._clearance_hint)
+            # start from the last step's clearance: the robot moves little in a step, so one pass usually does
+            d = batch.smallest(self._clearance_hint)
         if d <= 1e6:
-            self._clearance_hint = max(d, 0.0) + 0.05
+            self._clearance_hint = self._mirror_clearance_hint = max(d, 0.0) + 0.05
         return d
 
     def _touching_obstacle(self) -> bool:

@@ -21,8 +21,8 @@ from ..assets import (
 )
 from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
-from .biped_kernels import biped_observation, biped_state_numerics, biped_targets
-from .contact_pressure import compiled_contact_pressure, contact_layout, contact_pressure, foot_of_geom
+from .biped_kernels import biped_metrics, biped_observation, biped_targets
+from .contact_pressure import ContactPressure, contact_layout, contact_pressure, foot_of_geom
 from .exceptions import EnvConfigError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
@@ -529,32 +529,48 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         if self._backend == "python":
             return self._metrics_python(forward_speed)
         m, d = self.model, self.data
-        pressure = compiled_contact_pressure(d, self._floor, self._foot_of_geom, self._contact_layout)
         mujoco.mj_subtreeVel(m, d)
-        tilt, margin, energy, peak, moments, angmom, com = biped_state_numerics(
-            d.qpos,
-            d.qvel,
-            self._lower,
-            self._upper,
-            d.xmat[self._torso],
-            d.site_xmat,
-            self._ankle_sites_array,
-            d.sensordata,
-            self._torque_adr_array,
-            d.geom_xpos,
-            d.geom_xmat,
-            self._ssv_geoms,
-            self._half_length,
-            self._batch.vertices,
-            self._vertex_mirror,
-            d.subtree_angmom,
-            d.subtree_com,
-            self._pelvis,
+        mirror = self._mirror_batch
+        own_address, other_address = self._batch.address, (0, 0, 0) if mirror is None else mirror.address
+        (tilt, margin, energy, peak, moments, angmom, com, cop, cop_valid, zmp, zmp_valid, normal, clearance, other) = (
+            biped_metrics(
+                (
+                    d.qpos,
+                    d.qvel,
+                    self._lower,
+                    self._upper,
+                    d.xmat[self._torso],
+                    d.site_xmat,
+                    self._ankle_sites_array,
+                    d.sensordata,
+                    self._torque_adr_array,
+                    d.geom_xpos,
+                    d.geom_xmat,
+                    self._ssv_geoms,
+                    self._half_length,
+                    self._batch.vertices,
+                    self._batch.vertices if mirror is None else mirror.vertices,
+                    d.subtree_angmom,
+                    d.subtree_com,
+                    self._pelvis,
+                ),
+                (
+                    d.contact.dist,
+                    d.ncon,
+                    self._contact_layout,
+                    d.efc_force,
+                    d.efc_type,
+                    self._foot_of_geom,
+                    self._floor,
+                ),
+                (*own_address, self._self_clearance_hint, *other_address, self._mirror_clearance_hint),
+            )
         )
-        # exact, computing only the pairs near the last step's clearance (the limbs move little in a step)
-        clearance = self._batch.smallest(self._self_clearance_hint)
+        # exact: only the pairs near the last step's clearances were computed (the limbs move little in a step)
         if clearance <= 1e6:
             self._self_clearance_hint = max(clearance, 0.0) + 0.05
+        self._mirror_clearance = other
+        pressure = ContactPressure(cop, cop_valid, zmp, bool(zmp_valid), normal)
         x = float(d.qpos[0])
         fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
         self._fell = self._fell or fell
@@ -717,5 +733,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             np.zeros((len(robot), 3, 3)), m.geom_size[self._ssv_geoms, 0].copy(), capsule.astype(np.int64)
         )
         self._batch = PairBatch(volumes, pairs[:, 0], pairs[:, 1])
-        self._vertex_mirror = self._batch.vertices  # where else the compiled step writes the robot's volumes
+        # a pair batch holding the robot's volumes first (BipedObstacles' obstacles): the compiled step places them
+        # there too and returns its smallest distance from this margin [m]
+        self._mirror_batch: PairBatch | None = None
+        self._mirror_clearance_hint = 0.25
+        self._mirror_clearance = math.inf
         self._self_clearance_hint = 0.05  # [m] the first bounding-sphere margin of the compiled self-clearance

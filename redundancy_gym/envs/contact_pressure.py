@@ -26,6 +26,7 @@ __all__ = [
     "ContactPressure",
     "compiled_contact_pressure",
     "compiled_touches_geoms",
+    "contact_pressure_kernel",
     "contact_layout",
     "contact_pressure",
     "foot_of_geom",
@@ -124,7 +125,7 @@ def compiled_contact_pressure(
 ) -> ContactPressure:
     """:func:`contact_pressure` in one compiled pass over MuJoCo's contact records (``layout``:
     :func:`contact_layout`): the same bits."""
-    cop, cop_valid, zmp, zmp_valid, normal = _reduce(
+    cop, cop_valid, zmp, zmp_valid, normal = contact_pressure_kernel(
         data.contact.dist, data.ncon, layout, data.efc_force, data.efc_type, foot, floor
     )
     return ContactPressure(cop, cop_valid, zmp, bool(zmp_valid), normal)
@@ -156,7 +157,7 @@ def _touches(dist, ncon, layout, low, high):  # noqa: ANN001, ANN202
 
 
 @njit(**JIT_EXACT)
-def _reduce(dist, ncon, layout, efc_force, efc_type, foot, floor):  # noqa: ANN001, ANN202
+def contact_pressure_kernel(dist, ncon, layout, efc_force, efc_type, foot, floor):  # noqa: ANN001, ANN202
     """The fields of :class:`ContactPressure` (``mj_contactForce``'s decoding and the reference's sums, in their
     order), reading the ``ncon`` contact records that start at ``dist``'s address through ``layout``."""
     stride = layout[0]

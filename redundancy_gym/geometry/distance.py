@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .exceptions import GeometryError
 from .primitives import SSV
-from .ssv_kernels import GROUP_OF, cull_pairs_at, near_pairs_at, ssv_pairs_at, ssv_pairs_grouped
+from .ssv_kernels import GROUP_OF, cull_pairs_at, near_pairs_at, smallest_pair_at, ssv_pairs_at, ssv_pairs_grouped
 
 __all__ = ["PackedVolumes", "PairBatch", "SSVDistance", "SSVDistances", "distance", "distances", "indexed_distances"]
 
@@ -337,14 +337,15 @@ class PairBatch:
         :meth:`compute_near` with ``margin`` [m] (a guess of the answer, such as the last step's), repeated with
         a doubled margin while its minimum lies beyond the margin (a pair farther than the margin may then be
         nearer than that minimum); beyond 1e6 m every pair is computed. A non-finite vertex gives NaN or +inf
-        back, as :meth:`compute` would."""
-        while True:
-            d = self.compute_near(margin)
-            if d <= margin or margin == math.inf:
-                return d
-            margin = max(2.0 * margin, d) if math.isfinite(d) else 2.0 * margin
-            if margin > 1e6:
-                margin = math.inf
+        back, as :meth:`compute` would. One compiled call (``ssv_kernels.smallest_pair_at``)."""
+        return float(smallest_pair_at(self._header_address, float(margin), self._moving, self._frames_address))
+
+    @property
+    def address(self) -> tuple[int, int, int]:
+        """``(header address, moving, frames address)``: the arguments with which a kernel queries this batch
+        through :func:`~redundancy_gym.geometry.ssv_kernels.smallest_pair_at` (valid while the batch lives and its
+        frames stay attached)."""
+        return self._header_address, self._moving, self._frames_address
 
     def compute(self) -> SSVDistances:
         """Distances of all pairs for the current :attr:`vertices` (buffers reused by the next call)."""

@@ -32,7 +32,9 @@ __all__ = [
     "KIND_PSS",
     "KIND_TSS",
     "cull_pairs_at",
+    "near_pairs_at",
     "pointer_intrinsic",
+    "smallest_pair_at",
     "ssv_pairs_at",
     "ssv_pairs_grouped",
     "volume_pair_distance",
@@ -949,3 +951,17 @@ def near_pairs_at(header, margin, moving, frames):
         margin,
         moving,
     )
+
+
+@njit(**JIT)
+def smallest_pair_at(header, margin, moving, frames):
+    """:meth:`~redundancy_gym.geometry.PairBatch.smallest`: the exact smallest distance [m] of a pair batch (its
+    header address; ``moving`` and ``frames`` as for :func:`near_pairs_at`), computing only the pairs near it,
+    from a first ``margin`` [m] doubled while the minimum lies beyond it (every pair beyond 1e6 m)."""
+    while True:
+        d = near_pairs_at(header, margin, moving, frames)
+        if d <= margin or margin == np.inf:
+            return d
+        margin = max(2.0 * margin, d) if np.isfinite(d) else 2.0 * margin
+        if margin > 1e6:
+            margin = np.inf

@@ -560,8 +560,11 @@ def test_clearance_search_ends_on_a_non_finite_state(backend: str) -> None:
     env = gym.make(ENV_ID, course="beam", backend=backend)
     env.reset(seed=0)
     base = env.unwrapped
-    # the robot's volumes as the step would place them from NaN frames: the reference copies them from the
-    # self-collision batch, the compiled step writes them into the obstacle batch's leading rows too
-    base._batch.vertices[:] = np.nan
-    base._obstacle_batch.vertices[: len(base._ssv_geoms)] = np.nan
-    assert not math.isfinite(base._obstacle_clearance())
+    if backend == "python":  # the robot's volumes as _self_clearance would place them from NaN frames
+        base._batch.vertices[:] = np.nan
+        assert not math.isfinite(base._obstacle_clearance())
+    else:  # the compiled metrics place them from the geoms' frames and search both batches in the same call
+        base.data.geom_xpos[:] = np.nan
+        metrics = base._metrics(0.0)
+        assert not math.isfinite(metrics["min_obstacle_clearance"])
+        assert not math.isfinite(metrics["min_self_clearance"])
