@@ -368,6 +368,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             dtype=np.int64,
         )
         self._quat_slice = lay["tcp_quaternion"]
+        self._sample = np.empty(12)  # the reference path's sample of the compiled step
         self._reset_episode_state()
         self._row: CropRow | None = None
         self._part_geoms = np.zeros(0, dtype=np.int64)
@@ -483,7 +484,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         """:meth:`_get_obs` and :meth:`_metrics` with the path sampled once, in one compiled pass."""
         d = self.data
         o = self._obs
-        error, tracking, angle, energy, margin, peak, tcp, ref = agri_state(
+        error, tracking, angle, energy, margin, peak, tcp, ref, obstacle, own, leaf = agri_state(
             d.qpos,
             d.qvel,
             self._qpos_index,
@@ -492,16 +493,21 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
             self._upper,
             d.site_xpos[self._tcp_site],
             d.site_xmat[self._tcp_site],
-            self._reference_path.sample(self._time),
+            self._reference_path.params,
+            self._sample,
             self._time,
             self._grasp,
             self._approach,
             o,
             self._slots,
+            (self._hard_batch.address, self._self_batch.address, self._soft_batch.address),
+            self._horizon,
         )
         mujoco.mju_mat2Quat(self._quat, d.site_xmat[self._tcp_site])
         o[self._quat_slice] = self._quat
-        metrics = self._metrics_from(error, tracking, angle, energy * self.dt, margin, peak, tcp, ref)
+        metrics = self._metrics_from(
+            error, tracking, angle, energy * self.dt, margin, peak, tcp, ref, (obstacle, own, self._leaves(leaf))
+        )
         if self._noise is None:
             return o.copy(), metrics
         index, std = self._noise
@@ -638,9 +644,11 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         peak: float,
         tcp: NDArray[np.float64],
         reference: NDArray[np.float64],
+        contacts: tuple[float, float, int] | None = None,
     ) -> dict[str, Any]:
-        """The step's ``info`` from its numbers and the clearances; advances the episode's contact counters."""
-        obstacle_clearance, self_clearance, leaves = self._contacts()
+        """The step's ``info`` from its numbers and the clearances (``contacts``: as :meth:`_contacts` returns
+        them, computed here when None); advances the episode's contact counters."""
+        obstacle_clearance, self_clearance, leaves = self._contacts() if contacts is None else contacts
         clearance = min(obstacle_clearance, self_clearance)
         collision = clearance <= 0.0
         self._collided = self._collided or collision
@@ -672,10 +680,15 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         horizon), and the number of leaves touched."""
         obstacle = min(self._hard_batch.compute_near(self._horizon), self._horizon)
         own = min(self._self_batch.compute_near(self._horizon), self._horizon)
-        if self._soft_batch.compute_near(0.0) > 0.0:  # leaves only count when touched
-            return obstacle, own, 0
+        return obstacle, own, self._leaves(self._soft_batch.compute_near(0.0))
+
+    def _leaves(self, nearest: float) -> int:
+        """The number of leaves touched, from the leaf batch's last ``compute_near(0)`` and its minimum
+        ``nearest`` [m]: leaves only count when touched."""
+        if nearest > 0.0:
+            return 0
         touched = self._soft_part[self._soft_batch.result.distance <= 0.0]
-        return obstacle, own, (int(np.unique(touched).size) if touched.size else 0)
+        return int(np.unique(touched).size) if touched.size else 0
 
     # ------------------------------------------------------------------ scene
     def _pool_capacity(self) -> dict[str, int]:
