@@ -150,12 +150,6 @@ class GraspPath:
         out = self._out
         return float(out[0]), float(out[1]), float(out[2])
 
-    def sample(self, t: float) -> NDArray[np.float64]:
-        """Target ``[p, a]`` then target velocity ``[v, omega]`` at time ``t`` [s] as one (12,) array, a buffer
-        of the path's own that the next call of :meth:`sample`, :meth:`position` or ``()`` overwrites."""
-        self._sampler(self._params, float(t), self._out)
-        return self._out
-
     def __call__(self, t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Target ``[p, a]`` and target velocity ``[v, omega]`` at time ``t`` [s]."""
         self._sampler(self._params, float(t), self._out)
