@@ -11,7 +11,7 @@ from numba import njit
 
 from ..kernel_options import JIT_EXACT
 
-__all__ = ["clipped_finite", "joint_command"]
+__all__ = ["clipped_finite", "joint_command", "residual_applied"]
 
 
 @njit(**JIT_EXACT)
@@ -34,3 +34,19 @@ def joint_command(qdot, speeds):  # noqa: ANN001, ANN201
     for j in range(qdot.shape[0]):
         out[j] = np.float32(min(max(qdot[j] / speeds[j], -1.0), 1.0))
     return out
+
+
+@njit(**JIT_EXACT)
+def residual_applied(reference, scaled_range, action, low, high):  # noqa: ANN001, ANN201
+    """``(applied, applied - reference)`` with ``applied = np.clip(reference + (scaled_range * action).astype(
+    reference.dtype), low, high)``: a residual action on the reference's, in the env's dtype (that of ``reference``,
+    ``low`` and ``high``), so that ``action = 0`` gives the reference bit for bit."""
+    n = reference.shape[0]
+    applied = np.empty_like(reference)
+    delta = np.empty_like(reference)
+    for j in range(n):
+        residual = reference.dtype.type(scaled_range[j] * action[j])
+        value = min(max(reference[j] + residual, low[j]), high[j])
+        applied[j] = value
+        delta[j] = value - reference[j]
+    return applied, delta

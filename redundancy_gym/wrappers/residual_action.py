@@ -15,6 +15,7 @@ from numpy.typing import NDArray
 from ..policies import POLICY_NAMES, PolicyError, make_policy, supported_policies
 from .action_check import check_action, check_bool, check_policy_kwargs, check_real
 from .exceptions import WrapperError
+from .glue_kernels import residual_applied
 
 __all__ = ["REFERENCE_POLICIES", "ResidualAction", "ResidualActionConfig"]
 
@@ -139,6 +140,7 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._high = space.high.astype(space.dtype)
         self._dtype = space.dtype
         self._range = (space.high.astype(np.float64) - space.low.astype(np.float64)) / 2.0
+        self._scaled_range = self.config.scale * self._range  # [action units] of a residual of 1
         self.action_space = spaces.Box(-1.0, 1.0, shape=space.shape, dtype=np.float32)
         if self.config.observe_reference:
             obs = env.observation_space
@@ -178,8 +180,7 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         reference = self._reference_action
         self.controller_time_us = self._reference_time_us  # computed after the previous step, applied in this one
         # in the env's dtype, so that a = 0 gives the reference action bit for bit
-        residual = (self.config.scale * self._range * a).astype(self._dtype)
-        applied = np.clip(reference + residual, self._low, self._high)
+        applied, residual = residual_applied(reference, self._scaled_range, a, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(applied)
-        info = {**info, "reference_action": reference, "residual_action": applied - reference}
+        info = {**info, "reference_action": reference, "residual_action": residual}
         return self._observe(obs, False), reward, terminated, truncated, info

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import time
 from dataclasses import dataclass, field
 from typing import Any, SupportsFloat
@@ -53,15 +54,27 @@ _MIN = ("min_clearance", "min_self_clearance")
 
 def _hold(held: dict[str, Any], info: dict[str, Any]) -> None:
     """Fold one period's ``info`` into ``held``: sums, any, max and min over the periods so far."""
-    for key, value in info.items():
-        if key in _SUMMED or key.startswith("reward_"):
-            held[key] = held.get(key, 0.0) + float(value)
-        elif key in _ANY:
-            held[key] = held.get(key, False) or bool(value)
-        elif key in _MAX:
-            held[key] = max(held.get(key, -np.inf), float(value))
-        elif key in _MIN:
-            held[key] = min(held.get(key, np.inf), float(value))
+    summed, any_of, largest, smallest = _held_keys(tuple(info))
+    for key in summed:
+        held[key] = held.get(key, 0.0) + float(info[key])
+    for key in any_of:
+        held[key] = held.get(key, False) or bool(info[key])
+    for key in largest:
+        held[key] = max(held.get(key, -np.inf), float(info[key]))
+    for key in smallest:
+        held[key] = min(held.get(key, np.inf), float(info[key]))
+
+
+@functools.lru_cache(maxsize=16)
+def _held_keys(keys: tuple[str, ...]) -> tuple[tuple[str, ...], ...]:
+    """The keys of an ``info`` (its keys in order: an env's are the same every step) that :func:`_hold` sums,
+    takes any of, the largest and the smallest of: sorted once per key set, not per step."""
+    return (
+        tuple(k for k in keys if k in _SUMMED or k.startswith("reward_")),
+        tuple(k for k in keys if k in _ANY and not (k in _SUMMED or k.startswith("reward_"))),
+        tuple(k for k in keys if k in _MAX and k not in _SUMMED and k not in _ANY),
+        tuple(k for k in keys if k in _MIN and k not in _SUMMED and k not in _ANY and k not in _MAX),
+    )
 
 
 class WalkingCommandAction(ReferenceActionWrapper):

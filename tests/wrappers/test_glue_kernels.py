@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from redundancy_gym.wrappers.glue_kernels import clipped_finite, joint_command
+from redundancy_gym.wrappers.glue_kernels import clipped_finite, joint_command, residual_applied
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
@@ -29,3 +29,18 @@ def test_joint_command_is_numpys_expression() -> None:
     command = joint_command(qdot, speeds)
     assert command.dtype == np.float32
     np.testing.assert_array_equal(command, (qdot / speeds).clip(-1.0, 1.0).astype(np.float32))
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_residual_applied_is_numpys_expression(dtype: type) -> None:
+    rng = np.random.default_rng(2)
+    reference = rng.uniform(-1.0, 1.0, 10_000).astype(dtype)
+    low, high = np.full(10_000, -1.0, dtype=dtype), np.full(10_000, 1.0, dtype=dtype)
+    scaled_range, action = 0.3 * rng.uniform(0.5, 2.0, 10_000), rng.uniform(-1.0, 1.0, 10_000)
+    applied, residual = residual_applied(reference, scaled_range, action, low, high)
+    expected = np.clip(reference + (scaled_range * action).astype(dtype), low, high)
+    assert applied.dtype == residual.dtype == np.dtype(dtype)
+    np.testing.assert_array_equal(applied, expected)
+    np.testing.assert_array_equal(residual, expected - reference)
+    # a zero residual gives the reference bit for bit
+    np.testing.assert_array_equal(residual_applied(reference, scaled_range, 0.0 * action, low, high)[0], reference)
