@@ -34,8 +34,9 @@ def test_joint_command_is_numpys_expression() -> None:
 @pytest.mark.parametrize("dtype", [np.float32, np.float64])
 def test_residual_applied_is_numpys_expression(dtype: type) -> None:
     rng = np.random.default_rng(2)
-    reference = rng.uniform(-1.0, 1.0, 10_000).astype(dtype)
-    low, high = np.full(10_000, -1.0, dtype=dtype), np.full(10_000, 1.0, dtype=dtype)
+    reference: np.ndarray = rng.uniform(-1.0, 1.0, 10_000).astype(dtype)
+    low: np.ndarray = np.full(10_000, -1.0, dtype=dtype)
+    high: np.ndarray = np.full(10_000, 1.0, dtype=dtype)
     scaled_range, action = 0.3 * rng.uniform(0.5, 2.0, 10_000), rng.uniform(-1.0, 1.0, 10_000)
     applied, residual = residual_applied(reference, scaled_range, action, low, high)
     expected = np.clip(reference + (scaled_range * action).astype(dtype), low, high)
