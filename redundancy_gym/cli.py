@@ -101,7 +101,8 @@ def _parser() -> argparse.ArgumentParser:
         default=0,
         metavar="N",
         help="untimed episodes first (seed --seed), so JIT compilation and one-time set-up are not "
-        "counted in the step times",
+        "counted in the step times (with --workers or --ray: one untimed reset and step instead, before the "
+        "workers fork or in each spawned one)",
     )
     ev.add_argument(
         "--workers",

@@ -24,8 +24,13 @@ over the rounds [us]), ``env_vs_physics`` (the median of the per-round ratio env
 ``overhead_us`` (the median of the per-round difference [us]: what the env spends outside MuJoCo, resets
 included). For each of our envs ``bound_us`` is the larger of 1.5 x its physics and its physics plus Pusher-v5's
 overhead measured in the same run, and ``within_bound`` whether its env step is at most that. For every wrapped id,
-``glue_us`` is the wrapped step minus the raw step minus the wrapper's own ``controller_time_us`` (its mean over the
-window's steps), per round, by its median [us]: what the wrapper adds beyond its controller.
+``glue_us`` is what the wrapper adds beyond its controller: the wrapped step less the steps of the env inside it
+(each timed in the window) less the wrapper's own ``controller_time_us``, per round, by its median [us]. The inner
+env's steps are timed on the wrapped episode itself: the raw env's zero-action episode is another trajectory (an
+arm at rest among the plants computes fewer near pairs than one reaching), so its step is not the one the wrapper
+calls. The wrapped ids' windows are timed without their resets (a wrapped episode ends at other times than the raw
+env's, and a reset rebuilds the controller's plan): ``step_us``, ``raw_step_us``, the ratio and ``glue_us`` are
+per step.
 """
 
 from __future__ import annotations
@@ -104,6 +109,11 @@ class _Stepper:
         self._clock = _controller_clock(self.env)
         self.windows: list[tuple[int, int, float]] = []
         self.controller_us: list[float] = []
+        self.step_only_s: list[float] = []
+        self.glue_us: list[float] = []
+        self._inner_ns = 0
+        if self._clock is not None:
+            self._time_inner_steps(self._clock.env)
         self._run(0.0, warmup=50)  # compiled kernels and caches
         self.env.reset(seed=seed)
 
@@ -112,6 +122,25 @@ class _Stepper:
         steps, resets, elapsed = self._run(seconds)
         self.windows.append((steps, resets, elapsed))
         return elapsed / steps
+
+    def _time_inner_steps(self, inner: gym.Env) -> None:
+        """Time every ``step`` of the env inside the action wrapper (on this instance only), so that a window
+        knows its wrapper's own time: its step less the inner env's steps less its controller."""
+        step = inner.step
+
+        def timed(action: Any) -> Any:
+            began = time.perf_counter_ns()
+            result = step(action)
+            self._inner_ns += time.perf_counter_ns() - began
+            return result
+
+        inner.step = timed  # type: ignore[method-assign]
+
+    def step_window(self, seconds: float) -> float:
+        """:meth:`window`, returning its time per step without the resets [s] (each reset timed by the wall clock
+        and taken out): the wrapped ids' comparison, whose episodes end at other times than the raw env's."""
+        self.window(seconds)
+        return self.step_only_s[-1]
 
     def physics_window(self, seconds: float) -> float:
         """One window of about ``seconds`` [s] of bare physics, ``mj_step`` with ``nstep=frame_skip`` on the env's
@@ -139,7 +168,8 @@ class _Stepper:
         :func:`~redundancy_gym.bench.timing.timed_call`) of one window of about ``seconds`` wall time."""
         steps = resets = 0
         clock = self._clock
-        controller = 0.0
+        controller = resetting = 0.0
+        self._inner_ns = 0
         cpu = time.process_time()
         start = time.perf_counter()
         while True:
@@ -148,16 +178,22 @@ class _Stepper:
             if clock is not None:
                 controller += clock.controller_time_us
             if terminated or truncated:
+                began = time.perf_counter()
                 self.env.reset()
+                resetting += time.perf_counter() - began
                 resets += 1
             if warmup and steps >= warmup:
                 break
             if not warmup and steps % 16 == 0 and time.perf_counter() - start >= seconds:
                 break
         wall = time.perf_counter() - start
+        elapsed = min(wall, time.process_time() - cpu)
         if not warmup:
             self.controller_us.append(controller / steps)
-        return steps, resets, min(wall, time.process_time() - cpu)
+            self.step_only_s.append(max(elapsed - resetting, 1e-9) / steps)
+            if clock is not None:
+                self.glue_us.append(self.step_only_s[-1] * 1e6 - self._inner_ns * 1e-3 / steps - controller / steps)
+        return steps, resets, elapsed
 
     def close(self) -> None:
         """Close the env."""
@@ -177,7 +213,10 @@ def wrapped_rates(
         try:
             timed = alternating_rounds(
                 # partial binds this iteration's steppers (a closure would read the loop's latest)
-                {"raw": partial(raw.window, seconds / rounds), "wrapped": partial(inner.window, seconds / rounds)},
+                {
+                    "raw": partial(raw.step_window, seconds / rounds),
+                    "wrapped": partial(inner.step_window, seconds / rounds),
+                },
                 rounds=rounds,
             )
         finally:
@@ -185,10 +224,7 @@ def wrapped_rates(
             inner.close()
         stats = timed.ratio("raw", "wrapped")  # time per step raw / wrapped = rate wrapped / raw
         skip = timed.warmup
-        glue = [
-            (w - r) * 1e6 - c
-            for w, r, c in zip(timed.samples["wrapped"], timed.samples["raw"], inner.controller_us[skip:], strict=True)
-        ]
+        glue = inner.glue_us[skip:]
         out[wrapped_id] = {
             "raw": raw_id,
             "raw_steps_per_second": 1.0 / timed.median("raw"),

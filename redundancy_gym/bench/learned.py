@@ -236,17 +236,24 @@ def _fmt(value: float | None, digits: int = 3) -> str:
     return f"{value:.{digits}g}"
 
 
+def _median_p99(times: Mapping[str, Any] | None) -> str:
+    """``median / p99`` of a time block of the contract, ``-`` where the report has none (analytic policies, a
+    learned one without the fast path, a table from before ``sb3_predict_us``)."""
+    return "-" if times is None else f"{_fmt(times['median'])} / {_fmt(times['p99'])}"
+
+
 def _per_period(rows: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
     """Label -> report with its step times per control period: a policy whose action holds k periods
     (``periods_per_step``, a ``WalkingCommandAction``'s ``command_period``) computes once per k periods, so its
-    times per action are divided by k to compare with the others'."""
+    times per action (``step_time_us``, and a learned policy's ``sb3_predict_us``) are divided by k to compare with
+    the others'."""
     out = {}
     for label, row in rows.items():
         k = int(row.get("periods_per_step", 1))
         report = dict(row["report"])
-        report["step_time_us"] = {
-            key: (value / k if key != "steps" else value) for key, value in report["step_time_us"].items()
-        }
+        for times in ("step_time_us", "sb3_predict_us"):
+            if times in report:
+                report[times] = {key: (value / k if key != "steps" else value) for key, value in report[times].items()}
         out[label] = report
     return out
 
@@ -325,7 +332,9 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
         f"Held-out seeds {table['seed']}-{table['seed'] + table['episodes'] - 1} ({table['episodes']} episodes "
         f"per policy; `{command}`). Step time: the policy's compute per control period (an action wrapper's "
         "controller included, the simulation excluded; an action held for k periods counts 1/k of its time) after "
-        "one warm-up episode. Training: environment steps and CPU time "
+        "one warm-up episode; a learned policy's is its network run by the compiled fast path, and SB3 predict is "
+        "the same step with stable-baselines3's own `predict` on the same observations instead. Training: "
+        "environment steps and CPU time "
         "of the run that produced the shipped model (`baselines/models/<name>.json`).",
         "",
     ]
@@ -341,6 +350,7 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
                 "pseudoenergy [rad^2/s]",
                 "return",
                 "step time median / p99 [us]",
+                "SB3 predict median / p99 [us]",
                 "training steps",
                 "training CPU [min]",
             ]
@@ -365,6 +375,7 @@ def learned_markdown(table: Mapping[str, Any], *, command: str = "redundancy-gym
                     _fmt(r["pseudoenergy"]),
                     f"{r['episode_return']:.1f}",
                     f"{_fmt(r['step_time_us']['median'])} / {_fmt(r['step_time_us']['p99'])}",
+                    _median_p99(r.get("sb3_predict_us")),
                     "-" if training is None else f"{training['env_steps']:,}",
                     "-" if training is None else f"{training['cpu_s'] / 60.0:.1f}",
                 ]

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -63,6 +64,10 @@ class EpisodeSummary:
             end; a leaf touched for 10 steps counts 10).
         obstacle_contact: whether ``info["obstacle_contact"]`` held at any step (BipedObstacles: a MuJoCo contact of
             the robot with an obstacle).
+        sb3_predict_us: for an SB3 policy on its fast path (``Sb3Policy.fast_path``), the step time SB3's own
+            ``predict`` would have given, per step [us]: ``sb3_predict`` timed on the step's observation right after
+            the policy's ``predict`` (its action unused), plus the step's action-wrapper controller time as in
+            ``step_time_us``; ``None`` for every other policy.
     """
 
     seed: int
@@ -87,6 +92,7 @@ class EpisodeSummary:
     min_self_clearance: float | None = None
     leaf_contacts: int | None = None
     obstacle_contact: bool | None = None
+    sb3_predict_us: NDArray[np.float64] | None = None
 
 
 @dataclass
@@ -122,13 +128,8 @@ class EvalReport:
             "peak_joint_speed": max(e.peak_joint_speed for e in s),
             "min_clearance": _finite_or_none(min(e.min_clearance for e in s)),
             **self._clearance_metrics(),
-            "step_time_us": {
-                "median": float(np.median(times)),
-                "p99": float(np.percentile(times, 99)),
-                "mean": float(np.mean(times)),
-                "first_step_mean": float(first.mean()),
-                "steps": int(times.size),
-            },
+            "step_time_us": _time_stats(times, first),
+            **self._sb3_metrics(),
             "compute_time_per_episode_ms": float(times.sum()) * 1e-3 / len(s),
             "episode_return": float(returns.mean()),
             "episode_return_std": float(returns.std()),
@@ -136,6 +137,16 @@ class EvalReport:
             **self._walking_metrics(),
             "per_episode": [_episode_row(e) for e in s],
         }
+
+    def _sb3_metrics(self) -> dict[str, dict[str, float | int]]:
+        """``sb3_predict_us``: the statistics of ``step_time_us`` over the step times SB3's own ``predict`` gave on
+        the same observations (:attr:`EpisodeSummary.sb3_predict_us`), for an SB3 policy on its fast path; nothing
+        for other policies, whose contract stays as it was."""
+        timed = [e.sb3_predict_us for e in self.summaries]
+        if not timed or any(t is None or t.size == 0 for t in timed):
+            return {}
+        arrays = cast(list[NDArray[np.float64]], timed)
+        return {"sb3_predict_us": _time_stats(np.concatenate(arrays), np.array([t[0] for t in arrays]))}
 
     def _task_metrics(self, steps: int) -> dict[str, float | None]:
         """Tracking error (against the env's reference path), goal error and time to the goal; each ``None``
@@ -198,6 +209,17 @@ class EvalReport:
         return write_json(self.to_json(), path)
 
 
+def _time_stats(times: NDArray[np.float64], first: NDArray[np.float64]) -> dict[str, float | int]:
+    """Median, p99 and mean of per-step times [us], the mean of the episodes' first steps and the step count."""
+    return {
+        "median": float(np.median(times)),
+        "p99": float(np.percentile(times, 99)),
+        "mean": float(np.mean(times)),
+        "first_step_mean": float(first.mean()),
+        "steps": int(times.size),
+    }
+
+
 def make_env(env_id: str, env_kwargs: dict[str, Any] | None = None, **make_kwargs: Any) -> gym.Env:
     """``gym.make`` with a clear error for an unknown id."""
     if env_id not in gym.registry:
@@ -235,10 +257,16 @@ def run_episode(
     """Run one episode from ``env.reset(seed=seed)``, timing only the policy: ``policy.predict`` plus, in an action
     wrapper, the wrapper's controller (its ``controller_time_us`` attribute); the simulation is not counted.
 
+    An SB3 policy on its fast path is timed a second time per step through SB3's own ``predict`` on the same
+    observation (its action unused: the episode is the fast path's), for
+    :attr:`EpisodeSummary.sb3_predict_us`.
+
     ``frames``: when given, ``env.render()`` output is appended after the reset and after every step.
     """
     obs, info = env.reset(seed=seed)
     controller = _controller_clock(env)
+    sb3_predict = policy.sb3_predict if getattr(policy, "fast_path", False) else None
+    sb3_times: list[float] = []
     if frames is not None:
         frames.append(_frame(env))
     rows: list[tuple[float, ...]] = []
@@ -253,10 +281,19 @@ def run_episode(
         t0 = time.perf_counter_ns()
         action, state = policy.predict(obs, state=state, episode_start=episode_start, deterministic=True)
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
+        sb3_us = 0.0
+        if sb3_predict is not None:  # after the policy's own timing, which it leaves as it was
+            t0 = time.perf_counter_ns()
+            sb3_predict(obs, state=None, episode_start=episode_start, deterministic=True)
+            sb3_us = (time.perf_counter_ns() - t0) * 1e-3
         episode_start = np.array([False])
         obs, reward, terminated, truncated, info = env.step(action)
         if controller is not None:  # an action wrapper's controller is part of the policy: its time counts too
-            elapsed_us += float(getattr(controller, CONTROLLER_TIME_ATTRIBUTE))
+            controller_us = float(getattr(controller, CONTROLLER_TIME_ATTRIBUTE))
+            elapsed_us += controller_us
+            sb3_us += controller_us
+        if sb3_predict is not None:
+            sb3_times.append(sb3_us)
         if frames is not None:
             frames.append(_frame(env))
         ret += float(reward)
@@ -294,6 +331,7 @@ def run_episode(
         peak_joint_speed=float(np.max(trace.joint_speed)),
         min_clearance=float(np.min(trace.min_clearance)),
         first_step_us=float(trace.step_time_us[0]),
+        sb3_predict_us=np.asarray(sb3_times, dtype=np.float64) if sb3_predict is not None else None,
     )
     if "tracking_error" in info:
         summary.tracking_error_max = float(np.max(trace.tracking_error))
@@ -347,7 +385,9 @@ def evaluate(
         progress: show a progress bar.
         warmup: untimed episodes (seed ``seed``) run first with the same policy object and env, so that one-time
             costs (JIT compilation, lazily built models) are not counted in the step times or as a plan-once
-            policy's per-episode solve (with ``workers``, on every worker).
+            policy's per-episode solve. With ``workers`` > 1 or Ray, any ``warmup`` > 0 is one warm-up call instead
+            (a reset with seed ``seed`` and one policy step and env step), made once before the workers fork or
+            once per spawned worker: it loads the compiled kernels (numba's cache) that the episodes use.
         workers: processes the episodes are split across (:mod:`redundancy_gym.eval.parallel`); each episode
             keeps its seed, so the report is the serial one's, timings excepted.
         retries: with ``workers`` > 1 or Ray, how many times episodes whose worker failed or died run again.
@@ -388,19 +428,27 @@ def evaluate(
         traces: list[EpisodeTrace] = []
         step_times: list[NDArray[np.float64]] = []
         for k in tqdm(range(episodes), desc=f"eval {policy} on {env_id}", disable=not progress, leave=False):
-            summary, trace = runner(seed + k)
+            summary, trace = runner.episode(seed + k)
             summaries.append(summary)
             step_times.append(trace.step_time_us)
             if keep_traces:
                 traces.append(trace)
     finally:
-        runner.env.close()
+        runner.close()
     return EvalReport(env_id, policy, episodes, seed, env_kwargs, summaries, np.concatenate(step_times), traces)
 
 
 class _EpisodeRunner:
-    """The env and the policy of an evaluation, after its warm-up episodes; called with a seed, it runs that seed's
-    episode (the policy reseeded first). The serial loop uses one; each parallel worker builds its own."""
+    """The env and the policy of an evaluation, after its warm-up; :meth:`episode` runs a seed's episode (the policy
+    reseeded first). The serial loop uses one; a parallel run builds one before its workers fork (or one per spawned
+    worker), and the workers call it (:meth:`__call__`) for compact results.
+
+    Args:
+        warmup: warm-up episodes of seed ``warmup_seed`` (``warmup_call``: one warm-up call instead, if > 0).
+        keep_traces: whether :meth:`__call__` sends every trace field back or only the step times.
+        warmup_call: warm up with one reset and one step rather than whole episodes (what loads the compiled
+            kernels: numba's cache is on disk, so a worker needs each kernel run once, not a whole episode).
+    """
 
     def __init__(
         self,
@@ -410,19 +458,49 @@ class _EpisodeRunner:
         policy_kwargs: dict[str, Any],
         warmup: int,
         warmup_seed: int,
+        *,
+        keep_traces: bool = True,
+        warmup_call: bool = False,
     ) -> None:
+        self.keep_traces = keep_traces
         self.env = make_env(env_id, env_kwargs)
         try:
             self.agent = make_policy(policy, self.env, **policy_kwargs)
-            for _ in range(warmup):
-                run_episode(self.env, self.agent, warmup_seed)
+            if warmup_call and warmup:
+                obs, _ = self.env.reset(seed=warmup_seed)
+                start = np.array([True])
+                action, _ = self.agent.predict(obs, state=None, episode_start=start, deterministic=True)
+                if getattr(self.agent, "fast_path", False):  # run_episode times SB3's own predict too: warm it
+                    self.agent.sb3_predict(obs, state=None, episode_start=start, deterministic=True)
+                self.env.step(action)
+            else:
+                for _ in range(warmup):
+                    run_episode(self.env, self.agent, warmup_seed)
         except BaseException:
             self.env.close()
             raise
 
-    def __call__(self, seed: int) -> tuple[EpisodeSummary, EpisodeTrace]:
+    def episode(self, seed: int) -> tuple[EpisodeSummary, EpisodeTrace]:
+        """The episode of ``seed``: its summary and its trace."""
         reseed_policy(self.agent, seed)
         return run_episode(self.env, self.agent, seed)
+
+    def __call__(self, seed: int) -> tuple[EpisodeSummary, NDArray[np.float64]]:
+        """The episode of ``seed`` as a worker sends it back: the summary and the trace as one array (one row per
+        :class:`EpisodeTrace` field, or only ``step_time_us`` without ``keep_traces``), one buffer to pickle."""
+        summary, trace = self.episode(seed)
+        if not self.keep_traces:
+            return summary, trace.step_time_us[np.newaxis]
+        return summary, np.stack([getattr(trace, f.name) for f in dataclasses.fields(EpisodeTrace)])
+
+    @staticmethod
+    def unpack(packed: NDArray[np.float64]) -> EpisodeTrace:
+        """The trace of a :meth:`__call__` array with every field (its rows, as views)."""
+        return EpisodeTrace(**{f.name: row for f, row in zip(dataclasses.fields(EpisodeTrace), packed, strict=True)})
+
+    def close(self) -> None:
+        """Close the env."""
+        self.env.close()
 
 
 def _evaluate_parallel(
@@ -440,18 +518,34 @@ def _evaluate_parallel(
     ray_address: str | None,
 ) -> EvalReport:
     """:func:`evaluate` on worker processes."""
-    make_env(env_id, env_kwargs).close()  # a clear error for a bad id or kwargs before any worker starts
     seeds = [seed + k for k in range(episodes)]
     where = "Ray actors" if ray_address is not None else "workers"
+    setup = functools.partial(
+        _EpisodeRunner,
+        env_id,
+        policy,
+        env_kwargs,
+        policy_kwargs,
+        warmup,
+        seed,
+        keep_traces=keep_traces,
+        warmup_call=True,
+    )
     with tqdm(
         total=episodes, desc=f"eval {policy} on {env_id} ({workers} {where})", disable=not progress, leave=False
     ) as bar:
-        setup = functools.partial(_EpisodeRunner, env_id, policy, env_kwargs, policy_kwargs, warmup, seed)
         outcomes = run_parallel(
-            setup, seeds, workers=workers, retries=retries, progress=bar.update, ray_address=ray_address
+            setup,
+            seeds,
+            workers=workers,
+            retries=retries,
+            progress=bar.update,
+            ray_address=ray_address,
+            # where the setup does not run here first (spawn, Ray): a clear error for a bad id or kwargs
+            validate=lambda: make_env(env_id, env_kwargs).close(),
         )
     summaries = [summary for summary, _ in outcomes]
-    traces = [trace for _, trace in outcomes]
+    step_row = [f.name for f in dataclasses.fields(EpisodeTrace)].index("step_time_us") if keep_traces else 0
     return EvalReport(
         env_id,
         policy,
@@ -459,8 +553,8 @@ def _evaluate_parallel(
         seed,
         env_kwargs,
         summaries,
-        np.concatenate([t.step_time_us for t in traces]),
-        traces if keep_traces else [],
+        np.concatenate([packed[step_row] for _, packed in outcomes]),
+        [_EpisodeRunner.unpack(packed) for _, packed in outcomes] if keep_traces else [],
     )
 
 

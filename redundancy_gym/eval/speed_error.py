@@ -3,7 +3,9 @@
 Every function takes evaluation-contract objects (:meth:`EvalReport.to_json`) keyed by a label naming the
 policy and its options. The error metrics a section can show are :data:`METRICS`; times are the policy's own
 compute time per step: median, p99, the amortized mean (a plan-once policy's first-step solve included) and
-the first step alone (where such a policy plans). A policy that failed every episode (success rate 0) is drawn
+the first step alone (where such a policy plans); where a report has ``sb3_predict_us`` (an SB3 policy on its
+compiled fast path), a column beside the step time gives the step with stable-baselines3's own ``predict``. A policy
+that failed every episode (success rate 0) is drawn
 hollow and left out of the "fastest / most accurate" sentence.
 """
 
@@ -118,6 +120,11 @@ def _fmt(value: float | None) -> str:
     return f"{value:.2e}"
 
 
+def _median_p99(times: Mapping[str, Any] | None) -> str:
+    """``median / p99`` of a time block of the contract [us], ``-`` where the report has none."""
+    return "-" if times is None else f"{_fmt(times['median'])} / {_fmt(times['p99'])}"
+
+
 def _runs(reports: Mapping[str, Mapping[str, Any]]) -> str:
     """Episodes and seeds of the reports, e.g. ``5 episodes per policy, seeds 0-4``."""
     runs = sorted({(int(r["episodes"]), int(r["seed"])) for r in reports.values()})
@@ -166,10 +173,13 @@ def speed_error_markdown(
     for name in rank:
         _metric(name)
     pseudo = METRICS["pseudoenergy"]
+    sb3 = any("sb3_predict_us" in r for r in reports.values())  # no column where no policy is a learned one
     headings = (
         ["policy", "success", "collision"]
         + [m.heading for m in metrics]
-        + [pseudo.heading, "step time median / p99 [us]", "step time amortized (mean) [us]", "first step (plan) [ms]"]
+        + [pseudo.heading, "step time median / p99 [us]"]
+        + (["SB3 predict median / p99 [us]"] if sb3 else [])
+        + ["step time amortized (mean) [us]", "first step (plan) [ms]"]
     )
     lines = [
         f"## {title}",
@@ -184,12 +194,9 @@ def speed_error_markdown(
         cells = (
             [label + (" (failed)" if _failed(r) else ""), f"{r['success_rate']:.2f}", f"{r['collision_rate']:.2f}"]
             + [_fmt(m.value(r)) for m in metrics]
-            + [
-                _fmt(pseudo.value(r)),
-                f"{_fmt(step['median'])} / {_fmt(step['p99'])}",
-                _fmt(step["mean"]),
-                _fmt(1e-3 * step["first_step_mean"]),
-            ]
+            + [_fmt(pseudo.value(r)), f"{_fmt(step['median'])} / {_fmt(step['p99'])}"]
+            + ([_median_p99(r.get("sb3_predict_us"))] if sb3 else [])
+            + [_fmt(step["mean"]), _fmt(1e-3 * step["first_step_mean"])]
         )
         lines.append("| " + " | ".join(cells) + " |")
     paragraph = speed_error_paragraph(reports, rank, tolerance=tolerance, time_tolerance=time_tolerance)

@@ -379,7 +379,8 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
         env: the environment the policy will act in (or a stable-baselines3 ``DummyVecEnv`` of such envs). The
             policy takes one observation of it or a batch (a VecEnv's, one controller state per env index).
         **kwargs: options of the policy (the fields of its options dataclass: ``ClikPolicyConfig`` for ``clik``,
-            ``seed`` for ``random``, ``algo`` for a ``.zip``).
+            ``seed`` for ``random``, ``algo`` and ``fast_path`` for a ``.zip``:
+            :class:`~redundancy_gym.policies.Sb3Policy`).
 
     Raises:
         PolicyError: unknown name or options, an option value the policy or its controller rejects (the message
@@ -392,9 +393,11 @@ def make_policy(name: str, env: Any, **kwargs: Any) -> Policy:
     if _is_model_file(name) and name not in _REGISTRY:
         from .sb3_policy import Sb3Policy
 
-        unknown = set(kwargs) - {"algo"}
+        unknown = set(kwargs) - {"algo", "fast_path"}
         if unknown:
-            raise PolicyError(f"unknown option(s) {', '.join(sorted(unknown))} for a .zip policy; valid: algo")
+            raise PolicyError(
+                f"unknown option(s) {', '.join(sorted(unknown))} for a .zip policy; valid: algo, fast_path"
+            )
         return Sb3Policy(name, env, **kwargs)
     try:
         return build(name, "policy", env, kwargs)

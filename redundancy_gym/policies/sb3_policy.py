@@ -1,5 +1,10 @@
 """A stable-baselines3 model loaded from a ``.zip`` as a policy.
 
+``predict(..., deterministic=True)`` runs the network's weights in a compiled kernel
+(:mod:`~redundancy_gym.policies.mlp_inference`, a few microseconds instead of SB3's 95-130 us of per-call
+overhead) where the model is a plain MLP (:func:`mlp_inference_from_sb3` reads its weights); :attr:`Sb3Policy.fast_path`
+says whether it is, and :meth:`Sb3Policy.sb3_predict` is SB3's own ``predict`` (to time against it).
+
 A ``.zip`` is code, not data: stable-baselines3 unpickles the objects it holds (the policy class, schedules,
 spaces), and unpickling can run any code the file's author put there. Loading one from outside the package's
 shipped models (:data:`~redundancy_gym.policies.shipped_models.SHIPPED_MODELS_DIR`) logs where it came from, once
@@ -17,10 +22,11 @@ from numpy.typing import NDArray
 
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .exceptions import PolicyError
+from .mlp_inference import MlpInference
 from .options import env_name
 from .shipped_models import SHIPPED_MODELS_DIR
 
-__all__ = ["SB3_ALGOS", "Sb3Policy", "is_shipped_model_file"]
+__all__ = ["SB3_ALGOS", "Sb3Policy", "is_shipped_model_file", "mlp_inference_from_sb3"]
 
 SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
 
@@ -50,19 +56,35 @@ def _announce_origin(path: Path) -> None:
 
 
 class Sb3Policy:
-    """A stable-baselines3 model loaded from a ``.zip``; ``predict`` is the model's own.
+    """A stable-baselines3 model loaded from a ``.zip``; ``predict`` gives the model's actions.
+
+    A deterministic ``predict`` of a plain MLP (PPO, A2C, SAC, TD3, DDPG on a ``Box`` observation) runs
+    :attr:`inference`, the network's weights in one compiled kernel call, instead of SB3's ``predict``: the same
+    actions to within torch's float32 rounding (:mod:`~redundancy_gym.policies.mlp_inference`), in a few
+    microseconds. A stochastic ``predict``, and every ``predict`` of another architecture, is SB3's.
 
     Args:
         path: the ``.zip`` written by ``model.save``. Loading it can run code from the file (SB3 unpickles its
             objects): load only files you trust; one from outside the shipped models is logged with its path.
         env: the environment (checked against the model's spaces by SB3).
         algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG when omitted.
+        fast_path: run a plain MLP's deterministic ``predict`` on the compiled fast path (False: SB3's always, for
+            torch's float32 actions to the last bit: on a biped, a difference of 1e-6 can move a fall by steps).
+
+    Attributes:
+        model: the loaded SB3 model; algo: its class name.
+        inference: the fast path, or None.
+        fast_path: whether a deterministic ``predict`` runs :attr:`inference`.
+        fast_path_reason: the network the fast path runs (``"PPO MLP 20 -> 64x64 -> 4 (tanh)"``), or why there is
+            none (``"observation space Dict (only a Box is a plain MLP's input)"``); logged at INFO level then.
     """
 
-    def __init__(self, path: str | Path, env: Any = None, algo: str | None = None) -> None:
+    def __init__(self, path: str | Path, env: Any = None, algo: str | None = None, fast_path: bool = True) -> None:
         path = Path(path)
         if not path.is_file():
             raise PolicyError(f"policy file not found: {path}")
+        if not isinstance(fast_path, bool):
+            raise PolicyError(f"fast_path={fast_path!r}; valid: True, False")
         try:
             sb3 = import_stable_baselines3()
         except ImportError as exc:  # the 'learn' extra
@@ -84,6 +106,14 @@ class Sb3Policy:
             raise PolicyError(f"{path} is not a stable-baselines3 model of {', '.join(names)} ({'; '.join(errors)})")
         if env is not None:
             self._check_spaces(path, env)
+        self.inference: MlpInference | None
+        if fast_path:
+            self.inference, self.fast_path_reason = mlp_inference_from_sb3(self.model)
+        else:
+            self.inference, self.fast_path_reason = None, "turned off (fast_path=False)"
+        self.fast_path = self.inference is not None
+        if self.inference is None and fast_path:
+            _LOG.info("%s: no fast path (%s); predict runs stable-baselines3's", path.name, self.fast_path_reason)
 
     def _check_spaces(self, path: Path, env: Any) -> None:
         """A model trained on another env fails here, naming both, instead of at its first ``predict``."""
@@ -104,5 +134,147 @@ class Sb3Policy:
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[NDArray[np.floating], Any]:
-        """The SB3 model's action."""
+        """The model's action for one observation, or its actions for a batch (``(n, *observation_shape)``), and
+        ``state`` back (SB3's contract; a plain MLP has no state): :attr:`inference`'s where
+        :attr:`fast_path` and ``deterministic``, else SB3's :meth:`sb3_predict`.
+
+        Raises:
+            PolicyError: on the fast path, an observation of neither shape (SB3 raises a ValueError).
+        """
+        if deterministic and self.inference is not None:
+            return self.inference(observation), state
+        return self.sb3_predict(observation, state, episode_start, deterministic)
+
+    def sb3_predict(
+        self,
+        observation: NDArray[np.floating],
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.floating], Any]:
+        """SB3's own ``model.predict``, whatever the fast path (an evaluation times both: ``sb3_predict_us``)."""
         return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
+
+
+def _sequential(module: Any, where: str) -> tuple[list[tuple[Any, Any, str]] | None, str]:
+    """The ``(weight, bias, activation)`` layers of a torch ``Sequential`` of ``Linear`` layers, each followed by
+    at most one ``Tanh`` or ``ReLU``, or None and what else it holds."""
+    from torch import nn
+
+    supported: dict[type, str] = {nn.Tanh: "tanh", nn.ReLU: "relu"}
+    if type(module) is not nn.Sequential:
+        return None, f"{where} is a {type(module).__name__}, not a Sequential of Linear layers"
+    layers: list[tuple[Any, Any, str]] = []
+    for child in module:
+        if type(child) is nn.Linear:
+            if child.bias is None:
+                return None, f"{where} has a Linear layer without bias"
+            layers.append((child.weight, child.bias, "identity"))
+        elif type(child) in supported and layers and layers[-1][2] == "identity":
+            layers[-1] = (*layers[-1][:2], supported[type(child)])
+        else:
+            return None, (
+                f"{where} holds {type(child).__name__} (supported: Linear, each followed by at most one Tanh or ReLU)"
+            )
+    return layers, ""
+
+
+def _linear(module: Any, where: str) -> tuple[list[tuple[Any, Any, str]] | None, str]:
+    """The one layer of a torch ``Linear`` with bias, or None and what it is instead."""
+    from torch import nn
+
+    if type(module) is not nn.Linear or module.bias is None:
+        return None, f"{where} is a {type(module).__name__}, not a Linear layer with bias"
+    return [(module.weight, module.bias, "identity")], ""
+
+
+def _network(model: Any) -> tuple[list[tuple[Any, Any, str]] | None, bool, str]:
+    """The actor's layers of ``model``'s policy and whether a ``tanh`` follows them, or None and why not."""
+    from stable_baselines3.common.distributions import DiagGaussianDistribution, SquashedDiagGaussianDistribution
+    from stable_baselines3.common.policies import ActorCriticPolicy
+    from stable_baselines3.common.torch_layers import FlattenExtractor, MlpExtractor
+    from stable_baselines3.sac.policies import Actor as SacActor
+    from stable_baselines3.sac.policies import SACPolicy
+    from stable_baselines3.td3.policies import Actor as Td3Actor
+    from stable_baselines3.td3.policies import TD3Policy
+
+    policy = model.policy
+    kind = type(policy)
+    if kind is ActorCriticPolicy:
+        if type(policy.pi_features_extractor) is not FlattenExtractor:
+            return None, False, f"features extractor {type(policy.pi_features_extractor).__name__} (not Flatten)"
+        if type(policy.mlp_extractor) is not MlpExtractor:
+            return None, False, f"mlp_extractor {type(policy.mlp_extractor).__name__} (not SB3's MlpExtractor)"
+        if type(policy.action_dist) is not DiagGaussianDistribution:
+            # gSDE, categorical and other distributions have another mode (and state-dependent noise)
+            return None, False, f"action distribution {type(policy.action_dist).__name__} (not DiagGaussian)"
+        body, why = _sequential(policy.mlp_extractor.policy_net, "mlp_extractor.policy_net")
+        head, why_head = _linear(policy.action_net, "action_net")
+        if body is None or head is None:
+            return None, False, why or why_head
+        return body + head, False, ""
+    if kind is SACPolicy:
+        actor = policy.actor
+        if type(actor) is not SacActor or actor.use_sde:
+            return None, False, "a SAC actor with state-dependent exploration (gSDE) or of its own class"
+        if type(actor.features_extractor) is not FlattenExtractor:
+            return None, False, f"features extractor {type(actor.features_extractor).__name__} (not Flatten)"
+        if type(actor.action_dist) is not SquashedDiagGaussianDistribution:
+            return None, False, f"action distribution {type(actor.action_dist).__name__} (not SquashedDiagGaussian)"
+        body, why = _sequential(actor.latent_pi, "actor.latent_pi")
+        head, why_head = _linear(actor.mu, "actor.mu")
+        if body is None or head is None:
+            return None, False, why or why_head
+        return body + head, True, ""
+    if kind is TD3Policy:  # DDPG's too
+        actor = policy.actor
+        if type(actor) is not Td3Actor:
+            return None, False, f"a TD3 actor of its own class {type(actor).__name__}"
+        if type(actor.features_extractor) is not FlattenExtractor:
+            return None, False, f"features extractor {type(actor.features_extractor).__name__} (not Flatten)"
+        layers, why = _sequential(actor.mu, "actor.mu")
+        return layers, False, why
+    return None, False, f"policy class {kind.__name__} (supported: ActorCriticPolicy, SACPolicy, TD3Policy MLPs)"
+
+
+def mlp_inference_from_sb3(model: Any) -> tuple[MlpInference | None, str]:
+    """The fast path of ``model`` (a loaded SB3 ``PPO``, ``A2C``, ``SAC``, ``TD3`` or ``DDPG``): its deterministic
+    actor as an :class:`MlpInference` and a description of the network, or ``None`` and why it is no plain MLP
+    on a ``Box`` observation (then ``model.predict`` is the only way to its actions).
+
+    The weights are copied: training the model further does not change the returned network.
+    """
+    from gymnasium import spaces
+    from stable_baselines3.common.preprocessing import is_image_space
+
+    policy = getattr(model, "policy", None)
+    obs_space = getattr(model, "observation_space", None)
+    action_space = getattr(model, "action_space", None)
+    if policy is None:
+        return None, f"{type(model).__name__} has no SB3 policy"
+    if not isinstance(obs_space, spaces.Box):
+        return None, f"observation space {type(obs_space).__name__} (only a Box is a plain MLP's input)"
+    if not isinstance(action_space, spaces.Box):
+        return None, f"action space {type(action_space).__name__} (only a Box has a continuous mean action)"
+    if policy.normalize_images and is_image_space(obs_space):
+        return None, "image observations (scaled by 1/255 and usually fed to a CNN)"
+    layers, squash, why = _network(model)
+    if layers is None:
+        return None, why
+    dtypes = {str(p.dtype) for w, b, _ in layers for p in (w, b)}
+    if dtypes != {"torch.float32"}:
+        return None, f"parameters of dtype {', '.join(sorted(dtypes))} (the kernel computes in float32)"
+    arrays = [(w.detach().cpu().numpy(), b.detach().cpu().numpy(), act) for w, b, act in layers]
+    try:
+        inference = MlpInference(
+            arrays,
+            obs_space.shape,
+            action_space.low,
+            action_space.high,
+            squash=squash,
+            unscale=bool(policy.squash_output),
+        )
+    except PolicyError as exc:  # a network whose sizes do not fit its spaces: SB3's predict fails on it too
+        return None, str(exc)
+    algo = type(model).__name__
+    return inference, f"{algo} {inference.description}" + (", tanh-squashed" if squash else "")

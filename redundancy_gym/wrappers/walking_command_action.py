@@ -191,7 +191,8 @@ class WalkingCommandAction(ReferenceActionWrapper):
             self._obs = np.asarray(obs, dtype=np.float64)
             self._periods += 1
             total += float(reward)
-            _hold(held, info)
+            if self.config.command_period > 1:  # one period's info is its own sum, any, max and min
+                _hold(held, info)
             if limit is not None and self._periods >= limit:
                 truncated = True  # the time limit counts this wrapper's steps, each command_period periods long
             if terminated or truncated:

@@ -3,15 +3,22 @@ raises or dies fails its episodes by seed, and --retries runs them again."""
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import json
 import os
+import sys
+import types
 from pathlib import Path
+from typing import Any, cast
 
+import numpy as np
 import pytest
 
 import redundancy_gym.eval.parallel as parallel
 from redundancy_gym.cli import main
 from redundancy_gym.eval.evaluate import evaluate
+from redundancy_gym.eval.exceptions import EvalError
 from redundancy_gym.eval.parallel import ParallelEvalError
 
 TIMINGS = ("step_time_us", "compute_time_per_episode_ms")
@@ -39,6 +46,102 @@ def test_workers_give_the_serial_json(env_id: str, policy: str, episodes: int, e
     ).to_json()
     assert _without_timings(split) == _without_timings(serial)
     assert split["step_time_us"]["steps"] == serial["step_time_us"]["steps"]
+
+
+@pytest.mark.parametrize(
+    ("env_id", "policy", "episodes", "env_kwargs"),
+    [
+        ("redundancy_gym/AgriReach-v0", "clik", 9, {}),  # chunks of several episodes, then single ones
+        ("redundancy_gym/PlanarReach-v0", "random", 4, {}),
+    ],
+)
+def test_workers_with_a_warmup_and_traces_give_the_serial_json_and_traces(
+    env_id: str, policy: str, episodes: int, env_kwargs: dict
+) -> None:
+    """warmup=1 as bench and demo run it: the serial loop's warm-up episode and the workers' warm-up call leave
+    every episode as its seed makes it; the traces sent back packed are the serial ones, step times excepted."""
+    kwargs: dict[str, Any] = dict(
+        episodes=episodes, seed=3, env_kwargs=env_kwargs, progress=False, warmup=1, keep_traces=True
+    )
+    serial = evaluate(env_id, policy, **kwargs)
+    split = evaluate(env_id, policy, workers=2, **kwargs)
+    assert _without_timings(split.to_json()) == _without_timings(serial.to_json())
+    assert len(split.traces) == len(serial.traces) == episodes
+    for a, b in zip(split.traces, serial.traces, strict=True):
+        for f in dataclasses.fields(a):
+            if f.name != "step_time_us":
+                np.testing.assert_array_equal(getattr(a, f.name), getattr(b, f.name), err_msg=f.name)
+        assert a.step_time_us.shape == b.step_time_us.shape and np.all(a.step_time_us > 0)
+    assert split.step_times_us.shape == serial.step_times_us.shape
+    without = evaluate(env_id, policy, workers=2, **{**kwargs, "keep_traces": False})
+    assert without.traces == [] and without.step_times_us.shape == serial.step_times_us.shape
+
+
+def test_chunks_are_guided_consecutive_and_cover_every_seed_once() -> None:
+    seeds = list(range(5, 1005))
+    work = parallel.chunks(seeds, 2)
+    assert [s for chunk in work for s in chunk] == seeds
+    sizes = [len(chunk) for chunk in work]
+    assert sizes[0] == 1000 // (parallel.CHUNKS_PER_WORKER * 2)
+    assert sizes == sorted(sizes, reverse=True) and sizes[-parallel.CHUNKS_PER_WORKER :] == [1] * 4
+    assert len(work) <= 60  # tens of messages for 1000 episodes, not 1000
+    assert parallel.chunks([1, 2, 3], 8) == [[1], [2], [3]] and parallel.chunks([], 2) == []
+
+
+def _whose(setup_pid: int, seed: int) -> tuple[int, int, int]:
+    return seed, setup_pid, os.getpid()
+
+
+class _Closing:
+    """A setup's result with a close method, recording in the parent that it was closed."""
+
+    def __init__(self, closed: list[int]) -> None:
+        self.closed = closed
+
+    def __call__(self, seed: int) -> tuple[int, int, int]:
+        return _whose(-1, seed)
+
+    def close(self) -> None:
+        self.closed.append(os.getpid())
+
+
+def test_forked_workers_inherit_the_setup_run_once_here_and_it_is_closed_after(monkeypatch) -> None:
+    calls: list[int] = []
+    closed: list[int] = []
+
+    def setup() -> _Closing:
+        calls.append(os.getpid())
+        return _Closing(closed)
+
+    progress: list[int] = []
+    seeds = list(range(30))
+    out = parallel.run_parallel(setup, seeds, workers=2, start_method="fork", progress=progress.append)
+    assert calls == [os.getpid()] and closed == [os.getpid()]  # once, here; closed here after the run
+    assert [seed for seed, _, _ in out] == seeds
+    assert os.getpid() not in {pid for _, _, pid in out}  # the episodes ran in the workers
+    assert sum(progress) == len(seeds) and len(progress) == len(parallel.chunks(seeds, 2)) < len(seeds)
+
+
+def _setup_that_loads_torch(parent_pid: int):
+    if os.getpid() == parent_pid:  # here as a policy's import would: the run must not fork after this
+        sys.modules["torch"] = cast(types.ModuleType, types.SimpleNamespace(set_num_threads=lambda n: None))
+    return functools.partial(_whose, os.getpid())
+
+
+def test_a_setup_that_loads_torch_here_makes_the_workers_spawn_and_set_up_themselves(monkeypatch) -> None:
+    monkeypatch.delitem(sys.modules, "torch", raising=False)
+    monkeypatch.setattr(parallel, "_start_method", lambda: "spawn" if "torch" in sys.modules else "fork")
+    try:
+        out = parallel.run_parallel(functools.partial(_setup_that_loads_torch, os.getpid()), [1, 2, 3], workers=2)
+    finally:
+        sys.modules.pop("torch", None)
+    assert [seed for seed, _, _ in out] == [1, 2, 3]
+    assert all(setup_pid == pid != os.getpid() for _, setup_pid, pid in out)  # set up in each spawned worker
+
+
+def test_an_unknown_start_method_is_named() -> None:
+    with pytest.raises(EvalError, match="start_method must be one of .*fork.*, got 'threads'"):
+        parallel.run_parallel(lambda: int, [1], workers=2, start_method="threads")
 
 
 def _dies_once(marker: Path, seed_to_kill: int):
