@@ -46,9 +46,9 @@ import numpy as np
 from gymnasium import spaces
 from tqdm.auto import tqdm
 
+from ..eval.evaluate import controller_clock
 from ..eval.machine import finish_machine_info, machine_info
 from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS
-from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
 from .exceptions import BenchError
 from .timing import CLOCK, alternating_rounds
 
@@ -83,16 +83,6 @@ class _ControlPeriod(Protocol):
         """Seconds of simulated time per step [s]."""
 
 
-def _controller_clock(env: gym.Env) -> Any:
-    """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
-    layer: gym.Env | None = env
-    while layer is not None:
-        if CONTROLLER_TIME_ATTRIBUTE in vars(layer):
-            return layer
-        layer = getattr(layer, "env", None)
-    return None
-
-
 class _Stepper:
     """One env stepped with the zero action in timed windows, resetting when an episode ends; keeps each window's
     steps, resets and duration."""
@@ -106,7 +96,7 @@ class _Stepper:
         base = self.env.unwrapped
         self.dt = float(cast(_ControlPeriod, base).dt)
         self._physics = (base.model, base.data, int(base.frame_skip))  # type: ignore[attr-defined]
-        self._clock = _controller_clock(self.env)
+        self._clock = controller_clock(self.env)
         self.windows: list[tuple[int, int, float]] = []
         self.controller_us: list[float] = []
         self.step_only_s: list[float] = []

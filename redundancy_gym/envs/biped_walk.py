@@ -571,11 +571,29 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             self._self_clearance_hint = max(clearance, 0.0) + 0.05
         self._mirror_clearance = other
         pressure = ContactPressure(cop, cop_valid, zmp, bool(zmp_valid), normal)
-        x = float(d.qpos[0])
+        return self._metrics_info(
+            forward_speed, pressure, tilt, clearance, (moments, angmom, com), (margin, energy * self._dt, peak)
+        )
+
+    def _metrics_info(
+        self,
+        forward_speed: float,
+        pressure: ContactPressure,
+        tilt: float,
+        clearance: float,
+        loads: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]],
+        joints: tuple[float, float, float],
+    ) -> dict[str, Any]:
+        """The step's ``info`` from its numbers, both backends' (``loads``: contact moments [N m], angular
+        momentum [kg m^2/s], CoM [m]; ``joints``: limit margin [rad], pseudoenergy, peak speed [rad/s]); advances
+        the episode's fall and self-collision flags."""
+        d = self.data
+        moments, angmom, com = loads
+        margin, pseudoenergy, peak = joints
         fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
         self._fell = self._fell or fell
         self._self_collided = self._self_collided or clearance <= 0.0
-        distance = x - self._start_x
+        distance = float(d.qpos[0]) - self._start_x
         mean_speed = distance / self._time if self._time > 0.0 else 0.0
         ok = not (self._fell or self._self_collided)
         speed = float(forward_speed)
@@ -595,12 +613,12 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             "com": com,
             "min_self_clearance": clearance,
             "min_clearance": clearance,
-            "self_collision": clearance <= 0.0,
-            "collision": clearance <= 0.0,
+            "self_collision": bool(clearance <= 0.0),
+            "collision": bool(clearance <= 0.0),
             "fell": fell,
             "torso_tilt": tilt,
             "joint_limit_margin": margin,
-            "pseudoenergy": energy * self._dt,
+            "pseudoenergy": pseudoenergy,
             "peak_joint_speed": peak,
             "speed_error": abs(speed - self._target_speed),
             "mean_speed_error": mean_error,
@@ -616,50 +634,18 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         pressure = contact_pressure(m, d, self._floor, self._foot_of_geom)
         torso = d.xmat[self._torso].reshape(3, 3)
         tilt = float(np.arccos(np.clip(torso[2, 2], -1.0, 1.0)))
-        fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
         clearance = self._self_clearance()
-        self._fell = self._fell or fell
-        self._self_collided = self._self_collided or clearance <= 0.0
-        distance = float(d.qpos[0]) - self._start_x
         mujoco.mj_subtreeVel(m, d)
-        mean_speed = distance / self._time if self._time > 0.0 else 0.0
-        ok = not (self._fell or self._self_collided)
         moments = np.array(
             [
                 d.site_xmat[s].reshape(3, 3) @ -d.sensordata[a : a + 3]
                 for s, a in zip(self._ankle_sites, self._torque_adr, strict=False)
             ]
         )
-        return {
-            "time": self._time,
-            "forward_speed": float(forward_speed),
-            "lateral_speed": float(d.qvel[1]),
-            "distance": distance,
-            "cop": pressure.cop,
-            "cop_valid": pressure.cop_valid,
-            "zmp": pressure.zmp,
-            "zmp_valid": pressure.zmp_valid,
-            "normal_force": pressure.normal,
-            "contact_moments": moments,
-            "angular_momentum": d.subtree_angmom[self._pelvis].copy(),
-            "com": d.subtree_com[self._pelvis].copy(),
-            "min_self_clearance": clearance,
-            "min_clearance": clearance,
-            "self_collision": bool(clearance <= 0.0),
-            "collision": bool(clearance <= 0.0),
-            "fell": fell,
-            "torso_tilt": tilt,
-            "joint_limit_margin": float(np.min(np.minimum(d.qpos[7:] - self._lower, self._upper - d.qpos[7:]))),
-            "pseudoenergy": float(qdot @ qdot) * self.dt,
-            "peak_joint_speed": float(np.max(np.abs(qdot))),
-            "speed_error": abs(float(forward_speed) - self._target_speed),
-            "mean_speed_error": abs(mean_speed - self._target_speed),
-            "is_success": bool(
-                ok
-                and self._time > 0.0
-                and abs(mean_speed - self._target_speed) <= max(0.1 * self._target_speed, SUCCESS_SPEED_TOLERANCE)
-            ),
-        }
+        angmom, com = d.subtree_angmom[self._pelvis].copy(), d.subtree_com[self._pelvis].copy()
+        margin = float(np.min(np.minimum(d.qpos[7:] - self._lower, self._upper - d.qpos[7:])))
+        joints = (margin, float(qdot @ qdot) * self.dt, float(np.max(np.abs(qdot))))
+        return self._metrics_info(forward_speed, pressure, tilt, clearance, (moments, angmom, com), joints)
 
     def _self_clearance(self) -> float:
         """Smallest SSV distance between non-adjacent robot volumes [m] (capsules -> LSS, spheres -> PSS)."""

@@ -22,7 +22,7 @@ from .exceptions import EvalError
 from .json_writer import write_json
 from .parallel import run_parallel
 
-__all__ = ["EpisodeTrace", "EvalReport", "evaluate", "format_report", "make_env", "run_episode"]
+__all__ = ["EpisodeTrace", "EvalReport", "controller_clock", "evaluate", "format_report", "make_env", "run_episode"]
 
 
 @dataclass
@@ -235,7 +235,7 @@ def reseed_policy(policy: Any, seed: int) -> None:
         reseed(seed)
 
 
-def _controller_clock(env: gym.Env) -> Any:
+def controller_clock(env: gym.Env) -> Any:
     """The wrapper in ``env``'s chain that times its controller (``controller_time_us``), or None."""
     layer: gym.Env | None = env
     while layer is not None:
@@ -264,7 +264,7 @@ def run_episode(
     ``frames``: when given, ``env.render()`` output is appended after the reset and after every step.
     """
     obs, info = env.reset(seed=seed)
-    controller = _controller_clock(env)
+    controller = controller_clock(env)
     sb3_predict = policy.sb3_predict if getattr(policy, "fast_path", False) else None
     sb3_times: list[float] = []
     if frames is not None:
