@@ -323,6 +323,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         self._max_x_sorted = sorted(high_x.tolist())
         self._blocks: dict[int, NDArray[np.float64]] = {}
         self._mirror_batch = None
+        self._bound = None  # the compiled step's arguments name the mirror batch: made again at first use
         if not volumes:
             self._obstacle_batch: PairBatch | None = None
             return
@@ -388,12 +389,13 @@ class BipedObstaclesEnv(BipedWalkEnv):
     def _step_mujoco_simulation(self, ctrl: NDArray[np.float64], n_frames: int) -> None:
         """Step the physics as MuJoCo's ``nstep`` does, testing the contacts of every physics step: a contact
         within one control step must not go unseen because the last physics step has left it."""
-        self.data.ctrl[:] = ctrl
+        model, data = self.model, self.data
+        data.ctrl[:] = ctrl
         touched = False
         for _ in range(n_frames):
-            mujoco.mj_step(self.model, self.data)
+            mujoco.mj_step(model, data)
             touched = touched or self._touching_obstacle()
-        mujoco.mj_rnePostConstraint(self.model, self.data)
+        mujoco.mj_rnePostConstraint(model, data)
         self._touched = touched
 
     def _terminated(self, metrics: dict[str, Any]) -> bool:

@@ -237,6 +237,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     # what the policies and wrappers may rely on (redundancy_gym.policies.CAPABILITY_ATTRIBUTES)
     CAPABILITIES = frozenset({"biped"})
     _self_clearance_hint: float  # [m] the bounding-sphere margin of the next compiled self-clearance
+    _mirror_clearance_hint: float  # [m] that of the mirror batch's clearance
+    _bound: tuple[Any, ...] | None  # _compiled_arguments of the model's data, made at first use
 
     def __init__(
         self,
@@ -378,7 +380,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     def step(  # type: ignore[override]
         self, action: NDArray[np.floating]
     ) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
-        self._dt = dt = self.dt  # a property reading the model: once per step
+        dt = self._dt  # MujocoEnv.dt reads the model: once per episode, at reset
         if self._backend == "python":
             action = as_action(action, len(BIPED_JOINTS))
             targets = self.targets_from_action(action)
@@ -500,7 +502,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         if self._backend == "python":
             obs = np.concatenate([d.qpos, d.qvel, d.sensordata[self._sensors], [self._target_speed, self._time], tail])
         else:
-            obs = biped_observation(d.qpos, d.qvel, d.sensordata, self._sensors, self._target_speed, self._time, tail)
+            qpos, qvel, sensordata, sensors = self._compiled_arguments()[2]
+            obs = biped_observation(qpos, qvel, sensordata, sensors, self._target_speed, self._time, tail)
         if self._noise is not None:
             index, std = self._noise
             obs[index] += std * self.np_random.standard_normal(index.size)
@@ -528,42 +531,22 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
     def _metrics(self, forward_speed: float) -> dict[str, Any]:
         if self._backend == "python":
             return self._metrics_python(forward_speed)
-        m, d = self.model, self.data
-        mujoco.mj_subtreeVel(m, d)
-        mirror = self._mirror_batch
-        own_address, other_address = self._batch.address, (0, 0, 0) if mirror is None else mirror.address
+        data, state, _, own, other = self._compiled_arguments()
+        mujoco.mj_subtreeVel(self.model, data)
+        contacts = data.contact
         (tilt, margin, energy, peak, moments, angmom, com, cop, cop_valid, zmp, zmp_valid, normal, clearance, other) = (
             biped_metrics(
+                state,
                 (
-                    d.qpos,
-                    d.qvel,
-                    self._lower,
-                    self._upper,
-                    d.xmat[self._torso],
-                    d.site_xmat,
-                    self._ankle_sites_array,
-                    d.sensordata,
-                    self._torque_adr_array,
-                    d.geom_xpos,
-                    d.geom_xmat,
-                    self._ssv_geoms,
-                    self._half_length,
-                    self._batch.vertices,
-                    self._batch.vertices if mirror is None else mirror.vertices,
-                    d.subtree_angmom,
-                    d.subtree_com,
-                    self._pelvis,
-                ),
-                (
-                    d.contact.dist,
-                    d.ncon,
+                    contacts.dist,
+                    data.ncon,
                     self._contact_layout,
-                    d.efc_force,
-                    d.efc_type,
+                    data.efc_force,
+                    data.efc_type,
                     self._foot_of_geom,
                     self._floor,
                 ),
-                (*own_address, self._self_clearance_hint, *other_address, self._mirror_clearance_hint),
+                (*own, self._self_clearance_hint, *other, self._mirror_clearance_hint),
             )
         )
         # exact: only the pairs near the last step's clearances were computed (the limbs move little in a step)
@@ -574,6 +557,41 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         return self._metrics_info(
             forward_speed, pressure, tilt, clearance, (moments, angmom, com), (margin, energy * self._dt, peak)
         )
+
+    def _compiled_arguments(self) -> tuple[Any, ...]:
+        """The compiled step's arguments that stay while ``data`` does: ``(data, biped_metrics' state tuple,
+        biped_observation's arrays, the robot batch's address, the mirror batch's)``, made once per MjData (each
+        attribute read of an MjData makes a new array view: some twenty a step otherwise)."""
+        bound = self._bound
+        if bound is not None and bound[0] is self.data:
+            return bound
+        d = self.data
+        mirror = self._mirror_batch
+        state = (
+            d.qpos,
+            d.qvel,
+            self._lower,
+            self._upper,
+            d.xmat[self._torso],
+            d.site_xmat,
+            self._ankle_sites_array,
+            d.sensordata,
+            self._torque_adr_array,
+            d.geom_xpos,
+            d.geom_xmat,
+            self._ssv_geoms,
+            self._half_length,
+            self._batch.vertices,
+            self._batch.vertices if mirror is None else mirror.vertices,
+            d.subtree_angmom,
+            d.subtree_com,
+            self._pelvis,
+        )
+        observation = (d.qpos, d.qvel, d.sensordata, self._sensors)
+        other = (0, 0, 0) if mirror is None else mirror.address
+        bound = (d, state, observation, self._batch.address, other)
+        self._bound = bound
+        return bound
 
     def _metrics_info(
         self,
@@ -722,6 +740,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         # a pair batch holding the robot's volumes first (BipedObstacles' obstacles): the compiled step places them
         # there too and returns its smallest distance from this margin [m]
         self._mirror_batch: PairBatch | None = None
+        self._bound = None
         self._mirror_clearance_hint = 0.25
         self._mirror_clearance = math.inf
         self._self_clearance_hint = 0.05  # [m] the first bounding-sphere margin of the compiled self-clearance
