@@ -85,10 +85,12 @@ def test_compiled_step_equals_the_python_reference(case: str) -> None:
     assert compiled.unwrapped._backend == "compiled"  # the default
     rng = np.random.default_rng(7)
     seen: set[str] = set()
+    datas = []  # a random course's reset makes a new model and data: the kernels' bound arguments must follow
     try:
         for episode in range(2):
             old, old_info = reference.reset(seed=episode)
             new, new_info = compiled.reset(seed=episode)
+            datas.append(compiled.unwrapped.data)
             np.testing.assert_array_equal(new, old)
             for step in range(300):
                 action = amplitude * rng.uniform(-1.0, 1.0, reference.action_space.shape)
@@ -106,6 +108,8 @@ def test_compiled_step_equals_the_python_reference(case: str) -> None:
     finally:
         reference.close()
         compiled.close()
+    if case == "obstacles random":
+        assert datas[0] is not datas[1], "the second course must be another model, to exercise the rebinding"
     if case == "obstacle ahead":
         assert "obstacle_contact" in seen, "the episode must exercise the obstacle contacts it compares"
 
