@@ -154,7 +154,9 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         self._reference_action: NDArray[Any] | None = None
         self._reference_time_us = 0.0
         self.controller_time_us = 0.0
-        """Compute time of the reference action applied in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``)."""
+        """Compute time of the reference action computed in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``): the
+        next step's, from the step's observation, so that it is the controller time spent inside the step call
+        (the one computed in ``reset`` is the reset's)."""
         self._starting = True
 
     def _observe(self, obs: NDArray[np.floating], starting: bool) -> NDArray[np.floating]:
@@ -178,9 +180,10 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
             raise WrapperError("ResidualAction: call reset() before step()")
         a = check_action(action, self.action_space, "ResidualAction")
         reference = self._reference_action
-        self.controller_time_us = self._reference_time_us  # computed after the previous step, applied in this one
         # in the env's dtype, so that a = 0 gives the reference action bit for bit
         applied, residual = residual_applied(reference, self._scaled_range, a, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(applied)
         info = {**info, "reference_action": reference, "residual_action": residual}
-        return self._observe(obs, False), reward, terminated, truncated, info
+        obs = self._observe(obs, False)
+        self.controller_time_us = self._reference_time_us
+        return obs, reward, terminated, truncated, info

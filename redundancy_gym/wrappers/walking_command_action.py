@@ -176,10 +176,12 @@ class WalkingCommandAction(ReferenceActionWrapper):
         if self._obs is None:
             raise WrapperError("WalkingCommandAction: call reset() before step()")
         forward, lateral, yaw_rate = self.velocity(check_action(action, self.action_space, "WalkingCommandAction"))
+        began = time.perf_counter_ns()
+        # the controller's own work: a new command replans the walking pattern's coming steps
         self.reference.controller.set_command(forward, lateral, yaw_rate)
+        elapsed_ns = time.perf_counter_ns() - began
         total = 0.0
         adjusted = False
-        elapsed_ns = 0
         limit = self._period_limit() if self.config.command_period > 1 else None
         held: dict[str, Any] = {}  # the per-period info entries summed / worst over the periods of this action
         for _ in range(self.config.command_period):
