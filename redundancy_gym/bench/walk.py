@@ -23,7 +23,11 @@ controller (one walk each per round, the order reversed every other round, after
 (``controller``: median and p99 over their steps, and the start); ``controller_vs_lola`` relates its median to the
 548 us per cycle that Lola's whole controller took (a 2.33 GHz Core2 Duo; a published figure, not measured here;
 ``controller_vs_lola_rounds``: the same per round). ``zmp_rms_mm``: in those walks, the rms distance of the
-measured ZMP (the env's contact pressure, in the plan's frame) from the pattern's reference ZMP, per controller.
+measured ZMP (the env's contact pressure, in the plan's frame) from the pattern's reference ZMP, per controller;
+``zmp_rms_by_phase_mm`` the same per gait phase (single and double support, and the 20 ms around each touchdown and
+lift-off; with each phase's share of the periods and of the squared error); ``zmp_plan_margin_mm`` and
+``zmp_reference_margin_mm`` the smallest signed distance [mm] of the planned (LIPM) ZMP and of the reference ZMP
+inside the planned support polygon (the soles on the ground; negative: outside), over the periods of those walks.
 
 ``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
 0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
@@ -34,14 +38,20 @@ distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_c
 from __future__ import annotations
 
 from functools import partial
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from ..controllers import CollisionObjective
-from ..controllers.walking import CompiledWholeBodyIk, WholeBodyIkResult
+from ..controllers.walking import (
+    CompiledWholeBodyIk,
+    WalkingPattern,
+    WholeBodyIkResult,
+    support_margin,
+    support_polygon,
+)
 from ..eval.evaluate import make_env
 from ..eval.machine import finish_machine_info, machine_info
 from ..policies.walking_policy import WalkingPolicy
@@ -49,10 +59,12 @@ from .exceptions import BenchError
 from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, timed_call
 
 __all__ = [
+    "EVENT_WINDOW",
     "LOLA_CYCLE_US",
     "LOLA_IKD_CYCLE_US",
     "LOLA_OBSTACLE_CYCLE_US",
     "OBSTACLE_COURSES",
+    "ZMP_PHASES",
     "format_walk_bench",
     "run_walk_bench",
 ]
@@ -109,12 +121,42 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     return times, active, success, contacts
 
 
+ZMP_PHASES = ("single", "double", "touchdown", "liftoff")
+"""The gait phases of ``zmp_rms_by_phase_mm``: single and double support, and the ``EVENT_WINDOW`` around each
+touchdown and lift-off (taken out of the support phases)."""
+EVENT_WINDOW = 0.020  # [s] centred on a touchdown or a lift-off
+
+
+class _ZmpSample(NamedTuple):
+    """One control period of a walk: the measured ZMP's distance [m] from the reference and its gait phase, and the
+    planned ZMP's and the reference ZMP's signed distances [m] inside the planned support polygon."""
+
+    distance: float | None  # None where the feet carry no load (no measured ZMP)
+    error: tuple[float, float] | None  # measured - reference (x, y) [m], plan frame
+    phase: str
+    plan_margin: float
+    reference_margin: float
+
+
+def _phase(pattern: WalkingPattern, t: float) -> str:
+    """The gait phase (:data:`ZMP_PHASES`) of the walk at ``t`` [s], after the start."""
+    k, s, remaining = pattern.swing_state(t)
+    half = 0.5 * EVENT_WINDOW
+    if s < half or pattern.step_start(k + 1) - t <= half:
+        return "liftoff"
+    if abs(remaining) <= half:
+        return "touchdown"
+    return "single" if remaining > 0.0 else "double"
+
+
 def _walk(
-    speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[float] | None = None
+    speed: float, steps: int, seed: int, record: bool, ik: str = "clik", zmp: list[_ZmpSample] | None = None
 ) -> tuple[list[float], list[_Call], WalkingPolicy, bool]:
     """One walk; returns the predict times [us], the IK calls (when recording), the policy and whether it fell.
-    With a list ``zmp``, appends per period the distance [m] of the measured ZMP (the env's contact pressure, mapped
-    into the plan's frame) from the pattern's reference ZMP, once the first step has begun."""
+    With a list ``zmp``, appends a :class:`_ZmpSample` per period once the first step has begun: the measured ZMP
+    (the env's contact pressure, mapped into the plan's frame) against the pattern's reference ZMP at the period's
+    end, and the margins of the period's pattern sample (its planned ZMP, and the reference ZMP at its time, inside
+    the support polygon of its feet on the ground)."""
     env = make_env(ENV_ID, {"target_speed": speed})
     policy = WalkingPolicy(env, ik=ik)
     times: list[float] = []
@@ -131,15 +173,31 @@ def _walk(
             times.append(seconds * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
             controller = policy.controller
+            pattern = controller.pattern
+            command = policy.last_command
             if (
                 zmp is not None
-                and info["zmp_valid"]
-                and controller.pattern is not None
-                and controller.pattern.step_at(controller.time) >= 0
+                and pattern is not None
+                and command is not None
+                and pattern.step_at(controller.time) >= 0
             ):
-                rotation, translation = controller._world_to_plan
-                measured = (rotation @ np.array([*info["zmp"], 0.0]) + translation)[:2]
-                zmp.append(float(np.linalg.norm(measured - controller.pattern.reference_zmp(controller.time))))
+                distance = error = None
+                if info["zmp_valid"]:
+                    rotation, translation = controller._world_to_plan
+                    measured = (rotation @ np.array([*info["zmp"], 0.0]) + translation)[:2]
+                    offset = measured - pattern.reference_zmp(controller.time)
+                    distance, error = float(np.linalg.norm(offset)), (float(offset[0]), float(offset[1]))
+                sample = command.pattern
+                polygon = support_polygon(sample.feet, sample.contact, sample.feet_yaw)
+                zmp.append(
+                    _ZmpSample(
+                        distance,
+                        error,
+                        _phase(pattern, controller.time),
+                        support_margin(sample.zmp, polygon),
+                        support_margin(pattern.reference_zmp(sample.time), polygon),
+                    )
+                )
             if terminated or truncated:
                 fell = bool(info["fell"])
                 break
@@ -158,11 +216,11 @@ class _Walks:
     def __init__(self, speed: float, steps: int, seed: int, ik: str) -> None:
         self.speed, self.steps, self.seed, self.ik = speed, steps, seed, ik
         self.times: list[list[float]] = []
-        self.zmp: list[list[float]] = []
+        self.zmp: list[list[_ZmpSample]] = []
         self.fell: list[bool] = []
 
     def __call__(self) -> float:
-        zmp: list[float] = []
+        zmp: list[_ZmpSample] = []
         times, _, _, fell = _walk(self.speed, self.steps, self.seed, record=False, ik=self.ik, zmp=zmp)
         self.times.append(times)
         self.zmp.append(zmp)
@@ -218,7 +276,7 @@ def run_walk_bench(
     clik, ikd = walks["clik"], walks["ikd"]
     controller = [t for times in clik.times[skip:] for t in times[1:]]  # the first call of a walk plans it
     ikd_times = [t for times in ikd.times[skip:] for t in times[1:]]
-    zmp = {name: [d for walk in w.zmp[skip:] for d in walk] for name, w in walks.items()}
+    zmp = {name: [z for walk in w.zmp[skip:] for z in walk] for name, w in walks.items()}
     fell, ikd_fell = any(clik.fell[skip:]), any(ikd.fell[skip:])
     ikd_stats = walk_rounds.ratio("ikd", "clik")
     lola_stats = RatioStats.of([t * 1e6 / LOLA_CYCLE_US for t in walk_rounds.samples["clik"]])
@@ -292,7 +350,10 @@ def run_walk_bench(
         },
         "ikd_vs_clik": ikd_stats.median,
         "ikd_vs_clik_rounds": ikd_stats.to_json(),
-        "zmp_rms_mm": {name: 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None for name, d in zmp.items()},
+        "zmp_rms_mm": {name: _rms_mm([z.distance for z in z_]) for name, z_ in zmp.items()},
+        "zmp_rms_by_phase_mm": {name: _by_phase(z_) for name, z_ in zmp.items()},
+        "zmp_plan_margin_mm": {name: _smallest_mm([z.plan_margin for z in z_]) for name, z_ in zmp.items()},
+        "zmp_reference_margin_mm": {name: _smallest_mm([z.reference_margin for z in z_]) for name, z_ in zmp.items()},
         "ikd_vs_clik_spread": [ikd_stats.min, ikd_stats.max],
         "ikd_vs_lola_ikd": ikd_median / LOLA_IKD_CYCLE_US,
         "ik_max_difference": difference,
@@ -335,6 +396,25 @@ def format_walk_bench(report: dict[str, Any]) -> str:
                 f"{ik.upper()} " + ("(no step walked)" if v is None else f"{v:.1f} mm")
                 for ik, v in report["zmp_rms_mm"].items()
             ),
+            *[
+                f"  {ik.upper()} by phase: "
+                + ", ".join(
+                    f"{phase} {_mm(v['rms_mm'])} ({100 * (v['error_share'] or 0.0):.0f} % of the error"
+                    + (
+                        ""
+                        if v["mean_offset_mm"] is None
+                        else ", mean offset ({:.0f}, {:.0f}) mm".format(*v["mean_offset_mm"])
+                    )
+                    + ")"
+                    for phase, v in phases.items()
+                )
+                for ik, phases in report.get("zmp_rms_by_phase_mm", {}).items()
+            ],
+            "smallest margin inside the planned support polygon: "
+            + ", ".join(
+                f"{ik.upper()} planned ZMP {_mm(v)}, reference ZMP {_mm(report['zmp_reference_margin_mm'][ik])}"
+                for ik, v in report.get("zmp_plan_margin_mm", {}).items()
+            ),
             f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
             f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
             f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
@@ -349,6 +429,42 @@ def format_walk_bench(report: dict[str, Any]) -> str:
             "collision avoidance)",
         ]
     )
+
+
+def _mm(value: float | None) -> str:
+    """``value`` [mm] as text (``-`` for None)."""
+    return "-" if value is None else f"{value:.1f} mm"
+
+
+def _rms_mm(distances: list[float | None]) -> float | None:
+    """The rms [mm] of the measured distances [m] (None where nothing was measured)."""
+    d = [x for x in distances if x is not None]
+    return 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None
+
+
+def _smallest_mm(margins: list[float]) -> float | None:
+    """The smallest margin [mm] of margins [m] (None without any)."""
+    return 1e3 * min(margins) if margins else None
+
+
+def _by_phase(samples: list[_ZmpSample]) -> dict[str, dict[str, Any]]:
+    """Per gait phase: the measured ZMP's rms distance from the reference [mm], its mean offset (x, y) [mm] in the
+    plan's frame (a bias, where the rms is not scatter), the phase's share of the periods, its share of the squared
+    error (how much of ``zmp_rms_mm``'s square it carries), and the periods without a measured ZMP."""
+    total = sum(z.distance**2 for z in samples if z.distance is not None)
+    out: dict[str, dict[str, Any]] = {}
+    for phase in ZMP_PHASES:
+        own = [z for z in samples if z.phase == phase]
+        measured = [z.distance for z in own if z.distance is not None]
+        errors = [z.error for z in own if z.error is not None]
+        out[phase] = {
+            "rms_mm": _rms_mm(list(measured)),
+            "mean_offset_mm": [1e3 * float(v) for v in np.mean(errors, axis=0)] if errors else None,
+            "period_share": len(own) / len(samples) if samples else None,
+            "error_share": sum(d**2 for d in measured) / total if total > 0.0 else None,
+            "unloaded": len(own) - len(measured),
+        }
+    return out
 
 
 def _rounds_text(stats: dict[str, Any] | None) -> str:

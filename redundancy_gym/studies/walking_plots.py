@@ -14,6 +14,7 @@ import numpy as np  # noqa: E402
 from numpy.typing import NDArray  # noqa: E402
 
 from .. import make_policy  # noqa: E402
+from ..controllers.walking import SOLE_HALF_WIDTH, SOLE_X  # noqa: E402
 from ..eval.evaluate import make_env  # noqa: E402
 from ..eval.plots import save_figure  # noqa: E402
 
@@ -23,8 +24,6 @@ if TYPE_CHECKING:
 __all__ = ["WalkTrace", "plot_angular_momentum", "plot_com_zmp", "record_walk"]
 
 _BIPED = "redundancy_gym/BipedWalk-v0"
-# sole extent around the sole point [m] (biped.xml: plate and toe boxes)
-_SOLE_X, _SOLE_Y = (-0.095, 0.165), 0.075
 
 
 @dataclass
@@ -84,7 +83,7 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
         lo, hi = [], []
         for feet, contact in zip(trace.feet, trace.contact, strict=False):
             on = feet[np.asarray(contact)]
-            ext = _SOLE_X if axis == 0 else (-_SOLE_Y, _SOLE_Y)
+            ext = SOLE_X if axis == 0 else (-SOLE_HALF_WIDTH, SOLE_HALF_WIDTH)
             lo.append(on[:, axis].min() + ext[0])
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")

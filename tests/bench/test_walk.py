@@ -16,6 +16,16 @@ def test_walk_bench_report(tmp_path) -> None:
     # the IKD controller is timed in the same run: a ratio to the CLIK controller, and both ZMPs measured
     assert report["ikd"]["step_us_median"] > 0.0 and report["ikd_vs_clik"] > 0.0 and not report["ikd"]["fell"]
     assert all(0.0 < v < 200.0 for v in report["zmp_rms_mm"].values())
+    for ik, phases in report["zmp_rms_by_phase_mm"].items():  # the phases split the periods and the squared error
+        assert set(phases) == {"single", "double", "touchdown", "liftoff"}
+        assert sum(p["period_share"] for p in phases.values()) == pytest.approx(1.0)
+        assert sum(p["error_share"] or 0.0 for p in phases.values()) == pytest.approx(1.0)
+        # the rms over all periods is the share-weighted rms of the phases
+        assert sum(p["period_share"] * (p["rms_mm"] or 0.0) ** 2 for p in phases.values()) == pytest.approx(
+            report["zmp_rms_mm"][ik] ** 2
+        )
+        # the reference ZMP lies inside the planned support polygon by construction (heel to toe, foot to foot)
+        assert report["zmp_reference_margin_mm"][ik] > 0.0
     assert report["states"] == 149 and not report["fell"]  # every period after the first records one IK call
     assert report["ik_max_difference"] < 1e-9  # the same inputs give the same configuration in both backends
     assert report["self_collision_pairs"] > 100

@@ -21,6 +21,7 @@ from .ssta import (
 )
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
+from .support_polygon import SOLE_HALF_WIDTH, SOLE_X, sole_corners, support_margin, support_polygon
 from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
@@ -44,6 +45,8 @@ __all__ = [
     "OBSTACLE_CLASSES",
     "REFERENCE_LAYOUT",
     "REFERENCE_SIZE",
+    "SOLE_HALF_WIDTH",
+    "SOLE_X",
     "TASK_ROWS",
     "ComState",
     "DcmPlan",
@@ -83,6 +86,9 @@ __all__ = [
     "bounding_boxes",
     "estimate_zmp",
     "return_quintic_no_overshoot_time",
+    "sole_corners",
+    "support_margin",
+    "support_polygon",
 ]
 
 
