@@ -611,6 +611,16 @@ def format_report(report: dict[str, Any]) -> str:
             else ()
         ),
         ("step time median / p99 / mean [us]", f"{step['median']:.1f} / {step['p99']:.1f} / {step['mean']:.1f}"),
+        *(
+            (
+                (
+                    "  with SB3's predict instead [us]",
+                    "{median:.1f} / {p99:.1f} / {mean:.1f}".format(**report["sb3_predict_us"]),
+                ),
+            )
+            if "sb3_predict_us" in report
+            else ()
+        ),
         ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
         ("episode length [steps]", f"{report['episode_length']:.1f}"),

@@ -19,7 +19,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 import redundancy_gym  # noqa: F401  (registers the ids)
-from redundancy_gym.eval.evaluate import evaluate
+from redundancy_gym.eval.evaluate import evaluate, format_report
 from redundancy_gym.eval.speed_error import speed_error_markdown
 from redundancy_gym.learning.baselines import Baseline, baselines
 from redundancy_gym.policies import PolicyError, make_policy
@@ -245,6 +245,8 @@ def test_an_evaluation_reports_sb3_predict_beside_the_fast_step_time() -> None:
     assert sb3_times["median"] > fast["median"]  # SB3's per-call overhead is what the fast path removes
     analytic = evaluate("redundancy_gym/PlanarReach-v0", "zero", episodes=1, seed=20000, progress=False).to_json()
     assert "sb3_predict_us" not in analytic
+    assert "with SB3's predict instead [us]" in format_report(report)
+    assert "SB3" not in format_report(analytic)
     text = speed_error_markdown({"ppo-joint": report, "zero": analytic}, "PlanarReach")
     rows = [line for line in text.splitlines() if line.startswith("|")]
     assert "SB3 predict median / p99 [us]" in rows[0] and rows[3].split("|")[8].strip() == "-"
