@@ -156,6 +156,13 @@ def _biped(out: Path, *, episodes: int, seed: int, progress: bool, workers: int 
             trace, out / "biped_walk_com_zmp.png", "BipedWalk-v0 at 0.7 m/s: CoM and ZMP, planned and measured"
         )
     )
+    written.append(
+        plot_com_zmp(
+            record_walk(0.7, 6.0, seed, ik="ikd"),
+            out / "biped_walk_com_zmp_ikd.png",
+            "BipedWalk-v0 at 0.7 m/s, IKD walker: CoM and ZMP, planned and measured",
+        )
+    )
     walks = {}
     for on in (False, True):
         walk = trace if on else record_walk(0.7, 6.0, seed, momentum_minimization=False)
