@@ -41,6 +41,9 @@ class WalkTrace:
     lz_model: NDArray[np.float64]
     fell: bool
     distance: float
+    zmp_target: NDArray[np.float64] | None = None
+    """The whole body's reference ZMP [m] (``WalkingPattern.reference_zmp``: the LIPM plan's ``zmp_ref`` plus the
+    multi-body correction), which ``bench walk``'s ``zmp_rms_mm`` measures the measured ZMP against."""
 
 
 def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **policy_kwargs: Any) -> WalkTrace:
@@ -49,7 +52,7 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
     policy = make_policy("walking", env, **policy_kwargs)
     obs, info = env.reset(seed=seed)
     rows: dict[str, list[Any]] = {
-        k: [] for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "feet", "contact", "lz", "lz_model")
+        k: [] for k in ("time", "com", "com_ref", "zmp", "zmp_ref", "zmp_target", "feet", "contact", "lz", "lz_model")
     }
     start = True
     try:
@@ -63,6 +66,7 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
             rows["com_ref"].append(command.pattern.com)
             rows["zmp"].append(info["zmp"] if info["zmp_valid"] else np.full(2, np.nan))  # a gap in flight
             rows["zmp_ref"].append(command.pattern.zmp)
+            rows["zmp_target"].append(policy.controller.pattern.reference_zmp(command.pattern.time))
             rows["feet"].append(command.pattern.feet)
             rows["contact"].append(command.pattern.contact)
             rows["lz"].append(info["angular_momentum"][2])
@@ -87,7 +91,9 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
             lo.append(on[:, axis].min() + ext[0])
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")
-        ax.plot(t, trace.zmp_ref[:, axis], color="tab:orange", lw=1.2, label="ZMP planned")
+        ax.plot(t, trace.zmp_ref[:, axis], color="tab:orange", lw=1.2, label="ZMP planned (LIPM)")
+        if trace.zmp_target is not None:
+            ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label="ZMP reference (whole body)")
         ax.plot(t, trace.zmp[:, axis], color="tab:red", lw=0.6, alpha=0.8, label="ZMP measured (contact forces)")
         ax.plot(t, trace.com_ref[:, axis], color="tab:blue", lw=1.2, label="CoM planned (LIPM/DCM)")
         ax.plot(t, trace.com[:, axis], "--", color="navy", lw=1.0, label="CoM measured")
