@@ -37,6 +37,7 @@ distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_c
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from functools import partial
 from typing import Any, NamedTuple
 
@@ -436,7 +437,7 @@ def _mm(value: float | None) -> str:
     return "-" if value is None else f"{value:.1f} mm"
 
 
-def _rms_mm(distances: list[float | None]) -> float | None:
+def _rms_mm(distances: Sequence[float | None]) -> float | None:
     """The rms [mm] of the measured distances [m] (None where nothing was measured)."""
     d = [x for x in distances if x is not None]
     return 1e3 * float(np.sqrt(np.mean(np.square(d)))) if d else None
@@ -458,7 +459,7 @@ def _by_phase(samples: list[_ZmpSample]) -> dict[str, dict[str, Any]]:
         measured = [z.distance for z in own if z.distance is not None]
         errors = [z.error for z in own if z.error is not None]
         out[phase] = {
-            "rms_mm": _rms_mm(list(measured)),
+            "rms_mm": _rms_mm(measured),
             "mean_offset_mm": [1e3 * float(v) for v in np.mean(errors, axis=0)] if errors else None,
             "period_share": len(own) / len(samples) if samples else None,
             "error_share": sum(d**2 for d in measured) / total if total > 0.0 else None,

@@ -323,7 +323,6 @@ class BipedObstaclesEnv(BipedWalkEnv):
         self._max_x_sorted = sorted(high_x.tolist())
         self._blocks: dict[int, NDArray[np.float64]] = {}
         self._mirror_batch = None
-        self._bound = None  # the compiled step's arguments name the mirror batch: made again at first use
         if not volumes:
             self._obstacle_batch: PairBatch | None = None
             return

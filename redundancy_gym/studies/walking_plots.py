@@ -35,15 +35,15 @@ class WalkTrace:
     com_ref: NDArray[np.float64]
     zmp: NDArray[np.float64]
     zmp_ref: NDArray[np.float64]
+    zmp_target: NDArray[np.float64]
+    """The whole body's reference ZMP [m] (``WalkingPattern.reference_zmp``: the LIPM plan's ``zmp_ref`` plus the
+    multi-body correction), which ``bench walk``'s ``zmp_rms_mm`` measures the measured ZMP against."""
     feet: NDArray[np.float64]
     contact: NDArray[np.bool_]
     lz: NDArray[np.float64]
     lz_model: NDArray[np.float64]
     fell: bool
     distance: float
-    zmp_target: NDArray[np.float64] | None = None
-    """The whole body's reference ZMP [m] (``WalkingPattern.reference_zmp``: the LIPM plan's ``zmp_ref`` plus the
-    multi-body correction), which ``bench walk``'s ``zmp_rms_mm`` measures the measured ZMP against."""
 
 
 def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **policy_kwargs: Any) -> WalkTrace:
@@ -92,8 +92,7 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")
         ax.plot(t, trace.zmp_ref[:, axis], color="tab:orange", lw=1.2, label="ZMP planned (LIPM)")
-        if trace.zmp_target is not None:
-            ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label="ZMP reference (whole body)")
+        ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label="ZMP reference (whole body)")
         ax.plot(t, trace.zmp[:, axis], color="tab:red", lw=0.6, alpha=0.8, label="ZMP measured (contact forces)")
         ax.plot(t, trace.com_ref[:, axis], color="tab:blue", lw=1.2, label="CoM planned (LIPM/DCM)")
         ax.plot(t, trace.com[:, axis], "--", color="navy", lw=1.0, label="CoM measured")

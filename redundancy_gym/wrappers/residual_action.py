@@ -152,18 +152,17 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
                 dtype=obs.dtype,
             )
         self._reference_action: NDArray[Any] | None = None
-        self._reference_time_us = 0.0
         self.controller_time_us = 0.0
-        """Compute time of the reference action computed in the last step [us] (``CONTROLLER_TIME_ATTRIBUTE``): the
+        """Compute time of the reference action computed last [us] (``CONTROLLER_TIME_ATTRIBUTE``): after a step, the
         next step's, from the step's observation, so that it is the controller time spent inside the step call
-        (the one computed in ``reset`` is the reset's)."""
+        (after ``reset``, the reset's)."""
         self._starting = True
 
     def _observe(self, obs: NDArray[np.floating], starting: bool) -> NDArray[np.floating]:
         """Compute the reference action of ``obs`` (kept for the next step) and the wrapper's observation."""
         began = time.perf_counter_ns()
         action, _ = self.reference.predict(obs, episode_start=np.array([starting]))
-        self._reference_time_us = (time.perf_counter_ns() - began) * 1e-3
+        self.controller_time_us = (time.perf_counter_ns() - began) * 1e-3
         self._reference_action = np.asarray(action, dtype=self._dtype)
         if self.config.observe_reference:
             return np.concatenate([obs, self._reference_action.astype(obs.dtype)])
@@ -184,6 +183,4 @@ class ResidualAction(gym.Wrapper, gym.utils.RecordConstructorArgs):
         applied, residual = residual_applied(reference, self._scaled_range, a, self._low, self._high)
         obs, reward, terminated, truncated, info = self.env.step(applied)
         info = {**info, "reference_action": reference, "residual_action": residual}
-        obs = self._observe(obs, False)
-        self.controller_time_us = self._reference_time_us
-        return obs, reward, terminated, truncated, info
+        return self._observe(obs, False), reward, terminated, truncated, info
