@@ -483,6 +483,13 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         return self._scale.copy()
 
     @property
+    def servo_stiffness(self) -> NDArray[np.float64]:
+        """The position servos' stiffness ``k_p`` [N m/rad] per joint in :data:`BIPED_JOINTS` order, as the model
+        file gives it (what a model-based controller knows of its plant: the IKD walker feeds its torques forward
+        over it)."""
+        return self._stiffness.copy()
+
+    @property
     def joint_limits(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Hardware joint limits [rad] (lower, upper) in :data:`BIPED_JOINTS` order."""
         return self._lower.copy(), self._upper.copy()
@@ -697,7 +704,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._upper = m.jnt_range[joints, 1].copy()
         self._nominal = np.array([NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS])
         self._scale = np.maximum(self._nominal - self._lower, self._upper - self._nominal)
-        self._servo_lead = -m.actuator_biasprm[: len(BIPED_SERVOS), 2] / m.actuator_gainprm[: len(BIPED_SERVOS), 0]
+        self._stiffness = m.actuator_gainprm[: len(BIPED_SERVOS), 0].copy()
+        self._servo_lead = -m.actuator_biasprm[: len(BIPED_SERVOS), 2] / self._stiffness
         self._upper_body = np.array([BIPED_JOINTS.index(j) for j in _UPPER_BODY])
         names = (
             "r_ankle_force",

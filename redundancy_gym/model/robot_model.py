@@ -462,6 +462,23 @@ class RobotModel:
         qdot = self._check_velocity(qdot)
         return np.array(pin.nonLinearEffects(self._model, self._data, q, qdot), dtype=np.float64)
 
+    def inverse_dynamics(self, q: ArrayLike, qdot: ArrayLike, qddot: ArrayLike) -> NDArray[np.float64]:
+        """``M(q) qddot + h(q, qdot)`` of (5.92) by the recursive Newton-Euler algorithm [N m or N] (nv): the
+        generalized forces that produce ``qddot``, without contact forces, rotor inertias (armature) included.
+
+        Updates the model at ``q`` (as :meth:`update`); the kinematic cache stays valid there.
+        """
+        q = self.update(q)
+        qdot = self._check_velocity(qdot)
+        qddot = self._check_velocity(qddot)
+        return np.array(pin.rnea(self._model, self._data, q, qdot, qddot), dtype=np.float64)
+
+    @property
+    def joint_damping(self) -> NDArray[np.float64]:
+        """Viscous joint damping [N m s/rad or N s/m] per velocity (nv) as the model file gives it (0 for the
+        free base); :meth:`inverse_dynamics` leaves it out."""
+        return np.array(self._model.damping, dtype=np.float64)
+
     # ------------------------------------------------------------------ integration
     def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration

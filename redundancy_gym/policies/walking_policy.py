@@ -78,6 +78,10 @@ class WalkingPolicyConfig:
             stabilization; ``correction_iterations`` is then not used, the plan is the plain LIPM's).
         moment_gain: with ``ik="ikd"``, ``k`` of the contact-moment stabilization (5.97) (``K_p = k 40 / dt``).
         ikd_planning: with ``ik="ikd"``, stabilization via planning on (with ``moment_gain`` > 0: hybrid).
+        ikd_feedforward: with ``ik="ikd"``, the IKD motion's joint torques fed forward through the position servos
+            (:class:`~redundancy_gym.controllers.walking.ServoFeedforward`, over the env's ``servo_stiffness``): the
+            targets lead by ``tau / k_p`` so the servos do not sag under the plan's loads. Not used with ``"clik"``,
+            which computes no joint accelerations.
     """
 
     momentum_minimization: bool = True
@@ -107,6 +111,7 @@ class WalkingPolicyConfig:
     ik: str = "clik"
     moment_gain: float = WalkingIkdConfig.moment_gain
     ikd_planning: bool = WalkingIkdConfig.planning
+    ikd_feedforward: bool = True
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -144,6 +149,11 @@ class WalkingPolicy(PerEnvPolicy):
         self.model = RobotModel.from_mjcf(base.ROBOT_XML)
         lower, upper = base.joint_limits
         c = self.config
+        stiffness = None
+        if c.ik == "ikd" and c.ikd_feedforward:
+            stiffness = getattr(base, "servo_stiffness", None)
+            if stiffness is None:
+                raise PolicyError("ikd_feedforward needs the env's servo_stiffness (the servos' k_p); set it False")
         if c.step_min_width > c.step_max_width:  # StepAdjusterConfig checks it too, without the options' names
             raise PolicyError(f"step_min_width={c.step_min_width!r} exceeds step_max_width={c.step_max_width!r} [m]")
         try:
@@ -197,6 +207,7 @@ class WalkingPolicy(PerEnvPolicy):
                 use_rca=c.rca,
                 correction_configuration=self._nominal,
                 ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None,
+                servo_stiffness=stiffness,
             )
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc

@@ -394,3 +394,26 @@ def test_acceleration_terms_are_the_separate_queries_from_one_pass(rng) -> None:
         biped.acceleration_terms(q, v[:-1], frames)
     with pytest.raises(ModelError, match="configuration"):
         biped.acceleration_terms(q[:-1], v, frames)
+
+
+def test_inverse_dynamics_matches_mujoco_on_the_floating_biped() -> None:
+    # MuJoCo's inverse dynamics of the biped lifted off the floor (no contact): qfrc_inverse = M qacc + bias -
+    # passive, the passive force the joint damping; the base at rest (velocity and acceleration zero), where the
+    # free joint's conventions (MuJoCo's world-frame linear velocity, pinocchio's local spatial one) agree
+    mj_model = mujoco.MjModel.from_xml_path(str(BIPED_XML))
+    mj_data = mujoco.MjData(mj_model)
+    model = RobotModel.from_mjcf(BIPED_XML)
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        mj_data.qpos[:] = mj_model.qpos0
+        mj_data.qpos[2] += 2.0  # far above the floor: no contact force enters qfrc_inverse
+        mj_data.qpos[7:] = 0.5 * (mj_model.jnt_range[1:, 0] + mj_model.jnt_range[1:, 1]) + rng.uniform(-0.2, 0.2, 22)
+        mj_data.qvel[:] = np.r_[np.zeros(6), rng.normal(size=mj_model.nv - 6)]
+        mj_data.qacc[:] = np.r_[np.zeros(6), rng.normal(size=mj_model.nv - 6)]
+        mujoco.mj_inverse(mj_model, mj_data)
+        q, v = model.from_mujoco_state(mj_data.qpos, mj_data.qvel)
+        _, a = model.from_mujoco_state(mj_data.qpos, mj_data.qacc)
+        tau = model.inverse_dynamics(q, v, a) + model.joint_damping * v
+        assert np.allclose(tau, mj_data.qfrc_inverse, atol=1e-8 * np.abs(tau).max())
+        # rotor inertia included: without the armature the joints' torques differ
+        assert not np.allclose(tau - model.pinocchio_model.armature * a, mj_data.qfrc_inverse, atol=1e-3)

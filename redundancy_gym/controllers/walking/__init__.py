@@ -8,6 +8,7 @@ from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement, MeasurementResult, renamed_attribute
 from .quintic import PiecewiseQuintic, Quintic
 from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
+from .servo_feedforward import ServoFeedforward, ServoFeedforwardTorques
 from .ssta import (
     BLOCKED_COST,
     OBSTACLE_CLASSES,
@@ -62,6 +63,8 @@ __all__ = [
     "Rca",
     "RcaConfig",
     "RcaState",
+    "ServoFeedforward",
+    "ServoFeedforwardTorques",
     "Ssta",
     "SstaConfig",
     "Stabilizer",

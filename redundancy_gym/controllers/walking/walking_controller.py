@@ -32,6 +32,7 @@ from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
 from .rca import Rca, RcaConfig, RcaState
+from .servo_feedforward import ServoFeedforward
 from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
@@ -155,6 +156,10 @@ class WalkingController:
             (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`, monograph 5.5) instead of the whole-body CLIK
             (None): the pattern's ZMP is then realized exactly, so ``correction_iterations`` should be 0 (the plain
             LIPM plan). The CLIK still moves the standing start onto the pattern's first reference.
+        servo_stiffness: with ``ikd``, the position servos' ``k_p`` [N m/rad] per actuated joint: each period's
+            joint targets are then shifted by the IKD motion's torques over them (:class:`ServoFeedforward`), so
+            the servos do not sag under the plan's loads (None: the IKD's positions as they are). The CLIK has no
+            joint accelerations to feed forward: ControllerError.
     """
 
     def __init__(
@@ -180,6 +185,7 @@ class WalkingController:
         use_rca: bool = True,
         correction_configuration: ArrayLike | None = None,
         ikd: WalkingIkdConfig | None = None,
+        servo_stiffness: ArrayLike | None = None,
     ) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
@@ -261,6 +267,11 @@ class WalkingController:
         self._obstacle_step = -1
         self.ikd_config = ikd
         self.ikd: WalkingIkd | None = None
+        self.feedforward: ServoFeedforward | None = None
+        if servo_stiffness is not None:
+            if ikd is None:
+                raise ControllerError("servo_stiffness needs the IKD (ikd=...): the CLIK gives no joint accelerations")
+            self.feedforward = ServoFeedforward(model, servo_stiffness, feet_frames)
         self._ikd_com = (np.zeros(3), np.zeros(3))
         self._base: tuple[PatternSample, _ReferenceBase] | None = None  # the last packed reference (its sample)
 
@@ -830,7 +841,12 @@ class WalkingController:
             result = self.solver.step(self.q_ref, start_ref, end_ref, self.dt)
         self.q_ref = result.q
         self.time += self.dt
-        return WalkingCommand(result.q[self._nq :].copy(), start, feedback, contact, result, adjustment, avoidance)
+        targets = result.q[self._nq :].copy()
+        if self.feedforward is not None and isinstance(result, WalkingIkdStep):
+            # the targets hold from the period's end: its state, and the feet's loads planned there
+            torques = self.feedforward.torques(result.q, result.qdot, result.qddot, end.contact, end.right_load)
+            targets += torques.offsets
+        return WalkingCommand(targets, start, feedback, contact, result, adjustment, avoidance)
 
     def _ikd_step(
         self,
