@@ -64,6 +64,8 @@ class EpisodeSummary:
             end; a leaf touched for 10 steps counts 10).
         obstacle_contact: whether ``info["obstacle_contact"]`` held at any step (BipedObstacles: a MuJoCo contact of
             the robot with an obstacle).
+        stop_reason: for a policy with a ``stop_reason`` attribute (the ``walking`` policy), its value at the
+            episode's end: why the walk stopped in front of an obstacle (None: it did not stop).
         sb3_predict_us: for an SB3 policy on its fast path (``Sb3Policy.fast_path``), the step time SB3's own
             ``predict`` would have given, per step [us]: ``sb3_predict`` timed on the step's observation right after
             the policy's ``predict`` (its action unused), plus the step's action-wrapper controller time as in
@@ -92,6 +94,7 @@ class EpisodeSummary:
     min_self_clearance: float | None = None
     leaf_contacts: int | None = None
     obstacle_contact: bool | None = None
+    stop_reason: str | None = None
     sb3_predict_us: NDArray[np.float64] | None = None
 
 
@@ -350,6 +353,8 @@ def run_episode(
         summary.leaf_contacts = int(info["leaf_contacts_total"])
     if "obstacle_contact" in info:
         summary.obstacle_contact = obstacle_contact
+    if hasattr(policy, "stop_reason"):
+        summary.stop_reason = policy.stop_reason
     if "fell" in info and "distance" in info:
         elapsed = float(info.get("time", 0.0))
         summary.fell = bool(info["fell"])
@@ -628,6 +633,9 @@ def format_report(report: dict[str, Any]) -> str:
     if "fall_rate" in report:
         rows.append(("fall rate", f"{report['fall_rate']:.3f}"))
         rows.append(("forward speed [m/s]", f"{report['forward_speed']:.3f}"))
+    for e in report.get("per_episode", []):  # a failed walk that stopped in front of an obstacle: why
+        if not e["success"] and e.get("stop_reason"):
+            rows.append((f"stopped, seed {e['seed']}", e["stop_reason"]))
     width = max(len(k) for k, _ in rows)
     return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
 
@@ -657,6 +665,8 @@ def _episode_row(e: EpisodeSummary) -> dict[str, Any]:
         row["min_obstacle_clearance"] = _finite_or_none(e.min_obstacle_clearance)
     if e.obstacle_contact is not None:
         row["obstacle_contact"] = e.obstacle_contact
+    if e.stop_reason is not None:
+        row["stop_reason"] = e.stop_reason
     return row
 
 

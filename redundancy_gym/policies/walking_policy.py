@@ -26,10 +26,17 @@ from .options import config_from_options, env_with_attributes
 from .per_env_policy import PerEnvPolicy
 from .registry import CAPABILITY_ATTRIBUTES
 
-__all__ = ["WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
+__all__ = ["IKD_FEEDFORWARD_GAINS", "WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
 
 OBSTACLE_ROW = 14
 """Entries of one obstacle row of the observation: ``[mask, PSS, LSS, TSS, v0 (3), v1 (3), v2 (3), radius]``."""
+
+DEFAULT_GAINS = (1.0, 1.0)
+"""``(zmp_gain, com_gain)`` of the CLIK walker and of the IKD walker without feedforward."""
+IKD_FEEDFORWARD_GAINS = (0.3, 0.3)
+"""``(zmp_gain, com_gain)`` [-, 1/s] of the IKD walker with ``ikd_feedforward``: with the servos' sag fed forward,
+the full gains over-correct (``bench walk``'s measured ZMP 74.9 mm rms from the reference at 1.0 / 1.0, 52.8 mm at
+0.3 / 0.3; docs/walking.md)."""
 
 
 def obstacle_volumes(rows: NDArray[np.float64]) -> list[SSV]:
@@ -53,7 +60,9 @@ class WalkingPolicyConfig:
         gamma: ``gamma`` of (5.62).
         beta: scale of (5.62) against the nullspace objectives.
         stabilizer: balance feedback on (False: the planned references only).
-        dcm_gain, zmp_gain, com_gain: stabilizer gains ``k_dcm`` [-], ``k_zmp``, ``k_com`` [1/s].
+        dcm_gain, zmp_gain, com_gain: stabilizer gains ``k_dcm`` [-], ``k_zmp``, ``k_com`` [1/s]; ``zmp_gain``
+            and ``com_gain`` None: the walker's own (1.0; with ``ik="ikd"`` and ``ikd_feedforward``
+            :data:`IKD_FEEDFORWARD_GAINS`, as the fed-forward servos track the plan closer and need less feedback).
         step_duration: nominal step duration [s].
         com_height: LIPM CoM height [m].
         correction_iterations: kinematic rollouts for the multi-body ZMP correction (0: plain LIPM).
@@ -89,8 +98,8 @@ class WalkingPolicyConfig:
     beta: float = 10.0
     stabilizer: bool = True
     dcm_gain: float = 1.0
-    zmp_gain: float = 1.0
-    com_gain: float = 1.0
+    zmp_gain: float | None = None
+    com_gain: float | None = None
     step_duration: float = 0.8
     com_height: float = 0.91
     correction_iterations: int = 3
@@ -162,8 +171,13 @@ class WalkingPolicy(PerEnvPolicy):
                 com_height=c.com_height,
                 min_step_duration=min(GaitConfig.min_step_duration, c.step_duration),
             )
+            zmp_default, com_default = IKD_FEEDFORWARD_GAINS if stiffness is not None else DEFAULT_GAINS
             gains = (
-                StabilizerGains(dcm=c.dcm_gain, zmp=c.zmp_gain, com=c.com_gain)
+                StabilizerGains(
+                    dcm=c.dcm_gain,
+                    zmp=zmp_default if c.zmp_gain is None else c.zmp_gain,
+                    com=com_default if c.com_gain is None else c.com_gain,
+                )
                 if c.stabilizer
                 else StabilizerGains(dcm=0.0, zmp=0.0, com=0.0)
             )
@@ -253,6 +267,14 @@ class WalkingPolicy(PerEnvPolicy):
         if self._new_episode(obs, starting) or self.controller.pattern is None:
             self.begin(obs)
         return self.command(obs)
+
+    @property
+    def stop_reason(self) -> str | None:
+        """Why the walk of the first env stops in front of an obstacle now, in one line
+        (:meth:`~redundancy_gym.controllers.walking.StopReason.describe`; None: it does not stop). The evaluation
+        records it at each episode's end (``stop_reason`` in ``per_episode``)."""
+        reason = self.controller.stop_reason
+        return None if reason is None else reason.describe()
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

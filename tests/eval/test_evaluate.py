@@ -132,3 +132,31 @@ def test_warmup_runs_untimed_episodes_first() -> None:
     assert warm["pseudoenergy"] == pytest.approx(cold["pseudoenergy"], rel=1e-9)  # same episode, same policy state
     with pytest.raises(EvalError, match="warmup"):
         evaluate(ENV_ID, "zero", episodes=1, warmup=-1)
+
+
+def test_a_policys_stop_reason_is_kept_per_episode_and_printed_for_a_failed_episode() -> None:
+    import gymnasium as gym
+    import numpy as np
+
+    import redundancy_gym
+    from redundancy_gym.eval.evaluate import EvalReport, run_episode
+
+    env = gym.make(ENV_ID)
+    zero = redundancy_gym.make_policy("zero", env)
+
+    class Stopping:  # a policy that says why it stopped (as the walking policy does)
+        stop_reason = "too_large before foothold 6: box x [1.400, 1.600]"
+
+        def predict(self, *args, **kwargs):
+            return zero.predict(*args, **kwargs)
+
+    stopped, _ = run_episode(env, Stopping(), seed=0)
+    plain, _ = run_episode(env, zero, seed=0)
+    env.close()
+    assert stopped.stop_reason == Stopping.stop_reason and not stopped.success
+    assert plain.stop_reason is None
+    data = EvalReport(ENV_ID, "zero", 2, 0, {}, [stopped, plain], np.array([1.0, 2.0])).to_json()
+    assert data["per_episode"][0]["stop_reason"] == Stopping.stop_reason
+    assert "stop_reason" not in data["per_episode"][1]
+    lines = [line.split(None, 3) for line in format_report(data).splitlines() if line.startswith("stopped")]
+    assert lines == [["stopped,", "seed", "0", Stopping.stop_reason]]

@@ -55,3 +55,13 @@ def test_without_ssta_the_feet_walk_into_the_beam(layer):
     result = walk({layer: False})
     assert result["contacts"] > 0 or result["fell"]
     assert not result["is_success"]
+
+
+def test_a_wall_stops_the_walk_and_the_policy_says_why():
+    wall = [{"shape": "box", "center": [1.2, 0.0, 0.5], "size": [0.1, 1.5, 1.0]}]
+    result = walk({}, obstacles=wall, limit=600)
+    reason = result["policy"].stop_reason
+    assert reason is not None and reason.startswith("too_large before foothold")
+    assert "class too_large" in reason and "> max_step_over_height" in reason
+    assert result["contacts"] == 0 and not result["fell"]
+    assert walk({}, limit=300)["policy"].stop_reason is None  # the low beam is stepped over

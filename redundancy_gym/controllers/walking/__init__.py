@@ -2,6 +2,7 @@
 stabilizer and whole-body IK with angular-momentum minimization (5.62), or the walking IKD (5.5.4) in its place,
 each a separate layer."""
 
+from .compiled_servo_feedforward import CompiledServoFeedforward
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
 from .gait_config import GaitConfig
@@ -12,11 +13,13 @@ from .servo_feedforward import ServoFeedforward, ServoFeedforwardTorques
 from .ssta import (
     BLOCKED_COST,
     OBSTACLE_CLASSES,
+    STOP_CAUSES,
     LinePlan,
     ObstacleBox,
     ObstacleDecision,
     Ssta,
     SstaConfig,
+    StopReason,
     SwingModification,
     bounding_boxes,
 )
@@ -40,6 +43,7 @@ __all__ = [
     "BACKENDS",
     "BLOCKED_COST",
     "CompiledMeasurement",
+    "CompiledServoFeedforward",
     "CompiledWholeBodyIk",
     "GRAVITY",
     "LEG_SEGMENTS",
@@ -48,6 +52,7 @@ __all__ = [
     "REFERENCE_SIZE",
     "SOLE_HALF_WIDTH",
     "SOLE_X",
+    "STOP_CAUSES",
     "TASK_ROWS",
     "ComState",
     "DcmPlan",
@@ -73,6 +78,7 @@ __all__ = [
     "StepAdjuster",
     "StepAdjusterConfig",
     "StepAdjustment",
+    "StopReason",
     "SwingModification",
     "WalkingCommand",
     "WalkingController",

@@ -36,11 +36,13 @@ from ..exceptions import ControllerError
 
 __all__ = [
     "OBSTACLE_CLASSES",
+    "STOP_CAUSES",
     "LinePlan",
     "ObstacleBox",
     "ObstacleDecision",
     "Ssta",
     "SstaConfig",
+    "StopReason",
     "SwingModification",
     "bounding_boxes",
 ]
@@ -53,6 +55,12 @@ OBSTACLE_CLASSES = ("beside", "sidestep", "step_over", "swing_around", "too_larg
 """The classes of :meth:`Ssta.classify`: the monograph's (a foot next to it: ``"beside"``, or ``"sidestep"`` where
 the walking line moves sideways to put the feet next to it; over it; too large), with ``"swing_around"`` for
 swings shifted sideways."""
+
+STOP_CAUSES = ("too_large", "no_foothold", "blocked_swing")
+"""Why the walking pattern stops in front of a box (:class:`StopReason`): the box is ``"too_large"`` (its class, no
+foot steps over it or around it and the walking line cannot move beside it), no foothold in front of or behind it
+keeps the step lengths and the margins (``"no_foothold"``), or the walking line's plan found no swing past it
+(``"blocked_swing"``, :meth:`Ssta.plan_line`'s ``blocked``)."""
 
 
 @dataclass(frozen=True)
@@ -229,6 +237,39 @@ class SstaConfig:
             raise ControllerError("min_step_length must be below max_step_length")
 
 
+class StopReason(NamedTuple):
+    """Why a walk stops in front of an obstacle (:attr:`WalkingPattern.stop_reason
+    <redundancy_gym.controllers.walking.WalkingPattern.stop_reason>`).
+
+    Attributes:
+        foothold: the first foothold that stays in front of the box (the feet step in place from it on).
+        cause: one of :data:`STOP_CAUSES`.
+        box: the box the walk stops in front of.
+        classification: the box's class (:meth:`Ssta.classify`, one of :data:`OBSTACLE_CLASSES`); only
+            ``"too_large"`` is impassable for this robot.
+        limits: the limits that decide the class, in words (:meth:`Ssta.limits`).
+    """
+
+    foothold: int
+    cause: str
+    box: ObstacleBox
+    classification: str
+    limits: str
+
+    @property
+    def impassable(self) -> bool:
+        """Whether the box is too large to pass for this robot (a stop that the monograph's classification allows)."""
+        return self.classification == "too_large"
+
+    def describe(self) -> str:
+        """One line: the cause, the box [m] and its class with its limits."""
+        lo, hi = self.box.lower, self.box.upper
+        return (
+            f"{self.cause} before foothold {self.foothold}: box x [{lo[0]:.3f}, {hi[0]:.3f}] y [{lo[1]:.3f}, "
+            f"{hi[1]:.3f}] height {self.box.height:.3f} m, class {self.classification} ({self.limits})"
+        )
+
+
 class SwingModification(NamedTuple):
     """How :class:`Ssta` changes one swing.
 
@@ -364,6 +405,41 @@ class Ssta:
         else:
             classification = "beside"
         return ObstacleDecision(box, classification, feet, lateral)
+
+    def limits(self, box: ObstacleBox) -> str:
+        """The limits that decide the class of ``box``, in words: stepping over it (its height and depth against
+        ``max_step_over_height`` and ``max_step_over_depth``), swinging around it (each lane's sideways shift
+        against ``max_outward_shift`` / ``max_inward_shift``) and the sidestep (``line_shift`` against
+        ``max_line_shift``)."""
+        c = self.config
+        over_height, depth = box.height + c.clearance, box.depth
+        high = "<=" if over_height <= c.max_step_over_height else ">"
+        deep = "<=" if depth <= c.max_step_over_depth else ">"
+        over = (
+            f"step over: height {box.height:.3f} + clearance {c.clearance:.3f} = {over_height:.3f} m {high} "
+            f"max_step_over_height {c.max_step_over_height:.3f}, depth {depth:.3f} m {deep} max_step_over_depth "
+            f"{c.max_step_over_depth:.3f}"
+        )
+        shifts = []
+        for side, name in ((0, "right"), (1, "left")):
+            meets, shift = self._lateral_options(box, float(self.lanes[side]), side)
+            if not meets:
+                shifts.append(f"{name} beside")
+            elif math.isnan(shift):
+                shifts.append(f"{name} beyond the shift limits")
+            else:
+                shifts.append(f"{name} {shift:+.3f} m")
+        around = (
+            f"swing around (max_outward_shift {c.max_outward_shift:.3f}, max_inward_shift {c.max_inward_shift:.3f} m):"
+            f" {', '.join(shifts)}"
+        )
+        line = self.line_shift(box)
+        sidestep = (
+            f"sidestep: {line:+.3f} m within max_line_shift {c.max_line_shift:.3f}"
+            if line is not None
+            else f"sidestep: beyond max_line_shift {c.max_line_shift:.3f} m"
+        )
+        return f"{over}; {around}; {sidestep}"
 
     def _feet(self, box: ObstacleBox, outward: float | None) -> tuple[tuple[str, str], tuple[float, float]]:
         """Both feet's :meth:`foot_decision` in their lanes: (decisions, shifts), right then left."""

@@ -28,12 +28,13 @@ from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
 from ..objectives.objective import Objective
 from ..objectives.posture_objective import PostureObjective
+from .compiled_servo_feedforward import CompiledServoFeedforward
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
 from .rca import Rca, RcaConfig, RcaState
 from .servo_feedforward import ServoFeedforward
-from .ssta import ObstacleBox, Ssta, SstaConfig, bounding_boxes
+from .ssta import ObstacleBox, Ssta, SstaConfig, StopReason, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
@@ -83,9 +84,11 @@ class WalkingIkConfig:
         self_collision_slope: its slope ``|H'(0)|`` [1/m] at contact.
         backend: which twins the controller runs (:data:`~redundancy_gym.kernel_options.BACKENDS`):
             ``"compiled"`` (the default: :class:`CompiledWholeBodyIk`, one kernel call a period, and the
-            measurement's :class:`~.measure_kernels.CompiledMeasurement`; both need a model of 1-DoF joints on a
-            free flyer, which :class:`WalkingController` checks) or ``"python"`` (:class:`WholeBodyIk` and the
-            measurement on pinocchio and NumPy, the references); both give the same result to round-off.
+            measurement's :class:`~.measure_kernels.CompiledMeasurement`, and with ``servo_stiffness``
+            :class:`CompiledServoFeedforward`; the first two need a model of 1-DoF joints on a free flyer, which
+            :class:`WalkingController` checks) or ``"python"`` (:class:`WholeBodyIk`, the measurement and
+            :class:`ServoFeedforward` on pinocchio and NumPy, the references); both give the same result to
+            round-off.
     """
 
     gain: float = 100.0
@@ -271,7 +274,8 @@ class WalkingController:
         if servo_stiffness is not None:
             if ikd is None:
                 raise ControllerError("servo_stiffness needs the IKD (ikd=...): the CLIK gives no joint accelerations")
-            self.feedforward = ServoFeedforward(model, servo_stiffness, feet_frames)
+            twin = CompiledServoFeedforward if self.ik_config.backend == "compiled" else ServoFeedforward
+            self.feedforward = twin(model, servo_stiffness, feet_frames)
         self._ikd_com = (np.zeros(3), np.zeros(3))
         self._base: tuple[PatternSample, _ReferenceBase] | None = None  # the last packed reference (its sample)
 
@@ -423,6 +427,12 @@ class WalkingController:
             self.rca.set_obstacles(self._obstacle_volumes)
         self._map_obstacles(force=True)
         return True
+
+    @property
+    def stop_reason(self) -> StopReason | None:
+        """Why the walk stops in front of an obstacle now (:attr:`WalkingPattern.stop_reason`; the box in the plan's
+        frame); None: it does not stop, or :meth:`start` was not called."""
+        return None if self.pattern is None else self.pattern.stop_reason
 
     def _map_obstacles(self, force: bool = False) -> None:
         """Give SSTA and RCA the obstacles in the plan's frame: the world volumes moved by the rigid map that puts

@@ -25,7 +25,7 @@ from ..exceptions import ControllerError
 from .dcm_planner import DcmPlan, DcmPlanner, horizontal_point
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
-from .ssta import ObstacleBox, Ssta, SwingModification
+from .ssta import ObstacleBox, Ssta, StopReason, SwingModification
 
 __all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
 
@@ -192,6 +192,7 @@ class WalkingPattern:
         self._boxes: tuple[ObstacleBox, ...] = ()
         self._modifications: dict[int, SwingModification] = {}
         self._stop: int | None = None
+        self._stop_cause: tuple[int, str, ObstacleBox] | None = None  # (foothold, cause, box) of the last stop set
         # the walking line's sideways offsets [m] per foothold (sidesteps, :meth:`set_obstacles`)
         self._line: dict[int, float] = {}
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
@@ -370,6 +371,20 @@ class WalkingPattern:
         """The first foothold that stays in front of a box too large to pass (None: no such box)."""
         return self._stop
 
+    @property
+    def stop_reason(self) -> StopReason | None:
+        """Why the walk stops at :attr:`stop_index`: the cause, the box and its class with the limits that decide
+        it (None: the walk does not stop)."""
+        cause = self._stop_cause
+        if self._stop is None or self._ssta is None or cause is None or cause[0] != self._stop:
+            return None
+        j, why, box = cause
+        return StopReason(j, why, box, self._ssta.classify(box).classification, self._ssta.limits(box))
+
+    def _set_stop(self, j: int, cause: str, box: ObstacleBox) -> None:
+        self._stop = j
+        self._stop_cause = (j, cause, box)
+
     def swing_modification(self, k: int) -> SwingModification | None:
         """How SSTA changed step ``k``'s swing (None: the nominal swing); for a step already over, the
         modification it was walked with (planning it again would use the boxes where the drift has mapped them
@@ -408,8 +423,8 @@ class WalkingPattern:
         if self._stop is not None and self._stop >= first:
             self._stop = None
             changed = True
-        walls = [ssta.foothold_band(b)[0] for b in self._boxes if ssta.classify(b).classification == "too_large"]
-        wall = min(walls, default=np.inf)
+        walls = [(ssta.foothold_band(b)[0], b) for b in self._boxes if ssta.classify(b).classification == "too_large"]
+        wall, wall_box = min(walls, key=lambda w: w[0], default=(np.inf, None))
         passable = tuple(b for b in self._boxes if float(b.lower[0]) < wall)
         reach = max((float(b.upper[0]) for b in self._boxes), default=-np.inf) + 2.0 * self.config.max_step_length
         # the line's offsets decide which lanes meet a box, the footholds' moves where the swings pass it: the
@@ -424,7 +439,10 @@ class WalkingPattern:
                 h, previous = self.foothold(j), self.foothold(j - 1)
                 move = ssta.foothold_shift(h, previous, self._boxes, behind=float(self.foothold(j - 2)[0]))
                 if move is None or h[0] + (move or 0.0) > wall:
-                    self._stop = j
+                    if wall_box is not None and h[0] + (move or 0.0) > wall:
+                        self._set_stop(j, "too_large", wall_box)
+                    else:
+                        self._set_stop(j, "no_foothold", _box_at(ssta, h, self._boxes))
                     changed = True
                     break
                 if move != 0.0:
@@ -492,7 +510,10 @@ class WalkingPattern:
             if offset != 0.0:
                 line[j] = float(offset)
         if plan.blocked is not None:
+            swing = (bases[plan.blocked], bases[min(plan.blocked + 2, len(bases) - 1)])
             self._stop = first + plan.blocked
+            if boxes:  # (the plan meets no box without one; a blocked plan then only lacks a stance)
+                self._set_stop(self._stop, "blocked_swing", _box_passed(ssta, swing, boxes))
             for j in [j for j in line if j >= self._stop]:
                 del line[j]
         return (
@@ -1040,3 +1061,24 @@ class WalkingPattern:
         load = 1.0 - share
         # np.clip(load, 0, 1) without its dispatch: NaN and -0.0 pass as there
         return load if load != load else 0.0 if load < 0.0 else 1.0 if load > 1.0 else load
+
+
+def _box_at(ssta: Ssta, foothold: NDArray[np.float64], boxes: Sequence[ObstacleBox]) -> ObstacleBox:
+    """The box in whose band (its lane, :meth:`Ssta.foothold_band`) ``foothold`` stands, else the nearest along x."""
+    x, y = float(foothold[0]), float(foothold[1])
+    for box in boxes:
+        low, high = ssta.foothold_band(box)
+        if ssta.in_lane(box, y) and low < x < high:
+            return box
+    return min(boxes, key=lambda b: abs(0.5 * float(b.lower[0] + b.upper[0]) - x))
+
+
+def _box_passed(
+    ssta: Ssta, swing: tuple[NDArray[np.float64], NDArray[np.float64]], boxes: Sequence[ObstacleBox]
+) -> ObstacleBox:
+    """The first box along x that a swing from ``swing[0]`` to ``swing[1]`` passes (its band), else the nearest."""
+    x0, x1 = sorted((float(swing[0][0]), float(swing[1][0])))
+    passed = [b for b in boxes if ssta.foothold_band(b)[1] > x0 and ssta.foothold_band(b)[0] < x1]
+    if passed:
+        return min(passed, key=lambda b: float(b.lower[0]))
+    return min(boxes, key=lambda b: abs(0.5 * float(b.lower[0] + b.upper[0]) - x1))

@@ -7,7 +7,13 @@ import pytest
 
 from redundancy_gym.constants import GRAVITY
 from redundancy_gym.controllers import ControllerError
-from redundancy_gym.controllers.walking import ServoFeedforward, WalkingController, WalkingIkdConfig
+from redundancy_gym.controllers.walking import (
+    CompiledServoFeedforward,
+    ServoFeedforward,
+    WalkingController,
+    WalkingIkConfig,
+    WalkingIkdConfig,
+)
 from redundancy_gym.envs.biped_walk import BipedWalkEnv
 from redundancy_gym.model import RobotModel
 
@@ -34,12 +40,18 @@ def test_env_reports_the_servo_gains_of_its_model_file(stiffness: np.ndarray) ->
     assert (stiffness[3], stiffness[4], stiffness[6]) == (5000.0, 3000.0, 300.0)
 
 
+TWINS = [ServoFeedforward, CompiledServoFeedforward]
+
+
+@pytest.mark.parametrize("twin", TWINS)
 @pytest.mark.parametrize(("contact", "right_load"), [((True, True), 0.3), ((True, False), 1.0), ((False, True), 0.0)])
-def test_contact_wrenches_balance_the_base(model: RobotModel, stiffness: np.ndarray, contact, right_load) -> None:
+def test_contact_wrenches_balance_the_base(
+    model: RobotModel, stiffness: np.ndarray, contact, right_load, twin: type[ServoFeedforward]
+) -> None:
     rng = np.random.default_rng(4)
     q = standing(model)
     qdot, qddot = 0.3 * rng.normal(size=model.nv), rng.normal(size=model.nv)
-    result = ServoFeedforward(model, stiffness).torques(q, qdot, qddot, contact, right_load)
+    result = twin(model, stiffness).torques(q, qdot, qddot, contact, right_load)
     tau = model.inverse_dynamics(q, qdot, qddot) + model.joint_damping * qdot
     for i, wrench in enumerate(result.wrenches):
         if contact[i]:
@@ -50,6 +62,48 @@ def test_contact_wrenches_balance_the_base(model: RobotModel, stiffness: np.ndar
     assert result.base_residual < 1e-8 * np.max(np.abs(result.torques))
     assert np.allclose(result.torques, tau[6:])
     assert np.allclose(result.offsets, result.torques / stiffness)
+
+
+def test_the_compiled_twin_gives_the_references_torques_and_wrenches(model: RobotModel, stiffness: np.ndarray) -> None:
+    rng = np.random.default_rng(11)
+    reference, compiled = (
+        ServoFeedforward(model, stiffness, gain=0.8),
+        CompiledServoFeedforward(model, stiffness, gain=0.8),
+    )
+    # double and single support, a foot at its touchdown (load below MIN_LOAD) and flight
+    cases = [
+        ((True, True), 0.37),
+        ((False, True), 0.0),
+        ((True, True), 1e-4),
+        ((True, False), 1.0),
+        ((False, False), 0.5),
+    ]
+    for contact, right_load in cases:
+        q = standing(model)
+        q[7:] += 0.05 * rng.normal(size=model.nq - 7)
+        qdot, qddot = 0.5 * rng.normal(size=model.nv), 2.0 * rng.normal(size=model.nv)
+        a = reference.torques(q, qdot, qddot, contact, right_load)
+        b = compiled.torques(q, qdot, qddot, contact, right_load)
+        scale = np.max(np.abs(a.torques))
+        assert np.max(np.abs(a.torques - b.torques)) < 1e-10 * scale, contact
+        assert np.max(np.abs(a.offsets - b.offsets)) < 1e-10 * np.max(np.abs(a.offsets))
+        assert np.max(np.abs(a.wrenches - b.wrenches)) < 1e-10 * max(1.0, np.max(np.abs(a.wrenches)))
+        assert b.base_residual == pytest.approx(a.base_residual, rel=1e-9, abs=1e-9 * scale)
+
+
+def test_the_walking_controller_picks_the_twin_by_its_backend(model: RobotModel, stiffness: np.ndarray) -> None:
+    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
+    for backend, twin in (("compiled", CompiledServoFeedforward), ("python", ServoFeedforward)):
+        controller = WalkingController(
+            model,
+            0.004,
+            lower,
+            upper,
+            ik=WalkingIkConfig(backend=backend),
+            ikd=WalkingIkdConfig(),
+            servo_stiffness=stiffness,
+        )
+        assert type(controller.feedforward) is twin
 
 
 def test_standing_weight_is_split_by_the_load_share(model: RobotModel, stiffness: np.ndarray) -> None:
@@ -94,8 +148,9 @@ def test_invalid_arguments_are_named(model: RobotModel, stiffness: np.ndarray) -
     with pytest.raises(ControllerError, match="gain"):
         ServoFeedforward(model, stiffness, gain=-1.0)
     zero = np.zeros(model.nv)
-    with pytest.raises(ControllerError, match="right_load"):
-        ServoFeedforward(model, stiffness).torques(standing(model), zero, zero, (True, True), 1.5)
+    for twin in TWINS:
+        with pytest.raises(ControllerError, match="right_load"):
+            twin(model, stiffness).torques(standing(model), zero, zero, (True, True), 1.5)
 
 
 def test_the_clik_walker_cannot_feed_forward(model: RobotModel, stiffness: np.ndarray) -> None:

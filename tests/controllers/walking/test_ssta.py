@@ -110,6 +110,41 @@ def test_a_wall_is_too_large_and_the_walk_stops_in_front_of_it():
         assert pattern.foothold(j)[0] <= front + 1e-12
 
 
+def test_a_stop_in_front_of_a_wall_names_the_wall_as_impassable_and_its_limits():
+    volumes = rectangle(1.5, 2.0, 1.0, 0.2)
+    pattern, _ = pattern_with(volumes)
+    reason = pattern.stop_reason
+    assert reason is not None
+    assert reason.foothold == pattern.stop_index
+    assert reason.cause == "too_large" and reason.classification == "too_large" and reason.impassable
+    np.testing.assert_array_equal(reason.box.lower, bounding_boxes(volumes)[0].lower)
+    # 1.1 m (1 m and the 0.1 m swept radius) + 0.05 m clearance above the 0.3 m the leg reaches; 2 m wide, beyond
+    # the line's 0.3 m shift
+    assert "1.150 m > max_step_over_height 0.300" in reason.limits
+    assert "sidestep: beyond max_line_shift 0.300 m" in reason.limits
+    assert "too_large before foothold" in reason.describe()
+
+
+def test_no_stop_has_no_reason_and_a_passable_box_reads_within_its_limits():
+    pattern, ssta = pattern_with(beam())
+    assert pattern.stop_index is None and pattern.stop_reason is None
+    limits = ssta.limits(bounding_boxes(beam())[0])
+    assert "0.251 m <= max_step_over_height 0.300" in limits  # 0.201 m + 0.05 m clearance
+    assert "sidestep: beyond max_line_shift" in limits  # 0.43 m wide: over it, not beside it
+
+
+def test_a_foothold_that_fits_nowhere_stops_the_walk_with_no_foothold():
+    # a beam too deep for a foothold in front of it within the step limits and the stance foot right before it
+    volumes = rectangle(0.5, 2.0, 0.05, 0.2)
+    config = SstaConfig(max_step_length=0.3)
+    pattern, ssta = pattern_with(volumes, config)
+    reason = pattern.stop_reason
+    assert reason is not None and pattern.stop_index is not None
+    assert reason.cause == "no_foothold"
+    # the beam is low enough to step over: the stop is not one the classification allows
+    assert reason.classification == "step_over" and not reason.impassable
+
+
 def test_footholds_keep_the_margin_and_take_the_smaller_step_change():
     box = bounding_boxes(beam())[0]
     ssta = Ssta(lanes=LANES)
