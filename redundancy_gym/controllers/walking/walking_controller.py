@@ -812,7 +812,8 @@ class WalkingController:
         if self._obstacle_volumes and start.step != self._obstacle_step:
             # once a step, the obstacles are mapped into the plan's frame again as the robot drifts from it
             self._obstacle_step = start.step
-            self._map_obstacles()
+            # a walk stepping in place in front of a passable box plans on from where its feet stand
+            self._map_obstacles(force=self.pattern.resumable(self.time))
             if self._next is None:
                 start = self.pattern.sample(self.time)
         # the measured DCM, c + c_dot / omega (x, y), in floats

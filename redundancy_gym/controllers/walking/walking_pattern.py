@@ -193,6 +193,10 @@ class WalkingPattern:
         self._modifications: dict[int, SwingModification] = {}
         self._stop: int | None = None
         self._stop_cause: tuple[int, str, ObstacleBox] | None = None  # (foothold, cause, box) of the last stop set
+        # earlier stops in front of passable boxes that the walk resumed from: footholds [stop, resume) in place,
+        # and the moves along x that bring the footholds from each resume on back to the feet (not to steps in place)
+        self._paused: list[tuple[int, int]] = []
+        self._resumes: list[tuple[int, float]] = []
         # the walking line's sideways offsets [m] per foothold (sidesteps, :meth:`set_obstacles`)
         self._line: dict[int, float] = {}
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
@@ -219,18 +223,10 @@ class WalkingPattern:
             return self._start_feet[j].copy()
         side = RIGHT if j % 2 == 0 else LEFT
         if self._stop is not None and j >= self._stop:
-            # stopped in front of a box too large to pass: the feet step in place beside the last foothold
-            last = self.foothold(self._stop - 1)
-            own = self.foothold(self._stop - 1 if (self._stop - 1) % 2 == j % 2 else self._stop - 2)
-            # beside the other foot, unless a box stands there in this foot's lane (a post the other foot passed)
-            x = last[0]
-            if self._ssta is not None and self._ssta.in_band(float(x), float(own[1]), self._boxes):
-                x = own[0]
-            h = np.array([x, own[1], own[2]])
-            for first, shift in self._shifts:  # push recovery still moves the steps in place
-                if self._stop <= first <= j:
-                    h[:2] += shift
-            return h
+            return self._in_place(j, self._stop)
+        for stop, resume in self._paused:
+            if stop <= j < resume:
+                return self._in_place(j, stop)
         if self._turned:
             x, y, heading = self._path(j)
             # a turned foot is set wider by its heading change times the toe length: the feet of a turn would
@@ -242,6 +238,9 @@ class WalkingPattern:
             for first, shift in self._shifts:
                 if j >= first:
                     h[:2] += shift
+            for first, dx in self._resumes:
+                if j >= first:
+                    h[0] += dx
             h[1] += self._line.get(j, 0.0)
             return h
         # in Python floats, one array at the end (runs several times per control period): the array form's
@@ -257,7 +256,25 @@ class WalkingPattern:
             if j >= first:
                 dx, dy = ((j - first + 1) * delta).tolist()
                 x, y = x + dx, y + dy
+        for first, dx in self._resumes:
+            if j >= first:
+                x += dx
         return np.array((x, y + self._line.get(j, 0.0), self.ground))
+
+    def _in_place(self, j: int, stop: int) -> NDArray[np.float64]:
+        """Foothold ``j`` of a walk stopped in front of a box from foothold ``stop`` on: the feet step in place
+        beside the last foothold before it."""
+        last = self.foothold(stop - 1)
+        own = self.foothold(stop - 1 if (stop - 1) % 2 == j % 2 else stop - 2)
+        # beside the other foot, unless a box stands there in this foot's lane (a post the other foot passed)
+        x = last[0]
+        if self._ssta is not None and self._ssta.in_band(float(x), float(own[1]), self._boxes):
+            x = own[0]
+        h = np.array([x, own[1], own[2]])
+        for first, shift in self._shifts:  # push recovery still moves the steps in place
+            if stop <= first <= j:
+                h[:2] += shift
+        return h
 
     def heading(self, j: int) -> float:
         """Heading [rad] of foothold ``h_j`` about the vertical (0: the starting heading, +x; positive: to the
@@ -381,6 +398,26 @@ class WalkingPattern:
         j, why, box = cause
         return StopReason(j, why, box, self._ssta.classify(box).classification, self._ssta.limits(box))
 
+    def resumable(self, t: float) -> bool:
+        """Whether the walk steps in place at ``t`` [s] in front of a box that is not too large to pass: the next
+        :meth:`set_obstacles` then plans the walk on from the feet where they stand (a stop only stays where the
+        box is impassable for this robot)."""
+        if self._stop is None or self._ssta is None:
+            return False
+        k = self.step_at(t)
+        reason = self.stop_reason
+        return self._stop < (k + 3 if k >= 0 else 2) and reason is not None and not reason.impassable
+
+    def _resume(self, first: int) -> None:
+        """Walk on from foothold ``first`` after the stop before it: the footholds from the stop to ``first`` stay
+        in place, and ``first`` is a step ahead of the foothold before it, the later ones following."""
+        assert self._stop is not None
+        behind = self.foothold(first - 1)
+        self._paused.append((self._stop, first))
+        self._stop, self._stop_cause = None, None
+        nominal = self.foothold(first)
+        self._resumes.append((first, float(behind[0]) + self.step_length - float(nominal[0])))
+
     def _set_stop(self, j: int, cause: str, box: ObstacleBox) -> None:
         self._stop = j
         self._stop_cause = (j, cause, box)
@@ -422,6 +459,9 @@ class WalkingPattern:
         changed = False
         if self._stop is not None and self._stop >= first:
             self._stop = None
+            changed = True
+        elif self.resumable(t):
+            self._resume(first)
             changed = True
         walls = [(ssta.foothold_band(b)[0], b) for b in self._boxes if ssta.classify(b).classification == "too_large"]
         wall, wall_box = min(walls, key=lambda w: w[0], default=(np.inf, None))

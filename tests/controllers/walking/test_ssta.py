@@ -145,6 +145,42 @@ def test_a_foothold_that_fits_nowhere_stops_the_walk_with_no_foothold():
     assert reason.classification == "step_over" and not reason.impassable
 
 
+def test_a_walk_stopped_in_front_of_a_wall_stays_stopped():
+    pattern, ssta = pattern_with(rectangle(1.5, 2.0, 1.0, 0.2))
+    stop = pattern.stop_index
+    assert stop is not None
+    t = pattern.step_start(stop) + 0.1  # stepping in place
+    assert not pattern.resumable(t)
+    before = [pattern.foothold(j) for j in range(stop - 2, stop + 6)]
+    pattern.set_obstacles(t, pattern.obstacle_boxes, ssta)
+    assert pattern.stop_index == stop
+    for j, h in zip(range(stop - 2, stop + 6), before, strict=True):
+        np.testing.assert_array_equal(pattern.foothold(j), h)
+
+
+def test_a_walk_stopped_in_front_of_a_passable_box_plans_on_from_where_its_feet_stand():
+    pattern, ssta = pattern_with(rectangle(0.5, 2.0, 0.05, 0.2), SstaConfig(max_step_length=0.3))
+    stop = pattern.stop_index
+    assert stop is not None and pattern.stop_reason is not None and not pattern.stop_reason.impassable
+    t = pattern.step_start(stop) + 0.1
+    assert pattern.resumable(t)
+    first = pattern.step_at(t) + 3
+    begun = [pattern.foothold(j) for j in range(stop - 2, first)]  # swings begun or planned stay where they are
+    # the box still blocks: the walk stops again, its feet where they stood and no step ahead of them
+    pattern.set_obstacles(t, pattern.obstacle_boxes, ssta)
+    assert pattern.stop_index == first and pattern.stop_reason is not None
+    for j, h in zip(range(stop - 2, first), begun, strict=True):
+        np.testing.assert_array_equal(pattern.foothold(j), h)
+    assert all(pattern.foothold(j)[0] <= max(h[0] for h in begun) for j in range(first, first + 4))
+    # mapped again beside the path (the robot's drift moves the boxes it maps): the walk goes on from its feet
+    assert pattern.set_obstacles(t, bounding_boxes(rectangle(0.5, 0.4, 0.05, 0.2, y=1.0)), ssta)
+    assert pattern.stop_index is None and pattern.stop_reason is None
+    for j, h in zip(range(stop - 2, first), begun, strict=True):
+        np.testing.assert_array_equal(pattern.foothold(j), h)
+    steps = np.diff([pattern.foothold(j)[0] for j in range(first - 1, first + 6)])
+    np.testing.assert_allclose(steps, pattern.step_length)  # a step ahead of the feet, then the nominal steps
+
+
 def test_footholds_keep_the_margin_and_take_the_smaller_step_change():
     box = bounding_boxes(beam())[0]
     ssta = Ssta(lanes=LANES)
