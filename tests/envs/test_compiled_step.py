@@ -38,6 +38,13 @@ ROUND_OFF = {
     "goal_error",
     "tracking_error",
     "reward_position",
+    # PlanarReach's tracking error (a 2-norm: NumPy's through BLAS, whose AVX-512 kernels fuse the multiply-adds) and
+    # what follows from it
+    "reward_tracking",
+    "max_tracking_error",
+    # arccos of the torso's z-z entry: NumPy's SIMD arccos on AVX-512 machines against the kernel's libm acos
+    # (1 ulp apart on AMD EPYC with AVX-512; equal on machines without it)
+    "torso_tilt",
 }
 """The ``info`` keys that agree to round-off only (all others and every observation: bit for bit)."""
 
