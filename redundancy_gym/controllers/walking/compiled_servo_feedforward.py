@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 from numba import njit
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from ...kernel_options import JIT
 from ..exceptions import ControllerError
@@ -81,21 +81,12 @@ def _split(
 
 class CompiledServoFeedforward(ServoFeedforward):
     """:class:`ServoFeedforward` with the split of the contact wrenches and the torques compiled (same arguments,
-    same results to round-off)."""
+    same results to round-off): its :meth:`~ServoFeedforward.torques`, with one kernel after the RNEA."""
 
-    def torques(
-        self,
-        q: ArrayLike,
-        qdot: ArrayLike,
-        qddot: ArrayLike,
-        contact: tuple[bool, bool],
-        right_load: float,
+    def _balance(
+        self, tau: NDArray[np.float64], qdot: NDArray[np.float64], contact: tuple[bool, bool], right_load: float
     ) -> ServoFeedforwardTorques:
-        """As :meth:`ServoFeedforward.torques`."""
-        if not (math.isfinite(right_load) and 0.0 <= right_load <= 1.0):
-            raise ControllerError(f"right_load must lie in [0, 1], got {right_load!r}")
         model = self.model
-        tau = model.inverse_dynamics(q, qdot, qddot)  # the kinematic cache at q for the Jacobians
         loads = np.array((right_load, 1.0 - right_load))
         jacobians = np.zeros((2, 6, model.nv))
         for i in range(2):
@@ -104,9 +95,8 @@ class CompiledServoFeedforward(ServoFeedforward):
             else:
                 loads[i] = 0.0
         wrenches = np.empty((2, 6))
-        velocity: NDArray[np.float64] = np.ascontiguousarray(qdot, dtype=np.float64)
         joint, offsets, residual = _split(
-            tau, velocity, self._damping, jacobians, loads, self.gain, self.stiffness, wrenches
+            tau, np.ascontiguousarray(qdot), self._damping, jacobians, loads, self.gain, self.stiffness, wrenches
         )
         if math.isnan(residual):
             raise ControllerError("the soles' Jacobians give a singular base block: no contact wrench balances it")

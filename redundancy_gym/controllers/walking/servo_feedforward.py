@@ -98,9 +98,16 @@ class ServoFeedforward:
         """
         if not (math.isfinite(right_load) and 0.0 <= right_load <= 1.0):
             raise ControllerError(f"right_load must lie in [0, 1], got {right_load!r}")
+        tau = self.model.inverse_dynamics(q, qdot, qddot)  # also the kinematic cache at q for the Jacobians
+        return self._balance(tau, np.asarray(qdot, dtype=np.float64), contact, right_load)
+
+    def _balance(
+        self, tau: NDArray[np.float64], qdot: NDArray[np.float64], contact: tuple[bool, bool], right_load: float
+    ) -> ServoFeedforwardTorques:
+        """The torques from the RNEA torques ``tau`` at the velocity ``qdot``: the damping added, the contact
+        wrenches split (the module docstring) and taken off, the offsets."""
         model = self.model
-        tau = model.inverse_dynamics(q, qdot, qddot)  # also the kinematic cache at q for the Jacobians
-        tau += self._damping * np.asarray(qdot, dtype=np.float64)
+        tau = tau + self._damping * qdot
         loads = (right_load, 1.0 - right_load)
         feet = [i for i in range(2) if contact[i] and loads[i] > MIN_LOAD]
         wrenches = np.zeros((2, 6))

@@ -402,11 +402,12 @@ class WalkingPattern:
         """Whether the walk steps in place at ``t`` [s] in front of a box that is not too large to pass: the next
         :meth:`set_obstacles` then plans the walk on from the feet where they stand (a stop only stays where the
         box is impassable for this robot)."""
-        if self._stop is None or self._ssta is None:
+        cause = self._stop_cause
+        if self._stop is None or self._ssta is None or cause is None or cause[0] != self._stop:
             return False
         k = self.step_at(t)
-        reason = self.stop_reason
-        return self._stop < (k + 3 if k >= 0 else 2) and reason is not None and not reason.impassable
+        # the class alone (stop_reason would also write out the limits)
+        return self._stop < (k + 3 if k >= 0 else 2) and self._ssta.classify(cause[2]).classification != "too_large"
 
     def _resume(self, first: int) -> None:
         """Walk on from foothold ``first`` after the stop before it: the footholds from the stop to ``first`` stay
