@@ -392,8 +392,8 @@ class WalkingPattern:
     def stop_reason(self) -> StopReason | None:
         """Why the walk stops at :attr:`stop_index`: the cause, the box and its class with the limits that decide
         it (None: the walk does not stop)."""
-        cause = self._stop_cause
-        if self._stop is None or self._ssta is None or cause is None or cause[0] != self._stop:
+        cause = self._active_stop_cause()
+        if cause is None or self._ssta is None:
             return None
         j, why, box = cause
         return StopReason(j, why, box, self._ssta.classify(box).classification, self._ssta.limits(box))
@@ -402,12 +402,12 @@ class WalkingPattern:
         """Whether the walk steps in place at ``t`` [s] in front of a box that is not too large to pass: the next
         :meth:`set_obstacles` then plans the walk on from the feet where they stand (a stop only stays where the
         box is impassable for this robot)."""
-        cause = self._stop_cause
-        if self._stop is None or self._ssta is None or cause is None or cause[0] != self._stop:
+        cause = self._active_stop_cause()
+        if cause is None or self._ssta is None:
             return False
         k = self.step_at(t)
         # the class alone (stop_reason would also write out the limits)
-        return self._stop < (k + 3 if k >= 0 else 2) and self._ssta.classify(cause[2]).classification != "too_large"
+        return cause[0] < (k + 3 if k >= 0 else 2) and self._ssta.classify(cause[2]).classification != "too_large"
 
     def _resume(self, first: int) -> None:
         """Walk on from foothold ``first`` after the stop before it: the footholds from the stop to ``first`` stay
@@ -418,6 +418,11 @@ class WalkingPattern:
         self._stop, self._stop_cause = None, None
         nominal = self.foothold(first)
         self._resumes.append((first, float(behind[0]) + self.step_length - float(nominal[0])))
+
+    def _active_stop_cause(self) -> tuple[int, str, ObstacleBox] | None:
+        """``(foothold, cause, box)`` of the stop in force (None: none, or one set without a box)."""
+        cause = self._stop_cause
+        return cause if self._stop is not None and cause is not None and cause[0] == self._stop else None
 
     def _set_stop(self, j: int, cause: str, box: ObstacleBox) -> None:
         self._stop = j
@@ -551,9 +556,9 @@ class WalkingPattern:
             if offset != 0.0:
                 line[j] = float(offset)
         if plan.blocked is not None:
-            swing = (bases[plan.blocked], bases[min(plan.blocked + 2, len(bases) - 1)])
             self._stop = first + plan.blocked
             if boxes:  # (the plan meets no box without one; a blocked plan then only lacks a stance)
+                swing = (bases[plan.blocked], bases[min(plan.blocked + 2, len(bases) - 1)])
                 self._set_stop(self._stop, "blocked_swing", _box_passed(ssta, swing, boxes))
             for j in [j for j in line if j >= self._stop]:
                 del line[j]
