@@ -22,12 +22,18 @@ __all__ = [
     "JOINT_DOFS",
     "PRISMATIC",
     "REVOLUTE",
+    "chain_acceleration_terms",
     "chain_centroidal",
+    "chain_centroidal_drift",
+    "chain_difference",
     "chain_forward",
     "chain_integrate",
     "chain_jacobian",
     "chain_jacobian_transpose_times",
+    "chain_motion",
+    "chain_rnea",
     "place_frame",
+    "point_drift",
 ]
 
 REVOLUTE, PRISMATIC, FREE = 0, 1, 2
@@ -360,3 +366,402 @@ def chain_integrate(joint_type, q_index, v_index, q, v, dt, out):
             norm = -norm
         out[k], out[k + 1], out[k + 2] = px, py, pz
         out[k + 3], out[k + 4], out[k + 5], out[k + 6] = nx / norm, ny / norm, nz / norm, nw / norm
+
+
+@njit(**JIT)
+def chain_motion(parent, joint_type, v_index, rotation, position, world_axis, v, a, omega, omega_dot, velocity, drift):
+    """The motion of every joint frame at the velocity ``v`` and joint acceleration ``a`` after
+    :func:`chain_forward`, world-aligned: angular velocity ``omega`` (J, 3) [rad/s] and acceleration ``omega_dot``
+    (J, 3) [rad/s^2], the velocity ``velocity`` (J, 3) [m/s] and classical acceleration ``drift`` (J, 3) [m/s^2]
+    of the frame's origin. With ``a = 0`` these are the drift terms ``Jdot qdot`` of the point Jacobians.
+    Parents precede children.
+
+    A joint's axis turns with its parent (``d/dt a = omega_p x a``), and its origin is fixed in the parent
+    (prismatic: slides along ``a``), so ``omega_dot = omega_dot_p + omega_p x a qdot + a qddot`` and the origin's
+    acceleration is the parent's point acceleration ``a_p + omega_dot_p x r + omega_p x (omega_p x r)`` (plus
+    ``2 omega_p x a qdot + a qddot`` for a slide). A free flyer (the root) with the body-frame twist ``[v; omega]``
+    and its rate: the origin's classical acceleration is ``R vdot + omega x v`` and ``omega_dot = R omegadot``."""
+    for j in range(parent.shape[0]):
+        p = parent[j]
+        c = v_index[j]
+        wx = wy = wz = dwx = dwy = dwz = 0.0
+        vx = vy = vz = ax = ay = az = 0.0
+        if p >= 0:
+            wx, wy, wz = omega[p, 0], omega[p, 1], omega[p, 2]
+            dwx, dwy, dwz = omega_dot[p, 0], omega_dot[p, 1], omega_dot[p, 2]
+            rx, ry, rz = (
+                position[j, 0] - position[p, 0],
+                position[j, 1] - position[p, 1],
+                position[j, 2] - position[p, 2],
+            )
+            # w x r, w x (w x r), wdot x r
+            ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+            vx, vy, vz = velocity[p, 0] + ux, velocity[p, 1] + uy, velocity[p, 2] + uz
+            ax = drift[p, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy
+            ay = drift[p, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz
+            az = drift[p, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux
+        if joint_type[j] == FREE:
+            lx = rotation[j, 0, 0] * v[c] + rotation[j, 0, 1] * v[c + 1] + rotation[j, 0, 2] * v[c + 2]
+            ly = rotation[j, 1, 0] * v[c] + rotation[j, 1, 1] * v[c + 1] + rotation[j, 1, 2] * v[c + 2]
+            lz = rotation[j, 2, 0] * v[c] + rotation[j, 2, 1] * v[c + 1] + rotation[j, 2, 2] * v[c + 2]
+            ox = rotation[j, 0, 0] * v[c + 3] + rotation[j, 0, 1] * v[c + 4] + rotation[j, 0, 2] * v[c + 5]
+            oy = rotation[j, 1, 0] * v[c + 3] + rotation[j, 1, 1] * v[c + 4] + rotation[j, 1, 2] * v[c + 5]
+            oz = rotation[j, 2, 0] * v[c + 3] + rotation[j, 2, 1] * v[c + 4] + rotation[j, 2, 2] * v[c + 5]
+            # a free flyer is the root (the chains' trees have no other)
+            vx, vy, vz = lx, ly, lz
+            ax = (
+                oy * lz
+                - oz * ly
+                + rotation[j, 0, 0] * a[c]
+                + rotation[j, 0, 1] * a[c + 1]
+                + rotation[j, 0, 2] * a[c + 2]
+            )
+            ay = (
+                oz * lx
+                - ox * lz
+                + rotation[j, 1, 0] * a[c]
+                + rotation[j, 1, 1] * a[c + 1]
+                + rotation[j, 1, 2] * a[c + 2]
+            )
+            az = (
+                ox * ly
+                - oy * lx
+                + rotation[j, 2, 0] * a[c]
+                + rotation[j, 2, 1] * a[c + 1]
+                + rotation[j, 2, 2] * a[c + 2]
+            )
+            dwx = rotation[j, 0, 0] * a[c + 3] + rotation[j, 0, 1] * a[c + 4] + rotation[j, 0, 2] * a[c + 5]
+            dwy = rotation[j, 1, 0] * a[c + 3] + rotation[j, 1, 1] * a[c + 4] + rotation[j, 1, 2] * a[c + 5]
+            dwz = rotation[j, 2, 0] * a[c + 3] + rotation[j, 2, 1] * a[c + 4] + rotation[j, 2, 2] * a[c + 5]
+            wx, wy, wz = ox, oy, oz
+        else:
+            qd, qdd = v[c], a[c]
+            ex, ey, ez = world_axis[j, 0] * qd, world_axis[j, 1] * qd, world_axis[j, 2] * qd
+            if joint_type[j] == PRISMATIC:
+                vx, vy, vz = vx + ex, vy + ey, vz + ez
+                ax += 2.0 * (wy * ez - wz * ey) + world_axis[j, 0] * qdd
+                ay += 2.0 * (wz * ex - wx * ez) + world_axis[j, 1] * qdd
+                az += 2.0 * (wx * ey - wy * ex) + world_axis[j, 2] * qdd
+            else:
+                dwx += wy * ez - wz * ey + world_axis[j, 0] * qdd
+                dwy += wz * ex - wx * ez + world_axis[j, 1] * qdd
+                dwz += wx * ey - wy * ex + world_axis[j, 2] * qdd
+                wx, wy, wz = wx + ex, wy + ey, wz + ez
+        omega[j, 0], omega[j, 1], omega[j, 2] = wx, wy, wz
+        omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2] = dwx, dwy, dwz
+        velocity[j, 0], velocity[j, 1], velocity[j, 2] = vx, vy, vz
+        drift[j, 0], drift[j, 1], drift[j, 2] = ax, ay, az
+
+
+@njit(**JIT)
+def point_drift(position, omega, omega_dot, drift, joint, px, py, pz, out):
+    """``Jdot qdot`` (6) of the world point ``(px, py, pz)`` [m] moving with ``joint`` after :func:`chain_motion`:
+    its classical acceleration at zero joint acceleration [m/s^2], then the joint's ``omega_dot`` [rad/s^2]."""
+    if joint < 0:
+        out[:] = 0.0
+        return
+    wx, wy, wz = omega[joint, 0], omega[joint, 1], omega[joint, 2]
+    dwx, dwy, dwz = omega_dot[joint, 0], omega_dot[joint, 1], omega_dot[joint, 2]
+    rx, ry, rz = px - position[joint, 0], py - position[joint, 1], pz - position[joint, 2]
+    ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+    out[0] = drift[joint, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy
+    out[1] = drift[joint, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz
+    out[2] = drift[joint, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux
+    out[3], out[4], out[5] = dwx, dwy, dwz
+
+
+@njit(**JIT)
+def chain_centroidal_drift(rotation, position, body_mass, body_com, body_inertia, omega, omega_dot, drift, com, out):
+    """``Adot_G qdot`` (6) [N, N m] after :func:`chain_motion`: the rate of the centroidal momentum at zero joint
+    acceleration, ``sum m_i a_i`` and ``sum (c_i - c) x m_i a_i + I_i omega_dot_i + omega_i x I_i omega_i``
+    (``a_i`` the body CoM's acceleration, ``I_i`` its world inertia; the CoM's own motion drops out of the sum).
+    """
+    s0 = s1 = s2 = s3 = s4 = s5 = 0.0
+    for j in range(position.shape[0]):
+        m = body_mass[j]
+        bx, by, bz = body_com[j, 0], body_com[j, 1], body_com[j, 2]
+        # the body CoM's offset from the joint origin (world) and its acceleration (as point_drift)
+        rx = rotation[j, 0, 0] * bx + rotation[j, 0, 1] * by + rotation[j, 0, 2] * bz
+        ry = rotation[j, 1, 0] * bx + rotation[j, 1, 1] * by + rotation[j, 1, 2] * bz
+        rz = rotation[j, 2, 0] * bx + rotation[j, 2, 1] * by + rotation[j, 2, 2] * bz
+        wx, wy, wz = omega[j, 0], omega[j, 1], omega[j, 2]
+        dwx, dwy, dwz = omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2]
+        ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+        fx = m * (drift[j, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy)
+        fy = m * (drift[j, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz)
+        fz = m * (drift[j, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux)
+        s0 += fx
+        s1 += fy
+        s2 += fz
+        gx, gy, gz = position[j, 0] + rx - com[0], position[j, 1] + ry - com[1], position[j, 2] + rz - com[2]
+        s3 += gy * fz - gz * fy
+        s4 += gz * fx - gx * fz
+        s5 += gx * fy - gy * fx
+        # R I R^T applied to omega and omega_dot: R (I (R^T w))
+        bw0 = rotation[j, 0, 0] * wx + rotation[j, 1, 0] * wy + rotation[j, 2, 0] * wz
+        bw1 = rotation[j, 0, 1] * wx + rotation[j, 1, 1] * wy + rotation[j, 2, 1] * wz
+        bw2 = rotation[j, 0, 2] * wx + rotation[j, 1, 2] * wy + rotation[j, 2, 2] * wz
+        bd0 = rotation[j, 0, 0] * dwx + rotation[j, 1, 0] * dwy + rotation[j, 2, 0] * dwz
+        bd1 = rotation[j, 0, 1] * dwx + rotation[j, 1, 1] * dwy + rotation[j, 2, 1] * dwz
+        bd2 = rotation[j, 0, 2] * dwx + rotation[j, 1, 2] * dwy + rotation[j, 2, 2] * dwz
+        inertia = body_inertia[j]
+        h0 = inertia[0, 0] * bw0 + inertia[0, 1] * bw1 + inertia[0, 2] * bw2
+        h1 = inertia[1, 0] * bw0 + inertia[1, 1] * bw1 + inertia[1, 2] * bw2
+        h2 = inertia[2, 0] * bw0 + inertia[2, 1] * bw1 + inertia[2, 2] * bw2
+        e0 = inertia[0, 0] * bd0 + inertia[0, 1] * bd1 + inertia[0, 2] * bd2
+        e1 = inertia[1, 0] * bd0 + inertia[1, 1] * bd1 + inertia[1, 2] * bd2
+        e2 = inertia[2, 0] * bd0 + inertia[2, 1] * bd1 + inertia[2, 2] * bd2
+        lx = rotation[j, 0, 0] * h0 + rotation[j, 0, 1] * h1 + rotation[j, 0, 2] * h2
+        ly = rotation[j, 1, 0] * h0 + rotation[j, 1, 1] * h1 + rotation[j, 1, 2] * h2
+        lz = rotation[j, 2, 0] * h0 + rotation[j, 2, 1] * h1 + rotation[j, 2, 2] * h2
+        s3 += rotation[j, 0, 0] * e0 + rotation[j, 0, 1] * e1 + rotation[j, 0, 2] * e2 + wy * lz - wz * ly
+        s4 += rotation[j, 1, 0] * e0 + rotation[j, 1, 1] * e1 + rotation[j, 1, 2] * e2 + wz * lx - wx * lz
+        s5 += rotation[j, 2, 0] * e0 + rotation[j, 2, 1] * e1 + rotation[j, 2, 2] * e2 + wx * ly - wy * lx
+    out[0], out[1], out[2], out[3], out[4], out[5] = s0, s1, s2, s3, s4, s5
+
+
+@njit(**JIT)
+def chain_acceleration_terms(
+    parent,
+    placement_rotation,
+    placement_translation,
+    axis,
+    joint_type,
+    q_index,
+    v_index,
+    body_mass,
+    body_com,
+    body_inertia,
+    frame_joint,
+    frame_rotation,
+    frame_translation,
+    q,
+    v,
+    work_rotation,
+    work_position,
+    work_axis,
+    work_omega,
+    work_omega_dot,
+    work_velocity,
+    work_drift,
+    work_composite,
+    rotation,
+    position,
+    jacobian,
+    drift,
+    com,
+    centroidal,
+    centroidal_drift,
+):
+    """What :meth:`~redundancy_gym.model.RobotModel.acceleration_terms` gives, for the frames ``(frame_joint,
+    frame_rotation, frame_translation)`` (:meth:`~redundancy_gym.model.RobotModel.frame_attachment`) at ``(q, v)``:
+    their rotations (k, 3, 3), positions (k, 3) [m], Jacobians (k, 6, nv) and ``Jdot qdot`` (k, 6), the CoM (3)
+    [m], ``A_G`` (6 x nv, linear rows first) and ``Adot_G qdot`` (6), into the last seven arrays; ``work_*``
+    are scratch arrays of the joints (J, 3, 3), (J, 3) x 6 and (J, 13). Returns the total mass [kg]."""
+    chain_forward(
+        parent,
+        placement_rotation,
+        placement_translation,
+        axis,
+        joint_type,
+        q_index,
+        q,
+        work_rotation,
+        work_position,
+        work_axis,
+    )
+    chain_motion(
+        parent,
+        joint_type,
+        v_index,
+        work_rotation,
+        work_position,
+        work_axis,
+        v,
+        np.zeros(v.shape[0]),
+        work_omega,
+        work_omega_dot,
+        work_velocity,
+        work_drift,
+    )
+    for k in range(frame_joint.shape[0]):
+        joint = frame_joint[k]
+        place_frame(
+            work_rotation, work_position, joint, frame_rotation[k], frame_translation[k], rotation[k], position[k]
+        )
+        px, py, pz = position[k, 0], position[k, 1], position[k, 2]
+        chain_jacobian(
+            parent, joint_type, v_index, work_rotation, work_position, work_axis, joint, px, py, pz, jacobian[k]
+        )
+        point_drift(work_position, work_omega, work_omega_dot, work_drift, joint, px, py, pz, drift[k])
+    mass = chain_centroidal(
+        parent,
+        joint_type,
+        v_index,
+        work_rotation,
+        work_position,
+        work_axis,
+        body_mass,
+        body_com,
+        body_inertia,
+        work_composite,
+        com,
+        centroidal[:3],
+        centroidal[3:],
+    )
+    for r in range(3):
+        for c in range(centroidal.shape[1]):
+            centroidal[r, c] *= mass
+    chain_centroidal_drift(
+        work_rotation,
+        work_position,
+        body_mass,
+        body_com,
+        body_inertia,
+        work_omega,
+        work_omega_dot,
+        work_drift,
+        com,
+        centroidal_drift,
+    )
+    return mass
+
+
+@njit(**JIT)
+def chain_rnea(
+    parent,
+    joint_type,
+    v_index,
+    rotation,
+    position,
+    world_axis,
+    body_mass,
+    body_com,
+    body_inertia,
+    armature,
+    gravity,
+    v,
+    a,
+    omega,
+    omega_dot,
+    velocity,
+    acceleration,
+    force,
+    moment,
+    tau,
+):
+    """``tau = M(q) a + h(q, v)`` (nv) by the recursive Newton-Euler algorithm after :func:`chain_forward` at ``q``,
+    as ``pinocchio.rnea`` (the armature's ``armature * a`` included; ``gravity`` the world's (3) [m/s^2]); a free
+    flyer's six entries are the spatial force on it in its own frame at its origin (force, then moment).
+
+    Forward: :func:`chain_motion` with ``a`` into ``omega``, ``omega_dot``, ``velocity`` and ``acceleration``
+    (J, 3). Backward: ``force`` and ``moment`` (J, 3) receive each subtree's wrench about the world origin,
+    ``sum m_i (a_i - g)`` and ``sum c_i x m_i (a_i - g) + I_i omega_dot_i + omega_i x I_i omega_i`` (``a_i`` the
+    body CoM's acceleration, ``I_i`` its world inertia); a revolute joint's torque is its world axis times the
+    moment about its origin, a prismatic one's its axis times the force."""
+    nj = parent.shape[0]
+    chain_motion(
+        parent, joint_type, v_index, rotation, position, world_axis, v, a, omega, omega_dot, velocity, acceleration
+    )
+    for j in range(nj):
+        m = body_mass[j]
+        bx, by, bz = body_com[j, 0], body_com[j, 1], body_com[j, 2]
+        rx = rotation[j, 0, 0] * bx + rotation[j, 0, 1] * by + rotation[j, 0, 2] * bz
+        ry = rotation[j, 1, 0] * bx + rotation[j, 1, 1] * by + rotation[j, 1, 2] * bz
+        rz = rotation[j, 2, 0] * bx + rotation[j, 2, 1] * by + rotation[j, 2, 2] * bz
+        wx, wy, wz = omega[j, 0], omega[j, 1], omega[j, 2]
+        dwx, dwy, dwz = omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2]
+        ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+        fx = m * (acceleration[j, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy - gravity[0])
+        fy = m * (acceleration[j, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz - gravity[1])
+        fz = m * (acceleration[j, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux - gravity[2])
+        cx, cy, cz = position[j, 0] + rx, position[j, 1] + ry, position[j, 2] + rz
+        # R I R^T applied to omega and omega_dot: R (I (R^T w))
+        bw0 = rotation[j, 0, 0] * wx + rotation[j, 1, 0] * wy + rotation[j, 2, 0] * wz
+        bw1 = rotation[j, 0, 1] * wx + rotation[j, 1, 1] * wy + rotation[j, 2, 1] * wz
+        bw2 = rotation[j, 0, 2] * wx + rotation[j, 1, 2] * wy + rotation[j, 2, 2] * wz
+        bd0 = rotation[j, 0, 0] * dwx + rotation[j, 1, 0] * dwy + rotation[j, 2, 0] * dwz
+        bd1 = rotation[j, 0, 1] * dwx + rotation[j, 1, 1] * dwy + rotation[j, 2, 1] * dwz
+        bd2 = rotation[j, 0, 2] * dwx + rotation[j, 1, 2] * dwy + rotation[j, 2, 2] * dwz
+        inertia = body_inertia[j]
+        h0 = inertia[0, 0] * bw0 + inertia[0, 1] * bw1 + inertia[0, 2] * bw2
+        h1 = inertia[1, 0] * bw0 + inertia[1, 1] * bw1 + inertia[1, 2] * bw2
+        h2 = inertia[2, 0] * bw0 + inertia[2, 1] * bw1 + inertia[2, 2] * bw2
+        e0 = inertia[0, 0] * bd0 + inertia[0, 1] * bd1 + inertia[0, 2] * bd2
+        e1 = inertia[1, 0] * bd0 + inertia[1, 1] * bd1 + inertia[1, 2] * bd2
+        e2 = inertia[2, 0] * bd0 + inertia[2, 1] * bd1 + inertia[2, 2] * bd2
+        lx = rotation[j, 0, 0] * h0 + rotation[j, 0, 1] * h1 + rotation[j, 0, 2] * h2
+        ly = rotation[j, 1, 0] * h0 + rotation[j, 1, 1] * h1 + rotation[j, 1, 2] * h2
+        lz = rotation[j, 2, 0] * h0 + rotation[j, 2, 1] * h1 + rotation[j, 2, 2] * h2
+        force[j, 0], force[j, 1], force[j, 2] = fx, fy, fz
+        moment[j, 0] = cy * fz - cz * fy + rotation[j, 0, 0] * e0 + rotation[j, 0, 1] * e1 + rotation[j, 0, 2] * e2
+        moment[j, 1] = cz * fx - cx * fz + rotation[j, 1, 0] * e0 + rotation[j, 1, 1] * e1 + rotation[j, 1, 2] * e2
+        moment[j, 2] = cx * fy - cy * fx + rotation[j, 2, 0] * e0 + rotation[j, 2, 1] * e1 + rotation[j, 2, 2] * e2
+        moment[j, 0] += wy * lz - wz * ly
+        moment[j, 1] += wz * lx - wx * lz
+        moment[j, 2] += wx * ly - wy * lx
+    for j in range(nj - 1, -1, -1):
+        c = v_index[j]
+        fx, fy, fz = force[j, 0], force[j, 1], force[j, 2]
+        ox, oy, oz = position[j, 0], position[j, 1], position[j, 2]
+        # the subtree's moment about the joint origin
+        nx = moment[j, 0] - (oy * fz - oz * fy)
+        ny = moment[j, 1] - (oz * fx - ox * fz)
+        nz = moment[j, 2] - (ox * fy - oy * fx)
+        if joint_type[j] == FREE:
+            for i in range(3):
+                tau[c + i] = rotation[j, 0, i] * fx + rotation[j, 1, i] * fy + rotation[j, 2, i] * fz
+                tau[c + i] += armature[c + i] * a[c + i]
+                tau[c + 3 + i] = rotation[j, 0, i] * nx + rotation[j, 1, i] * ny + rotation[j, 2, i] * nz
+                tau[c + 3 + i] += armature[c + 3 + i] * a[c + 3 + i]
+        elif joint_type[j] == PRISMATIC:
+            tau[c] = world_axis[j, 0] * fx + world_axis[j, 1] * fy + world_axis[j, 2] * fz + armature[c] * a[c]
+        else:
+            tau[c] = world_axis[j, 0] * nx + world_axis[j, 1] * ny + world_axis[j, 2] * nz + armature[c] * a[c]
+        p = parent[j]
+        if p >= 0:
+            for r in range(3):
+                force[p, r] += force[j, r]
+                moment[p, r] += moment[j, r]
+
+
+@njit(**JIT)
+def chain_difference(joint_type, q_index, v_index, q0, q1, out):
+    """``out = q1 (-) q0``, the tangent vector with ``integrate(q0, out, 1) = q1``, as ``pinocchio.difference``: a
+    free flyer's ``log6(M0^-1 M1)`` (``[v; omega]``, the rotation by the relative quaternion's shorter arc), 1-DoF
+    joints ``q1 - q0``."""
+    for j in range(joint_type.shape[0]):
+        k = q_index[j]
+        c = v_index[j]
+        if joint_type[j] != FREE:
+            out[c] = q1[k] - q0[k]
+            continue
+        ax, ay, az, aw = q0[k + 3], q0[k + 4], q0[k + 5], q0[k + 6]
+        bx, by, bz, bw = q1[k + 3], q1[k + 4], q1[k + 5], q1[k + 6]
+        # relative rotation conj(a) * b, on the hemisphere w >= 0 (the shorter arc)
+        rw = aw * bw + ax * bx + ay * by + az * bz
+        rx = aw * bx - ax * bw - ay * bz + az * by
+        ry = aw * by + ax * bz - ay * bw - az * bx
+        rz = aw * bz - ax * by + ay * bx - az * bw
+        if rw < 0.0:
+            rw, rx, ry, rz = -rw, -rx, -ry, -rz
+        s = np.sqrt(rx * rx + ry * ry + rz * rz)
+        theta = 2.0 * np.arctan2(s, rw)
+        # omega = theta * axis: theta / s, whose limit at s -> 0 is 2 / rw
+        scale = theta / s if s > 1e-12 else 2.0 / rw
+        wx, wy, wz = scale * rx, scale * ry, scale * rz
+        # p = R0^T (p1 - p0), with R0 from the first quaternion
+        dx, dy, dz = q1[k] - q0[k], q1[k + 1] - q0[k + 1], q1[k + 2] - q0[k + 2]
+        px = (1.0 - 2.0 * (ay * ay + az * az)) * dx + 2.0 * (ax * ay + az * aw) * dy + 2.0 * (ax * az - ay * aw) * dz
+        py = 2.0 * (ax * ay - az * aw) * dx + (1.0 - 2.0 * (ax * ax + az * az)) * dy + 2.0 * (ay * az + ax * aw) * dz
+        pz = 2.0 * (ax * az + ay * aw) * dx + 2.0 * (ay * az - ax * aw) * dy + (1.0 - 2.0 * (ax * ax + ay * ay)) * dz
+        # v = V^-1 p, V^-1 = I - [w]x / 2 + b [w]x^2, b = (1 - theta sin(theta) / (2 (1 - cos(theta)))) / theta^2
+        t2 = theta * theta
+        if theta < 1e-2:  # its series (the closed form cancels: 1e-10 off at 1e-3 rad), exact to round-off there
+            b = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0
+        else:
+            b = (1.0 - theta * np.sin(theta) / (2.0 * (1.0 - np.cos(theta)))) / t2
+        cx, cy, cz = wy * pz - wz * py, wz * px - wx * pz, wx * py - wy * px
+        ex, ey, ez = wy * cz - wz * cy, wz * cx - wx * cz, wx * cy - wy * cx
+        out[c], out[c + 1], out[c + 2] = px - 0.5 * cx + b * ex, py - 0.5 * cy + b * ey, pz - 0.5 * cz + b * ez
+        out[c + 3], out[c + 4], out[c + 5] = wx, wy, wz

@@ -479,6 +479,17 @@ class RobotModel:
         free base); :meth:`inverse_dynamics` leaves it out."""
         return np.array(self._model.damping, dtype=np.float64)
 
+    @property
+    def armature(self) -> NDArray[np.float64]:
+        """Rotor inertia [kg m^2 or kg] per velocity (nv) as the model file gives it (0 for the free base);
+        :meth:`inverse_dynamics` adds ``armature * qddot``."""
+        return np.array(self._model.armature, dtype=np.float64)
+
+    @property
+    def gravity(self) -> NDArray[np.float64]:
+        """The world's gravity [m/s^2] (3) that :meth:`inverse_dynamics` and :meth:`nonlinear_effects` include."""
+        return np.array(self._model.gravity.linear, dtype=np.float64)
+
     # ------------------------------------------------------------------ integration
     def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
         """Configuration reached from ``q`` after moving with ``qdot`` for ``dt`` [s] (on the configuration

@@ -4,6 +4,7 @@ it, :class:`~redundancy_gym.controllers.walking.WalkingIkd`, lives in the walkin
 
 from ..._moved import forward_attributes
 from .biped_ikd import BipedIkd, BipedIkdReference, BipedIkdResult
+from .compiled_biped_ikd import CompiledBipedIkd
 from .error_compensation import ErrorCompensation, ErrorCompensationOutput
 from .general_ikd import WEIGHTINGS, GeneralIkd, GeneralIkdResult
 from .plan_stabilizer import PlanStabilizer, PlanStabilizerOutput
@@ -13,6 +14,7 @@ __all__ = [
     "BipedIkd",
     "BipedIkdReference",
     "BipedIkdResult",
+    "CompiledBipedIkd",
     "ErrorCompensation",
     "ErrorCompensationOutput",
     "GeneralIkd",

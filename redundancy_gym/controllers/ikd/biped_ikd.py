@@ -195,11 +195,11 @@ class BipedIkd:
         else:
             q, qdot, ref, plan, support = self._checked(q, qdot, reference, stabilize)
             goal = _goal(ref, plan, support)
-        terms = model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
+        terms = self._terms(q, qdot)
         self.terms = terms
         posture = self.posture
         has_posture = posture is not None
-        offset = model.difference(posture, q) if posture is not None else qdot
+        offset = self._difference(posture, q) if posture is not None else qdot
         stiffness = self.posture_stiffness
         if self.objectives:  # the kernel's preferred -K offset then carries -K (q - posture) - k_H dH/dq
             limits = _joint_limits(self.objectives, model.nq, model.nv)
@@ -207,6 +207,7 @@ class BipedIkd:
             if limits is not None:  # the walking controller's one joint-limit objective: one compiled call
                 combined = _limit_offset(q, offset, limits, self.objective_gain, stiffness, has_posture)
             if combined is None:  # other objectives, or non-finite distances (the objective's own error)
+                self._prepare_objectives(q)
                 gradient = sum_objectives(self.objectives, model, np.asarray(q, dtype=np.float64)).gradient
                 combined = (stiffness * offset if has_posture else 0.0) + self.objective_gain * gradient
             offset = combined
@@ -246,6 +247,23 @@ class BipedIkd:
             diagonal is not None,
         )
         return BipedIkdResult(qddot, com_acceleration, residual, sigma_min, ok, "ok" if ok else "singular", moment)
+
+    def integrate(self, q: ArrayLike, qdot: ArrayLike, dt: float) -> NDArray[np.float64]:
+        """The configuration reached from ``q`` moving with ``qdot`` for ``dt`` [s] (:meth:`RobotModel.integrate`)."""
+        return self.model.integrate(q, qdot, dt)
+
+    def _difference(self, q0: NDArray[np.float64], q1: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``q1 (-) q0`` (nv) of checked configurations (:meth:`RobotModel.difference`)."""
+        return self.model.difference(q0, q1)
+
+    def _terms(self, q: NDArray[np.float64], qdot: NDArray[np.float64]) -> AccelerationTerms:
+        """The soles' and the torso's placements, Jacobians and drifts, the CoM and the centroidal map at the
+        checked ``(q, qdot)`` (:meth:`RobotModel.acceleration_terms`, which leaves the model's cache at ``q``)."""
+        return self.model.acceleration_terms(q, qdot, (*self.feet_frames, self.torso_frame))
+
+    def _prepare_objectives(self, q: NDArray[np.float64]) -> None:
+        """Make the model ready for the objectives' :meth:`~Objective.evaluate` at ``q`` (:meth:`_terms` left its
+        cache there)."""
 
     def _checked(
         self, q: ArrayLike, qdot: ArrayLike, reference: BipedIkdReference, stabilize: bool

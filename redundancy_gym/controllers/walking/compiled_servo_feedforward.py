@@ -1,20 +1,24 @@
-"""A :class:`ServoFeedforward` with its wrench split and torques in one compiled kernel (the same results to
-round-off, held equal by ``tests/controllers/walking/test_servo_feedforward.py``).
+"""A :class:`ServoFeedforward` compiled (the same results to round-off, held equal by
+``tests/controllers/walking/test_servo_feedforward.py``).
 
 The Python reference spends most of its time on small NumPy operations around pinocchio's RNEA (about 70 us a
-call against 7 us of RNEA and Jacobians); here the model gives the RNEA torques and the soles' Jacobians and one
-kernel does the rest (damping, the base rows' least-squares split (5.92), ``J^T F``, the offsets).
+call against 7 us of RNEA and Jacobians); here one kernel runs the RNEA and the soles' Jacobians on the model's
+exported chain (:func:`~redundancy_gym.model.chain_kernels.chain_rnea`) and another the rest (damping, the base
+rows' least-squares split (5.92), ``J^T F``, the offsets).
 """
 
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ...kernel_options import JIT
+from ...model import RobotModel
+from ...model.chain_kernels import chain_forward, chain_jacobian, chain_rnea, place_frame
 from ..exceptions import ControllerError
 from ..kernels.linalg import cholesky_factor, cholesky_solve
 from .servo_feedforward import MIN_LOAD, ServoFeedforward, ServoFeedforwardTorques
@@ -79,21 +83,143 @@ def _split(
     return joint, joint / stiffness, residual
 
 
-class CompiledServoFeedforward(ServoFeedforward):
-    """:class:`ServoFeedforward` with the split of the contact wrenches and the torques compiled (same arguments,
-    same results to round-off): its :meth:`~ServoFeedforward.torques`, with one kernel after the RNEA."""
+@njit(**JIT)
+def _dynamics(
+    parent: np.ndarray,
+    placement_rotation: np.ndarray,
+    placement_translation: np.ndarray,
+    axis: np.ndarray,
+    joint_type: np.ndarray,
+    q_index: np.ndarray,
+    v_index: np.ndarray,
+    body_mass: np.ndarray,
+    body_com: np.ndarray,
+    body_inertia: np.ndarray,
+    armature: np.ndarray,
+    gravity: np.ndarray,
+    frame_joint: np.ndarray,
+    frame_rotation: np.ndarray,
+    frame_translation: np.ndarray,
+    q: np.ndarray,
+    qdot: np.ndarray,
+    qddot: np.ndarray,
+    loads: np.ndarray,
+    jacobians: np.ndarray,
+) -> np.ndarray:  # pragma: no cover - compiled
+    """The RNEA torques (nv) at ``(q, qdot, qddot)``, and into ``jacobians[i]`` the Jacobian of sole ``i`` where
+    ``loads[i] > 0`` (zeros elsewhere)."""
+    n = parent.shape[0]
+    rotation, position, world_axis = np.empty((n, 3, 3)), np.empty((n, 3)), np.empty((n, 3))
+    chain_forward(
+        parent, placement_rotation, placement_translation, axis, joint_type, q_index, q, rotation, position, world_axis
+    )
+    tau = np.empty(qdot.shape[0])
+    work = np.empty((6, n, 3))
+    chain_rnea(
+        parent,
+        joint_type,
+        v_index,
+        rotation,
+        position,
+        world_axis,
+        body_mass,
+        body_com,
+        body_inertia,
+        armature,
+        gravity,
+        qdot,
+        qddot,
+        work[0],
+        work[1],
+        work[2],
+        work[3],
+        work[4],
+        work[5],
+        tau,
+    )
+    sole_rotation, sole_position = np.empty((3, 3)), np.empty(3)
+    for i in range(2):
+        if loads[i] <= 0.0:
+            jacobians[i] = 0.0
+            continue
+        joint = frame_joint[i]
+        place_frame(rotation, position, joint, frame_rotation[i], frame_translation[i], sole_rotation, sole_position)
+        chain_jacobian(
+            parent,
+            joint_type,
+            v_index,
+            rotation,
+            position,
+            world_axis,
+            joint,
+            sole_position[0],
+            sole_position[1],
+            sole_position[2],
+            jacobians[i],
+        )
+    return tau
 
-    def _balance(
-        self, tau: NDArray[np.float64], qdot: NDArray[np.float64], contact: tuple[bool, bool], right_load: float
-    ) -> ServoFeedforwardTorques:
+
+class CompiledServoFeedforward(ServoFeedforward):
+    """:class:`ServoFeedforward` compiled (same arguments, same results to round-off): its
+    :meth:`~ServoFeedforward.torques` with the RNEA and the soles' Jacobians from one kernel on
+    :meth:`RobotModel.serial_chain` and the split of the contact wrenches from another. Unlike the reference it
+    leaves the model's kinematic cache where it was."""
+
+    @cached_property
+    def _chain(self) -> tuple[np.ndarray, ...]:
+        """The kernel's leading arguments: the exported chain, armature, gravity and the soles' attachments."""
         model = self.model
+        chain = model.serial_chain()
+        attachments = [model.frame_attachment(f) for f in self._feet]
+        return (
+            chain.parent,
+            chain.placement_rotation,
+            chain.placement_translation,
+            chain.axis,
+            chain.joint_type,
+            chain.q_index,
+            chain.v_index,
+            chain.body_mass,
+            chain.body_com,
+            chain.body_inertia,
+            model.armature,
+            model.gravity,
+            np.array([a[0] for a in attachments], dtype=np.int64),
+            np.array([a[1] for a in attachments], dtype=np.float64),
+            np.array([a[2] for a in attachments], dtype=np.float64),
+        )
+
+    def torques(
+        self,
+        q: ArrayLike,
+        qdot: ArrayLike,
+        qddot: ArrayLike,
+        contact: tuple[bool, bool],
+        right_load: float,
+    ) -> ServoFeedforwardTorques:
+        if not (math.isfinite(right_load) and 0.0 <= right_load <= 1.0):
+            raise ControllerError(f"right_load must lie in [0, 1], got {right_load!r}")
+        model = self.model
+        q = model.check_configuration(q)
+        qdot = _velocity(model, qdot, "qdot")
+        qddot = _velocity(model, qddot, "qddot")
         loads = np.array((right_load, 1.0 - right_load))
-        jacobians = np.zeros((2, 6, model.nv))
         for i in range(2):
-            if contact[i] and loads[i] > MIN_LOAD:
-                jacobians[i] = model.frame_jacobian(self._feet[i])
-            else:
+            if not (contact[i] and loads[i] > MIN_LOAD):
                 loads[i] = 0.0
+        jacobians = np.empty((2, 6, model.nv))
+        tau = _dynamics(*self._chain, q, qdot, qddot, loads, jacobians)
+        return self._finish(tau, qdot, jacobians, loads)
+
+    def _finish(
+        self,
+        tau: NDArray[np.float64],
+        qdot: NDArray[np.float64],
+        jacobians: NDArray[np.float64],
+        loads: NDArray[np.float64],
+    ) -> ServoFeedforwardTorques:
+        """The torques from the RNEA torques ``tau``, the soles' ``jacobians`` and their ``loads`` (0: no wrench)."""
         wrenches = np.empty((2, 6))
         joint, offsets, residual = _split(
             tau, np.ascontiguousarray(qdot), self._damping, jacobians, loads, self.gain, self.stiffness, wrenches
@@ -101,3 +227,11 @@ class CompiledServoFeedforward(ServoFeedforward):
         if math.isnan(residual):
             raise ControllerError("the soles' Jacobians give a singular base block: no contact wrench balances it")
         return ServoFeedforwardTorques(joint, offsets, wrenches, float(residual))
+
+
+def _velocity(model: RobotModel, value: ArrayLike, name: str) -> NDArray[np.float64]:
+    """``value`` as a finite float64 C array of ``model.nv`` entries, else :class:`ControllerError` naming it."""
+    array = np.ascontiguousarray(value, dtype=np.float64)
+    if array.shape != (model.nv,) or not math.isfinite(float(array.sum())):
+        raise ControllerError(f"{name} must be finite with shape ({model.nv},), got shape {array.shape}")
+    return array

@@ -84,10 +84,12 @@ class WalkingIkConfig:
         self_collision_slope: its slope ``|H'(0)|`` [1/m] at contact.
         backend: which twins the controller runs (:data:`~redundancy_gym.kernel_options.BACKENDS`):
             ``"compiled"`` (the default: :class:`CompiledWholeBodyIk`, one kernel call a period, and the
-            measurement's :class:`~.measure_kernels.CompiledMeasurement`, and with ``servo_stiffness``
-            :class:`CompiledServoFeedforward`; the first two need a model of 1-DoF joints on a free flyer, which
+            measurement's :class:`~.measure_kernels.CompiledMeasurement`, with ``servo_stiffness``
+            :class:`CompiledServoFeedforward`, with an IKD :class:`~redundancy_gym.controllers.ikd.CompiledBipedIkd`;
+            the first two need a model of 1-DoF joints on a free flyer, which
             :class:`WalkingController` checks) or ``"python"`` (:class:`WholeBodyIk`, the measurement and
-            :class:`ServoFeedforward` on pinocchio and NumPy, the references); both give the same result to
+            :class:`ServoFeedforward` and :class:`~redundancy_gym.controllers.ikd.BipedIkd` on pinocchio and NumPy, the
+            references); both give the same result to
             round-off.
     """
 
@@ -348,6 +350,7 @@ class WalkingController:
                 feet_frames=self.feet_frames,
                 torso_frame=self.torso_frame,
                 objectives=objectives,
+                backend=self.ik_config.backend,
             )
             self.ikd.start(q_ref)
             self.model.update(q_ref)

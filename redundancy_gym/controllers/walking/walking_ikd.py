@@ -13,10 +13,12 @@ from numba import njit, types
 from numpy.typing import ArrayLike, NDArray
 
 from ...constants import GRAVITY
-from ...kernel_options import JIT_EXACT
+from ...kernel_options import DEFAULT_BACKEND, JIT_EXACT
 from ...model import RobotModel
+from ...validation import check_backend
 from ..exceptions import ControllerError
 from ..ikd.biped_ikd import BipedIkd, BipedIkdReference, BipedIkdResult
+from ..ikd.compiled_biped_ikd import CompiledBipedIkd
 from ..ikd.plan_stabilizer import PlanStabilizer
 from ..objectives.objective import Objective
 
@@ -158,6 +160,8 @@ class WalkingIkd:
         feet_frames, torso_frame: the sole frames (right, left) and the torso's.
         objectives: nullspace objectives (the CLIK walker's joint limits and self-collision) for
             :class:`BipedIkd`.
+        backend: ``"compiled"`` (:class:`CompiledBipedIkd`, the terms of each step from one kernel) or ``"python"``
+            (:class:`BipedIkd` on pinocchio's passes), :data:`~redundancy_gym.kernel_options.BACKENDS`.
     """
 
     def __init__(
@@ -171,13 +175,15 @@ class WalkingIkd:
         feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
         torso_frame: str = "imu",
         objectives: Sequence[Objective] = (),
+        backend: str = DEFAULT_BACKEND,
     ) -> None:
+        twin = CompiledBipedIkd if check_backend("backend", backend, error=ControllerError) == "compiled" else BipedIkd
         if not math.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0 [s], got {dt!r}")
         self.model = model
         self.dt = float(dt)
         self.config = config
-        self.ikd = BipedIkd(
+        self.ikd = twin(
             model,
             feet_frames=feet_frames,
             torso_frame=torso_frame,
@@ -299,7 +305,7 @@ class WalkingIkd:
             return self._step_general(
                 start, start_reference, end_reference, double_support, feet_shift, feet_shift_rate, zmp
             )
-        dt, model, c = self.dt, self.model, self.config
+        dt, c = self.dt, self.config
         shift_x, shift_y = -shift[0], -shift[1]
         t = float(start.time)
         self._replan_at_new_step(start, t, double_support)
@@ -356,7 +362,7 @@ class WalkingIkd:
         )
         self.qdot = qdot
         if result.success:
-            self.q = model.integrate(self.q, qdot, dt)
+            self.q = self.ikd.integrate(self.q, qdot, dt)
         return self._period(result, terms.com, com_velocity, realized, ideal, planning_shift, support, lz, limited)
 
     def _replan_at_new_step(self, start: PatternSample, t: float, double_support: tuple[float, float] | None) -> None:
@@ -441,7 +447,7 @@ class WalkingIkd:
             if not fastest <= c.max_velocity:  # NaN included
                 limited = True
                 self.qdot = self.qdot * (c.max_velocity / fastest) if math.isfinite(fastest) else np.zeros(model.nv)
-            self.q = model.integrate(self.q, self.qdot, dt)
+            self.q = self.ikd.integrate(self.q, self.qdot, dt)
         else:  # a singular task: hold still rather than integrate zeros into a moving state
             self.qdot = np.zeros(model.nv)
         planning_shift = planned.zmp_shift if planned is not None else np.zeros(2)
