@@ -28,6 +28,10 @@ measured ZMP (the env's contact pressure, in the plan's frame) from the pattern'
 lift-off; with each phase's share of the periods and of the squared error); ``zmp_plan_margin_mm`` and
 ``zmp_reference_margin_mm`` the smallest signed distance [mm] of the planned (LIPM) ZMP and of the reference ZMP
 inside the planned support polygon (the soles on the ground; negative: outside), over the periods of those walks.
+``zmp_whole_body_plan``: the ZMP that the plan's motion itself demands (a kinematic rollout of the IK on the pattern
+without feedback, from the model's CoM and centroidal momentum rate, :meth:`WalkingController.plan_zmp`), over the
+first four steps at the bench's speed: its smallest margin inside the support polygon (overall, after the first
+step, and per step) and its rms distance from the reference [mm].
 
 ``obstacles``: the same controller step on BipedObstacles-v0 (the monograph's beam and triangle courses at
 0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
@@ -48,6 +52,7 @@ from tqdm.auto import tqdm
 from ..controllers import CollisionObjective
 from ..controllers.walking import (
     CompiledWholeBodyIk,
+    PlanZmp,
     WalkingPattern,
     WholeBodyIkResult,
     support_margin,
@@ -80,6 +85,8 @@ LOLA_OBSTACLE_CYCLE_US = 2000.0
 redundancy resolution, force and position control in one 2 ms cycle)."""
 OBSTACLE_ENV_ID = "redundancy_gym/BipedObstacles-v0"
 OBSTACLE_COURSES = ("beam", "triangle")
+PLAN_STEPS = 4
+"""Steps of the plan's kinematic rollout in ``zmp_whole_body_plan`` (the first from standing, then steady ones)."""
 
 _Call = tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], float]
 
@@ -283,6 +290,7 @@ def run_walk_bench(
     lola_stats = RatioStats.of([t * 1e6 / LOLA_CYCLE_US for t in walk_rounds.samples["clik"]])
 
     _, calls, policy, _ = _walk(speed, steps, seed, record=True)
+    plan = policy.controller.plan_zmp(speed, steps=PLAN_STEPS)
     ik = policy.controller.ik
     compiled = policy.controller.solver
     if not isinstance(compiled, CompiledWholeBodyIk) or ik is None:
@@ -355,6 +363,7 @@ def run_walk_bench(
         "zmp_rms_by_phase_mm": {name: _by_phase(z_) for name, z_ in zmp.items()},
         "zmp_plan_margin_mm": {name: _smallest_mm([z.plan_margin for z in z_]) for name, z_ in zmp.items()},
         "zmp_reference_margin_mm": {name: _smallest_mm([z.reference_margin for z in z_]) for name, z_ in zmp.items()},
+        "zmp_whole_body_plan": _plan_report(plan),
         "ikd_vs_clik_spread": [ikd_stats.min, ikd_stats.max],
         "ikd_vs_lola_ikd": ikd_median / LOLA_IKD_CYCLE_US,
         "ik_max_difference": difference,
@@ -416,6 +425,11 @@ def format_walk_bench(report: dict[str, Any]) -> str:
                 f"{ik.upper()} planned ZMP {_mm(v)}, reference ZMP {_mm(report['zmp_reference_margin_mm'][ik])}"
                 for ik, v in report.get("zmp_plan_margin_mm", {}).items()
             ),
+            "the plan's whole-body ZMP (kinematic rollout, no feedback): smallest margin "
+            + _mm(report["zmp_whole_body_plan"]["margin_mm"])
+            + " (per step: "
+            + ", ".join(_mm(row["margin_mm"]) for row in report["zmp_whole_body_plan"]["by_step"])
+            + f"), rms {report['zmp_whole_body_plan']['rms_mm']:.1f} mm from the reference",
             f"ikd_vs_clik = {report['ikd_vs_clik']:.3f}  (rounds {report['ikd_vs_clik_spread'][0]:.3f}-"
             f"{report['ikd_vs_clik_spread'][1]:.3f}; Lola: {LOLA_IKD_CYCLE_US:.0f} / {LOLA_CYCLE_US:.0f} us = "
             f"{LOLA_IKD_CYCLE_US / LOLA_CYCLE_US:.2f})",
@@ -430,6 +444,30 @@ def format_walk_bench(report: dict[str, Any]) -> str:
             "collision avoidance)",
         ]
     )
+
+
+def _plan_report(plan: PlanZmp) -> dict[str, Any]:
+    """``zmp_whole_body_plan``: the plan's whole-body ZMP (:meth:`WalkingController.plan_zmp`) against the
+    reference, overall and per step: smallest margin inside the support polygon, rms and largest distance [mm]."""
+    distance = np.linalg.norm(plan.zmp - plan.reference, axis=1)
+    by_step = []
+    for k in range(PLAN_STEPS):
+        m = (plan.times >= plan.step_starts[k]) & (plan.times < plan.step_starts[k + 1])
+        by_step.append(
+            {
+                "step": k,
+                "margin_mm": float(plan.margin[m].min()) * 1e3,
+                "rms_mm": float(np.sqrt(np.mean(distance[m] ** 2))) * 1e3,
+                "max_mm": float(distance[m].max()) * 1e3,
+            }
+        )
+    return {
+        "steps": PLAN_STEPS,
+        "margin_mm": float(plan.margin.min()) * 1e3,
+        "margin_after_first_step_mm": min(row["margin_mm"] for row in by_step[1:]),
+        "rms_mm": float(np.sqrt(np.mean(distance**2))) * 1e3,
+        "by_step": by_step,
+    }
 
 
 def _mm(value: float | None) -> str:

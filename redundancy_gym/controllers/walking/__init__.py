@@ -26,7 +26,7 @@ from .ssta import (
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .support_polygon import SOLE_HALF_WIDTH, SOLE_X, sole_corners, support_margin, support_polygon
-from .walking_controller import BACKENDS, WalkingCommand, WalkingController, WalkingIkConfig
+from .walking_controller import BACKENDS, PlanZmp, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import (
@@ -63,6 +63,7 @@ __all__ = [
     "ObstacleBox",
     "ObstacleDecision",
     "PatternSample",
+    "PlanZmp",
     "PiecewiseQuintic",
     "Quintic",
     "Rca",

@@ -37,6 +37,7 @@ from .servo_feedforward import ServoFeedforward
 from .ssta import ObstacleBox, Ssta, SstaConfig, StopReason, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
+from .support_polygon import support_margin, support_polygon
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
@@ -132,6 +133,24 @@ class WalkingCommand(NamedTuple):
     ik: WholeBodyIkResult | WalkingIkdStep
     adjustment: StepAdjustment | None = None
     avoidance: RcaState | None = None
+
+
+class PlanZmp(NamedTuple):
+    """The whole-body ZMP of the walking plan (:meth:`WalkingController.plan_zmp`), one row per control period.
+
+    Attributes:
+        times: the periods' mid-times from the start of the walk [s] (n,).
+        zmp: the ZMP of the kinematic model's motion [m] (n, 2), from its CoM and centroidal momentum rate.
+        reference: the pattern's reference ZMP at those times [m] (n, 2).
+        margin: ``zmp``'s signed distance [m] inside the planned support polygon (n,): negative outside.
+        step_starts: the start times of the rolled-out steps and the end of the last [s] (steps + 1,).
+    """
+
+    times: NDArray[np.float64]
+    zmp: NDArray[np.float64]
+    reference: NDArray[np.float64]
+    margin: NDArray[np.float64]
+    step_starts: NDArray[np.float64]
 
 
 class WalkingController:
@@ -548,6 +567,65 @@ class WalkingController:
             correction = ZmpCorrection(phases, offsets)
         assert correction is not None
         return correction
+
+    def plan_zmp(self, speed: float, steps: int = 4) -> PlanZmp:
+        """The whole-body ZMP of the plan: a kinematic rollout of the IK (no balance feedback) on the pattern at
+        ``speed`` [m/s] from the standing start of :attr:`correction_configuration`, with the multi-body correction
+        the walks at that speed use (none with ``correction_iterations=0``), over its first ``steps`` steps after the
+        weight shift.
+
+        The ZMP on the soles' ground plane follows from the model's CoM ``c`` and centroidal momentum ``(p, L)``
+        (rates by central differences): ``r = c_xy - (c_z - z_0) pdot_xy / F_z + (-Ldot_y, Ldot_x) / F_z``,
+        ``F_z = pdot_z + m g``. This is the ZMP the planned motion demands of the ground, where the LIPM plan's own
+        ZMP (``PatternSample.zmp``) leaves out the legs' angular momentum that the correction moves it by.
+
+        Raises:
+            ControllerError: a controller without :attr:`correction_configuration`, or ``steps`` < 1.
+        """
+        if self.correction_configuration is None:
+            raise ControllerError("plan_zmp needs the controller's correction_configuration (the standing start)")
+        if int(steps) != steps or steps < 1:
+            raise ControllerError(f"steps must be an integer >= 1, got {steps!r}")
+        q = np.zeros(self.model.nq)
+        q[self._nq - 1] = 1.0
+        q[self._nq :] = self.correction_configuration
+        _, solver, q, (feet, com) = self._stand(q)
+        correction = self._canonical_correction(speed) if self.correction_iterations else None
+        pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
+        ground = float(feet[:, 2].mean())
+        begin, end = pattern.step_start(0), pattern.step_start(int(steps))
+        t = 0.0
+        start_ref = self._reference_array(pattern.sample(0.0), np.zeros(2), np.zeros(2))
+        times, centres, momenta, references, polygons = [], [], [], [], []
+        while t < end:
+            sample = pattern.sample(t + self.dt)
+            end_ref = self._reference_array(sample, np.zeros(2), np.zeros(2))
+            result = solver.step(q, start_ref, end_ref, self.dt)
+            q, start_ref, t = result.q, end_ref, t + self.dt
+            self.model.update(q)
+            centre, centroidal = self.model.com_and_centroidal_matrix()
+            times.append(t)
+            centres.append(centre)
+            momenta.append(centroidal @ result.qdot)
+            # read as the walk goes: the pattern replans its LIPM window at each step, and a later read of an
+            # earlier time would see the new window
+            references.append(pattern.reference_zmp(t))
+            polygons.append(support_polygon(sample.feet, sample.contact, sample.feet_yaw))
+        times_a, centres_a = np.array(times), np.array(centres)
+        rate = np.gradient(np.array(momenta), times_a, axis=0)
+        vertical = rate[:, 2] + self._mass * GRAVITY
+        zmp = np.stack(
+            [
+                centres_a[:, 0] - (centres_a[:, 2] - ground) * rate[:, 0] / vertical - rate[:, 4] / vertical,
+                centres_a[:, 1] - (centres_a[:, 2] - ground) * rate[:, 1] / vertical + rate[:, 3] / vertical,
+            ],
+            axis=1,
+        )
+        keep = (times_a >= begin) & (times_a < end)
+        margin = np.array([support_margin(z, polygon) for z, polygon in zip(zmp, polygons, strict=True)])[keep]
+        reference = np.array(references)[keep]
+        starts = np.array([pattern.step_start(k) for k in range(int(steps) + 1)])
+        return PlanZmp(times_a[keep], zmp[keep], reference, margin, starts)
 
     # ------------------------------------------------------------------ step
     @staticmethod
