@@ -32,6 +32,7 @@ __all__ = [
     "chain_jacobian_transpose_times",
     "chain_motion",
     "chain_rnea",
+    "frame_jacobian",
     "place_frame",
     "point_drift",
 ]
@@ -171,6 +172,29 @@ def chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, 
             out[4, c] = wy
             out[5, c] = wz
         k = parent[k]
+
+
+@njit(**JIT)
+def frame_jacobian(
+    parent,
+    joint_type,
+    v_index,
+    rotation,
+    position,
+    world_axis,
+    joint,
+    local_rotation,
+    local_translation,
+    out_rotation,
+    out_position,
+    out_jacobian,
+):
+    """A frame fixed to ``joint`` at ``(local_rotation, local_translation)``: its world placement into
+    ``out_rotation``, ``out_position`` (:func:`place_frame`) and its world-aligned Jacobian at its origin into
+    ``out_jacobian`` (6 x nv, :func:`chain_jacobian`)."""
+    place_frame(rotation, position, joint, local_rotation, local_translation, out_rotation, out_position)
+    px, py, pz = out_position[0], out_position[1], out_position[2]
+    chain_jacobian(parent, joint_type, v_index, rotation, position, world_axis, joint, px, py, pz, out_jacobian)
 
 
 @njit(**JIT)
@@ -471,6 +495,46 @@ def point_drift(position, omega, omega_dot, drift, joint, px, py, pz, out):
 
 
 @njit(**JIT)
+def _body_wrench(rotation, position, body_mass, body_com, body_inertia, omega, omega_dot, acceleration, j, gx, gy, gz):
+    """Body ``j``'s ``(c, f, n)`` after :func:`chain_motion`, nine floats: its CoM ``c`` [m] (world), the force
+    ``f = m (a_c - g)`` [N] its motion and the gravity ``(gx, gy, gz)`` need (``a_c`` the CoM's classical
+    acceleration, from the joint origin's like :func:`point_drift`), and the moment about its CoM ``n = I
+    omega_dot + omega x I omega`` [N m] (``I = R I_body R^T``, applied as ``R (I_body (R^T w))``)."""
+    m = body_mass[j]
+    bx, by, bz = body_com[j, 0], body_com[j, 1], body_com[j, 2]
+    rx = rotation[j, 0, 0] * bx + rotation[j, 0, 1] * by + rotation[j, 0, 2] * bz
+    ry = rotation[j, 1, 0] * bx + rotation[j, 1, 1] * by + rotation[j, 1, 2] * bz
+    rz = rotation[j, 2, 0] * bx + rotation[j, 2, 1] * by + rotation[j, 2, 2] * bz
+    wx, wy, wz = omega[j, 0], omega[j, 1], omega[j, 2]
+    dwx, dwy, dwz = omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2]
+    ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+    fx = m * (acceleration[j, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy - gx)
+    fy = m * (acceleration[j, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz - gy)
+    fz = m * (acceleration[j, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux - gz)
+    bw0 = rotation[j, 0, 0] * wx + rotation[j, 1, 0] * wy + rotation[j, 2, 0] * wz
+    bw1 = rotation[j, 0, 1] * wx + rotation[j, 1, 1] * wy + rotation[j, 2, 1] * wz
+    bw2 = rotation[j, 0, 2] * wx + rotation[j, 1, 2] * wy + rotation[j, 2, 2] * wz
+    bd0 = rotation[j, 0, 0] * dwx + rotation[j, 1, 0] * dwy + rotation[j, 2, 0] * dwz
+    bd1 = rotation[j, 0, 1] * dwx + rotation[j, 1, 1] * dwy + rotation[j, 2, 1] * dwz
+    bd2 = rotation[j, 0, 2] * dwx + rotation[j, 1, 2] * dwy + rotation[j, 2, 2] * dwz
+    inertia = body_inertia[j]
+    h0 = inertia[0, 0] * bw0 + inertia[0, 1] * bw1 + inertia[0, 2] * bw2
+    h1 = inertia[1, 0] * bw0 + inertia[1, 1] * bw1 + inertia[1, 2] * bw2
+    h2 = inertia[2, 0] * bw0 + inertia[2, 1] * bw1 + inertia[2, 2] * bw2
+    e0 = inertia[0, 0] * bd0 + inertia[0, 1] * bd1 + inertia[0, 2] * bd2
+    e1 = inertia[1, 0] * bd0 + inertia[1, 1] * bd1 + inertia[1, 2] * bd2
+    e2 = inertia[2, 0] * bd0 + inertia[2, 1] * bd1 + inertia[2, 2] * bd2
+    lx = rotation[j, 0, 0] * h0 + rotation[j, 0, 1] * h1 + rotation[j, 0, 2] * h2
+    ly = rotation[j, 1, 0] * h0 + rotation[j, 1, 1] * h1 + rotation[j, 1, 2] * h2
+    lz = rotation[j, 2, 0] * h0 + rotation[j, 2, 1] * h1 + rotation[j, 2, 2] * h2
+    nx = rotation[j, 0, 0] * e0 + rotation[j, 0, 1] * e1 + rotation[j, 0, 2] * e2 + wy * lz - wz * ly
+    ny = rotation[j, 1, 0] * e0 + rotation[j, 1, 1] * e1 + rotation[j, 1, 2] * e2 + wz * lx - wx * lz
+    nz = rotation[j, 2, 0] * e0 + rotation[j, 2, 1] * e1 + rotation[j, 2, 2] * e2 + wx * ly - wy * lx
+    cx, cy, cz = position[j, 0] + rx, position[j, 1] + ry, position[j, 2] + rz
+    return cx, cy, cz, fx, fy, fz, nx, ny, nz
+
+
+@njit(**JIT)
 def chain_centroidal_drift(rotation, position, body_mass, body_com, body_inertia, omega, omega_dot, drift, com, out):
     """``Adot_G qdot`` (6) [N, N m] after :func:`chain_motion`: the rate of the centroidal momentum at zero joint
     acceleration, ``sum m_i a_i`` and ``sum (c_i - c) x m_i a_i + I_i omega_dot_i + omega_i x I_i omega_i``
@@ -478,45 +542,16 @@ def chain_centroidal_drift(rotation, position, body_mass, body_com, body_inertia
     """
     s0 = s1 = s2 = s3 = s4 = s5 = 0.0
     for j in range(position.shape[0]):
-        m = body_mass[j]
-        bx, by, bz = body_com[j, 0], body_com[j, 1], body_com[j, 2]
-        # the body CoM's offset from the joint origin (world) and its acceleration (as point_drift)
-        rx = rotation[j, 0, 0] * bx + rotation[j, 0, 1] * by + rotation[j, 0, 2] * bz
-        ry = rotation[j, 1, 0] * bx + rotation[j, 1, 1] * by + rotation[j, 1, 2] * bz
-        rz = rotation[j, 2, 0] * bx + rotation[j, 2, 1] * by + rotation[j, 2, 2] * bz
-        wx, wy, wz = omega[j, 0], omega[j, 1], omega[j, 2]
-        dwx, dwy, dwz = omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2]
-        ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
-        fx = m * (drift[j, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy)
-        fy = m * (drift[j, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz)
-        fz = m * (drift[j, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux)
+        cx, cy, cz, fx, fy, fz, nx, ny, nz = _body_wrench(
+            rotation, position, body_mass, body_com, body_inertia, omega, omega_dot, drift, j, 0.0, 0.0, 0.0
+        )
+        gx, gy, gz = cx - com[0], cy - com[1], cz - com[2]
         s0 += fx
         s1 += fy
         s2 += fz
-        gx, gy, gz = position[j, 0] + rx - com[0], position[j, 1] + ry - com[1], position[j, 2] + rz - com[2]
-        s3 += gy * fz - gz * fy
-        s4 += gz * fx - gx * fz
-        s5 += gx * fy - gy * fx
-        # R I R^T applied to omega and omega_dot: R (I (R^T w))
-        bw0 = rotation[j, 0, 0] * wx + rotation[j, 1, 0] * wy + rotation[j, 2, 0] * wz
-        bw1 = rotation[j, 0, 1] * wx + rotation[j, 1, 1] * wy + rotation[j, 2, 1] * wz
-        bw2 = rotation[j, 0, 2] * wx + rotation[j, 1, 2] * wy + rotation[j, 2, 2] * wz
-        bd0 = rotation[j, 0, 0] * dwx + rotation[j, 1, 0] * dwy + rotation[j, 2, 0] * dwz
-        bd1 = rotation[j, 0, 1] * dwx + rotation[j, 1, 1] * dwy + rotation[j, 2, 1] * dwz
-        bd2 = rotation[j, 0, 2] * dwx + rotation[j, 1, 2] * dwy + rotation[j, 2, 2] * dwz
-        inertia = body_inertia[j]
-        h0 = inertia[0, 0] * bw0 + inertia[0, 1] * bw1 + inertia[0, 2] * bw2
-        h1 = inertia[1, 0] * bw0 + inertia[1, 1] * bw1 + inertia[1, 2] * bw2
-        h2 = inertia[2, 0] * bw0 + inertia[2, 1] * bw1 + inertia[2, 2] * bw2
-        e0 = inertia[0, 0] * bd0 + inertia[0, 1] * bd1 + inertia[0, 2] * bd2
-        e1 = inertia[1, 0] * bd0 + inertia[1, 1] * bd1 + inertia[1, 2] * bd2
-        e2 = inertia[2, 0] * bd0 + inertia[2, 1] * bd1 + inertia[2, 2] * bd2
-        lx = rotation[j, 0, 0] * h0 + rotation[j, 0, 1] * h1 + rotation[j, 0, 2] * h2
-        ly = rotation[j, 1, 0] * h0 + rotation[j, 1, 1] * h1 + rotation[j, 1, 2] * h2
-        lz = rotation[j, 2, 0] * h0 + rotation[j, 2, 1] * h1 + rotation[j, 2, 2] * h2
-        s3 += rotation[j, 0, 0] * e0 + rotation[j, 0, 1] * e1 + rotation[j, 0, 2] * e2 + wy * lz - wz * ly
-        s4 += rotation[j, 1, 0] * e0 + rotation[j, 1, 1] * e1 + rotation[j, 1, 2] * e2 + wz * lx - wx * lz
-        s5 += rotation[j, 2, 0] * e0 + rotation[j, 2, 1] * e1 + rotation[j, 2, 2] * e2 + wx * ly - wy * lx
+        s3 += gy * fz - gz * fy + nx
+        s4 += gz * fx - gx * fz + ny
+        s5 += gx * fy - gy * fx + nz
     out[0], out[1], out[2], out[3], out[4], out[5] = s0, s1, s2, s3, s4, s5
 
 
@@ -586,13 +621,21 @@ def chain_acceleration_terms(
     )
     for k in range(frame_joint.shape[0]):
         joint = frame_joint[k]
-        place_frame(
-            work_rotation, work_position, joint, frame_rotation[k], frame_translation[k], rotation[k], position[k]
+        frame_jacobian(
+            parent,
+            joint_type,
+            v_index,
+            work_rotation,
+            work_position,
+            work_axis,
+            joint,
+            frame_rotation[k],
+            frame_translation[k],
+            rotation[k],
+            position[k],
+            jacobian[k],
         )
         px, py, pz = position[k, 0], position[k, 1], position[k, 2]
-        chain_jacobian(
-            parent, joint_type, v_index, work_rotation, work_position, work_axis, joint, px, py, pz, jacobian[k]
-        )
         point_drift(work_position, work_omega, work_omega_dot, work_drift, joint, px, py, pz, drift[k])
     mass = chain_centroidal(
         parent,
@@ -664,42 +707,24 @@ def chain_rnea(
         parent, joint_type, v_index, rotation, position, world_axis, v, a, omega, omega_dot, velocity, acceleration
     )
     for j in range(nj):
-        m = body_mass[j]
-        bx, by, bz = body_com[j, 0], body_com[j, 1], body_com[j, 2]
-        rx = rotation[j, 0, 0] * bx + rotation[j, 0, 1] * by + rotation[j, 0, 2] * bz
-        ry = rotation[j, 1, 0] * bx + rotation[j, 1, 1] * by + rotation[j, 1, 2] * bz
-        rz = rotation[j, 2, 0] * bx + rotation[j, 2, 1] * by + rotation[j, 2, 2] * bz
-        wx, wy, wz = omega[j, 0], omega[j, 1], omega[j, 2]
-        dwx, dwy, dwz = omega_dot[j, 0], omega_dot[j, 1], omega_dot[j, 2]
-        ux, uy, uz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
-        fx = m * (acceleration[j, 0] + dwy * rz - dwz * ry + wy * uz - wz * uy - gravity[0])
-        fy = m * (acceleration[j, 1] + dwz * rx - dwx * rz + wz * ux - wx * uz - gravity[1])
-        fz = m * (acceleration[j, 2] + dwx * ry - dwy * rx + wx * uy - wy * ux - gravity[2])
-        cx, cy, cz = position[j, 0] + rx, position[j, 1] + ry, position[j, 2] + rz
-        # R I R^T applied to omega and omega_dot: R (I (R^T w))
-        bw0 = rotation[j, 0, 0] * wx + rotation[j, 1, 0] * wy + rotation[j, 2, 0] * wz
-        bw1 = rotation[j, 0, 1] * wx + rotation[j, 1, 1] * wy + rotation[j, 2, 1] * wz
-        bw2 = rotation[j, 0, 2] * wx + rotation[j, 1, 2] * wy + rotation[j, 2, 2] * wz
-        bd0 = rotation[j, 0, 0] * dwx + rotation[j, 1, 0] * dwy + rotation[j, 2, 0] * dwz
-        bd1 = rotation[j, 0, 1] * dwx + rotation[j, 1, 1] * dwy + rotation[j, 2, 1] * dwz
-        bd2 = rotation[j, 0, 2] * dwx + rotation[j, 1, 2] * dwy + rotation[j, 2, 2] * dwz
-        inertia = body_inertia[j]
-        h0 = inertia[0, 0] * bw0 + inertia[0, 1] * bw1 + inertia[0, 2] * bw2
-        h1 = inertia[1, 0] * bw0 + inertia[1, 1] * bw1 + inertia[1, 2] * bw2
-        h2 = inertia[2, 0] * bw0 + inertia[2, 1] * bw1 + inertia[2, 2] * bw2
-        e0 = inertia[0, 0] * bd0 + inertia[0, 1] * bd1 + inertia[0, 2] * bd2
-        e1 = inertia[1, 0] * bd0 + inertia[1, 1] * bd1 + inertia[1, 2] * bd2
-        e2 = inertia[2, 0] * bd0 + inertia[2, 1] * bd1 + inertia[2, 2] * bd2
-        lx = rotation[j, 0, 0] * h0 + rotation[j, 0, 1] * h1 + rotation[j, 0, 2] * h2
-        ly = rotation[j, 1, 0] * h0 + rotation[j, 1, 1] * h1 + rotation[j, 1, 2] * h2
-        lz = rotation[j, 2, 0] * h0 + rotation[j, 2, 1] * h1 + rotation[j, 2, 2] * h2
+        cx, cy, cz, fx, fy, fz, nx, ny, nz = _body_wrench(
+            rotation,
+            position,
+            body_mass,
+            body_com,
+            body_inertia,
+            omega,
+            omega_dot,
+            acceleration,
+            j,
+            gravity[0],
+            gravity[1],
+            gravity[2],
+        )
         force[j, 0], force[j, 1], force[j, 2] = fx, fy, fz
-        moment[j, 0] = cy * fz - cz * fy + rotation[j, 0, 0] * e0 + rotation[j, 0, 1] * e1 + rotation[j, 0, 2] * e2
-        moment[j, 1] = cz * fx - cx * fz + rotation[j, 1, 0] * e0 + rotation[j, 1, 1] * e1 + rotation[j, 1, 2] * e2
-        moment[j, 2] = cx * fy - cy * fx + rotation[j, 2, 0] * e0 + rotation[j, 2, 1] * e1 + rotation[j, 2, 2] * e2
-        moment[j, 0] += wy * lz - wz * ly
-        moment[j, 1] += wz * lx - wx * lz
-        moment[j, 2] += wx * ly - wy * lx
+        moment[j, 0] = cy * fz - cz * fy + nx
+        moment[j, 1] = cz * fx - cx * fz + ny
+        moment[j, 2] = cx * fy - cy * fx + nz
     for j in range(nj - 1, -1, -1):
         c = v_index[j]
         fx, fy, fz = force[j, 0], force[j, 1], force[j, 2]

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...kernel_options import BORROW
-from ...model.chain_kernels import chain_jacobian, place_frame
+from ...model.chain_kernels import frame_jacobian
 from ..kernels import chain_fields as _chain
 from ..kernels.buffers import borrowed_float_field, borrowed_int_field, pack_fields
 from ..kernels.chain_fields import chain_indices, chain_views, field_index, forward_chain
@@ -251,16 +251,20 @@ def _task(
     jac6 = _fv(f, i, _F_JACOBIAN6).reshape((6, nv))
     rot = scratch[_S_FRAME_ROTATION:_S_FRAME_POSITION].reshape((3, 3))
     pos = scratch[_S_FRAME_POSITION : _S_FRAME_POSITION + 3]
-    place_frame(
+    frame_jacobian(
+        parent,
+        joint_type,
+        v_index,
         q_rotation,
         position,
+        world_axis,
         joint,
         _fv(f, i, _F_TASK_ROTATION).reshape((3, 3)),
         _fv(f, i, _F_TASK_TRANSLATION),
         rot,
         pos,
+        jac6,
     )
-    chain_jacobian(parent, joint_type, v_index, q_rotation, position, world_axis, joint, pos[0], pos[1], pos[2], jac6)
     width = 6 if kind == 1 else m
     for k in range(width):
         if not np.isfinite(target[k]):

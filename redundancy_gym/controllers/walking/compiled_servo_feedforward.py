@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ...kernel_options import JIT
 from ...model import RobotModel
-from ...model.chain_kernels import chain_forward, chain_jacobian, chain_rnea, place_frame
+from ...model.chain_kernels import chain_forward, chain_rnea, frame_jacobian
 from ..exceptions import ControllerError
 from ..kernels.linalg import cholesky_factor, cholesky_solve
 from .servo_feedforward import MIN_LOAD, ServoFeedforward, ServoFeedforwardTorques
@@ -142,19 +142,18 @@ def _dynamics(
         if loads[i] <= 0.0:
             jacobians[i] = 0.0
             continue
-        joint = frame_joint[i]
-        place_frame(rotation, position, joint, frame_rotation[i], frame_translation[i], sole_rotation, sole_position)
-        chain_jacobian(
+        frame_jacobian(
             parent,
             joint_type,
             v_index,
             rotation,
             position,
             world_axis,
-            joint,
-            sole_position[0],
-            sole_position[1],
-            sole_position[2],
+            frame_joint[i],
+            frame_rotation[i],
+            frame_translation[i],
+            sole_rotation,
+            sole_position,
             jacobians[i],
         )
     return tau

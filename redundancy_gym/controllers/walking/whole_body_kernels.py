@@ -17,7 +17,7 @@ from numba import njit
 
 from ...geometry.potentials import piecewise_potential_kernel
 from ...kernel_options import JIT
-from ...model.chain_kernels import chain_centroidal, chain_integrate, chain_jacobian, place_frame
+from ...model.chain_kernels import chain_centroidal, chain_integrate, frame_jacobian
 from ..kernels import chain_fields as _chain
 from ..kernels.buffers import float_field, int_field
 from ..kernels.chain_fields import chain_indices, chain_views, field_index, forward_chain
@@ -172,9 +172,19 @@ def _build(f, i, dims, q, reference):
     feet_position = reference[6:12].reshape((2, 3))
     feet_rotation = reference[12:30].reshape((2, 3, 3))
     for side in range(3):  # right sole, left sole, torso
-        place_frame(rotation, position, frame_joint[side], frame_rotation[side], frame_translation[side], rot, pos)
-        chain_jacobian(
-            parent, joint_type, v_index, rotation, position, world_axis, frame_joint[side], pos[0], pos[1], pos[2], jac6
+        frame_jacobian(
+            parent,
+            joint_type,
+            v_index,
+            rotation,
+            position,
+            world_axis,
+            frame_joint[side],
+            frame_rotation[side],
+            frame_translation[side],
+            rot,
+            pos,
+            jac6,
         )
         if side < 2:
             row = 3 + 6 * side
