@@ -378,20 +378,7 @@ class WalkingController:
         # from correction_configuration once per speed, else from this start's state (kept for the same state only):
         # a correction kept from an earlier walk's slightly different standing state made a walk's result depend on
         # the walks before it
-        correction = None
-        if self.correction_iterations:
-            canonical = self.correction_configuration is not None
-            key = (round(float(speed), 9), self.ik_config.momentum_minimization, b"" if canonical else q_ref.tobytes())
-            correction = self._corrections.get(key)
-            if correction is None:
-                correction = (
-                    self._canonical_correction(speed)
-                    if canonical
-                    else self._estimate_correction(q_ref, speed, self.solver, start)
-                )
-                if len(self._corrections) >= 16:
-                    self._corrections.pop(next(iter(self._corrections)))
-                self._corrections[key] = correction
+        correction = self._correction(speed, q_ref, self.solver, start)
         self.pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
         self.ssta = Ssta(self.ssta_config, lanes=(float(feet[0, 1]), float(feet[1, 1])))
         self.obstacle_boxes = ()
@@ -486,14 +473,47 @@ class WalkingController:
         yaw = np.eye(3)
         return WholeBodyReference(com, np.zeros(3), feet, rotations, np.zeros((2, 6)), yaw, np.zeros(3))
 
-    def _canonical_correction(self, speed: float) -> ZmpCorrection:
-        """The ZMP correction for ``speed`` from :attr:`correction_configuration`: standing with the base level at the
-        origin, its own IK (the same for every start, so no walk depends on the walks before it)."""
+    def _correction(
+        self,
+        speed: float,
+        q_ref: NDArray[np.float64],
+        solver: WholeBodyIk | CompiledWholeBodyIk,
+        start: tuple[NDArray[np.float64], NDArray[np.float64]],
+    ) -> ZmpCorrection | None:
+        """The ZMP correction for a walk at ``speed`` [m/s] from ``q_ref`` with ``solver`` (``None`` without
+        correction iterations),
+        kept per speed (and per start where there is no :attr:`correction_configuration`)."""
+        if not self.correction_iterations:
+            return None
+        # from correction_configuration once per speed, else from this start's state (kept for the same state only):
+        # a correction kept from an earlier walk's slightly different standing state made a walk's result depend on
+        # the walks before it
+        canonical = self.correction_configuration is not None
+        key = (round(float(speed), 9), self.ik_config.momentum_minimization, b"" if canonical else q_ref.tobytes())
+        correction = self._corrections.get(key)
+        if correction is None:
+            correction = (
+                self._canonical_correction(speed)
+                if canonical
+                else self._estimate_correction(q_ref, speed, solver, start)
+            )
+            if len(self._corrections) >= 16:
+                self._corrections.pop(next(iter(self._corrections)))
+            self._corrections[key] = correction
+        return correction
+
+    def _canonical_configuration(self) -> NDArray[np.float64]:
+        """:attr:`correction_configuration`'s joints with the base level at the origin."""
         assert self.correction_configuration is not None
         q = np.zeros(self.model.nq)
         q[self._nq - 1] = 1.0  # the identity quaternion (x, y, z, w)
         q[self._nq :] = self.correction_configuration
-        _, solver, q_ref, start = self._stand(q)
+        return q
+
+    def _canonical_correction(self, speed: float) -> ZmpCorrection:
+        """The ZMP correction for ``speed`` from :attr:`correction_configuration`: standing with the base level at the
+        origin, its own IK (the same for every start, so no walk depends on the walks before it)."""
+        _, solver, q_ref, start = self._stand(self._canonical_configuration())
         return self._estimate_correction(q_ref, speed, solver, start)
 
     def _stand(
@@ -586,11 +606,8 @@ class WalkingController:
             raise ControllerError("plan_zmp needs the controller's correction_configuration (the standing start)")
         if int(steps) != steps or steps < 1:
             raise ControllerError(f"steps must be an integer >= 1, got {steps!r}")
-        q = np.zeros(self.model.nq)
-        q[self._nq - 1] = 1.0
-        q[self._nq :] = self.correction_configuration
-        _, solver, q, (feet, com) = self._stand(q)
-        correction = self._canonical_correction(speed) if self.correction_iterations else None
+        _, solver, q, (feet, com) = self._stand(self._canonical_configuration())
+        correction = self._correction(speed, q, solver, (feet, com))
         pattern = WalkingPattern(self.gait, feet[0], feet[1], com, speed, correction)
         ground = float(feet[:, 2].mean())
         begin, end = pattern.step_start(0), pattern.step_start(int(steps))
