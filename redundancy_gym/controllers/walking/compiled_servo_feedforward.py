@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from ...kernel_options import JIT
 from ...model import RobotModel
 from ...model.chain_kernels import chain_forward, chain_rnea, frame_jacobian
+from ...validation import check_required_real
 from ..exceptions import ControllerError
 from ..kernels.linalg import cholesky_factor, cholesky_solve
 from .servo_feedforward import MIN_LOAD, ServoFeedforward, ServoFeedforwardTorques
@@ -197,8 +198,7 @@ class CompiledServoFeedforward(ServoFeedforward):
         contact: tuple[bool, bool],
         right_load: float,
     ) -> ServoFeedforwardTorques:
-        if not (math.isfinite(right_load) and 0.0 <= right_load <= 1.0):
-            raise ControllerError(f"right_load must lie in [0, 1], got {right_load!r}")
+        right_load = check_required_real("right_load", right_load, low=0.0, high=1.0, error=ControllerError)
         model = self.model
         q = model.check_configuration(q)
         qdot = _velocity(model, qdot, "qdot")

@@ -14,13 +14,13 @@ the wrenches are split by the plan's load share (the smallest ``sum_i |F_i|^2 / 
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...model import RobotModel
+from ...validation import check_required_real
 from ..exceptions import ControllerError
 
 __all__ = ["ServoFeedforward", "ServoFeedforwardTorques"]
@@ -75,11 +75,9 @@ class ServoFeedforward:
             raise ControllerError(
                 f"stiffness must hold {model.nv - 6} finite servo gains > 0 [N m/rad], got {np.asarray(stiffness)!r}"
             )
-        if not math.isfinite(gain) or gain < 0.0:
-            raise ControllerError(f"gain must be finite and >= 0, got {gain!r}")
         self.model = model
         self.stiffness = k
-        self.gain = float(gain)
+        self.gain = check_required_real("gain", gain, low=0.0, error=ControllerError)
         self._feet = tuple(model.frame_id(f) for f in feet_frames)
         self._damping = model.joint_damping
 
@@ -96,8 +94,7 @@ class ServoFeedforward:
 
         Updates ``model`` at ``q``.
         """
-        if not (math.isfinite(right_load) and 0.0 <= right_load <= 1.0):
-            raise ControllerError(f"right_load must lie in [0, 1], got {right_load!r}")
+        right_load = check_required_real("right_load", right_load, low=0.0, high=1.0, error=ControllerError)
         tau = self.model.inverse_dynamics(q, qdot, qddot)  # also the kinematic cache at q for the Jacobians
         return self._balance(tau, np.asarray(qdot, dtype=np.float64), contact, right_load)
 

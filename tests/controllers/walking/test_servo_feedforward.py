@@ -145,12 +145,14 @@ def test_invalid_arguments_are_named(model: RobotModel, stiffness: np.ndarray) -
         ServoFeedforward(model, stiffness[:5])
     with pytest.raises(ControllerError, match="stiffness"):
         ServoFeedforward(model, np.zeros(22))
-    with pytest.raises(ControllerError, match="gain"):
-        ServoFeedforward(model, stiffness, gain=-1.0)
+    for gain in (-1.0, float("nan"), "1"):
+        with pytest.raises(ControllerError, match=r"gain must be a finite real number >= 0"):
+            ServoFeedforward(model, stiffness, gain=gain)  # type: ignore[arg-type]
     zero = np.zeros(model.nv)
     for twin in TWINS:
-        with pytest.raises(ControllerError, match="right_load"):
-            twin(model, stiffness).torques(standing(model), zero, zero, (True, True), 1.5)
+        for load in (1.5, -0.1, float("nan"), None):
+            with pytest.raises(ControllerError, match=r"right_load must be a finite real number in \[0, 1\]"):
+                twin(model, stiffness).torques(standing(model), zero, zero, (True, True), load)  # type: ignore[arg-type]
 
 
 def test_the_clik_walker_cannot_feed_forward(model: RobotModel, stiffness: np.ndarray) -> None:
