@@ -241,6 +241,18 @@ class RobotModel:
         f = self._model.frames[self._resolve(frame)]
         return int(f.parentJoint) - 1, np.array(f.placement.rotation), np.array(f.placement.translation)
 
+    def frame_attachments(
+        self, frames: Sequence[str | int]
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`frame_attachment` of each of ``frames``, stacked for a kernel: ``(joints (K,), rotations
+        (K, 3, 3), positions (K, 3) [m])``."""
+        attachments = [self.frame_attachment(f) for f in frames]
+        return (
+            np.array([j for j, _, _ in attachments], dtype=np.int64),
+            np.array([r for _, r, _ in attachments], dtype=np.float64).reshape(len(attachments), 3, 3),
+            np.array([p for _, _, p in attachments], dtype=np.float64).reshape(len(attachments), 3),
+        )
+
     # ------------------------------------------------------------------ state
     def check_configuration(self, q: ArrayLike) -> NDArray[np.float64]:
         """Return ``q`` as a float array after checking its size and finiteness."""

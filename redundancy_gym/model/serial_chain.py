@@ -56,6 +56,23 @@ class SerialChain:
         """Number of joints ``J`` (= nq = nv on a fixed base)."""
         return len(self.joint_names)
 
+    def kernel_arrays(self) -> tuple[NDArray[np.generic], ...]:
+        """``(parent, placement_rotation, placement_translation, axis, joint_type, q_index, v_index, body_mass,
+        body_com, body_inertia)``: the chain's arrays in the order the dynamics kernels of :mod:`.chain_kernels`
+        take them (:func:`~.chain_kernels.chain_acceleration_terms` and the kernels built on it)."""
+        return (
+            self.parent,
+            self.placement_rotation,
+            self.placement_translation,
+            self.axis,
+            self.joint_type,
+            self.q_index,
+            self.v_index,
+            self.body_mass,
+            self.body_com,
+            self.body_inertia,
+        )
+
     @property
     def floating_base(self) -> bool:
         """Whether the root is a free flyer."""

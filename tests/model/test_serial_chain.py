@@ -33,8 +33,11 @@ def test_forward_kinematics_and_frames_match_pinocchio(xml, tcp, rng) -> None:
             r, p = model.frame_placement(name)
             np.testing.assert_allclose(rotation[j], r, atol=1e-12)
             np.testing.assert_allclose(position[j], p, atol=1e-12)
-        for frame in (tcp, *chain.joint_names):
-            joint, local_r, local_p = model.frame_attachment(frame)
+        frames = (tcp, *chain.joint_names)
+        # the stacked attachments, as the kernels take them, place every frame where the model does
+        joints, local_rs, local_ps = model.frame_attachments(frames)
+        assert joints.dtype == np.int64 and local_rs.shape == (len(frames), 3, 3) and local_ps.shape == (len(frames), 3)
+        for frame, joint, local_r, local_p in zip(frames, joints, local_rs, local_ps, strict=True):
             r, p = model.frame_placement(frame)
             np.testing.assert_allclose(rotation[joint] @ local_r, r, atol=1e-12)
             np.testing.assert_allclose(rotation[joint] @ local_p + position[joint], p, atol=1e-12)
@@ -136,7 +139,6 @@ def test_integrate_matches_pinocchio(rng) -> None:
 def _acceleration_terms(model: RobotModel, frames: tuple[str, ...], q: np.ndarray, v: np.ndarray) -> tuple:
     """``chain_acceleration_terms`` at ``(q, v)`` for ``frames``, in :class:`AccelerationTerms`' order."""
     chain = model.serial_chain()
-    attachments = [model.frame_attachment(f) for f in frames]
     n, k = chain.num_joints, len(frames)
     work = (np.empty((n, 3, 3)), *(np.empty((n, 3)) for _ in range(6)), np.empty((n, 13)))
     out = (
@@ -149,19 +151,8 @@ def _acceleration_terms(model: RobotModel, frames: tuple[str, ...], q: np.ndarra
         np.empty(6),
     )
     mass = chain_acceleration_terms(
-        chain.parent,
-        chain.placement_rotation,
-        chain.placement_translation,
-        chain.axis,
-        chain.joint_type,
-        chain.q_index,
-        chain.v_index,
-        chain.body_mass,
-        chain.body_com,
-        chain.body_inertia,
-        np.array([a[0] for a in attachments], dtype=np.int64),
-        np.array([a[1] for a in attachments]),
-        np.array([a[2] for a in attachments]),
+        *chain.kernel_arrays(),
+        *model.frame_attachments(frames),
         q,
         v,
         *work,

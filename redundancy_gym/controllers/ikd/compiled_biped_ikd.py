@@ -39,24 +39,11 @@ class CompiledBipedIkd(BipedIkd):
     def _arguments(self) -> tuple[tuple[NDArray[Any], ...], tuple[NDArray[np.float64], ...]]:
         """``(chain, work)``: the kernel's leading arguments from :meth:`RobotModel.serial_chain` and
         :meth:`RobotModel.frame_attachment`, and its scratch arrays."""
-        model = self.model
         chain = self._chain
-        attachments = [model.frame_attachment(f) for f in (*self.feet_frames, self.torso_frame)]
         n = chain.num_joints
         return (
-            chain.parent,
-            chain.placement_rotation,
-            chain.placement_translation,
-            chain.axis,
-            chain.joint_type,
-            chain.q_index,
-            chain.v_index,
-            chain.body_mass,
-            chain.body_com,
-            chain.body_inertia,
-            np.array([a[0] for a in attachments], dtype=np.int64),
-            np.array([a[1] for a in attachments], dtype=np.float64),
-            np.array([a[2] for a in attachments], dtype=np.float64),
+            *chain.kernel_arrays(),
+            *self.model.frame_attachments((*self.feet_frames, self.torso_frame)),
         ), (np.empty((n, 3, 3)), *(np.empty((n, 3)) for _ in range(6)), np.empty((n, 13)))
 
     def _terms(self, q: NDArray[np.float64], qdot: NDArray[np.float64]) -> AccelerationTerms:

@@ -170,24 +170,11 @@ class CompiledServoFeedforward(ServoFeedforward):
     def _chain(self) -> tuple[np.ndarray, ...]:
         """The kernel's leading arguments: the exported chain, armature, gravity and the soles' attachments."""
         model = self.model
-        chain = model.serial_chain()
-        attachments = [model.frame_attachment(f) for f in self._feet]
         return (
-            chain.parent,
-            chain.placement_rotation,
-            chain.placement_translation,
-            chain.axis,
-            chain.joint_type,
-            chain.q_index,
-            chain.v_index,
-            chain.body_mass,
-            chain.body_com,
-            chain.body_inertia,
+            *model.serial_chain().kernel_arrays(),
             model.armature,
             model.gravity,
-            np.array([a[0] for a in attachments], dtype=np.int64),
-            np.array([a[1] for a in attachments], dtype=np.float64),
-            np.array([a[2] for a in attachments], dtype=np.float64),
+            *model.frame_attachments(self._feet),
         )
 
     def torques(

@@ -88,15 +88,15 @@ class CompiledWholeBodyIk:
         self.model = model
         self._nq, self._nv = nq, nv
         self._q_shape = (nq,)
-        frames = [model.frame_attachment(f) for f in (*ik.feet_frames, ik.torso_frame)]
+        frame_joint, frame_rotation, frame_translation = model.frame_attachments((*ik.feet_frames, ik.torso_frame))
         floats, ints = chain_arrays(chain)
         floats |= {
             "body_mass": chain.body_mass,
             "body_com": chain.body_com,
             "body_inertia": chain.body_inertia,
             "composite": np.zeros((nj, 13)),
-            "frame_rotation": np.array([r for _, r, _ in frames]),
-            "frame_translation": np.array([p for _, _, p in frames]),
+            "frame_rotation": frame_rotation,
+            "frame_translation": frame_translation,
             **objective_arrays(limits, postures),
             "scalars": np.zeros(len(SCALARS)),
             "inputs": np.zeros(nq + 2 * REFERENCE_SIZE),
@@ -110,7 +110,7 @@ class CompiledWholeBodyIk:
             "gradient": np.zeros(nv),
             "scratch": np.zeros(SCRATCH_SIZE),
         }
-        ints["frame_joint"] = np.array([j for j, _, _ in frames], dtype=np.int64)
+        ints["frame_joint"] = frame_joint
         self.collision: CollisionObjective | None = collisions[0] if collisions else None
         if self.collision is None:
             empty_floats, empty_ints, counts = no_collision_arrays()

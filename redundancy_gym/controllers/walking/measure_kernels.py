@@ -354,20 +354,20 @@ class CompiledMeasurement:
             raise ControllerError(f"CompiledMeasurement measures {FRAMES} frames, got {len(frames)}: {frames!r}")
         chain = model.serial_chain()
         nj, nq, nv = chain.num_joints, model.nq, model.nv
-        attachments = [model.frame_attachment(f) for f in frames]
+        frame_joint, frame_rotation, frame_translation = model.frame_attachments(frames)
         outputs = nq + nv + sum(size for _, size in OUTPUT_SIZES)
         floats, ints = chain_arrays(chain)
         floats |= {
             "body_mass": chain.body_mass,
             "body_com": chain.body_com,
             "velocities": np.zeros((nj, 6)),
-            "frame_rotation": np.array([r for _, r, _ in attachments]),
-            "frame_translation": np.array([p for _, _, p in attachments]),
+            "frame_rotation": frame_rotation,
+            "frame_translation": frame_translation,
             "inputs": np.zeros(nq + nv + 12 + len(PARAMETERS)),
             "outputs": np.zeros(outputs),
         }
         ints["dims"] = np.array([nj, nq, nv, FRAMES], dtype=np.int64)
-        ints["frame_joint"] = np.array([j for j, _, _ in attachments], dtype=np.int64)
+        ints["frame_joint"] = frame_joint
         self._nq, self._nv = nq, nv
         self._f, self._i = pack_fields(floats, ints, FLOAT_FIELDS, INT_FIELDS)
         inputs = buffer_view(self._f, self._i, FLOAT_FIELDS, "inputs")
