@@ -9,6 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..controllers.walking import (
+    FIRST_STEP_TABLES,
+    FootForceGains,
     GaitConfig,
     RcaConfig,
     SstaConfig,
@@ -91,6 +93,11 @@ class WalkingPolicyConfig:
             (:class:`~redundancy_gym.controllers.walking.ServoFeedforward`, over the env's ``servo_stiffness``): the
             targets lead by ``tau / k_p`` so the servos do not sag under the plan's loads. Not used with ``"clik"``,
             which computes no joint accelerations.
+        correction_first_steps: the first steps (0-2) with multi-body ZMP correction tables of their own (0: the
+            steady tables from the first step on, as before 2026-12-03).
+        foot_force_gain: ``k`` [m/(N s)] of the ground contact by force
+            (:class:`~redundancy_gym.controllers.walking.FootForceControl`: the soles' heights follow the measured
+            normal forces against the plan's load share; 0: off).
     """
 
     momentum_minimization: bool = True
@@ -121,6 +128,8 @@ class WalkingPolicyConfig:
     moment_gain: float = WalkingIkdConfig.moment_gain
     ikd_planning: bool = WalkingIkdConfig.planning
     ikd_feedforward: bool = True
+    correction_first_steps: int = FIRST_STEP_TABLES
+    foot_force_gain: float = FootForceGains.gain
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -222,6 +231,8 @@ class WalkingPolicy(PerEnvPolicy):
                 correction_configuration=self._nominal,
                 ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None,
                 servo_stiffness=stiffness,
+                foot_force=FootForceGains(gain=c.foot_force_gain),
+                correction_first_steps=c.correction_first_steps,
             )
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc

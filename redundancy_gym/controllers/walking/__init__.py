@@ -5,6 +5,7 @@ each a separate layer."""
 from .compiled_servo_feedforward import CompiledServoFeedforward
 from .compiled_whole_body_ik import CompiledWholeBodyIk
 from .dcm_planner import GRAVITY, ComState, DcmPlan, DcmPlanner
+from .foot_force_control import FootForceControl, FootForceGains
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement, MeasurementResult, renamed_attribute
 from .quintic import PiecewiseQuintic, Quintic
@@ -26,7 +27,7 @@ from .ssta import (
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .support_polygon import SOLE_HALF_WIDTH, SOLE_X, sole_corners, support_margin, support_polygon
-from .walking_controller import BACKENDS, PlanZmp, WalkingCommand, WalkingController, WalkingIkConfig
+from .walking_controller import BACKENDS, FIRST_STEP_TABLES, PlanZmp, WalkingCommand, WalkingController, WalkingIkConfig
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import (
@@ -45,6 +46,7 @@ __all__ = [
     "CompiledMeasurement",
     "CompiledServoFeedforward",
     "CompiledWholeBodyIk",
+    "FIRST_STEP_TABLES",
     "GRAVITY",
     "LEG_SEGMENTS",
     "OBSTACLE_CLASSES",
@@ -57,6 +59,8 @@ __all__ = [
     "ComState",
     "DcmPlan",
     "DcmPlanner",
+    "FootForceControl",
+    "FootForceGains",
     "GaitConfig",
     "MeasurementResult",
     "LinePlan",

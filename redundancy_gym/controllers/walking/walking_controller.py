@@ -30,6 +30,7 @@ from ..objectives.objective import Objective
 from ..objectives.posture_objective import PostureObjective
 from .compiled_servo_feedforward import CompiledServoFeedforward
 from .compiled_whole_body_ik import CompiledWholeBodyIk
+from .foot_force_control import FootForceControl, FootForceGains
 from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
 from .rca import Rca, RcaConfig, RcaState
@@ -44,7 +45,7 @@ from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, Whole
 from .zmp_estimator import ZmpEstimate, estimate_zmp
 
 # BACKENDS: kernel_options' one tuple of twins, exported here as before (WalkingIkConfig.backend's choices)
-__all__ = ["BACKENDS", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
+__all__ = ["BACKENDS", "FIRST_STEP_TABLES", "WalkingCommand", "WalkingController", "WalkingIkConfig"]
 
 SSTA_REMAP = 0.01
 """How far [m] the map from the world into the plan's frame must have moved the obstacles (at the sole's reach)
@@ -64,6 +65,12 @@ def _is_float_array(value: object, shape: tuple[int, ...]) -> TypeGuard[NDArray[
 
 COMMAND_REPLAN_INTERVAL = 0.04
 """Shortest time [s] between two CoM replans for new walking commands (:meth:`WalkingController.set_command`)."""
+
+
+FIRST_STEP_TABLES = 2
+"""The first steps of a walk that get multi-body ZMP correction tables of their own (``correction_first_steps``):
+the first two start from standing, and the steady tables put their whole-body ZMP up to 21 mm outside the soles
+at 0.7 m/s (with their own tables 58 and 28 mm inside, ``plan_zmp``)."""
 
 
 @dataclass(frozen=True)
@@ -180,6 +187,10 @@ class WalkingController:
             (:class:`~redundancy_gym.controllers.ikd.WalkingIkd`, monograph 5.5) instead of the whole-body CLIK
             (None): the pattern's ZMP is then realized exactly, so ``correction_iterations`` should be 0 (the plain
             LIPM plan). The CLIK still moves the standing start onto the pattern's first reference.
+        foot_force: ground contact by force (:class:`FootForceControl`, foot force difference control): the soles'
+            height references follow the measured normal forces against the plan's load share (None: off).
+        correction_first_steps: the first steps of a walk (0-2) whose multi-body ZMP correction is estimated from
+            their own rollout rather than taken from the steady steps' tables (:attr:`ZmpCorrection.first`).
         servo_stiffness: with ``ikd``, the position servos' ``k_p`` [N m/rad] per actuated joint: each period's
             joint targets are then shifted by the IKD motion's torques over them (:class:`ServoFeedforward`), so
             the servos do not sag under the plan's loads (None: the IKD's positions as they are). The CLIK has no
@@ -210,6 +221,8 @@ class WalkingController:
         correction_configuration: ArrayLike | None = None,
         ikd: WalkingIkdConfig | None = None,
         servo_stiffness: ArrayLike | None = None,
+        foot_force: FootForceGains | None = None,
+        correction_first_steps: int = FIRST_STEP_TABLES,
     ) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
@@ -253,6 +266,9 @@ class WalkingController:
         self.feet_frames, self.torso_frame = feet_frames, torso_frame
         self.correction_iterations = int(correction_iterations)
         self.correction_samples = int(correction_samples)
+        if not isinstance(correction_first_steps, (int, np.integer)) or not 0 <= correction_first_steps <= 2:
+            raise ControllerError(f"correction_first_steps must be an int in [0, 2], got {correction_first_steps!r}")
+        self.correction_first_steps = int(correction_first_steps)
         self._corrections: dict[tuple[float, bool, bytes], ZmpCorrection] = {}
         self.correction_configuration: NDArray[np.float64] | None = None
         if correction_configuration is not None:
@@ -298,6 +314,8 @@ class WalkingController:
             twin = CompiledServoFeedforward if self.ik_config.backend == "compiled" else ServoFeedforward
             self.feedforward = twin(model, servo_stiffness, feet_frames)
         self._ikd_com = (np.zeros(3), np.zeros(3))
+        self.foot_force_gains = foot_force or FootForceGains()
+        self.foot_force = FootForceControl(self.foot_force_gains) if self.foot_force_gains.active else None
         self._base: tuple[PatternSample, _ReferenceBase] | None = None  # the last packed reference (its sample)
 
     # ------------------------------------------------------------------ start
@@ -391,6 +409,8 @@ class WalkingController:
             self.rca.set_obstacles(())
         self.stabilizer.reset()
         self.step_adjuster.reset()
+        if self.foot_force is not None:
+            self.foot_force.reset()
         self.time = 0.0
         self._command_replan = -np.inf
         self._next = None
@@ -576,17 +596,29 @@ class WalkingController:
             times_a, momentum_a = np.array(times), np.array(momentum)
             rate = np.gradient(momentum_a, times_a, axis=0)
             shift = np.stack([-rate[:, 1], rate[:, 0]], axis=1) / (self._mass * GRAVITY)
-            offsets = np.zeros((2, n, 2))
-            for side, k in ((0, 2), (1, 3)):
-                t0, duration = pattern.step_start(k), pattern.step_duration
-                for j, phase in enumerate(phases):
-                    window = (times_a >= t0 + (phase - 0.5 / n) * duration) & (
-                        times_a < t0 + (phase + 0.5 / n) * duration
-                    )
-                    offsets[side, j] = shift[window].mean(axis=0)
-            correction = ZmpCorrection(phases, offsets)
+            tables = [self._step_table(pattern, k, phases, times_a, shift) for k in range(4)]
+            offsets = np.array(tables[2:4])
+            first = np.array(tables[: self.correction_first_steps])
+            correction = ZmpCorrection(phases, offsets, first if self.correction_first_steps else None)
         assert correction is not None
         return correction
+
+    @staticmethod
+    def _step_table(
+        pattern: WalkingPattern,
+        k: int,
+        phases: NDArray[np.float64],
+        times: NDArray[np.float64],
+        shift: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Step ``k``'s ZMP shifts [m] (n, 2) at ``phases``: the mean of ``shift`` (per period, at ``times`` [s]) over
+        the window of width ``1 / n`` of the step about each phase."""
+        t0, duration, n = pattern.step_start(k), pattern.step_duration, phases.size
+        rows = np.empty((n, 2))
+        for j, phase in enumerate(phases):
+            window = (times >= t0 + (phase - 0.5 / n) * duration) & (times < t0 + (phase + 0.5 / n) * duration)
+            rows[j] = shift[window].mean(axis=0)
+        return rows
 
     def plan_zmp(self, speed: float, steps: int = 4) -> PlanZmp:
         """The whole-body ZMP of the plan: a kinematic rollout of the IK (no balance feedback) on the pattern at
@@ -940,6 +972,8 @@ class WalkingController:
         end_ref = self._offset_reference(
             self._packed_base(end), offset_x + rate_x * self.dt, offset_y + rate_y * self.dt, rate_x, rate_y
         )
+        if self.foot_force is not None:
+            self._press_feet(start, contact, start_ref, end_ref)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)
@@ -975,6 +1009,29 @@ class WalkingController:
         )
         self._ikd_com = (result.com + result.com_velocity * self.dt, result.com_velocity)
         return result
+
+    def _press_feet(
+        self,
+        start: PatternSample,
+        contact: ZmpEstimate,
+        start_ref: NDArray[np.float64],
+        end_ref: NDArray[np.float64],
+    ) -> None:
+        """Foot force difference control (:class:`FootForceControl`): the soles' height references of this period
+        moved by half the height difference each (the left up, the right down), from the measured normal forces
+        against the plan's load share."""
+        assert self.foot_force is not None
+        right, left = contact.normal_force.tolist()
+        before = self.foot_force.offset
+        after, rate = self.foot_force.update(self.dt, right, left, start.right_load)
+        start_ref[8] -= 0.5 * before
+        start_ref[11] += 0.5 * before
+        end_ref[8] -= 0.5 * after
+        end_ref[11] += 0.5 * after
+        start_ref[32] -= 0.5 * rate
+        start_ref[38] += 0.5 * rate
+        end_ref[32] -= 0.5 * rate
+        end_ref[38] += 0.5 * rate
 
     def _avoid(self, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64]) -> RcaState:
         """RCA (5.80)-(5.83): move the swing foot's position references of this period by the modification

@@ -94,10 +94,14 @@ class ZmpCorrection:
     Attributes:
         phases: step phases in [0, 1) at which the shift is given, increasing, shape (n,).
         offsets: ZMP shifts [m], shape (2, n, 2): for steps swinging the right foot, then the left.
+        first: ZMP shifts [m] of the first steps of a walk, shape (m, n, 2): step ``k < m`` takes ``first[k]``
+            instead of ``offsets[k % 2]`` (the first steps start from standing, with another momentum profile
+            than the steady steps; ``None``: every step takes ``offsets``).
     """
 
     phases: NDArray[np.float64]
     offsets: NDArray[np.float64]
+    first: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         phases, offsets = np.asarray(self.phases), np.asarray(self.offsets)
@@ -107,6 +111,19 @@ class ZmpCorrection:
             raise ControllerError("ZMP correction must be finite")
         if phases.size and (phases[0] < 0.0 or phases[-1] >= 1.0 or np.any(np.diff(phases) <= 0.0)):
             raise ControllerError("phases must increase within [0, 1)")
+        if self.first is not None:
+            first = np.asarray(self.first)
+            if first.ndim != 3 or first.shape[1:] != (phases.size, 2):
+                raise ControllerError(f"need first (m, {phases.size}, 2), got {first.shape}")
+            if not np.all(np.isfinite(first)):
+                raise ControllerError("ZMP correction must be finite")
+
+    def table(self, k: int) -> NDArray[np.float64]:
+        """The shifts [m] (n, 2) of step ``k`` (>= 0): its own first-step table, else its foot's steady one."""
+        first = self.first
+        if first is not None and k < len(first):
+            return first[k]
+        return self.offsets[k % 2]
 
 
 @dataclass(frozen=True)
@@ -635,7 +652,7 @@ class WalkingPattern:
             stance, swing_to = self._zmp_point(k + 1, -a), self._zmp_point(k + 1, a)
             landing = self._zmp_point(k + 2, -a)
             ratio = self._single / self.step_duration
-            offsets = correction.offsets[k % 2]
+            offsets = correction.table(k)
             if self._turned:  # the tables are in the stance foot's frame (estimated walking along +x)
                 heading = self.heading(k + 1)
                 c, s = math.cos(heading), math.sin(heading)
