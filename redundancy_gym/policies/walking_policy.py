@@ -28,7 +28,7 @@ from .options import config_from_options, env_with_attributes
 from .per_env_policy import PerEnvPolicy
 from .registry import CAPABILITY_ATTRIBUTES
 
-__all__ = ["IKD_FEEDFORWARD_GAINS", "WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
+__all__ = ["CLIK_FOOT_FORCE_GAIN", "IKD_FEEDFORWARD_GAINS", "WalkingPolicy", "WalkingPolicyConfig", "obstacle_volumes"]
 
 OBSTACLE_ROW = 14
 """Entries of one obstacle row of the observation: ``[mask, PSS, LSS, TSS, v0 (3), v1 (3), v2 (3), radius]``."""
@@ -39,6 +39,10 @@ IKD_FEEDFORWARD_GAINS = (0.3, 0.3)
 """``(zmp_gain, com_gain)`` [-, 1/s] of the IKD walker with ``ikd_feedforward``: with the servos' sag fed forward,
 the full gains over-correct (``bench walk``'s measured ZMP 74.9 mm rms from the reference at 1.0 / 1.0, 52.8 mm at
 0.3 / 0.3; docs/walking.md)."""
+CLIK_FOOT_FORCE_GAIN = 4e-4
+"""``foot_force_gain`` [m/(N s)] of the CLIK walker: its landing foot takes its load late (``bench walk``'s measured
+ZMP 71.5 mm rms from the reference without, 59.3 mm with). The IKD walker's 0 (off): its ZMP got worse with it
+(45.4 against 46.9 mm at 2e-4; docs/walking.md)."""
 
 
 def obstacle_volumes(rows: NDArray[np.float64]) -> list[SSV]:
@@ -97,7 +101,8 @@ class WalkingPolicyConfig:
             steady tables from the first step on, as before 2026-12-03).
         foot_force_gain: ``k`` [m/(N s)] of the ground contact by force
             (:class:`~redundancy_gym.controllers.walking.FootForceControl`: the soles' heights follow the measured
-            normal forces against the plan's load share; 0: off).
+            normal forces against the plan's load share; 0: off; None: the walker's own,
+            :data:`CLIK_FOOT_FORCE_GAIN` with ``ik="clik"``, 0 with ``"ikd"``).
     """
 
     momentum_minimization: bool = True
@@ -129,7 +134,7 @@ class WalkingPolicyConfig:
     ikd_planning: bool = WalkingIkdConfig.planning
     ikd_feedforward: bool = True
     correction_first_steps: int = FIRST_STEP_TABLES
-    foot_force_gain: float = FootForceGains.gain
+    foot_force_gain: float | None = None
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -231,7 +236,11 @@ class WalkingPolicy(PerEnvPolicy):
                 correction_configuration=self._nominal,
                 ikd=WalkingIkdConfig(moment_gain=c.moment_gain, planning=c.ikd_planning) if c.ik == "ikd" else None,
                 servo_stiffness=stiffness,
-                foot_force=FootForceGains(gain=c.foot_force_gain),
+                foot_force=FootForceGains(
+                    gain=(CLIK_FOOT_FORCE_GAIN if c.ik == "clik" else 0.0)
+                    if c.foot_force_gain is None
+                    else c.foot_force_gain
+                ),
                 correction_first_steps=c.correction_first_steps,
             )
         except ValueError as exc:  # ControllerError from the parts names the bad value

@@ -38,6 +38,10 @@ class WalkTrace:
     zmp_target: NDArray[np.float64]
     """The whole body's reference ZMP [m] (``WalkingPattern.reference_zmp``: the LIPM plan's ``zmp_ref`` plus the
     multi-body correction), which ``bench walk``'s ``zmp_rms_mm`` measures the measured ZMP against."""
+    zmp_plan: NDArray[np.float64]
+    """The ZMP [m] the plan's whole-body motion demands (``WalkingController.plan_zmp``: a kinematic rollout of the
+    CLIK on the pattern without feedback), at the trace's times; NaN before the first step and for the IKD walker,
+    whose planned ZMP is the reference it realizes (``zmp_target``)."""
     feet: NDArray[np.float64]
     contact: NDArray[np.bool_]
     lz: NDArray[np.float64]
@@ -76,6 +80,14 @@ def record_walk(speed: float = 0.7, duration: float = 6.0, seed: int = 0, **poli
     finally:
         env.close()
     arrays = {k: np.asarray(v) for k, v in rows.items()}
+    arrays["zmp_plan"] = np.full_like(arrays["zmp_target"], np.nan)
+    pattern = policy.controller.pattern
+    if policy.controller.ikd is None and pattern is not None:
+        steps = max(1, pattern.step_at(float(arrays["time"][-1])))
+        plan = policy.controller.plan_zmp(speed, steps=steps)
+        inside = (arrays["time"] >= plan.times[0]) & (arrays["time"] <= plan.times[-1])
+        for axis in range(2):
+            arrays["zmp_plan"][inside, axis] = np.interp(arrays["time"][inside], plan.times, plan.zmp[:, axis])
     return WalkTrace(**arrays, fell=bool(info["fell"]), distance=float(info["distance"]))
 
 
@@ -91,7 +103,9 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
             lo.append(on[:, axis].min() + ext[0])
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")
-        ax.plot(t, trace.zmp_ref[:, axis], color="tab:orange", lw=1.2, label="ZMP planned (LIPM)")
+        if np.any(np.isfinite(trace.zmp_plan)):
+            ax.plot(t, trace.zmp_plan[:, axis], color="tab:orange", lw=1.2, label="ZMP planned (whole-body motion)")
+        ax.plot(t, trace.zmp_ref[:, axis], ":", color="tab:brown", lw=0.8, label="LIPM's ZMP (planning variable)")
         ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label="ZMP reference (whole body)")
         ax.plot(t, trace.zmp[:, axis], color="tab:red", lw=0.6, alpha=0.8, label="ZMP measured (contact forces)")
         ax.plot(t, trace.com_ref[:, axis], color="tab:blue", lw=1.2, label="CoM planned (LIPM/DCM)")

@@ -26,6 +26,10 @@ def test_walk_bench_report(tmp_path) -> None:
         )
         # the reference ZMP lies inside the planned support polygon by construction (heel to toe, foot to foot)
         assert report["zmp_reference_margin_mm"][ik] > 0.0
+    # the planned ZMP (the plan's whole-body motion) keeps 20 mm inside the soles in every step, the first included
+    plan = report["zmp_whole_body_plan"]
+    assert report["zmp_plan_margin_mm"] == plan["margin_mm"] == min(row["margin_mm"] for row in plan["by_step"])
+    assert report["zmp_plan_margin_mm"] >= 20.0
     assert report["states"] == 149 and not report["fell"]  # every period after the first records one IK call
     assert report["ik_max_difference"] < 1e-9  # the same inputs give the same configuration in both backends
     assert report["self_collision_pairs"] > 100

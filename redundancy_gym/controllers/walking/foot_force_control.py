@@ -40,8 +40,8 @@ class FootForceGains:
 
     gain: float = 0.0
     time_constant: float = 0.1
-    max_offset: float = 0.02
-    force_filter: float = 0.03
+    max_offset: float = 0.06
+    force_filter: float = 0.01
 
     def __post_init__(self) -> None:
         for name, low, strict in (

@@ -89,6 +89,7 @@ def test_the_controller_moves_the_soles_by_half_the_difference_each_and_off_chan
         controller.foot_force = FootForceControl(gains) if gains is not None and gains.active else None
         controller.start(q, 0.5)
         controller.step(q, v, forces, torques)
+        assert controller.q_ref is not None
         model.update(controller.q_ref)
         soles.append([model.frame_position(f)[2] for f in ("r_sole", "l_sole")])
         if controller.foot_force is not None:
