@@ -3,7 +3,7 @@
 Never imports gymnasium, mujoco, envs or eval.
 """
 
-from .collision_geometry import CollisionGeometry, collision_geometry_from_mjcf, collision_model_from_mjcf
+from .collision_geometry import CollisionGeometry, box_volumes, collision_geometry_from_mjcf, collision_model_from_mjcf
 from .exceptions import ModelError, UnknownFrameError
 from .robot_model import AccelerationTerms, JacobianKind, RobotModel
 from .serial_chain import SerialChain
@@ -16,6 +16,7 @@ __all__ = [
     "RobotModel",
     "SerialChain",
     "UnknownFrameError",
+    "box_volumes",
     "collision_geometry_from_mjcf",
     "collision_model_from_mjcf",
 ]

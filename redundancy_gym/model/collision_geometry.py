@@ -22,7 +22,7 @@ from ..geometry import LSS, PSS, SSV, TSS, CollisionModel, Segment
 from .exceptions import ModelError
 from .robot_model import RobotModel
 
-__all__ = ["CollisionGeometry", "collision_geometry_from_mjcf", "collision_model_from_mjcf"]
+__all__ = ["CollisionGeometry", "box_volumes", "collision_geometry_from_mjcf", "collision_model_from_mjcf"]
 
 TRIANGLE_PREFIX = "tss"
 
@@ -137,6 +137,46 @@ def _mjcf_excludes(path: Path) -> list[tuple[str, str]]:
     except ElementTree.ParseError as exc:
         raise ModelError(f"{path} is not valid XML: {exc}") from exc
     return [(e.get("body1", ""), e.get("body2", "")) for e in root.iter("exclude")]
+
+
+def box_volumes(
+    model: RobotModel, names: tuple[str, ...] | list[str], path: str | Path | None = None
+) -> dict[str, tuple[TSS, ...]]:
+    """Swept-sphere covers of the MJCF's box geoms ``names``, by the segment they move with (the segment names of
+    :func:`collision_geometry_from_mjcf`, in its coordinates): each box as two TSS on its mid-plane across its
+    thinnest axis, of radius its half thickness, which hold the box with its edges rounded (its rim reaches at most
+    the half thickness beyond the box's sides).
+
+    Boxes are contact geoms that :func:`collision_geometry_from_mjcf` leaves out (the biped's soles); a model that
+    wants them in its distances adds these.
+
+    Raises:
+        ModelError: a name that is not a box geom of the MJCF.
+    """
+    source = Path(path if path is not None else model.source)
+    pm = model.pinocchio_model
+    try:
+        geom = pin.buildGeomFromMJCF(pm, str(source), pin.GeometryType.COLLISION)
+    except Exception as exc:  # pinocchio raises plain RuntimeError/ValueError
+        raise ModelError(f"pinocchio could not read the geoms of {source}: {exc}") from exc
+    boxes = {obj.name: obj for obj in geom.geometryObjects if type(obj.geometry).__name__ == "Box"}
+    missing = [n for n in names if n not in boxes]
+    if missing:
+        raise ModelError(f"box geoms {missing} not in {source}; its boxes: {sorted(boxes)}")
+    covers: dict[str, list[TSS]] = {}
+    for name in names:
+        obj = boxes[name]
+        half = np.asarray(obj.geometry.halfSide, dtype=np.float64)
+        rot, center = obj.placement.rotation, obj.placement.translation
+        thin = int(np.argmin(half))
+        a, b = (rot[:, k] * half[k] for k in range(3) if k != thin)
+        corners = (center - a - b, center + a - b, center + a + b, center - a + b)
+        radius = float(half[thin])
+        segment = pm.frames[obj.parentFrame].name
+        covers.setdefault(segment, []).extend(
+            (TSS(corners[0], corners[1], corners[2], radius), TSS(corners[0], corners[2], corners[3], radius))
+        )
+    return {segment: tuple(v) for segment, v in covers.items()}
 
 
 def collision_model_from_mjcf(

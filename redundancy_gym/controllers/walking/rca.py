@@ -26,18 +26,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import SSV, CollisionModel, Segment
-from ...model import RobotModel, collision_geometry_from_mjcf
+from ...model import RobotModel, box_volumes, collision_geometry_from_mjcf
 from ...validation import check_real
 from ..exceptions import ControllerError
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.collision_objective import CollisionObjective
 from ..objectives.joint_limit_objective import JointLimitObjective
 
-__all__ = ["LEG_SEGMENTS", "Rca", "RcaConfig", "RcaState", "return_quintic_no_overshoot_time"]
+__all__ = ["LEG_SEGMENTS", "SOLE_GEOMS", "Rca", "RcaConfig", "RcaState", "return_quintic_no_overshoot_time"]
 
 LEG_SEGMENTS = (("r_thigh", "r_shank", "r_foot", "r_toe"), ("l_thigh", "l_shank", "l_foot", "l_toe"))
 """The collision segments of the right and left leg (body names of the biped's MJCF) that RCA keeps off
 obstacles while the leg swings."""
+SOLE_GEOMS = ("r_sole_geom", "r_toe_sole_geom", "l_sole_geom", "l_toe_sole_geom")
+"""The biped's sole boxes (contact geoms, 0.26 x 0.15 m), which RCA adds to their leg segments as swept-sphere covers
+(:func:`~redundancy_gym.model.box_volumes`): the foot's capsule (r 45 mm) and the toe's sphere (r 35 mm) leave the
+sole's sides 30-40 mm uncovered, and a sole touched boxes that those volumes kept 40-75 mm off."""
 
 # the basis of a quintic from (w0, v0, a0) at tau = 0 to rest at zero at tau = 1 (tau = s / T):
 # w = w0 sigma + v0 T psi + a0 T^2 chi, each basis function >= 0 on [0, 1]; psi / sigma <= 0.4 and
@@ -149,6 +153,9 @@ class Rca:
         config: gains and timing.
         feet_frames: the sole frames (right, left): the swing foot's task coordinates ``w_F``.
         legs: collision segment names of the right and left leg (:data:`LEG_SEGMENTS`).
+        sole_geoms: box geoms of the MJCF added to the legs' segments they move with, each as two TSS
+            (:data:`SOLE_GEOMS`; ``()``: the segments' own volumes only). Obstacle avoidance only: the IK's
+            self-collision model keeps the MJCF's volumes (the feet pass each other 30 mm apart by design).
     """
 
     def __init__(
@@ -160,6 +167,7 @@ class Rca:
         *,
         feet_frames: tuple[str, str] = ("r_sole", "l_sole"),
         legs: tuple[tuple[str, ...], tuple[str, ...]] = LEG_SEGMENTS,
+        sole_geoms: tuple[str, ...] = SOLE_GEOMS,
     ) -> None:
         self.model = model
         self.config = config or RcaConfig()
@@ -169,7 +177,16 @@ class Rca:
         missing = [n for leg in legs for n in leg if n not in by_name]
         if missing:
             raise ControllerError(f"legs name unknown segments {missing}; the model has {sorted(by_name)}")
-        self._legs = tuple(tuple(by_name[n] for n in leg) for leg in legs)
+        covers = box_volumes(model, sole_geoms) if sole_geoms else {}
+        foreign = sorted(set(covers) - {n for leg in legs for n in leg})
+        if foreign:
+            raise ControllerError(f"sole_geoms move with segments {foreign} that are not in legs {legs}")
+        self._legs = tuple(
+            tuple(
+                Segment(n, by_name[n].volumes + covers[n], by_name[n].frame) if n in covers else by_name[n] for n in leg
+            )
+            for leg in legs
+        )
         c = self.config
         lower, upper = np.asarray(soft_lower, dtype=np.float64), np.asarray(soft_upper, dtype=np.float64)
         self._limits = None

@@ -173,3 +173,30 @@ def test_the_tss_obstacle_and_config_errors(model):
         RcaConfig(return_time=0.05, min_return_time=0.1)
     with pytest.raises(ControllerError, match="unknown segments"):
         Rca(model, model.lower_limits[7:], model.upper_limits[7:], legs=(("r_thigh",), ("nope",)))
+
+
+def test_the_soles_covers_bring_an_obstacle_beside_the_sole_into_view(model):
+    # a post 60 mm beside the right sole's outer edge: the foot's own capsule (r 45 mm on the foot's axis) sees it
+    # 80 mm away, the sole's TSS cover (its mid-plane rectangle, r 15 mm) 35 mm away, inside the activation distance
+    q = standing(model)
+    model.update(q)
+    sole = model.frame_position("r_sole")
+    x, y = float(sole[0]), float(sole[1]) - 0.075 - 0.06
+    post = LSS([x, y, float(sole[2])], [x, y, float(sole[2]) + 0.1], 0.01)
+    distances = {}
+    for covers in (True, False):
+        lower, upper = model.lower_limits[7:], model.upper_limits[7:]
+        rca = Rca(model, lower, upper, RcaConfig(), **({} if covers else {"sole_geoms": ()}))
+        rca.set_obstacles([post])
+        model.update(q)
+        distances[covers] = rca.modification_rate(q, 0)[1]
+    assert distances[True] == pytest.approx(0.06 - 0.015 - 0.01, abs=1e-9)
+    assert distances[False] == pytest.approx(0.075 + 0.06 - 0.045 - 0.01, abs=1e-9)
+    with pytest.raises(ControllerError, match=r"sole_geoms move with segments \['r_foot'\]"):
+        Rca(
+            model,
+            model.lower_limits[7:],
+            model.upper_limits[7:],
+            legs=(("r_thigh",), ("l_thigh",)),
+            sole_geoms=("r_sole_geom",),
+        )
