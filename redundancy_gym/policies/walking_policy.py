@@ -98,7 +98,9 @@ class WalkingPolicyConfig:
             targets lead by ``tau / k_p`` so the servos do not sag under the plan's loads. Not used with ``"clik"``,
             which computes no joint accelerations.
         correction_first_steps: the first steps (0-2) with multi-body ZMP correction tables of their own (0: the
-            steady tables from the first step on, as before 2026-12-03).
+            steady tables from the first step on, as before 2026-12-03; None: the walker's own,
+            :data:`~redundancy_gym.controllers.walking.FIRST_STEP_TABLES` with ``ik="clik"``, 0 with ``"ikd"``, whose
+            walks with them ended in a self-collision at 1.0 m/s and did worse on random obstacle courses).
         foot_force_gain: ``k`` [m/(N s)] of the ground contact by force
             (:class:`~redundancy_gym.controllers.walking.FootForceControl`: the soles' heights follow the measured
             normal forces against the plan's load share; 0: off; None: the walker's own,
@@ -133,7 +135,7 @@ class WalkingPolicyConfig:
     moment_gain: float = WalkingIkdConfig.moment_gain
     ikd_planning: bool = WalkingIkdConfig.planning
     ikd_feedforward: bool = True
-    correction_first_steps: int = FIRST_STEP_TABLES
+    correction_first_steps: int | None = None
     foot_force_gain: float | None = None
 
 
@@ -241,7 +243,9 @@ class WalkingPolicy(PerEnvPolicy):
                     if c.foot_force_gain is None
                     else c.foot_force_gain
                 ),
-                correction_first_steps=c.correction_first_steps,
+                correction_first_steps=(FIRST_STEP_TABLES if c.ik == "clik" else 0)
+                if c.correction_first_steps is None
+                else c.correction_first_steps,
             )
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc

@@ -159,14 +159,15 @@ def test_bad_settings_are_refused_by_name(kwargs, name):
 
 
 def test_on_the_corrected_plan_the_hybrid_holds_a_small_gain_and_moves_the_modification_into_double_support():
-    # fig. 5.24 on the walking controller's plan (multi-body ZMP correction): with k = 2e-4 (K_p = 8 < g / z_c) the
-    # contact-moment feedback alone lets the CoM run off within six steps, the hybrid keeps it within a few
-    # centimetres, with a larger share of its moment modification in double support
+    # fig. 5.24 on the walking controller's plan (multi-body ZMP correction, the first steps with their own tables):
+    # with k = 2e-4 (K_p = 8 < g / z_c) the contact-moment feedback alone lets the CoM drift off the plan, farther
+    # with every step (its largest distance is its last, eight times the hybrid's), the hybrid keeps it within a few
+    # millimetres, with a larger share of its moment modification in double support
     study = run_ikd_study(IkdStudyConfig(gains=(2e-4,), comparison_gain=2e-4, correction=True), progress=False)
     sweep = {row["stabilization"]: row for row in study.to_json()["k_sweep"]}
     feedback, hybrid = sweep["moment"], sweep["hybrid"]
-    assert not feedback["completed"] and hybrid["completed"]
-    assert hybrid["com_distance_max_m"] < 0.04
+    assert hybrid["completed"] and hybrid["com_distance_max_m"] < 0.01
+    assert feedback["com_distance_final_m"] == feedback["com_distance_max_m"] > 5.0 * hybrid["com_distance_max_m"]
     assert hybrid["modification_share_in_double_support"] > feedback["modification_share_in_double_support"] + 0.1
     # the ideal is the reference ZMP, not the corrected plan's own
     assert study.config.plan_name == "LIPM plan + ZMP correction"
