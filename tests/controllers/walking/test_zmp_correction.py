@@ -20,6 +20,20 @@ def model() -> RobotModel:
     return RobotModel.from_mjcf(BIPED_XML)
 
 
+def _nominal_controller(model: RobotModel, **kwargs: object) -> WalkingController:
+    """A 4 ms controller on the soft limits whose correction comes from the env's nominal standing posture."""
+    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
+    nominal = [NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS]
+    return WalkingController(
+        model,
+        0.004,
+        lower + BIPED_SOFT_LIMIT_MARGIN,
+        upper - BIPED_SOFT_LIMIT_MARGIN,
+        correction_configuration=nominal,
+        **kwargs,  # type: ignore[arg-type]
+    )
+
+
 def _offsets(controller: WalkingController) -> np.ndarray:
     assert controller.pattern is not None and controller.pattern.correction is not None
     return controller.pattern.correction.offsets
@@ -69,15 +83,7 @@ def test_the_plans_whole_body_zmp_follows_the_reference_only_with_the_correction
     nominal = [NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS]
 
     def plan(iterations: int):
-        controller = WalkingController(
-            model,
-            0.004,
-            lower + BIPED_SOFT_LIMIT_MARGIN,
-            upper - BIPED_SOFT_LIMIT_MARGIN,
-            correction_iterations=iterations,
-            correction_configuration=nominal,
-        )
-        result = controller.plan_zmp(0.7, steps=4)
+        result = _nominal_controller(model, correction_iterations=iterations).plan_zmp(0.7, steps=4)
         steady = result.times >= result.step_starts[2]
         distance = np.linalg.norm(result.zmp - result.reference, axis=1)[steady]
         return float(np.sqrt(np.mean(distance**2))), float(distance.max()), float(result.margin[steady].min())
@@ -93,18 +99,9 @@ def test_the_first_steps_own_tables_keep_their_whole_body_zmp_20_mm_inside_the_s
     # the first step starts from standing with another momentum profile than the steady steps, whose tables put its
     # whole-body ZMP 21 mm outside the soles at 0.7 m/s; with tables of its own (the rollout's first two steps) every
     # step of the plan keeps 20 mm inside (issue 35's margin), and the steady steps' tables stay as they were
-    lower, upper = model.lower_limits[7:], model.upper_limits[7:]
-    nominal = [NOMINAL_POSTURE.get(j, 0.0) for j in BIPED_JOINTS]
 
     def plan(first_steps: int):
-        controller = WalkingController(
-            model,
-            0.004,
-            lower + BIPED_SOFT_LIMIT_MARGIN,
-            upper - BIPED_SOFT_LIMIT_MARGIN,
-            correction_configuration=nominal,
-            correction_first_steps=first_steps,
-        )
+        controller = _nominal_controller(model, correction_first_steps=first_steps)
         result = controller.plan_zmp(0.7, steps=4)
         margins = [
             float(result.margin[(result.times >= a) & (result.times < b)].min())
