@@ -103,10 +103,12 @@ def plot_com_zmp(trace: WalkTrace, path: str | Path, title: str) -> Path:
             lo.append(on[:, axis].min() + ext[0])
             hi.append(on[:, axis].max() + ext[1])
         ax.fill_between(t, lo, hi, color="0.85", label="support polygon (extent)")
-        if np.any(np.isfinite(trace.zmp_plan)):
+        planned = bool(np.any(np.isfinite(trace.zmp_plan)))
+        if planned:
             ax.plot(t, trace.zmp_plan[:, axis], color="tab:orange", lw=1.2, label="ZMP planned (whole-body motion)")
         ax.plot(t, trace.zmp_ref[:, axis], ":", color="tab:brown", lw=0.8, label="LIPM's ZMP (planning variable)")
-        ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label="ZMP reference (whole body)")
+        reference = "ZMP reference (whole body)" if planned else "ZMP reference = planned (the IKD realizes it)"
+        ax.plot(t, trace.zmp_target[:, axis], color="tab:green", lw=1.0, label=reference)
         ax.plot(t, trace.zmp[:, axis], color="tab:red", lw=0.6, alpha=0.8, label="ZMP measured (contact forces)")
         ax.plot(t, trace.com_ref[:, axis], color="tab:blue", lw=1.2, label="CoM planned (LIPM/DCM)")
         ax.plot(t, trace.com[:, axis], "--", color="navy", lw=1.0, label="CoM measured")
