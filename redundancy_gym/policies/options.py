@@ -143,6 +143,8 @@ OPTION_RULES: dict[str, OptionRule] = {
     "step_duration": _above(0.0, "s"),
     "com_height": _above(0.0, "m"),
     "correction_iterations": _at_least(0),
+    "correction_first_steps": OptionRule(low=0, high=2),
+    "foot_force_gain": _at_least(0.0, "m/(N s)"),
     "step_min_remaining": _above(0.0, "s"),
     "step_max_forward": _at_least(0.0, "m"),
     "step_max_backward": _at_least(0.0, "m"),
