@@ -25,6 +25,7 @@ from ..assets.crop_row import DIFFICULTIES, PART_REACH, CropRow, crop_row_defaul
 from ..geometry import LSS, GraspPath, GraspPathTiming, PackedVolumes, PairBatch, indexed_distances
 from .agri_kernels import agri_state
 from .command_kernels import velocity_commands
+from .dynamics import ARM_ITEMS, DynamicsRandomization, parse_dynamics
 from .exceptions import EnvConfigError, InvalidActionError
 from .self_collision import self_collision_pairs as _self_collision_pairs
 from .validation import (
@@ -167,6 +168,14 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
       not named get none; the quaternion's entries are not renormalized). The episode constants (grasp,
       approach, pre-grasp, obstacles), ``time`` and the reference entries stay exact (``tcp_error`` is computed
       from the noisy TCP), and ``info`` and the rewards use the true state.
+    - ``dynamics`` (default None = off): per-reset randomization of the simulated plant, drawn from the env's
+      generator (:mod:`redundancy_gym.envs.dynamics`): a level ``L`` in [0, 0.3] (every body's mass and inertia,
+      joint damping and armature and servo gains scaled in ``(1 - L, 1 + L)``, CoM offsets and the base's
+      placement up to ``L / 10`` [m] per axis, a payload up to ``10 L`` [kg] at the TCP, ``floor(10 L)`` control
+      periods of actuation latency) or a dict of items: ``mass``, ``servo_gain`` (scale ranges), ``damping``,
+      ``frictionloss``, ``armature`` (scale ranges or ``{"range": (low, high)}``), ``com_offset``,
+      ``placement`` [m], ``payload`` [kg range], ``latency`` [control periods: an int or a range], and ``level``
+      for the rest. The controllers keep the nominal model; ``info["dynamics"]`` of a reset says what was drawn.
     - ``backend`` (``"compiled"`` or ``"python"``): how a step computes its commands, its observation and the
       numbers of ``info``: in two compiled kernels, the reference path sampled once, or with NumPy, the readable
       reference the tests hold them equal to (bit for bit; ``goal_error`` and ``tracking_error`` to round-off).
@@ -227,6 +236,7 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         camera_name: str = "side",
         obs_noise: float | dict[str, float] | None = None,
         backend: str = "compiled",
+        dynamics: float | dict[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, AgriReachEnv.__init__)
@@ -360,6 +370,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         )
         self._speed_scale = np.array([self._max_lift_speed] + [self._max_joint_speed] * 8)
         self._backend = check_backend("backend", backend)
+        spec = parse_dynamics(dynamics, ARM_ITEMS)
+        self._dynamics = None if spec is None else DynamicsRandomization(spec, "carriage", "tcp")
         self._slots = np.array(
             [
                 lay[k].start
@@ -412,9 +424,14 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         self._obs[lay["pregrasp_position"]] = self._pregrasp
         q = self._start_configuration(rng)
         mujoco.mj_resetData(self.model, self.data)
+        drawn = None
+        if self._dynamics is not None:
+            drawn = self._dynamics.apply(self.model, self.data, rng)
         self.data.qpos[self._qpos] = q
         self.data.act[self._servo_act] = q
         mujoco.mj_forward(self.model, self.data)
+        if self._dynamics is not None:
+            self._dynamics.start_delay(self.data.ctrl)
         self._path = GraspPath.plan(
             self.data.site_xpos[self._tcp_site].copy(),
             self.data.site_xmat[self._tcp_site].reshape(3, 3)[:, 0].copy(),
@@ -425,6 +442,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
         )
         warn_if_time_limit_short(self, self._path.duration, "this episode's reference path")
         metrics = self._metrics(np.zeros(9))
+        if drawn is not None:
+            metrics["dynamics"] = drawn
         return self._get_obs(), metrics
 
     def step(self, action: NDArray[np.floating]) -> tuple[NDArray[np.float64], float, bool, bool, dict[str, Any]]:
@@ -472,6 +491,8 @@ class AgriReachEnv(gym.Env, utils.EzPickle):
 
     def _advance(self) -> None:
         """One control step of the physics for the controls set, and the clock."""
+        if self._dynamics is not None:
+            self.data.ctrl[:] = self._dynamics.delay(self.data.ctrl.copy())
         # mj_step1 of the current state ran at the end of the last step (or in reset): finish that step with
         # mj_step2, then run the new state's position/velocity stages once, for the observation and next step
         mujoco.mj_step2(self.model, self.data)

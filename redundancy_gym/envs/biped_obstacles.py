@@ -199,6 +199,7 @@ class BipedObstaclesEnv(BipedWalkEnv):
         success_distance: float = 1.0,
         speed_scale: float = 0.25,
         backend: str = "compiled",
+        dynamics: float | dict[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, BipedObstaclesEnv.__init__)

@@ -23,6 +23,7 @@ from ..assets.biped_scene import BIPED_FLOOR_GEOM, biped_scene_xml
 from ..geometry import PackedVolumes, PairBatch
 from .biped_kernels import biped_metrics, biped_observation, biped_targets
 from .contact_pressure import ContactPressure, contact_layout, contact_pressure, foot_of_geom
+from .dynamics import BIPED_ITEMS, DynamicsRandomization, parse_dynamics
 from .exceptions import EnvConfigError
 from .faults import PushSchedule
 from .self_collision import self_collision_pairs
@@ -197,6 +198,14 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
       env's generator. ``info["push_force"]`` is the force [N] applied during the step (zeros without one).
     - ``actuator_torque_scale`` (fault, in (0, 1], default 1): scales every servo's torque limit
       (``actuator_forcerange`` of the MJCF, 30-250 N m) as weak or worn drives; gains are unchanged.
+    - ``dynamics`` (default None = off): per-reset randomization of the simulated plant, drawn from the env's
+      generator (:mod:`redundancy_gym.envs.dynamics`): a level ``L`` in [0, 0.3] (every body's mass and inertia,
+      joint damping and armature and servo gains scaled in ``(1 - L, 1 + L)``, CoM offsets up to ``L / 10``
+      [m] per axis, the ground's friction scaled in ``(1 - 3 L, 1 + 3 L)``, ``floor(10 L)`` control periods of
+      actuation latency) or a dict of items: ``mass``, ``servo_gain``, ``friction`` (scale ranges),
+      ``damping``, ``frictionloss``, ``armature`` (scale ranges or ``{"range": (low, high)}``), ``com_offset``
+      [m], ``latency`` [control periods: an int or a range], and ``level`` for the rest. The controllers keep the
+      nominal model; ``info["dynamics"]`` of a reset says what was drawn.
     - ``backend`` (``"compiled"`` or ``"python"``): how ``info``'s contact metrics (``cop``, ``zmp``,
       ``normal_force``) are computed: one compiled pass over MuJoCo's contact arrays, or its readable reference,
       ``mj_contactForce`` per contact; both give the same values (the tests hold them equal bit for bit).
@@ -263,6 +272,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         actuator_torque_scale: float = 1.0,
         speed_scale: float = 0.25,
         backend: str = "compiled",
+        dynamics: float | dict[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, BipedWalkEnv.__init__)
@@ -327,6 +337,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             ("q", "qdot", "force", "torque", "imu"),
         )
         self._push = None if push is None else PushSchedule(push, "torso")
+        spec = parse_dynamics(dynamics, BIPED_ITEMS)
+        self._dynamics = None if spec is None else DynamicsRandomization(spec, "pelvis")
+        self._drawn: dict[str, Any] | None = None
         self._backend = check_backend("backend", backend)
         width, height = check_render_arguments(render_mode, width, height, camera_name)
         init_mujoco_env(
@@ -408,6 +421,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         x_before = float(self.data.qpos[0])
         if self._push is not None:
             self._apply_push(self._push)
+        if self._dynamics is not None:
+            ctrl = self._dynamics.delay(ctrl)
         # MujocoEnv.do_simulation less its check of ctrl's shape, which holds by construction
         self._step_mujoco_simulation(ctrl, self.frame_skip)
         self._time += dt
@@ -438,6 +453,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._push_force = np.array(force, dtype=np.float64)
 
     def reset_model(self) -> NDArray[np.float64]:
+        if self._dynamics is not None:
+            self._drawn = self._dynamics.apply(self.model, self.data, self.np_random)
         self._dt = self.dt
         self._time = 0.0
         self.data.xfrc_applied[:] = 0.0
@@ -458,13 +475,18 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self.set_state(qpos, np.zeros(self.model.nv))
         self._targets = q.copy()
         self.data.ctrl[:] = q
+        if self._dynamics is not None:
+            self._dynamics.start_delay(self.data.ctrl)
         self._start_x = float(self.data.qpos[0])
         if self._push is not None:
             self._push.reset(self.np_random)
         return self._get_obs()
 
     def _get_reset_info(self) -> dict[str, Any]:
-        return {**self._metrics(0.0), "push_force": np.zeros(3)}
+        info = {**self._metrics(0.0), "push_force": np.zeros(3)}
+        if self._drawn is not None:
+            info["dynamics"] = self._drawn
+        return info
 
     # ------------------------------------------------------------------ task
     @property

@@ -22,6 +22,7 @@ from ..assets import (
 )
 from ..assets.planar_arm_scene import planar_arm_scene_xml
 from .command_kernels import velocity_commands
+from .dynamics import ARM_ITEMS, DynamicsRandomization, parse_dynamics
 from .exceptions import EnvConfigError
 from .planar_kernels import planar_state
 from .validation import (
@@ -138,6 +139,14 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
       a float std applies to ``q`` [rad], ``qdot`` [rad/s] and ``tcp`` [m] alike, a dict gives one per group
       (``{"q": 0.001, "qdot": 0.01, "tcp": 0.001}``; groups not named get none). The episode constants
       (reference, phase, obstacle) stay exact, and ``info`` and the rewards use the true state.
+    - ``dynamics`` (default None = off): per-reset randomization of the simulated plant, drawn from the env's
+      generator (:mod:`redundancy_gym.envs.dynamics`): a level ``L`` in [0, 0.3] (every body's mass and inertia,
+      joint damping and armature and servo gains scaled in ``(1 - L, 1 + L)``, CoM offsets and the base's
+      placement up to ``L / 10`` [m] per axis, a payload up to ``10 L`` [kg] at the TCP, ``floor(10 L)`` control
+      periods of actuation latency) or a dict of items: ``mass``, ``servo_gain`` (scale ranges), ``damping``,
+      ``frictionloss``, ``armature`` (scale ranges or ``{"range": (low, high)}``), ``com_offset``,
+      ``placement`` [m], ``payload`` [kg range], ``latency`` [control periods: an int or a range], and ``level``
+      for the rest. The controllers keep the nominal model; ``info["dynamics"]`` of a reset says what was drawn.
     - ``backend`` (``"compiled"`` or ``"python"``): how a step computes its commands, observation and ``info``: in
       two compiled kernels, or with NumPy, the readable reference the tests hold them equal to (to round-off).
     - ``render_mode``, ``width``, ``height``, ``camera_name``: as for Gymnasium's MuJoCo envs.
@@ -186,6 +195,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         camera_name: str | None = "side",
         obs_noise: float | dict[str, float] | None = None,
         backend: str = "compiled",
+        dynamics: float | dict[str, Any] | None = None,
         **kwargs: Any,
     ) -> None:
         check_known_arguments(kwargs, PlanarReachEnv.__init__)
@@ -197,6 +207,9 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
             ("q", "qdot", "tcp"),
         )
         self._backend = check_backend("backend", backend)
+        spec = parse_dynamics(dynamics, ARM_ITEMS)
+        self._dynamics = None if spec is None else DynamicsRandomization(spec, "link1", "tcp")
+        self._drawn: dict[str, Any] | None = None
         self._obstacle = check_bool("obstacle", obstacle)
         self._obstacle_center = _point(obstacle_center, "obstacle_center")
         if np.max(np.abs(self._obstacle_center)) > MAX_OBSTACLE_DISTANCE:
@@ -261,7 +274,7 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         return self.action_space
 
     def _step_mujoco_simulation(self, ctrl: NDArray[np.float64], n_frames: int) -> None:
-        self.data.ctrl[:] = ctrl
+        self.data.ctrl[:] = ctrl if self._dynamics is None else self._dynamics.delay(ctrl)
         mujoco.mj_step(self.model, self.data, nstep=n_frames)
         # mj_step leaves positions of the state before the last integration; observe the current one
         mujoco.mj_kinematics(self.model, self.data)
@@ -299,6 +312,8 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self._time = 0.0
         self._max_tracking_error = 0.0
         self._collided = False
+        if self._dynamics is not None:
+            self._drawn = self._dynamics.apply(self.model, self.data, self.np_random)
         q = None
         for _ in range(20):
             noise = self.np_random.uniform(-self._reset_noise_scale, self._reset_noise_scale, size=4)
@@ -310,10 +325,15 @@ class PlanarReachEnv(MujocoEnv, utils.EzPickle):
         self.set_state(q, np.zeros(4))
         self.data.act[self._servo_act] = q
         mujoco.mj_forward(self.model, self.data)
+        if self._dynamics is not None:
+            self._dynamics.start_delay(self.data.ctrl)
         return self._get_obs()
 
     def _get_reset_info(self) -> dict[str, Any]:
-        return self._metrics(np.zeros(4))
+        info = self._metrics(np.zeros(4))
+        if self._drawn is not None:
+            info["dynamics"] = self._drawn
+        return info
 
     # ------------------------------------------------------------------ task
     @property

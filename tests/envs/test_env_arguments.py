@@ -51,6 +51,7 @@ _WALK_ARGUMENTS: dict[str, Any] = {
     "actuator_torque_scale": 0.9,
     "speed_scale": 0.3,
     "backend": "python",
+    "dynamics": {"mass": (0.9, 1.1), "latency": 1},
 }
 
 NON_DEFAULT: dict[str, dict[str, Any]] = {
@@ -75,6 +76,7 @@ NON_DEFAULT: dict[str, dict[str, Any]] = {
         "camera_name": None,
         "obs_noise": {"q": 0.001},
         "backend": "python",
+        "dynamics": {"mass": (0.9, 1.1), "latency": 1},
     },
     "redundancy_gym/AgriReach-v0": {
         "difficulty": "easy",
@@ -116,6 +118,7 @@ NON_DEFAULT: dict[str, dict[str, Any]] = {
         "camera_name": "front",
         "obs_noise": 0.001,
         "backend": "python",
+        "dynamics": {"mass": (0.9, 1.1), "latency": 1},
     },
     "redundancy_gym/BipedWalk-v0": _WALK_ARGUMENTS,
     "redundancy_gym/BipedObstacles-v0": {
