@@ -26,6 +26,7 @@ from ..model import RobotModel, collision_model_from_mjcf
 from .exceptions import PolicyError
 from .options import config_from_options, control_period, env_with_attributes
 from .per_env_policy import PerEnvPolicy
+from .plant_compensation import delay_compensation, tcp_offset
 
 __all__ = ["COLLISION_MODES", "OBSTACLE_SEGMENT", "ClikPolicy", "ClikPolicyConfig"]
 
@@ -50,6 +51,9 @@ class ClikPolicyConfig:
         collision_slope: slope of the collision potential at contact [1/m].
         collision_weight: weight of the collision objective.
         self_collision: also avoid robot-robot pairs (non-adjacent links).
+        base_calibration: at an episode's start, take the observed TCP less the model's as the robot's placement
+            error and track the targets less it (:mod:`~redundancy_gym.policies.plant_compensation`).
+        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none).
         backend: ``"compiled"`` (:class:`~redundancy_gym.controllers.CompiledClik`, one fused kernel per step)
             or ``"python"`` (:class:`~redundancy_gym.controllers.Clik`); same commands to round-off.
     """
@@ -68,6 +72,8 @@ class ClikPolicyConfig:
     collision_slope: float = 5.0
     collision_weight: float = 1.0
     self_collision: bool = True
+    base_calibration: bool = True
+    latency: int = 0
     backend: str = DEFAULT_BACKEND
 
 
@@ -136,7 +142,10 @@ class ClikPolicy(PerEnvPolicy):
         )
         self.controller: Clik | CompiledClik = CompiledClik(clik) if self.config.backend == "compiled" else clik
         self.last_result: ClikResult | None = None
-        self._init_per_env(env, kwargs)  # a velocity-level law: no episode state
+        self._frame, self._axes = base.TCP_FRAME, tuple("xyz".index(a) for a in base.TASK_AXES)
+        self._delay = delay_compensation(self.config.latency, control_period(base), self.model.nv)
+        self._offset: NDArray[np.float64] | None = None  # the placement error of this episode [m]
+        self._init_per_env(env, kwargs, self._layout)  # the episode state: the placement error, commands in flight
 
     def _collision_objective(self, base: Any, has_obstacle: bool) -> CollisionObjective:
         """Robot segments from the robot MJCF; the obstacle (a sphere, read from the observation) as a PSS."""
@@ -183,17 +192,30 @@ class ClikPolicy(PerEnvPolicy):
         self, obs: NDArray[np.float64], starting: bool
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """The configuration, task target and target velocity of one observation, for :attr:`controller`
-        (places the observed obstacle in the collision model); ``starting``: a new episode (unused: the law keeps
-        no episode state)."""
+        (places the observed obstacle in the collision model); at a new episode (``starting``, or the observation's
+        phase ~0 or going back) it takes the placement error (``base_calibration``), which the target is shifted
+        by for the episode."""
         self.update_obstacle(obs)
         lay = self._layout
-        return obs[lay["q"]], obs[lay["tcp_ref"]], obs[lay["tcp_ref_vel"]]
+        q, target = obs[lay["q"]], obs[lay["tcp_ref"]]
+        if self._new_episode(obs, starting) or self._offset is None:
+            self._delay.reset()
+            self._offset = np.zeros(len(self._axes))
+            if self.config.base_calibration and "tcp" in lay:
+                self._offset = tcp_offset(self.model, self._frame, q, obs[lay["tcp"]], self._axes)
+        return q, target - self._offset, obs[lay["tcp_ref_vel"]]
 
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
-        result = self.controller.step(*self.task_reference(obs, starting))
+        q, target, velocity = self.task_reference(obs, starting)
+        if self._delay.latency:
+            q = self._delay.predict(q)
+            target, velocity = self._delay.ahead(target, velocity)
+        result = self.controller.step(q, target, velocity)
         self.last_result = result
-        return np.clip(result.qdot / self._speed, -1.0, 1.0).astype(np.float32)
+        action = np.clip(result.qdot / self._speed, -1.0, 1.0)
+        self._delay.sent(action * self._speed)
+        return action.astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

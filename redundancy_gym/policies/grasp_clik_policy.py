@@ -30,6 +30,7 @@ from .exceptions import PolicyError
 from .grasp_clik_kernels import grasp_clik_action
 from .options import config_from_options, control_period, env_with_attributes
 from .per_env_policy import PerEnvPolicy
+from .plant_compensation import delay_compensation, tcp_offset
 
 __all__ = ["GraspClikConfig", "GraspClikPolicy", "GraspPath"]
 
@@ -60,6 +61,11 @@ class GraspClikConfig:
         collision_activation: ``d_a`` [m]; collision_slope: ``|H'(0)|`` [1/m]; collision_weight: weight.
         avoid_leaves: also keep clear of observed leaves and petioles (soft obstacles).
         joint_limit_activation: ``d_a`` of the joint-limit potential [rad or m]; joint_limit_weight: its weight.
+        base_calibration: at an episode's start, take the observed TCP less the model's as the robot's placement
+            error, and plan the path and place the obstacles less it, in the model's frame
+            (:mod:`~redundancy_gym.policies.plant_compensation`).
+        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none). With a latency the
+            compiled backend composes its calls instead of the one-call step.
         backend: ``"compiled"`` (:class:`CompiledClik`, one fused kernel per step) or ``"python"``
             (:class:`Clik`); both give the same commands to round-off.
     """
@@ -78,6 +84,8 @@ class GraspClikConfig:
     avoid_leaves: bool = False
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
+    base_calibration: bool = True
+    latency: int = 0
     backend: str = DEFAULT_BACKEND
 
 
@@ -162,6 +170,7 @@ class GraspClikPolicy(PerEnvPolicy):
         self._outputs = np.zeros(0)
         self._result_pending = False
         self._nv = self.model.nv
+        self._delay = delay_compensation(self.config.latency, self._period, self._nv)
         self._init_per_env(env, kwargs, self._layout)
 
     def build_controller(self, environment: list[Segment]) -> Clik | CompiledClik:
@@ -197,11 +206,16 @@ class GraspClikPolicy(PerEnvPolicy):
         axis = _tool_axis(obs[lay["tcp_quaternion"]])
         pregrasp, grasp, approach = obs[lay["pregrasp_position"]], obs[lay["grasp_position"]], obs[lay["approach"]]
         c = self.config
-        self.path = GraspPath.plan(start, axis, pregrasp, grasp, approach, self.timing)
+        self._delay.reset()
+        offset = np.zeros(3)
+        if c.base_calibration:
+            offset = tcp_offset(self.model, self.task.frame, obs[lay["q"]], start, (0, 1, 2))
+        # the path and the obstacles in the model's frame: the world's less the base's offset
+        self.path = GraspPath.plan(start - offset, axis, pregrasp - offset, grasp - offset, approach, self.timing)
         environment = []
         for k, (volume, hard) in enumerate(obstacle_volumes(obs[lay["obstacles"]])):
             if hard or c.avoid_leaves:
-                environment.append(Segment(f"obstacle_{k}", (volume,)))
+                environment.append(Segment(f"obstacle_{k}", (volume.transformed(np.eye(3), -offset),)))
         if self.controller is None or self.config.collision_avoidance == "on":
             _ = self.last_result  # a pending result is read from the buffers of the controller being replaced
             self.controller = self.build_controller(environment)
@@ -209,7 +223,8 @@ class GraspClikPolicy(PerEnvPolicy):
         # writable copy: the entry point is compiled for writable arrays)
         self._fused = None
         if (
-            isinstance(self.controller, CompiledClik)
+            not self._delay.latency
+            and isinstance(self.controller, CompiledClik)
             and self._q_start is not None
             and self._time is not None
             and self._speeds.shape == (self._nv,)
@@ -261,11 +276,15 @@ class GraspClikPolicy(PerEnvPolicy):
                 return action
         # the Python backend, or an input the kernel rejects: the separate calls raise the controller's error
         assert self.path is not None and self.controller is not None and self._time is not None
-        target, velocity = self.path(obs.item(self._time))
-        result = self.controller.step(obs[self._layout["q"]], target, velocity)
+        delay = self._delay
+        # with a latency: the joints and the path where and when this command starts acting
+        target, velocity = self.path(obs.item(self._time) + delay.latency * delay.period)
+        result = self.controller.step(delay.predict(obs[self._layout["q"]]), target, velocity)
         self._result_pending = False
         self._last_result = result
-        return np.clip(result.qdot / self._speeds, -1.0, 1.0).astype(np.float32)
+        action = np.clip(result.qdot / self._speeds, -1.0, 1.0)
+        delay.sent(action * self._speeds)
+        return action.astype(np.float32)
 
     def describe(self) -> dict[str, Any]:
         """The configuration, for reports."""

@@ -13,6 +13,7 @@ from .. import validation as checks
 from ..controllers import DESCENT_METHODS, METHODS
 from ..kernel_options import BACKENDS
 from .exceptions import PolicyError
+from .plant_compensation import MAX_LATENCY
 
 __all__ = [
     "BACKENDS",
@@ -153,6 +154,8 @@ OPTION_RULES: dict[str, OptionRule] = {
     # obstacles (SSTA): a clearance above a box [m], a step-over single support (0: the nominal one) [s]
     "obstacle_clearance": _at_least(0.0, "m"),
     "step_over_duration": _at_least(0.0, "s"),
+    # the plant's actuation delay a controller compensates [control periods]
+    "latency": OptionRule(low=0, high=MAX_LATENCY),
     # choices
     "method": OptionRule(kind="str", choices=METHODS),
     "backend": OptionRule(kind="str", choices=BACKENDS),
