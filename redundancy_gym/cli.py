@@ -298,13 +298,13 @@ def _parser() -> argparse.ArgumentParser:
         "--episodes",
         type=int,
         metavar="N",
-        help="learned only: episodes per policy from --seed (default: 20, --quick: 2)",
+        help="learned, robustness: episodes per policy (and condition) from --seed (default: 20 and 10, --quick: 2)",
     )
     be.add_argument(
         "--workers",
         type=int,
         metavar="N",
-        help="learned: split each evaluation's episodes across N processes (default: 1); scale: the "
+        help="learned, robustness: split each evaluation's episodes across N processes (default: 1); scale: the "
         "worker count compared with the serial loop (default: 2)",
     )
     be.add_argument(
@@ -319,7 +319,7 @@ def _parser() -> argparse.ArgumentParser:
         "--envs",
         nargs="+",
         metavar="ENV",
-        help="learned only: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)",
+        help="learned, robustness: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)",
     )
 
     ba = _add_parser(
@@ -414,11 +414,12 @@ def format_registry() -> str:
         supported = supported_env_ids(entry.name, entry.kind)
         ids = "every env" if set(supported) == set(ENV_IDS) else ", ".join(i.split("/")[-1] for i in supported) or "-"
         table.append((entry.name, entry.kind, ids, entry.summary))
-    from .policies.shipped_models import shipped_models
+    from .policies.shipped_models import model_name, shipped_models
 
     for stem in shipped_models():  # the learned baselines of baselines/models/, by short name
-        learner, action, slug = stem.split("-", 2)
-        table.append((f"{learner}-{action}", "model", slug, f"shipped learned baseline baselines/models/{stem}.zip"))
+        learner, action, slug, variant = model_name(stem)
+        short = f"{learner}-{action}" + ("" if variant is None else f"-{variant}")
+        table.append((short, "model", slug, f"shipped learned baseline baselines/models/{stem}.zip"))
     widths = [max(len(r[i]) for r in table) for i in range(3)]
     return "\n".join(
         "  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3] for r in table

@@ -36,8 +36,8 @@ def run_demo(
 ) -> list[Path]:
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
     crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), the shipped learned
-    baselines against every analytic reference (appended to the speed-vs-error report) and the kinematic IKD study;
-    write JSON, PNG and MP4.
+    baselines against every analytic reference (appended to the speed-vs-error report), the references under
+    dynamics randomization (a short ``bench robustness``) and the kinematic IKD study; write JSON, PNG and MP4.
 
     ``workers``: processes each evaluation's episodes are split across (the same numbers, timings excepted; with
     both cores busy the step times are those of a loaded machine).
@@ -85,6 +85,7 @@ def run_demo(
         written.append(path)
     written.extend(_speed_error(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
     written.extend(_learned(out, episodes=min(episodes, 5), progress=progress, workers=workers))
+    written.extend(_robustness(out, episodes=min(episodes, 2), progress=progress, workers=workers))
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress, workers=workers))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress, workers=workers))
     written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
@@ -340,6 +341,31 @@ def _learned(out: Path, *, episodes: int, progress: bool, workers: int = 1) -> l
     print(text)
     path = write_json(table, out / "learned.json")
     return [path, *plot_learned_bench(table, out, prefix="speed_vs_error_learned_")]
+
+
+DEMO_ROBUSTNESS = ("nominal", "level 0.1", "latency 1", "dynamics=0.1")
+"""The plants of ``make demo``'s short robustness run (``bench robustness`` runs every one of its ``CONDITIONS``)."""
+
+
+def _robustness(out: Path, *, episodes: int, progress: bool, workers: int = 1) -> list[Path]:
+    """The references under dynamics randomization (``bench robustness``, a short run: :data:`DEMO_ROBUSTNESS`, the
+    first ``episodes`` of its held-out seeds): ``robustness.md``, ``robustness.json`` and one figure per env
+    (``robustness_<env>.png``)."""
+    from .bench.robustness import (  # noqa: PLC0415
+        CONDITIONS,
+        plot_robustness_bench,
+        robustness_markdown,
+        run_robustness_bench,
+    )
+
+    conditions = [c for c in CONDITIONS if c.label in DEMO_ROBUSTNESS]
+    table = run_robustness_bench(episodes=episodes, conditions=conditions, progress=progress, workers=workers)
+    command = f"redundancy-gym bench robustness --episodes {episodes} (the plants {', '.join(DEMO_ROBUSTNESS)})"
+    text = robustness_markdown(table, command=command)
+    print(text)
+    markdown = out / "robustness.md"
+    markdown.write_text("# The references on plants that differ from their model (a short run)\n\n" + text)
+    return [write_json(table, out / "robustness.json"), markdown, *plot_robustness_bench(table, out)]
 
 
 def _speed_error(out: Path, *, episodes: int, seed: int, progress: bool, workers: int = 1) -> list[Path]:

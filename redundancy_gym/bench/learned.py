@@ -128,7 +128,7 @@ def _setting(key: str) -> LearnedSetting:
 
 
 def _models_for(setting: LearnedSetting, found: Sequence[Baseline]) -> list[Baseline]:
-    return [b for b in found if b.name.split("-", 2)[2] == setting.key]
+    return [b for b in found if b.slug == setting.key]
 
 
 def run_learned_bench(
@@ -179,8 +179,11 @@ def run_learned_bench(
             if not b.model.is_file():
                 untrained.append(b.name)
                 continue
-            # the options the model was trained with (a wrapper's command period, say) over the setting's
-            runs.append((b.short_name, b.env_id, b.short_name, {}, {**setting.env_kwargs, **b.env_kwargs}, b))
+            # the options the model was trained with (a wrapper's command period, say) over the setting's; every
+            # row runs on the nominal plant, a model trained under dynamics randomization too (bench robustness
+            # compares it with its nominal twin on randomized plants)
+            trained = {k: v for k, v in b.env_kwargs.items() if k != "dynamics"}
+            runs.append((b.short_name, b.env_id, b.short_name, {}, {**setting.env_kwargs, **trained}, b))
         for label, env_id, policy, kwargs, env_kwargs, baseline in runs:
             if log is not None:
                 log(f"{setting.title}: {label} on {env_id}")

@@ -167,6 +167,29 @@ def _learned(a: BenchArgs) -> int:
     return 0
 
 
+def _robustness(a: BenchArgs) -> int:
+    from .robustness import HELD_OUT_SEED, plot_robustness_bench, robustness_markdown, run_robustness_bench
+
+    episodes = a.episodes if a.episodes is not None else (2 if a.quick else 10)
+    table = run_robustness_bench(
+        episodes=episodes,
+        seed=a.seed_or(HELD_OUT_SEED),
+        envs=None if a.envs is None else list(a.envs),
+        progress=a.progress,
+        workers=a.workers if a.workers is not None else 1,
+    )
+    markdown = robustness_markdown(table)
+    print(markdown)
+    path = write_json(table, a.json_path)
+    _wrote(path)
+    md = path.with_suffix(".md")
+    md.write_text("# The references on plants that differ from their model\n\n" + markdown)
+    _wrote(md)
+    for written in plot_robustness_bench(table, path.parent, prefix=path.stem + "_"):
+        _wrote(written)
+    return 0
+
+
 def _scale(a: BenchArgs) -> int:
     from .scale import format_scale_bench, run_scale_bench
 
@@ -255,6 +278,14 @@ BENCHES: Mapping[str, Bench] = {
             "beside the JSON)",
             frozenset({"episodes", "workers", "ray", "envs"}),
             _learned,
+        ),
+        Bench(
+            "robustness",
+            "every env's references under dynamics randomization: success, failures and errors against the "
+            "model-error level and the actuation latency on held-out seeds (markdown and one PNG per env beside "
+            "the JSON)",
+            frozenset({"episodes", "workers", "envs"}),
+            _robustness,
         ),
         Bench(
             "scale",

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..policies.shipped_models import ACTIONS, LEARNERS, SHIPPED_MODELS_DIR
+from ..policies.shipped_models import ACTIONS, LEARNERS, SHIPPED_MODELS_DIR, VARIANTS, model_name
 from ..registration import ENV_IDS
 from .exceptions import LearningError
 from .training_record import TrainingRecord, read_training_record, record_path
@@ -40,10 +40,12 @@ class Baseline:
     """One trained baseline.
 
     Attributes:
-        name: ``<learner>-<action>-<env>`` (the file stem).
+        name: ``<learner>-<action>-<env>[-<variant>]`` (the file stem).
         learner: ``ppo``, ``sac`` or ``bc``; action: the action space (``joint`` or a wrapper's name).
         env_id: the env id trained and evaluated on (a wrapped id for a wrapper's action).
         config: the YAML file.
+        slug: the env's name in the file name (``agri_reach``).
+        variant: how it was trained differently from its nominal twin (``dynamics``), None for the twin itself.
     """
 
     name: str
@@ -51,11 +53,13 @@ class Baseline:
     action: str
     env_id: str
     config: Path
+    slug: str = ""
+    variant: str | None = None
 
     @property
     def short_name(self) -> str:
-        """``<learner>-<action>``: the name ``make_policy`` and ``eval --policy`` take on the env."""
-        return f"{self.learner}-{self.action}"
+        """``<learner>-<action>[-<variant>]``: the name ``make_policy`` and ``eval --policy`` take on the env."""
+        return f"{self.learner}-{self.action}" + ("" if self.variant is None else f"-{self.variant}")
 
     @property
     def model(self) -> Path:
@@ -78,13 +82,13 @@ class Baseline:
 def _parse(path: Path) -> Baseline:
     import yaml
 
-    learner, _, rest = path.stem.partition("-")
-    action, _, _slug = rest.partition("-")
-    if learner not in LEARNERS or action not in ACTIONS or not _slug:
+    try:
+        learner, action, slug, variant = model_name(path.stem)
+    except ValueError:
         raise LearningError(
-            f"{path.name}: a baseline is named <learner>-<action>-<env>.yaml with learner in "
-            f"{', '.join(LEARNERS)} and action in {', '.join(ACTIONS)}"
-        )
+            f"{path.name}: a baseline is named <learner>-<action>-<env>[-<variant>].yaml with learner in "
+            f"{', '.join(LEARNERS)}, action in {', '.join(ACTIONS)} and variant in {', '.join(VARIANTS)}"
+        ) from None
     try:
         data = yaml.safe_load(path.read_text())
     except (OSError, yaml.YAMLError) as exc:
@@ -94,7 +98,7 @@ def _parse(path: Path) -> Baseline:
             f"{path}: a baseline holds one section keyed by a registered env id; found "
             f"{', '.join(map(str, data)) if isinstance(data, dict) else type(data).__name__}"
         )
-    return Baseline(path.stem, learner, action, next(iter(data)), path)
+    return Baseline(path.stem, learner, action, next(iter(data)), path, slug, variant)
 
 
 def baselines(names: Sequence[str] = (), directory: str | Path = BASELINES_DIR) -> list[Baseline]:

@@ -53,7 +53,8 @@ class ClikPolicyConfig:
         self_collision: also avoid robot-robot pairs (non-adjacent links).
         base_calibration: at an episode's start, take the observed TCP less the model's as the robot's placement
             error and track the targets less it (:mod:`~redundancy_gym.policies.plant_compensation`).
-        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none).
+        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none; None: measured at
+            each episode's start, from the observed joint velocities' response to the first command).
         backend: ``"compiled"`` (:class:`~redundancy_gym.controllers.CompiledClik`, one fused kernel per step)
             or ``"python"`` (:class:`~redundancy_gym.controllers.Clik`); same commands to round-off.
     """
@@ -73,7 +74,7 @@ class ClikPolicyConfig:
     collision_weight: float = 1.0
     self_collision: bool = True
     base_calibration: bool = True
-    latency: int = 0
+    latency: int | None = None
     backend: str = DEFAULT_BACKEND
 
 
@@ -208,13 +209,14 @@ class ClikPolicy(PerEnvPolicy):
     def _act(self, obs: NDArray[np.float64], starting: bool) -> NDArray[np.float32]:
         """Normalized joint velocity command for one observation."""
         q, target, velocity = self.task_reference(obs, starting)
-        if self._delay.latency:
-            q = self._delay.predict(q)
-            target, velocity = self._delay.ahead(target, velocity)
-        result = self.controller.step(q, target, velocity)
+        delay = self._delay
+        delay.observe(obs[self._layout["qdot"]])
+        target, velocity = delay.reference(target, velocity)
+        result = self.controller.step(delay.predict(q), target, velocity)
         self.last_result = result
         action = np.clip(result.qdot / self._speed, -1.0, 1.0)
-        self._delay.sent(action * self._speed)
+        if not delay.idle:
+            delay.sent(action * self._speed)
         return action.astype(np.float32)
 
     def describe(self) -> dict[str, Any]:

@@ -64,8 +64,9 @@ class GraspClikConfig:
         base_calibration: at an episode's start, take the observed TCP less the model's as the robot's placement
             error, and plan the path and place the obstacles less it, in the model's frame
             (:mod:`~redundancy_gym.policies.plant_compensation`).
-        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none). With a latency the
-            compiled backend composes its calls instead of the one-call step.
+        latency: actuation delay [control periods] to compensate (a Smith predictor; 0: none; None: measured at
+            each episode's start, from the observed joint velocities' response to the first command). With a
+            latency the compiled backend composes its calls instead of the one-call step.
         backend: ``"compiled"`` (:class:`CompiledClik`, one fused kernel per step) or ``"python"``
             (:class:`Clik`); both give the same commands to round-off.
     """
@@ -85,7 +86,7 @@ class GraspClikConfig:
     joint_limit_activation: float = 0.2
     joint_limit_weight: float = 0.5
     base_calibration: bool = True
-    latency: int = 0
+    latency: int | None = None
     backend: str = DEFAULT_BACKEND
 
 
@@ -223,8 +224,7 @@ class GraspClikPolicy(PerEnvPolicy):
         # writable copy: the entry point is compiled for writable arrays)
         self._fused = None
         if (
-            not self._delay.latency
-            and isinstance(self.controller, CompiledClik)
+            isinstance(self.controller, CompiledClik)
             and self._q_start is not None
             and self._time is not None
             and self._speeds.shape == (self._nv,)
@@ -264,7 +264,9 @@ class GraspClikPolicy(PerEnvPolicy):
         """Normalized joint velocity command for one observation."""
         if self._new_episode(obs, starting) or self.path is None:
             self.plan(obs)
-        fused = self._fused
+        delay = self._delay
+        delay.observe(obs[self._layout["qdot"]])
+        fused = self._fused if delay.latency == 0 else None
         if fused is not None:  # the compiled backend: one kernel call from observation to action
             f, i = self.controller.kernel_buffers()  # type: ignore[union-attr]
             action = np.empty(self._nv, dtype=np.float32)
@@ -273,17 +275,19 @@ class GraspClikPolicy(PerEnvPolicy):
                 == OK
             ):
                 self._result_pending = True
+                if not delay.idle:
+                    delay.sent(action * self._speeds)
                 return action
         # the Python backend, or an input the kernel rejects: the separate calls raise the controller's error
         assert self.path is not None and self.controller is not None and self._time is not None
-        delay = self._delay
         # with a latency: the joints and the path where and when this command starts acting
         target, velocity = self.path(obs.item(self._time) + delay.latency * delay.period)
         result = self.controller.step(delay.predict(obs[self._layout["q"]]), target, velocity)
         self._result_pending = False
         self._last_result = result
         action = np.clip(result.qdot / self._speeds, -1.0, 1.0)
-        delay.sent(action * self._speeds)
+        if not delay.idle:
+            delay.sent(action * self._speeds)
         return action.astype(np.float32)
 
     def describe(self) -> dict[str, Any]:

@@ -1,6 +1,8 @@
 """The learned baselines shipped with the package (``redundancy_gym/baselines/models/<learner>-<action>-<env>.zip``,
 ``baselines/models/`` of a clone), by short name: ``make_policy("ppo-nullspace", env)`` loads
-``ppo-nullspace-planar_reach.zip`` on a PlanarReach env."""
+``ppo-nullspace-planar_reach.zip`` on a PlanarReach env. A model trained another way carries a variant
+(:data:`VARIANTS`) at the end of both names: ``ppo-nullspace-dynamics`` loads
+``ppo-nullspace-agri_reach-dynamics.zip``."""
 
 from __future__ import annotations
 
@@ -14,6 +16,8 @@ __all__ = [
     "ACTIONS",
     "LEARNERS",
     "SHIPPED_MODELS_DIR",
+    "VARIANTS",
+    "model_name",
     "env_slug",
     "is_shipped_name",
     "shipped_model_path",
@@ -29,12 +33,26 @@ LEARNERS: tuple[str, ...] = ("ppo", "sac", "bc")
 """The learners of the shipped models."""
 ACTIONS: tuple[str, ...] = ("joint", "nullspace", "task_space", "residual", "walking_command")
 """Their action spaces: the raw joint action, or the action wrapper's."""
-_NAME = re.compile(rf"({'|'.join(LEARNERS)})-({'|'.join(ACTIONS)})")
+VARIANTS: tuple[str, ...] = ("dynamics",)
+"""How a model may differ from its nominal twin: ``dynamics``, trained under the env's dynamics randomization (its
+YAML's ``env_kwargs`` say how much)."""
+_NAME = re.compile(rf"({'|'.join(LEARNERS)})-({'|'.join(ACTIONS)})(?:-({'|'.join(VARIANTS)}))?")
 
 
 def is_shipped_name(name: Any) -> bool:
-    """Whether ``name`` has the form ``<learner>-<action>`` of a shipped model."""
+    """Whether ``name`` has the form ``<learner>-<action>[-<variant>]`` of a shipped model."""
     return isinstance(name, str) and _NAME.fullmatch(name) is not None
+
+
+def model_name(stem: str) -> tuple[str, str, str, str | None]:
+    """``(learner, action, env slug, variant or None)`` of a model's file stem
+    (``ppo-nullspace-agri_reach-dynamics``); ValueError for a stem not laid out so."""
+    parts = stem.split("-")
+    if len(parts) not in (3, 4) or parts[0] not in LEARNERS or parts[1] not in ACTIONS or not parts[2]:
+        raise ValueError(f"{stem!r} is no <learner>-<action>-<env>[-<variant>] model name")
+    if len(parts) == 4 and parts[3] not in VARIANTS:
+        raise ValueError(f"{stem!r}: unknown variant {parts[3]!r}; valid: {', '.join(VARIANTS)}")
+    return parts[0], parts[1], parts[2], parts[3] if len(parts) == 4 else None
 
 
 def env_slug(env: Any) -> str:
@@ -60,7 +78,7 @@ def _check_action_space(name: str, env: Any) -> None:
     env_id = getattr(spec, "id", None)
     if env_id not in BASE_ENV_IDS and env_id not in WRAPPED_ENV_IDS:
         return  # an env built outside the registry: nothing to compare against
-    action = name.split("-", 1)[1]
+    action = name.split("-")[1]
     base = next((b for b in BASE_ENV_IDS if b == env_id or env_id in (wrapped_env_id(b, a) for a in ACTIONS)), env_id)
     expected = base if action == "joint" else wrapped_env_id(base, action)
     if expected is not None and env_id != expected:
@@ -77,7 +95,9 @@ def shipped_model_path(name: str, env: Any) -> Path:
         PolicyError: no such model for this env (the message lists the shipped ones), or an env in another action
             space than the model's (a wrapper's model on the raw env, a joint model in a wrapper).
     """
-    path = SHIPPED_MODELS_DIR / f"{name}-{env_slug(env)}.zip"
+    match = _NAME.fullmatch(name)
+    learner, action, variant = match.groups() if match is not None else (name, "", None)
+    path = SHIPPED_MODELS_DIR / f"{learner}-{action}-{env_slug(env)}{'' if variant is None else '-' + variant}.zip"
     if path.is_file():
         _check_action_space(name, env)
         return path

@@ -35,7 +35,7 @@ def test_every_file_is_a_baseline_and_the_table_has_its_rows() -> None:
 
 @pytest.mark.parametrize("baseline", ALL, ids=lambda b: b.name)
 def test_name_action_and_env_agree(baseline) -> None:
-    slug = baseline.name.split("-", 2)[2]
+    slug = baseline.slug
     if baseline.action == "joint":
         assert baseline.env_id in BASE_ENV_IDS
         base = baseline.env_id
@@ -47,17 +47,27 @@ def test_name_action_and_env_agree(baseline) -> None:
         assert env_slug(env) == slug
     finally:
         env.close()
-    assert baseline.short_name == f"{baseline.learner}-{baseline.action}"
+    variant = "" if baseline.variant is None else f"-{baseline.variant}"
+    assert baseline.name == f"{baseline.learner}-{baseline.action}-{slug}{variant}"
+    assert baseline.short_name == f"{baseline.learner}-{baseline.action}{variant}"
     assert baseline.model.parent.parent == BASELINES_DIR
+    # a model trained under dynamics randomization says so in its name, and its nominal twin is shipped too
+    assert ("dynamics" in baseline.env_kwargs) == (baseline.variant == "dynamics")
+    if baseline.variant is not None:
+        assert f"{baseline.learner}-{baseline.action}-{slug}" in {b.name for b in ALL}
 
 
 def test_unknown_names_and_bad_files_are_named(tmp_path) -> None:
     with pytest.raises(EvalError, match="no baseline ppo-nope-x .*ppo-joint-planar_reach"):
         baselines(["ppo-nope-x"])
     (tmp_path / "ppo-fly-planar_reach.yaml").write_text("redundancy_gym/PlanarReach-v0: {}\n")
-    with pytest.raises(EvalError, match="learner in ppo, sac, bc and action in joint"):
+    with pytest.raises(EvalError, match="learner in ppo, sac, bc, action in joint.* and variant in dynamics"):
         baselines(directory=tmp_path)
     (tmp_path / "ppo-fly-planar_reach.yaml").unlink()
+    (tmp_path / "ppo-joint-planar_reach-windy.yaml").write_text("redundancy_gym/PlanarReach-v0: {}\n")
+    with pytest.raises(EvalError, match="variant in dynamics"):
+        baselines(directory=tmp_path)
+    (tmp_path / "ppo-joint-planar_reach-windy.yaml").unlink()
     (tmp_path / "ppo-joint-planar_reach.yaml").write_text("redundancy_gym/Nope-v0: {}\n")
     with pytest.raises(EvalError, match="keyed by a registered env id"):
         baselines(directory=tmp_path)

@@ -47,13 +47,37 @@ def test_delay_compensation_predicts_the_joints_and_the_reference() -> None:
     delay.reset()
     for k in range(3):
         t = 0.01 * k
-        target, velocity = delay.ahead(p0 + v0 * t + 0.5 * a * t**2, v0 + a * t)
+        target, velocity = delay.reference(p0 + v0 * t + 0.5 * a * t**2, v0 + a * t)
     t = 0.02 + 0.02
     np.testing.assert_allclose(target, p0 + v0 * t + 0.5 * a * t**2, atol=1e-12)
     np.testing.assert_allclose(velocity, v0 + a * t, atol=1e-12)
     none = DelayCompensation(0, 0.01, 3)
     none.sent(np.ones(3))
     np.testing.assert_array_equal(none.predict(q), q)
+    assert none.reference(p0, v0) == (p0, v0)
+
+
+@pytest.mark.parametrize("plant", [0, 1, 3])
+def test_the_latency_is_measured_from_rest(plant: int) -> None:
+    """A plant at rest whose joints move ``plant`` periods after the first command that moves them: the measured
+    latency is a lower bound while waiting, then exactly ``plant``."""
+    delay = DelayCompensation(None, 0.01, 2)
+    commands = [np.zeros(2), np.array([1e-12, 0.0]), np.array([0.0, 0.2]), np.array([0.1, 0.3])] + [np.ones(2)] * 6
+    first = 2  # the first command above round-off
+    for i, command in enumerate(commands):
+        responded = i >= first + 1 + plant  # the observation before command i shows command i - 1 - plant
+        delay.observe(np.array([0.0, 0.15]) if responded else np.array([1e-15, 0.0]))
+        if responded:
+            assert delay.latency == plant and delay.idle == (plant == 0)
+        elif i > first:
+            assert delay.latency == i - first  # the periods waited so far
+        delay.sent(command)
+    assert delay.latency == plant
+    delay.reset()
+    assert delay.latency == 0 and not delay.idle
+    moving = DelayCompensation(None, 0.01, 2)  # moving before any command: nothing to measure, no compensation
+    moving.observe(np.array([0.5, 0.0]))
+    assert moving.idle
 
 
 def test_planar_calibration_tracks_a_displaced_robot() -> None:
@@ -72,17 +96,21 @@ def test_planar_calibration_tracks_a_displaced_robot() -> None:
 
 def test_planar_latency_compensation_recovers_the_nominal_tracking() -> None:
     nominal, _ = _episode(PLANAR, 0, None)
-    late, _ = _episode(PLANAR, 0, {"latency": 2})
-    compensated, info = _episode(PLANAR, 0, {"latency": 2}, latency=2)
-    assert late > 1.5e-3 > 1e-3 > compensated  # the env's success tolerance is 1 mm
-    assert compensated < 1.5 * nominal and info["is_success"]
+    late, _ = _episode(PLANAR, 0, {"latency": 2}, latency=0)
+    measured, info = _episode(PLANAR, 0, {"latency": 2})
+    told, _ = _episode(PLANAR, 0, {"latency": 2}, latency=2)
+    assert late > 1.5e-3 > 1e-3 > measured  # the env's success tolerance is 1 mm
+    assert measured < 1.5 * nominal and info["is_success"]
+    assert told == pytest.approx(measured, rel=0.05)  # measured from rest, the latency is known after 3 periods
+    assert _episode(PLANAR, 0, None, latency=0)[0] == nominal  # nothing to measure on the nominal plant
 
 
 def test_agri_calibration_and_latency_reach_the_grasp() -> None:
-    """AgriReach with the base 2 cm off and two periods of latency: the compensated CLIK reaches the grasp pose
-    (TCP within the env's tolerance, tool axis aligned); the uncompensated one ends as far off as the base."""
+    """AgriReach with the base 2 cm off and two periods of latency: the CLIK, calibrated and measuring the latency,
+    reaches the grasp pose (TCP within the env's tolerance, tool axis aligned); uncalibrated it ends as far off as
+    the base."""
     dynamics = {"placement": 0.02, "latency": 2}
-    _, info = _episode(AGRI, 1, dynamics, latency=2)
+    _, info = _episode(AGRI, 1, dynamics)
     assert info["is_success"] and not info["collision"]
     _, off = _episode(AGRI, 1, dynamics, base_calibration=False)
     assert not off["is_success"] and off["goal_error"] > 5e-3
@@ -106,8 +134,8 @@ def test_calibration_is_round_off_on_the_nominal_plant(env_id: str) -> None:
 @pytest.mark.parametrize(
     ("options", "match"),
     [
-        ({"latency": 11}, r"latency must be an int in \[0, 10\]"),
-        ({"latency": 0.5}, "latency must be an int"),
+        ({"latency": 11}, r"latency must be None or an int in \[0, 10\]"),
+        ({"latency": 0.5}, "latency must be None or an int"),
         ({"base_calibration": "yes"}, "base_calibration must be a bool"),
     ],
 )

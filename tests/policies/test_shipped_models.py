@@ -17,6 +17,8 @@ from redundancy_gym.policies.shipped_models import (
     SHIPPED_MODELS_DIR,
     env_slug,
     is_shipped_name,
+    model_name,
+    shipped_model_path,
     shipped_models,
 )
 
@@ -64,6 +66,16 @@ def test_a_shipped_model_reproduces_its_table_row(key, label, row):
 
 def test_short_names_resolve_per_env_and_name_what_is_shipped():
     assert is_shipped_name("ppo-nullspace") and is_shipped_name("bc-joint") and not is_shipped_name("ppo-nope")
+    assert is_shipped_name("ppo-nullspace-dynamics") and not is_shipped_name("ppo-nullspace-windy")
+    assert model_name("ppo-nullspace-agri_reach-dynamics") == ("ppo", "nullspace", "agri_reach", "dynamics")
+    assert model_name("bc-joint-planar_reach") == ("bc", "joint", "planar_reach", None)
+    for bad in ("ppo-joint", "ppo-joint-planar_reach-windy", "ppo-fly-planar_reach"):
+        with pytest.raises(ValueError, match=bad):
+            model_name(bad)
+    wrapped = gym.make("redundancy_gym/AgriReach-Nullspace-v0")
+    assert shipped_model_path("ppo-nullspace-dynamics", wrapped).name == "ppo-nullspace-agri_reach-dynamics.zip"
+    assert shipped_model_path("ppo-nullspace", wrapped).name == "ppo-nullspace-agri_reach.zip"
+    wrapped.close()
     env = gym.make("redundancy_gym/AgriReach-v0")
     assert env_slug(env) == "agri_reach"
     with pytest.raises(PolicyError, match="shipped: .*bc-joint-planar_reach"):
