@@ -285,27 +285,37 @@ def _fmt(value: float | None) -> str:
     return f"{value:.0f}" if abs(value) >= 100.0 else f"{value:.3g}"
 
 
-def _holds(cell: Mapping[str, Any], rate: str) -> bool:
-    return cell["success_rate"] >= SUCCESS_THRESHOLD and cell[rate] == 0.0
+def _holds(cell: Mapping[str, Any], rate: str, nominal: Mapping[str, Any] | None = None) -> bool:
+    """Whether a reference holds a condition: success >= :data:`SUCCESS_THRESHOLD` and no failure, or, for a
+    reference below that on the nominal plant already, no lower success and no higher failure rate than there."""
+    if nominal is None or _holds(nominal, rate):
+        return cell["success_rate"] >= SUCCESS_THRESHOLD and cell[rate] == 0.0
+    return cell["success_rate"] >= nominal["success_rate"] and cell[rate] <= nominal[rate]
 
 
 def _breaks(env: Mapping[str, Any], label: str, conditions: Sequence[Mapping[str, Any]]) -> str:
-    """Where the reference ``label`` breaks along each axis: the first condition it does not hold (success below
-    :data:`SUCCESS_THRESHOLD` or a failure), or that it holds throughout."""
+    """Where the reference ``label`` breaks along each axis: the first condition it does not hold (:func:`_holds`),
+    or that it holds throughout."""
     cells, rate = env["rows"][label], env["rate"]
+    failure = rate.removesuffix("_rate")
+    nominal = cells.get("nominal")
     parts = []
+    if nominal is not None and not _holds(nominal, rate):
+        parts.append(
+            f"below the threshold on the nominal plant already (success {nominal['success_rate']:.2f}, {failure} "
+            f"rate {nominal[rate]:.2f}; judged against that below)"
+        )
     for axis, name in (("level", "model error"), ("latency", "latency"), ("shorthand", "the level shorthand")):
-        along = [c for c in conditions if c["axis"] == axis or (axis == "latency" and c["label"] == "nominal")]
-        along.sort(key=lambda c: c["x"])
-        broken = next((c for c in along if c["label"] in cells and not _holds(cells[c["label"]], rate)), None)
+        along = sorted((c for c in conditions if c["axis"] == axis or c["label"] == "nominal"), key=lambda c: c["x"])
+        broken = next((c for c in along if c["label"] in cells and not _holds(cells[c["label"]], rate, nominal)), None)
         if broken is None:
             last = along[-1]["label"] if along else "-"
             parts.append(f"{name}: holds through {last}")
         else:
             cell = cells[broken["label"]]
             parts.append(
-                f"{name}: breaks at {broken['label']} (success {cell['success_rate']:.2f}, "
-                f"{rate.removesuffix('_rate')} rate {cell[rate]:.2f})"
+                f"{name}: breaks at {broken['label']} (success {cell['success_rate']:.2f}, {failure} rate "
+                f"{cell[rate]:.2f})"
             )
     return f"**{label}**: " + "; ".join(parts) + "."
 

@@ -60,6 +60,13 @@ def test_breaks_names_the_first_failing_condition_along_each_axis() -> None:
     assert "model error: breaks at level 0.1 (success 0.90, fall rate 0.00)" in text
     assert "latency: holds through latency 2" in text
     assert "the level shorthand: breaks at dynamics=0.2 (success 1.00, fall rate 0.05)" in text
+    # below the threshold on the nominal plant: judged against its own nominal figures
+    cells = {c["label"]: {"success_rate": 0.9, "fall_rate": 0.0} for c in conditions}
+    cells["latency 2"] = {"success_rate": 0.8, "fall_rate": 0.0}
+    env = {"rows": {"walking": cells}, "rate": "fall_rate"}
+    text = _breaks(env, "walking", conditions)
+    assert "below the threshold on the nominal plant already (success 0.90, fall rate 0.00" in text
+    assert "model error: holds through level 0.2; latency: breaks at latency 2 (success 0.80" in text
 
 
 def test_every_setting_has_references_and_known_errors() -> None:
