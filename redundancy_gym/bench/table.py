@@ -141,6 +141,26 @@ def _ikd(a: BenchArgs) -> int:
     return 0
 
 
+def _write_table(
+    a: BenchArgs,
+    table: dict[str, Any],
+    title: str,
+    markdown: Callable[[dict[str, Any]], str],
+    plot: Callable[..., list[Path]],
+) -> None:
+    """Print a table's markdown; write its JSON (``--json``), the markdown beside it (``.md``, under ``title``) and
+    its figures (``<stem>_<env>.png``)."""
+    text = markdown(table)
+    print(text)
+    path = write_json(table, a.json_path)
+    _wrote(path)
+    md = path.with_suffix(".md")
+    md.write_text(f"# {title}\n\n" + text)
+    _wrote(md)
+    for written in plot(table, path.parent, prefix=path.stem + "_"):
+        _wrote(written)
+
+
 def _learned(a: BenchArgs) -> int:
     from ..eval.parallel import ray_cpus
     from .learned import HELD_OUT_SEED, learned_markdown, plot_learned_bench, run_learned_bench
@@ -155,15 +175,7 @@ def _learned(a: BenchArgs) -> int:
         workers=workers,
         ray_address=a.ray,
     )
-    markdown = learned_markdown(table)
-    print(markdown)
-    path = write_json(table, a.json_path)
-    _wrote(path)
-    md = path.with_suffix(".md")
-    md.write_text("# Learned baselines against the analytic references\n\n" + markdown)
-    _wrote(md)
-    for written in plot_learned_bench(table, path.parent, prefix=path.stem + "_"):
-        _wrote(written)
+    _write_table(a, table, "Learned baselines against the analytic references", learned_markdown, plot_learned_bench)
     return 0
 
 
@@ -178,15 +190,9 @@ def _robustness(a: BenchArgs) -> int:
         progress=a.progress,
         workers=a.workers if a.workers is not None else 1,
     )
-    markdown = robustness_markdown(table)
-    print(markdown)
-    path = write_json(table, a.json_path)
-    _wrote(path)
-    md = path.with_suffix(".md")
-    md.write_text("# The references on plants that differ from their model\n\n" + markdown)
-    _wrote(md)
-    for written in plot_robustness_bench(table, path.parent, prefix=path.stem + "_"):
-        _wrote(written)
+    _write_table(
+        a, table, "The references on plants that differ from their model", robustness_markdown, plot_robustness_bench
+    )
     return 0
 
 
