@@ -62,14 +62,24 @@ def test_sb3_check_env(env_id: str) -> None:
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_same_seed_same_episode(env_id: str) -> None:
-    a = _rollout(gym.make(env_id), seed=7, steps=60)
-    b = _rollout(gym.make(env_id), seed=7, steps=60)
+def test_randomized_plant_passes_check_env(env_id: str) -> None:
+    """The same checks on a plant drawn by the dynamics randomization (level 0.2, two periods of latency)."""
+    env = gym.make(env_id, dynamics=0.2)
+    gym_check_env(_checked(env), skip_render_check=True)
+    env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+@pytest.mark.parametrize("dynamics", [None, 0.2])
+def test_same_seed_same_episode(env_id: str, dynamics: float | None) -> None:
+    a = _rollout(gym.make(env_id, dynamics=dynamics), seed=7, steps=60)
+    b = _rollout(gym.make(env_id, dynamics=dynamics), seed=7, steps=60)
+    assert all(np.all(np.isfinite(o)) for o in a[0]) and all(np.isfinite(a[1]))
     assert len(a[0]) == len(b[0])
     for x, y in zip(a[0], b[0], strict=True):
         assert np.array_equal(x, y)
     assert a[1] == b[1]
-    c = _rollout(gym.make(env_id), seed=8, steps=5)
+    c = _rollout(gym.make(env_id, dynamics=dynamics), seed=8, steps=5)
     assert not np.array_equal(a[0][0], c[0][0])  # the seed matters
 
 
