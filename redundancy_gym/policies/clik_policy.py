@@ -210,7 +210,7 @@ class ClikPolicy(PerEnvPolicy):
         """Normalized joint velocity command for one observation."""
         q, target, velocity = self.task_reference(obs, starting)
         delay = self._delay
-        delay.observe(obs[self._layout["qdot"]])
+        delay.observe(obs[self._layout["qdot"]], None if self._time_index is None else obs.item(self._time_index))
         target, velocity = delay.reference(target, velocity)
         result = self.controller.step(delay.predict(q), target, velocity)
         self.last_result = result

@@ -265,7 +265,7 @@ class GraspClikPolicy(PerEnvPolicy):
         if self._new_episode(obs, starting) or self.path is None:
             self.plan(obs)
         delay = self._delay
-        delay.observe(obs[self._layout["qdot"]])
+        delay.observe(obs[self._layout["qdot"]], None if self._time is None else obs.item(self._time))
         fused = self._fused if delay.latency == 0 else None
         if fused is not None:  # the compiled backend: one kernel call from observation to action
             f, i = self.controller.kernel_buffers()  # type: ignore[union-attr]

@@ -81,6 +81,8 @@ class DelayCompensation:
         self._first: int | None = None  # the index of the first command that moves the robot
         self._response = RESTING  # the observed joint speed that answers it
         self._settled = not self.measured
+        self._time: float | None = None  # the time of the last observation
+        self._repeat = False  # this period's observation was seen before (a second predict on it)
 
     def reset(self) -> None:
         """A new episode: nothing in flight (the env fills its delay line with the reset's zero commands)."""
@@ -91,15 +93,23 @@ class DelayCompensation:
         self._first = None
         self.latency = self.given
         self._settled = not self.measured
+        self._time = None
+        self._repeat = False
 
     @property
     def idle(self) -> bool:
         """Whether nothing is left to measure or compensate this episode (no latency, measured or given)."""
         return self._settled and self.latency == 0
 
-    def observe(self, qdot: NDArray[np.float64]) -> None:
-        """The joints' observed velocities [rad/s or m/s] before this period's command (measures the latency)."""
-        if self._settled:
+    def observe(self, qdot: NDArray[np.float64], time: float | None = None) -> None:
+        """The joints' observed velocities [rad/s or m/s] before this period's command (measures the latency), at
+        the observation's ``time`` (any clock that advances with the periods; None: every call is a new period). An
+        observation whose time did not advance is the last one again: it measures nothing, and the command that
+        follows replaces the last one sent."""
+        self._repeat = time is not None and self._time is not None and time <= self._time
+        if not self._repeat:
+            self._time = time
+        if self._settled or self._repeat:
             return
         moving = float(np.max(np.abs(qdot))) > self._threshold
         if self._first is None:
@@ -142,6 +152,11 @@ class DelayCompensation:
         """Record the joint velocities [rad/s or m/s] just commanded (as the env applies them: clipped)."""
         if self.idle:
             return
+        if self._repeat and self._steps:  # the same period's command again: it replaces the last one
+            self._head = (self._head - 1) % MAX_LATENCY
+            self._steps -= 1
+            if self._first == self._steps:
+                self._first = None
         if self._first is None and not self._settled:
             speed = float(np.max(np.abs(qdot)))
             if speed > RESTING:

@@ -75,6 +75,13 @@ def test_the_latency_is_measured_from_rest(plant: int) -> None:
     assert delay.latency == plant
     delay.reset()
     assert delay.latency == 0 and not delay.idle
+    # a second predict on the same observation (its time did not advance) measures nothing and replaces the command
+    again = DelayCompensation(None, 0.01, 2)
+    for time in (0.0, 0.0, 0.01, 0.01, 0.02):
+        again.observe(np.zeros(2), time)
+        again.sent(np.array([0.0, 0.2]))
+    assert again.latency == 2  # a lower bound of two periods since the first command (not four calls)
+    np.testing.assert_allclose(again.predict(np.zeros(2)), [0.0, 0.004])
     moving = DelayCompensation(None, 0.01, 2)  # moving before any command: nothing to measure, no compensation
     moving.observe(np.array([0.5, 0.0]))
     assert moving.idle
