@@ -360,11 +360,11 @@ def _robustness(out: Path, *, episodes: int, progress: bool, workers: int = 1) -
 
     conditions = [c for c in CONDITIONS if c.label in DEMO_ROBUSTNESS]
     table = run_robustness_bench(episodes=episodes, conditions=conditions, progress=progress, workers=workers)
-    command = f"redundancy-gym bench robustness --episodes {episodes} (the plants {', '.join(DEMO_ROBUSTNESS)})"
-    text = robustness_markdown(table, command=command)
+    text = robustness_markdown(table, command=f"redundancy-gym bench robustness --episodes {episodes}")
     print(text)
     markdown = out / "robustness.md"
-    markdown.write_text("# The references on plants that differ from their model (a short run)\n\n" + text)
+    title = "# The references on plants that differ from their model (a short run)"
+    markdown.write_text(f"{title}\n\nThe plants of this short run: {', '.join(DEMO_ROBUSTNESS)}.\n\n{text}")
     return [write_json(table, out / "robustness.json"), markdown, *plot_robustness_bench(table, out)]
 
 
