@@ -26,7 +26,8 @@ Every item of the dict:
   multiplies each actuator's gains (position and velocity gain together, so a servo's ``kv / kp`` is kept) by
   one draw per actuator.
 - ``damping``, ``frictionloss``, ``armature``: a scale range ``(low, high)`` of each joint DoF's nominal value, or
-  ``{"range": (low, high)}``: the value itself drawn in the range (>= 0) [N m s/rad, N m, kg m^2], one draw per DoF.
+  ``{"range": (low, high)}``: the value itself drawn in the range (>= 0) [N m s/rad, N m, kg m^2], one draw per DoF
+  (a biped's floating base is no joint: its six DoFs keep their values).
 - ``com_offset``: the largest offset [m] per axis of each body's CoM (uniform in ``[-d, d]^3`` per body).
 - ``latency``: control periods ``k`` (an int) or a range ``(low, high)`` of ints drawn per reset, each in
   ``[0, MAX_LATENCY]``: the actuators apply the command of ``k`` periods before (a delay line on the env's
@@ -278,8 +279,12 @@ class DynamicsRandomization:
             if setting is None:
                 continue
             value = rng.uniform(setting.low, setting.high, size=model.nv)
+            compiled = getattr(nominal, f"dof_{key}")
             if setting.kind == "scale":
-                value = getattr(nominal, f"dof_{key}") * value
+                value = compiled * value
+            # a floating base's six DoFs are no joint: they keep their values (one draw per DoF all the same, so
+            # that the draws that follow do not depend on the robot's base)
+            value = np.where(model.jnt_type[model.dof_jntid] == mujoco.mjtJoint.mjJNT_FREE, compiled, value)
             getattr(model, f"dof_{key}")[:] = value
             drawn[key] = value
         if spec.servo_gain is not None:

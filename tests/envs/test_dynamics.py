@@ -159,6 +159,16 @@ def test_joint_items_scale_or_draw_in_the_range() -> None:
     assert np.all((env.model.dof_frictionloss >= 0.3) & (env.model.dof_frictionloss <= 0.4))
 
 
+def test_a_floating_base_gets_no_joint_damping_or_armature() -> None:
+    env = gym.make(BIPED, dynamics={"damping": {"range": (1.0, 2.0)}, "armature": {"range": (0.1, 0.2)}}).unwrapped
+    _, info = env.reset(seed=4)
+    m = env.model
+    np.testing.assert_array_equal(m.dof_damping[:6], 0.0)  # the free joint's six DoFs
+    np.testing.assert_array_equal(m.dof_armature[:6], 0.0)
+    assert np.all((m.dof_damping[6:] >= 1.0) & (m.dof_damping[6:] <= 2.0))
+    np.testing.assert_array_equal(info["dynamics"]["damping"], m.dof_damping)
+
+
 def test_servo_gains_scale_stiffness_and_damping_together() -> None:
     env = gym.make(BIPED, dynamics={"servo_gain": (0.7, 0.9)}).unwrapped
     nominal = gym.make(BIPED).unwrapped.model
