@@ -11,6 +11,7 @@ BASE_ENV_IDS: tuple[str, ...] = (
     "redundancy_gym/AgriReach-v0",
     "redundancy_gym/BipedWalk-v0",
     "redundancy_gym/BipedObstacles-v0",
+    "redundancy_gym/BipedTerrain-v0",
 )
 
 # (wrapped id, base id, wrapper name of the registry in redundancy_gym.policies)
@@ -64,6 +65,14 @@ def register_envs() -> None:
             # 45 s of 4 ms steps: the longest default random course takes 44.65 s at 0.4 m/s
             # (redundancy_gym.envs.biped_obstacles.MAX_EPISODE_STEPS; not imported here: that would load MuJoCo)
             max_episode_steps=11250,
+        )
+    if "redundancy_gym/BipedTerrain-v0" not in gym.registry:
+        gym.register(
+            id="redundancy_gym/BipedTerrain-v0",
+            entry_point="redundancy_gym.envs.biped_terrain:BipedTerrainEnv",
+            # 52 s of 4 ms steps: the longest default random terrain takes 51.65 s at 0.4 m/s
+            # (redundancy_gym.envs.biped_terrain.MAX_EPISODE_STEPS; not imported here: that would load MuJoCo)
+            max_episode_steps=13000,
         )
     for wrapped, base, wrapper in _WRAPPED:
         if wrapped not in gym.registry:

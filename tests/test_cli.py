@@ -11,6 +11,7 @@ from redundancy_gym.policies import PolicyError
 PLANAR = "redundancy_gym/PlanarReach-v0"
 BIPED = "redundancy_gym/BipedWalk-v0"
 OBSTACLES = "redundancy_gym/BipedObstacles-v0"
+TERRAIN = "redundancy_gym/BipedTerrain-v0"
 
 
 def test_version(capsys) -> None:
@@ -45,13 +46,13 @@ def test_list_json(capsys) -> None:
 
 
 def test_policy_on_the_wrong_env_names_the_envs_it_supports(capsys) -> None:
-    with pytest.raises(PolicyError, match=f"policy 'walking' supports {BIPED}, {OBSTACLES}; got {PLANAR}"):
+    with pytest.raises(PolicyError, match=f"policy 'walking' supports {BIPED}, {OBSTACLES}, {TERRAIN}; got {PLANAR}"):
         redundancy_gym.make_policy("walking", gym.make(PLANAR))
     with pytest.raises(PolicyError, match=f"policy 'clik' supports {PLANAR}, redundancy_gym/AgriReach-v0; got {BIPED}"):
         redundancy_gym.make_policy("clik", gym.make(BIPED))
     assert main(["eval", PLANAR, "--policy", "walking", "--episodes", "1", "--no-progress"]) == 2
     err = capsys.readouterr().err
-    assert f"policy 'walking' supports {BIPED}, {OBSTACLES}; got {PLANAR}" in err
+    assert f"policy 'walking' supports {BIPED}, {OBSTACLES}, {TERRAIN}; got {PLANAR}" in err
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:

@@ -10,15 +10,26 @@ from dm_control import mjcf
 
 from . import BIPED_XML
 from .backdrop import add_backdrop, look_at_xyaxes
-from .obstacle_course import Obstacle
+from .obstacle_course import MjcfParts, Obstacle
+from .terrain import Terrain
 
-__all__ = ["BIPED_CAMERA", "BIPED_FLOOR_GEOM", "biped_scene_xml", "obstacle_geom_name", "obstacle_scene_xml"]
+__all__ = [
+    "BIPED_CAMERA",
+    "BIPED_FLOOR_GEOM",
+    "TERRAIN_GEOM_PREFIX",
+    "biped_scene_xml",
+    "obstacle_geom_name",
+    "obstacle_scene_xml",
+    "terrain_scene_xml",
+]
 
 BIPED_FLOOR_GEOM = "ground"
 """The colliding floor plane (contype/conaffinity 1 against the robot's 2/1)."""
 BIPED_CAMERA = "track"
 """The default render camera: follows the robot's centre of mass (``mode="trackcom"``), looking at the whole body
 from ahead and to its right (-y), so the walk goes left to right across the image."""
+TERRAIN_GEOM_PREFIX = "terrain"
+"""Terrain geoms are named ``terrain_{k}`` (boxes, then ramps, then rough patches: :meth:`Terrain.mjcf`)."""
 _CAMERA_OFFSET = (1.6, -2.9, 0.4)  # [m] camera position relative to the centre of mass (world axes)
 _CAMERA_AIM = (0.15, 0.0, -0.05)  # [m] the point it looks at, relative to the centre of mass
 
@@ -92,6 +103,18 @@ def obstacle_scene_xml(scene_xml: str, obstacles: Sequence[Obstacle]) -> str:
     robot file again with ``dm_control.mjcf`` (about 27 ms); the geoms come after the floor's, so their ids are
     consecutive.
     """
+    return _with_parts(scene_xml, [obstacle.mjcf(obstacle_geom_name(k)) for k, obstacle in enumerate(obstacles)])
+
+
+def terrain_scene_xml(scene_xml: str, terrain: Terrain) -> str:
+    """The MJCF text of a composed scene (:func:`biped_scene_xml`) with ``terrain``'s geoms (:meth:`Terrain.mjcf`,
+    named ``terrain_{k}``) added to its world body after the floor's, so that the floor and the terrain have
+    consecutive geom ids (the envs count a sole's contact with any of them as ground contact)."""
+    return _with_parts(scene_xml, [terrain.mjcf(TERRAIN_GEOM_PREFIX)])
+
+
+def _with_parts(scene_xml: str, parts: Sequence[MjcfParts]) -> str:
+    """``scene_xml`` with each part's assets added to ``<asset>`` and its geoms to ``<worldbody>``, in order."""
     root = ET.fromstring(scene_xml)
     asset = root.find("asset")
     if asset is None:
@@ -99,10 +122,9 @@ def obstacle_scene_xml(scene_xml: str, obstacles: Sequence[Obstacle]) -> str:
     world = root.find("worldbody")
     if world is None:
         raise ValueError("scene_xml has no <worldbody>")
-    for k, obstacle in enumerate(obstacles):
-        parts = obstacle.mjcf(obstacle_geom_name(k))
-        for element in parts.assets:
+    for part in parts:
+        for element in part.assets:
             ET.SubElement(asset, element.tag, element.attributes)
-        for element in parts.geoms:
+        for element in part.geoms:
             ET.SubElement(world, element.tag, element.attributes)
     return ET.tostring(root, encoding="unicode")

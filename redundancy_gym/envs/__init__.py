@@ -3,6 +3,7 @@
 
 from .agri_reach import AgriReachEnv
 from .biped_obstacles import BipedObstaclesEnv
+from .biped_terrain import BipedTerrainEnv
 from .biped_walk import BipedWalkEnv
 from .exceptions import EnvConfigError, InvalidActionError
 from .planar_reach import PlanarReachEnv
@@ -10,6 +11,7 @@ from .planar_reach import PlanarReachEnv
 __all__ = [
     "AgriReachEnv",
     "BipedObstaclesEnv",
+    "BipedTerrainEnv",
     "BipedWalkEnv",
     "EnvConfigError",
     "InvalidActionError",

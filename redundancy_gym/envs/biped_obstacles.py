@@ -10,7 +10,6 @@ from typing import Any
 import mujoco
 import numpy as np
 from gymnasium import utils
-from gymnasium.envs.mujoco.mujoco_rendering import MujocoRenderer
 from numpy.typing import NDArray
 
 from ..assets.biped_scene import obstacle_geom_name, obstacle_scene_xml
@@ -256,31 +255,12 @@ class BipedObstaclesEnv(BipedWalkEnv):
         return obstacle_scene_xml(self._base_xml, self._obstacles)
 
     def _set_course(self, course: tuple[Obstacle, ...]) -> None:
-        """Make ``course`` the scene's obstacles: recompile the model when it differs from the current one.
-
-        MuJoCo's renderer holds the model (and its meshes, uploaded to the GL context), so it is closed and made
-        again for the new model; it opens its context lazily, at the next ``render()``. The old renderer is in no
-        reference cycle, so it and its ``MjrContext`` are freed when this method returns, before the new context
-        exists: an ``MjrContext`` freed later (by the cyclic garbage collector) would delete the GL objects of
-        whichever context is current then, and the new renderer's frames would come out black.
-        """
+        """Make ``course`` the scene's obstacles: recompile the model (:meth:`BipedWalkEnv._recompile`) when it
+        differs from the current one."""
         if course == self._obstacles:
             return
         self._obstacles = course
-        old = self.mujoco_renderer
-        old.close()
-        self.model, self.data = self._initialize_simulation()
-        self._resolve_names()
-        self.mujoco_renderer = MujocoRenderer(
-            self.model,
-            self.data,
-            old.default_cam_config,
-            self.width,
-            self.height,
-            old.max_geom,
-            self.camera_id,
-            self.camera_name,
-        )
+        self._recompile()
 
     def _resolve_names(self) -> None:
         super()._resolve_names()

@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 from gymnasium import spaces, utils
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+from gymnasium.envs.mujoco.mujoco_rendering import MujocoRenderer
 from numpy.typing import NDArray
 
 from ..assets import (
@@ -384,6 +385,30 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
             model.actuator_forcerange[: len(BIPED_SERVOS)] *= self._torque_scale
         return model, mujoco.MjData(model)
 
+    def _recompile(self) -> None:
+        """Compile the model again from :meth:`_scene_xml` (a subclass's scene changed: a new course or terrain).
+
+        MuJoCo's renderer holds the model (and its meshes, uploaded to the GL context), so it is closed and made
+        again for the new model; it opens its context lazily, at the next ``render()``. The old renderer is in no
+        reference cycle, so it and its ``MjrContext`` are freed when this method returns, before the new context
+        exists: an ``MjrContext`` freed later (by the cyclic garbage collector) would delete the GL objects of
+        whichever context is current then, and the new renderer's frames would come out black.
+        """
+        old = self.mujoco_renderer
+        old.close()
+        self.model, self.data = self._initialize_simulation()
+        self._resolve_names()
+        self.mujoco_renderer = MujocoRenderer(
+            self.model,
+            self.data,
+            old.default_cam_config,
+            self.width,
+            self.height,
+            old.max_geom,
+            self.camera_id,
+            self.camera_name,
+        )
+
     def _set_action_space(self) -> spaces.Box:
         self.action_space = spaces.Box(-1.0, 1.0, shape=(len(BIPED_JOINTS),), dtype=np.float32)
         return self.action_space
@@ -573,7 +598,8 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
                     data.efc_force,
                     data.efc_type,
                     self._foot_of_geom,
-                    self._floor,
+                    self._ground[0],
+                    self._ground[1],
                 ),
                 (*own, self._self_clearance_hint, *other, self._mirror_clearance_hint),
             )
@@ -637,7 +663,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         d = self.data
         moments, angmom, com = loads
         margin, pseudoenergy, peak = joints
-        fell = bool(d.qpos[2] < self._min_base_height or tilt > self._max_torso_tilt)
+        fell = bool(d.qpos[2] - self._ground_under_base() < self._min_base_height or tilt > self._max_torso_tilt)
         self._fell = self._fell or fell
         self._self_collided = self._self_collided or clearance <= 0.0
         distance = float(d.qpos[0]) - self._start_x
@@ -678,7 +704,7 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         """:meth:`_metrics` with NumPy: the readable reference of the compiled one (``backend="python"``)."""
         m, d = self.model, self.data
         qdot = d.qvel[6:]
-        pressure = contact_pressure(m, d, self._floor, self._foot_of_geom)
+        pressure = contact_pressure(m, d, self._ground, self._foot_of_geom)
         torso = d.xmat[self._torso].reshape(3, 3)
         tilt = float(np.arccos(np.clip(torso[2, 2], -1.0, 1.0)))
         clearance = self._self_clearance()
@@ -693,6 +719,11 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         margin = float(np.min(np.minimum(d.qpos[7:] - self._lower, self._upper - d.qpos[7:])))
         joints = (margin, float(qdot @ qdot) * self.dt, float(np.max(np.abs(qdot))))
         return self._metrics_info(forward_speed, pressure, tilt, clearance, (moments, angmom, com), joints)
+
+    def _ground_under_base(self) -> float:
+        """Height [m] of the ground under the pelvis, which the fall rule's ``min_base_height`` is measured from
+        (flat ground here: 0; BipedTerrain's terrain height)."""
+        return 0.0
 
     def _self_clearance(self) -> float:
         """Smallest SSV distance between non-adjacent robot volumes [m] (capsules -> LSS, spheres -> PSS)."""
@@ -747,7 +778,9 @@ class BipedWalkEnv(MujocoEnv, utils.EzPickle):
         self._ankle_sites_array = np.array(self._ankle_sites, dtype=np.int64)
         self._pelvis = m.body("pelvis").id
         self._torso = m.body("torso").id
-        self._floor = m.geom(BIPED_FLOOR_GEOM).id
+        floor = m.geom(BIPED_FLOOR_GEOM).id
+        # the ground's geom ids [low, high): the floor (BipedTerrain's terrain geoms follow it)
+        self._ground = (floor, floor + 1)
         self._sole_geoms = [m.geom(g).id for g in BIPED_SOLE_GEOMS]
         self._contact_layout = contact_layout(self.data)
         self._foot_of_geom = foot_of_geom(

@@ -1,9 +1,10 @@
 """The feet's centres of pressure and the zero-moment point from MuJoCo's contact forces (the biped envs' ``cop``,
 ``zmp`` and ``normal_force``).
 
-Each contact between the floor and a sole adds its world-frame normal force ``f_z`` to its foot, and ``f_z`` times
-its position to the foot's first moment; a foot's CoP is its moment over its force, the ZMP the moment of both
-feet over their summed force (on flat ground the ZMP is the CoP of all contacts). :func:`contact_pressure` does this
+Each contact between the ground (the floor, and BipedTerrain's terrain geoms) and a sole adds its world-frame normal
+force ``f_z`` to its foot, and ``f_z`` times its position to the foot's first moment; a foot's CoP is its moment
+over its force, the ZMP the moment of both feet over their summed force (on flat ground the ZMP is the CoP of all
+contacts). :func:`contact_pressure` does this
 with MuJoCo's ``mj_contactForce`` per contact (the readable reference) or, :func:`compiled_contact_pressure`, in
 one compiled pass over MuJoCo's contact arrays, which decodes the pyramidal or elliptic cone forces as
 ``mj_contactForce`` does and sums in the same order: both give the same bits.
@@ -71,23 +72,24 @@ def foot_of_geom(ngeom: int, sole_geoms: dict[int, int]) -> NDArray[np.int64]:
 
 
 def contact_pressure(
-    model: mujoco.MjModel, data: mujoco.MjData, floor: int, foot: NDArray[np.int64]
+    model: mujoco.MjModel, data: mujoco.MjData, ground: tuple[int, int], foot: NDArray[np.int64]
 ) -> ContactPressure:
-    """Each foot's CoP and normal force and the ZMP of ``data``'s contacts between geom ``floor`` and the soles,
-    with ``mj_contactForce`` per contact: the readable reference of :func:`compiled_contact_pressure`.
+    """Each foot's CoP and normal force and the ZMP of ``data``'s contacts between the ground's geoms and the
+    soles, with ``mj_contactForce`` per contact: the readable reference of :func:`compiled_contact_pressure`.
 
     Args:
         model, data: the simulation, after a step (its ``efc_force`` solved).
-        floor: the floor's geom id.
+        ground: the ground's geom ids ``[low, high)``: the floor, and a terrain's geoms after it.
         foot: (ngeom,) the foot of each geom (:func:`foot_of_geom`): 0 right, 1 left, -1 not a sole.
     """
     weighted = np.zeros((2, 2))
     normal = np.zeros(2)
     force = np.zeros(6)
+    low, high = ground
     for i in range(data.ncon):
         contact = data.contact[i]
         g1, g2 = int(contact.geom1), int(contact.geom2)
-        other = g2 if g1 == floor else g1 if g2 == floor else -1
+        other = g2 if low <= g1 < high else g1 if low <= g2 < high else -1
         side = int(foot[other]) if other >= 0 else -1
         if side < 0:
             continue
@@ -121,12 +123,12 @@ def contact_layout(data: mujoco.MjData) -> NDArray[np.int64]:
 
 
 def compiled_contact_pressure(
-    data: mujoco.MjData, floor: int, foot: NDArray[np.int64], layout: NDArray[np.int64]
+    data: mujoco.MjData, ground: tuple[int, int], foot: NDArray[np.int64], layout: NDArray[np.int64]
 ) -> ContactPressure:
     """:func:`contact_pressure` in one compiled pass over MuJoCo's contact records (``layout``:
     :func:`contact_layout`): the same bits."""
     cop, cop_valid, zmp, zmp_valid, normal = contact_pressure_kernel(
-        data.contact.dist, data.ncon, layout, data.efc_force, data.efc_type, foot, floor
+        data.contact.dist, data.ncon, layout, data.efc_force, data.efc_type, foot, ground[0], ground[1]
     )
     return ContactPressure(cop, cop_valid, zmp, bool(zmp_valid), normal)
 
@@ -157,9 +159,10 @@ def _touches(dist, ncon, layout, low, high):  # noqa: ANN001, ANN202
 
 
 @njit(**JIT_EXACT)
-def contact_pressure_kernel(dist, ncon, layout, efc_force, efc_type, foot, floor):  # noqa: ANN001, ANN202
+def contact_pressure_kernel(dist, ncon, layout, efc_force, efc_type, foot, low, high):  # noqa: ANN001, ANN202
     """The fields of :class:`ContactPressure` (``mj_contactForce``'s decoding and the reference's sums, in their
-    order), reading the ``ncon`` contact records that start at ``dist``'s address through ``layout``."""
+    order), reading the ``ncon`` contact records that start at ``dist``'s address through ``layout``; the ground is
+    the geoms ``[low, high)``."""
     stride = layout[0]
     records = _float64_pointer(dist.ctypes.data)
     counts = _int32_pointer(dist.ctypes.data)
@@ -173,10 +176,10 @@ def contact_pressure_kernel(dist, ncon, layout, efc_force, efc_type, foot, floor
         r = i * stride // 8
         k = i * stride // 4
         g1, g2 = ints[k + geom], ints[k + geom + 1]
-        other = g2 if g1 == floor else (g1 if g2 == floor else -1)
+        other = g2 if low <= g1 < high else (g1 if low <= g2 < high else -1)
         adr = ints[k + address]
         if other < 0 or foot[other] < 0 or adr < 0:
-            continue  # not a sole on the floor, or a contact without a constraint (mj_contactForce gives 0)
+            continue  # not a sole on the ground, or a contact without a constraint (mj_contactForce gives 0)
         side = foot[other]
         n = ints[k + dims]
         f0 = f1 = f2 = 0.0

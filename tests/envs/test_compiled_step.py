@@ -160,13 +160,13 @@ def _contacts_of_falling_biped(cone: int, condim: int) -> tuple[Any, list[tuple[
 def test_contact_kernels_equal_mj_contact_force(cone: int, condim: int) -> None:
     env, states = _contacts_of_falling_biped(cone, condim)
     base = env.unwrapped
-    floor, foot = base._floor, base._foot_of_geom
+    ground, foot = base._ground, base._foot_of_geom
     loaded = 0
     try:
         for model, data in states:
             layout = contact_layout(data)
-            old = contact_pressure(model, data, floor, foot)
-            new = compiled_contact_pressure(data, floor, foot, layout)
+            old = contact_pressure(model, data, ground, foot)
+            new = compiled_contact_pressure(data, ground, foot, layout)
             for name, a, b in zip(old._fields, old, new, strict=True):
                 assert type(a) is type(b), name
                 np.testing.assert_array_equal(b, a, err_msg=name)

@@ -132,6 +132,22 @@ NON_DEFAULT: dict[str, dict[str, Any]] = {
         "contact_weight": 2.0,
         "success_distance": 0.5,
     },
+    "redundancy_gym/BipedTerrain-v0": {
+        **_WALK_ARGUMENTS,
+        "terrain": "stairs",
+        "segments": [{"kind": "platform", "height": 0.1, "length": 1.0}],
+        "terrain_ranges": {"stairs": {"rise": (0.1, 0.12)}},
+        "n_segments": (1, 2),
+        "segment_spacing": (0.8, 1.2),
+        "first_segment_distance": 1.0,
+        "scan_size": (1.2, 0.4),
+        "scan_spacing": 0.05,
+        "scan_offset": -0.1,
+        "support_tolerance": 0.03,
+        "min_support": 0.6,
+        "unsupported_weight": 2.0,
+        "success_distance": 0.5,
+    },
 }
 """A valid value other than the default for every argument of each env (rendering ones included)."""
 

@@ -42,7 +42,11 @@ def test_envs_declare_what_the_policies_read() -> None:
     assert caps["redundancy_gym/PlanarReach-v0"] >= {"tcp_tracking", "tcp_reference", "bounded_action"}
     assert "grasp_task" in caps["redundancy_gym/AgriReach-v0"]
     assert "biped" in caps["redundancy_gym/BipedWalk-v0"]
-    assert supported_env_ids("walking") == ("redundancy_gym/BipedWalk-v0", "redundancy_gym/BipedObstacles-v0")
+    assert supported_env_ids("walking") == (
+        "redundancy_gym/BipedWalk-v0",
+        "redundancy_gym/BipedObstacles-v0",
+        "redundancy_gym/BipedTerrain-v0",
+    )
     assert set(supported_env_ids("task_space", "wrapper")) == {
         "redundancy_gym/PlanarReach-v0",
         "redundancy_gym/AgriReach-v0",
