@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -168,6 +169,9 @@ class WalkingPolicy(PerEnvPolicy):
         self._wrench = slice(layout["right_force"].start, layout["left_torque"].stop)
         self._command = layout["command"]
         self._obstacles = layout.get("obstacles")
+        # a height scan (BipedTerrain-v0): the terrain map's input, with the env's scan points
+        self._scan = layout.get("height_scan")
+        self._scan_points = None if self._scan is None else np.asarray(base.scan_points, dtype=np.float64)
         self._last_rows: bytes | None = None
         self._nominal = np.asarray(base.nominal_configuration, dtype=np.float64)
         self._scale = np.asarray(base.action_scale, dtype=np.float64)
@@ -261,6 +265,15 @@ class WalkingPolicy(PerEnvPolicy):
         self.controller.start(q, float(obs[self._command][0]))
         self._last_rows = None
         self._observe_obstacles(obs)
+        self._observe_terrain(obs)
+
+    def _observe_terrain(self, obs: NDArray[np.float64]) -> None:
+        """Give the controller's terrain map the observation's height scan, taken at the observed pelvis pose."""
+        if self._scan is None or self._scan_points is None:
+            return
+        x, y, z, w, qx, qy, qz = obs[self._qpos][:7].tolist()
+        yaw = math.atan2(2.0 * (w * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+        self.controller.observe_terrain((x, y, z, yaw), obs[self._scan], self._scan_points)
 
     def _observe_obstacles(self, obs: NDArray[np.float64]) -> None:
         """Give the controller the obstacle volumes of the observation's rows when they changed."""
@@ -278,6 +291,7 @@ class WalkingPolicy(PerEnvPolicy):
     def command(self, obs: NDArray[np.float64]) -> NDArray[np.float32]:
         """One control period of the walk under way: normalized joint position targets for ``obs``."""
         self._observe_obstacles(obs)
+        self._observe_terrain(obs)
         # MuJoCo's state and the ankle wrenches as they lie in the observation: the controller converts them in its
         # measurement kernel (WalkingController.step_mujoco)
         command = self.controller.step_mujoco(obs[self._qpos], obs[self._qvel], obs[self._wrench])

@@ -21,6 +21,7 @@ CASES: list[tuple[str, dict[str, Any], str, int, float]] = [
     ("redundancy_gym/AgriReach-v0", {"difficulty": "medium"}, "clik", 3, 0.9),
     ("redundancy_gym/BipedWalk-v0", {"target_speed": 0.5}, "walking", 2, 1.0 / 3.0),
     ("redundancy_gym/BipedObstacles-v0", {"course": "random"}, "walking", 2, 1.0 / 3.0),
+    ("redundancy_gym/BipedTerrain-v0", {"terrain": "slope"}, "walking", 2, 1.0 / 3.0),
 ]
 
 

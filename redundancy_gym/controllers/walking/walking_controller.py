@@ -39,6 +39,7 @@ from .ssta import ObstacleBox, Ssta, SstaConfig, StopReason, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
 from .support_polygon import support_margin, support_polygon
+from .terrain_map import TerrainMap
 from .walking_ikd import WalkingIkd, WalkingIkdConfig, WalkingIkdStep
 from .walking_pattern import PatternSample, WalkingPattern, ZmpCorrection
 from .whole_body_ik import REFERENCE_SIZE, WholeBodyIk, WholeBodyIkResult, WholeBodyReference
@@ -415,6 +416,30 @@ class WalkingController:
         self._command_replan = -np.inf
         self._next = None
         self._base = None
+        self.terrain: TerrainMap | None = None
+        self._terrain_planned = -2  # the step of the last terrain planning
+
+    def observe_terrain(self, base: tuple[float, float, float, float], scan: ArrayLike, offsets: ArrayLike) -> bool:
+        """Add a height scan to the terrain map (:class:`TerrainMap`, made at the first scan of a walk, its lanes
+        the starting feet's): the pelvis's world x, y, z [m] and yaw [rad] when it was taken, terrain minus pelvis
+        heights [m] (N,) and the scan points' offsets (forward, left) [m] in the pelvis's heading frame (N, 2).
+        The footholds not yet begun are placed on the map once a step (:meth:`WalkingPattern.set_terrain`).
+        Returns whether the map changed."""
+        if self.pattern is None:
+            raise ControllerError("call WalkingController.start(q, speed) before observe_terrain()")
+        if self.terrain is None:
+            feet = self.pattern.foothold(0), self.pattern.foothold(1)
+            self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])))
+        return self.terrain.observe(base, np.asarray(scan, dtype=np.float64), np.asarray(offsets, dtype=np.float64))
+
+    def _support_height(self, sample: PatternSample) -> float:
+        """The ground height [m] the ZMP is measured on: the planned height of the feet on the ground (their mean in
+        double support); the pattern's ground without a terrain map."""
+        assert self.pattern is not None
+        if self.terrain is None:
+            return self.pattern.ground
+        heights = [float(sample.feet[i, 2]) for i in (0, 1) if sample.contact[i]]
+        return sum(heights) / len(heights) if heights else self.pattern.ground
 
     def set_command(self, forward: float, lateral: float = 0.0, yaw_rate: float = 0.0) -> None:
         """Walk at ``forward`` and ``lateral`` [m/s] (in the frame of the walker's heading), turning at ``yaw_rate``
@@ -874,7 +899,7 @@ class WalkingController:
             stance_frame=self.stance_frame,
             stance=stance,
             planned=(planned.item(0), planned.item(1), start.feet_yaw.item(stance)),
-            ground=self.pattern.ground,
+            ground=self._support_height(start),
         )
         if m is None:
             return None
@@ -931,7 +956,7 @@ class WalkingController:
             com, com_velocity, rotations, positions = self._in_stance_frame(
                 start, com, com_velocity, rotations, positions
             )
-        contact = estimate_zmp(rotations[:2], positions[:2], forces, torques, ground=self.pattern.ground)
+        contact = estimate_zmp(rotations[:2], positions[:2], forces, torques, ground=self._support_height(start))
         return com, com_velocity, contact
 
     def _step(
@@ -946,14 +971,27 @@ class WalkingController:
             self._map_obstacles(force=self.pattern.resumable(self.time))
             if self._next is None:
                 start = self.pattern.sample(self.time)
+        if self.terrain is not None and start.step != self._terrain_planned:
+            # once a step, the footholds not yet begun are placed on the terrain as the map knows it then, in the
+            # plan's frame: the world's shifted by the real stance foot's drift
+            self._terrain_planned = start.step
+            self.pattern.set_terrain(self.time, self.terrain, float(self._world_to_plan[1][0]))
+            self._next = None
+            start = self.pattern.sample(self.time)
         # the measured DCM, c + c_dot / omega (x, y), in floats
         (com_x, com_y, _), (velocity_x, velocity_y, _) = com.tolist(), com_velocity.tolist()
         omega = self.stabilizer.omega
-        adjustment = self.step_adjuster.update(
-            self.pattern,
-            self.time,
-            np.array((com_x + velocity_x / omega, com_y + velocity_y / omega)),
-            planned=start.dcm,
+        # on terrain the landings are chosen surfaces and the swings pass edges: no push-recovery step adjustment,
+        # which moves a landing and re-times its swing over flat ground
+        adjustment = (
+            None
+            if self.terrain is not None
+            else self.step_adjuster.update(
+                self.pattern,
+                self.time,
+                np.array((com_x + velocity_x / omega, com_y + velocity_y / omega)),
+                planned=start.dcm,
+            )
         )
         if adjustment is not None:
             start = self.pattern.sample(self.time)  # the plan changed from now on

@@ -26,6 +26,7 @@ from .dcm_planner import DcmPlan, DcmPlanner, horizontal_point
 from .gait_config import GaitConfig
 from .quintic import PiecewiseQuintic, Quintic
 from .ssta import ObstacleBox, Ssta, StopReason, SwingModification
+from .terrain_map import Foothold, TerrainMap
 
 __all__ = ["PatternSample", "WalkingPattern", "ZmpCorrection"]
 
@@ -216,6 +217,12 @@ class WalkingPattern:
         self._resumes: list[tuple[int, float]] = []
         # the walking line's sideways offsets [m] per foothold (sidesteps, :meth:`set_obstacles`)
         self._line: dict[int, float] = {}
+        # terrain (:meth:`set_terrain`): the map, the plan-minus-world shift along x [m], each foothold placed on it
+        # (keyed by what it was placed from), and the first foothold that may still move
+        self._terrain: TerrainMap | None = None
+        self._terrain_shift = 0.0
+        self._holds: dict[int, tuple[tuple[float, float, float], Foothold]] = {}
+        self._terrain_open = 2
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -276,7 +283,101 @@ class WalkingPattern:
         for first, dx in self._resumes:
             if j >= first:
                 x += dx
+        if self._terrain is not None:
+            return self._on_terrain(j, x, y + self._line.get(j, 0.0))
         return np.array((x, y + self._line.get(j, 0.0), self.ground))
+
+    def _on_terrain(self, j: int, x: float, y: float) -> NDArray[np.float64]:
+        """Foothold ``j`` (nominally at ``(x, y)`` [m] in the plan's frame) placed on the terrain map: within reach
+        of the foothold before it, where the sole rests best on one plane (:meth:`TerrainMap.place`)."""
+        terrain = self._terrain
+        assert terrain is not None
+        previous = float(self.foothold(j - 1)[0])
+        key = (x, y, previous)
+        cached = self._holds.get(j)
+        if cached is not None and (j < self._terrain_open or cached[0] == key):
+            hold = cached[1]
+        else:
+            shift = self._terrain_shift
+            behind = float(self.foothold(j - 2)[0]) if j >= 2 else previous
+            # ahead of the foot's own last foothold and of the other foot less a little, within a step's reach
+            low = max(previous - 0.1, behind + 0.05) - shift
+            lane = RIGHT if j % 2 == 0 else LEFT
+            hold = terrain.place(lane, x - shift, low, previous + self.config.max_step_length - shift)
+            stance_z = float(self.foothold(j - 1)[2])
+            if abs(hold.z - stance_z) > terrain.config.height_step:
+                # a step up or down: no longer than nominal, or the leg stretches past its length; placed again
+                # within that reach, it may land before the edge (the next step then takes the height)
+                reach = previous + self.step_length + terrain.config.step_reach - shift
+                if hold.x > reach:
+                    hold = terrain.place(lane, min(x - shift, reach), low, reach)
+            hold = Foothold(hold.x + shift, hold.z, hold.pitch, hold.support)
+            self._holds[j] = (key, hold)
+        return np.array((hold.x, y, hold.z))
+
+    def foothold_pitch(self, j: int) -> float:
+        """Pitch [rad] of the sole on foothold ``j`` (positive: toes down): along the terrain's surface there, 0 on
+        flat ground or without a terrain map."""
+        if self._terrain is None or j < 2:
+            return 0.0
+        self.foothold(j)  # placed, if not yet
+        cached = self._holds.get(j)
+        return 0.0 if cached is None else cached[1].pitch
+
+    def set_terrain(self, t: float, terrain: TerrainMap, shift: float) -> None:
+        """Place the footholds not yet begun at ``t`` [s] on ``terrain`` (:class:`TerrainMap`, world frame), whose
+        x is the plan's less ``shift`` [m] (the drift of the real stance foot from the plan), and plan the swings and
+        the CoM's height over them; the landing of the swing under way is kept. Walking straight along +x only.
+
+        Raises:
+            ControllerError: the walk was turned by a yaw-rate command (:meth:`set_velocity`).
+        """
+        if self._turned:
+            raise ControllerError("terrain planning plans for walking straight; a yaw rate was commanded")
+        k = self.step_at(t)
+        if k > self._plan_step:
+            self._replan(k)
+        self._terrain, self._terrain_shift = terrain, float(shift)
+        self._terrain_open = k + 3 if k >= 0 else 2
+        # the footholds not yet begun are placed again on the map as it is now
+        self._holds = {j: v for j, v in self._holds.items() if j < self._terrain_open}
+        # steps up and down not yet begun take their own single-support time
+        scale = terrain.config.height_step_time
+        if scale != 1.0:
+            for i in range(max(k + 1, 0), k + 2 + self.config.preview_steps):
+                dz = float(self.foothold(i + 2)[2]) - float(self.foothold(i + 1)[2])
+                if abs(dz) > terrain.config.height_step:
+                    self._singles[i] = scale * self._single
+                else:
+                    self._singles.pop(i, None)
+        kept = k if k >= 0 and t - self.step_start(k) > 0.01 * self.step_single(k) else k - 1
+        self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= kept}
+        self._stale = True
+        self._replan_from(t)
+
+    def _com_height(self, t: float, k: int) -> tuple[float, float]:
+        """The CoM's height [m] and vertical velocity [m/s] at ``t`` in step ``k``: ``com_height`` above the lower
+        of the step's stance foothold and landing, reached by a quintic (C2, at rest at both ends) over the whole step
+        from the last step's height: down before a landing below the stance foot, up while the foot that landed
+        higher carries the robot."""
+        if self._terrain is None or k < 0:
+            return self.ground + self.config.com_height, 0.0
+        height = self.config.com_height
+
+        crouch = self._terrain.config.crouch
+
+        def level(i: int) -> float:
+            if i < 0:
+                return self.ground + height
+            stance, landing = float(self.foothold(i + 1)[2]), float(self.foothold(i + 2)[2])
+            return min(stance, landing) + height - crouch * max(stance - landing, 0.0)
+
+        before, after = level(k - 1), level(k)
+        if before == after:
+            return after, 0.0
+        start, end = self.step_start(k), self.step_start(k + 1)
+        z, vz, _ = Quintic.from_boundary(end - start, before, after).evaluate(min(t - start, end - start))
+        return float(z), float(vz)
 
     def _in_place(self, j: int, stop: int) -> NDArray[np.float64]:
         """Foothold ``j`` of a walk stopped in front of a box from foothold ``stop`` on: the feet step in place
@@ -741,10 +842,13 @@ class WalkingPattern:
                 pitch[swing_side], pitch_rate[swing_side] = angle, rate
                 contact[swing_side] = False
         zmp = np.array((rx, ry))
+        com_z, com_vz = self._com_height(t, k)
+        if self._terrain is not None and k >= 0:
+            self._terrain_pitch(k, t - self.step_start(k), pitch, pitch_rate, contact)
         return PatternSample(
             time=float(t),
-            com=np.array((px, py, self.ground + self.config.com_height)),
-            com_velocity=np.array((vx, vy, 0.0)),
+            com=np.array((px, py, com_z)),
+            com_velocity=np.array((vx, vy, com_vz)),
             zmp=zmp,
             dcm=np.array((dcm_x, dcm_y)),
             feet=feet,
@@ -777,6 +881,27 @@ class WalkingPattern:
         landing_x, landing_y = self._zmp_point(k + 2, -a).tolist()
         w = (s - single) / (end - start - single)
         return np.array((to_x + (landing_x - to_x) * w, to_y + (landing_y - to_y) * w))
+
+    def _terrain_pitch(
+        self, k: int, s: float, pitch: NDArray[np.float64], rate: NDArray[np.float64], contact: list[bool]
+    ) -> None:
+        """Add the terrain's pitch to step ``k``'s feet at swing time ``s`` [s]: the stance foot's surface pitch; the
+        swing foot's blends from its lift-off surface to its landing surface over the single support (a quintic, at
+        rest at both ends), on top of its swing profile."""
+        swing_side = RIGHT if k % 2 == 0 else LEFT
+        pitch[1 - swing_side] += self.foothold_pitch(k + 1)
+        landing = self.foothold_pitch(k + 2)
+        if contact[swing_side]:
+            pitch[swing_side] += landing
+            return
+        lift_off = self.foothold_pitch(k)
+        if lift_off == landing:
+            pitch[swing_side] += landing
+            return
+        single = self.step_single(k)
+        angle, angle_rate, _ = Quintic.from_boundary(single, lift_off, landing).evaluate(min(s, single))
+        pitch[swing_side] += float(angle)
+        rate[swing_side] += float(angle_rate)
 
     def _swing_yaw(self, k: int, nominal: float) -> tuple[float, float]:
         """Heading [rad] and its rate [rad/s] of step ``k``'s swing foot at nominal swing time ``nominal`` [s]: a
@@ -843,6 +968,17 @@ class WalkingPattern:
                     return self._swing_cache[k]
                 self._modifications.pop(k, None)
             single = self.step_single(k)
+            if self._terrain is not None:
+                side = RIGHT if k % 2 == 0 else LEFT
+                shift = self._terrain_shift
+                envelope = self._terrain.envelope(side, float(start[0]) - shift, float(end[0]) - shift)
+                b0, b1 = envelope.band
+                if b1 > b0:  # something to pass between lift-off and landing: held over, as over an obstacle box
+                    # above both ends as planned (a foothold placed on an older map may stand above its profile)
+                    top = max(envelope.top, max(float(start[2]), float(end[2])) + self._terrain.config.min_rise)
+                    over = SwingModification("over", top - self.ground, 0.0, (b0 + shift, b1 + shift))
+                    self._swing_cache[k] = self._modified_swing(start, end, single, over)
+                    return self._swing_cache[k]
             self._swing_cache[k] = (
                 self._nominal_vertical(start, end, single),
                 Quintic.from_boundary(single * (1.0 - self.config.swing_settle), start[:2], end[:2]),

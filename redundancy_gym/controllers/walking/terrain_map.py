@@ -1,0 +1,271 @@
+"""The terrain as the walker knows it: a height profile along each foot's lane, filled from the height scans it
+observes, and the footholds and swing heights planned on it.
+
+The walker reads the terrain from its observation only: a grid of terrain heights around the pelvis (BipedTerrain's
+``height_scan``). Each scan's column nearest to a foot's lane writes its points into that lane's profile, a row of
+1 cm cells along x in the world frame; as the robot walks the scan rows sweep over every cell, so an edge between
+two scan rows 0.1 m apart is located to the distance the robot moves in a control period (a few millimetres).
+Cells not seen yet take the height of the nearest seen cell.
+
+A foothold is placed where the sole (heel ``heel`` behind the sole point, toe tip ``toe`` ahead), extended by
+``margin`` at both ends, rests on one plane: the profile over the footprint is fitted by a line, and the share of
+cells within ``surface_tolerance`` of it is the foothold's support. The planner takes the best supported position
+near the nominal one (a step of ``distance_cost`` support per metre off it), the line's height at the sole point and
+its slope as the foot's pitch. A tread or stone shorter than the sole gets the sole centred on it; a ramp gets the
+foot pitched along it.
+
+A swing passes the terrain between its lift-off and landing with ``clearance`` under the sole: the profile's
+envelope (the highest cell under the sole's length at each position of the sole point) gives the height to hold
+and the band of x over which to hold it (the swing over an obstacle of the SSTA, monograph 5.4.2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..exceptions import ControllerError
+
+__all__ = ["Foothold", "SwingEnvelope", "TerrainMap", "TerrainMapConfig"]
+
+
+@dataclass(frozen=True)
+class TerrainMapConfig:
+    """Parameters of :class:`TerrainMap`.
+
+    Attributes:
+        cell: profile cell length [m] along x.
+        x_min, length: the profile's first x and its extent [m] (world frame).
+        heel, toe: the sole's extent behind and ahead of the sole point [m].
+        margin: length [m] added to the footprint at both ends: the distance kept from an edge.
+        riser_margin: distance [m] kept between the sole's ends and terrain higher than the surface it stands on (a
+            riser ahead of a short tread; the feet land a centimetre or two off their plan).
+        surface_tolerance: a cell within this of the footprint's line supports the sole [m].
+        distance_cost: support traded per metre of foothold moved off the nominal one [1/m].
+        search_back, search_ahead: the window [m] around the nominal foothold searched.
+        clearance: height [m] of the sole above the terrain it swings over.
+        min_rise: a swing's apex at least this [m] above its higher end.
+        height_step: a landing more than this [m] above or below the stance foothold is a step up or down.
+        step_reach: a step up or down reaches at most this [m] beyond the nominal step length (a longer one would
+            stretch the leg past its length: the landing moves before the edge and the next step takes the height).
+        height_step_time: single-support duration of a step up or down, in nominal single supports.
+        crouch: share of a step down's height by which the CoM goes lower than ``com_height`` above the landing
+            while it is taken (the stance leg bends, the swing leg reaches the lower ground).
+    """
+
+    cell: float = 0.01
+    x_min: float = -2.0
+    length: float = 60.0
+    heel: float = 0.095
+    toe: float = 0.165
+    margin: float = 0.02
+    riser_margin: float = 0.04
+    surface_tolerance: float = 0.012
+    distance_cost: float = 0.6
+    search_back: float = 0.25
+    search_ahead: float = 0.2
+    clearance: float = 0.05
+    min_rise: float = 0.05
+    height_step: float = 0.03
+    step_reach: float = 0.03
+    crouch: float = 0.0
+    height_step_time: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in (
+            "cell",
+            "length",
+            "heel",
+            "toe",
+            "surface_tolerance",
+            "search_back",
+            "search_ahead",
+            "height_step_time",
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
+                raise ControllerError(f"TerrainMapConfig.{name} must be a finite number > 0, got {value!r}")
+        for name in (
+            "margin",
+            "riser_margin",
+            "distance_cost",
+            "clearance",
+            "min_rise",
+            "height_step",
+            "step_reach",
+            "crouch",
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):
+                raise ControllerError(f"TerrainMapConfig.{name} must be a finite number >= 0, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Foothold:
+    """A planned foothold on the terrain.
+
+    Attributes:
+        x: the sole point's x [m].
+        z: its height [m] (the surface line's height there).
+        pitch: the sole's pitch [rad] along the surface (positive: toes down, a downhill surface).
+        support: share [0, 1] of the (margin-extended) footprint on the surface.
+    """
+
+    x: float
+    z: float
+    pitch: float
+    support: float
+
+
+@dataclass(frozen=True)
+class SwingEnvelope:
+    """What a swing must pass: ``top`` [m], the height to hold over the band ``(x0, x1)`` [m] of sole-point x."""
+
+    top: float
+    band: tuple[float, float]
+
+
+class TerrainMap:
+    """Height profiles along the feet's lanes from observed height scans (world frame).
+
+    Args:
+        lanes: the lanes' y [m] (right, left): the starting feet's.
+        config: the parameters.
+    """
+
+    def __init__(self, lanes: tuple[float, float], config: TerrainMapConfig | None = None) -> None:
+        self.config = config or TerrainMapConfig()
+        self.lanes = (float(lanes[0]), float(lanes[1]))
+        n = int(round(self.config.length / self.config.cell)) + 1
+        self._heights = np.full((2, n), np.nan)
+        self._filled: list[NDArray[np.float64] | None] = [None, None]
+        self.version = 0  # counts the observations that changed a profile
+        c = self.config
+        self._foot = int(round((c.heel + c.toe + 2.0 * c.margin) / c.cell)) + 1  # cells under a footprint
+        offsets = np.arange(self._foot) * c.cell - (c.heel + c.margin)
+        self._fit = (offsets, offsets - offsets.mean())
+        # the cells within riser_margin of the sole (relative to the footprint's first cell)
+        self._clear = np.arange(
+            int(round((c.margin - c.riser_margin) / c.cell)),
+            int(round((c.margin + c.heel + c.toe + c.riser_margin) / c.cell)) + 1,
+        )
+
+    # ------------------------------------------------------------------ observation
+    def observe(
+        self,
+        base: tuple[float, float, float, float],
+        scan: NDArray[np.float64],
+        offsets: NDArray[np.float64],
+    ) -> bool:
+        """Write a height scan into the lanes' profiles; returns whether a profile changed.
+
+        Args:
+            base: the pelvis's x, y, z [m] and yaw [rad] when the scan was taken.
+            scan: terrain height minus the pelvis height [m] at each scan point (N,).
+            offsets: the scan points (forward, left) [m] in the pelvis's heading frame (N, 2).
+        """
+        x, y, z, yaw = base
+        c, s = math.cos(yaw), math.sin(yaw)
+        world_x = x + c * offsets[:, 0] - s * offsets[:, 1]
+        world_y = y + s * offsets[:, 0] + c * offsets[:, 1]
+        heights = np.asarray(scan, dtype=np.float64) + z
+        changed = False
+        for lane, lane_y in enumerate(self.lanes):
+            # the points of the scan column nearest to the lane (one column: the scan is a grid)
+            gap = np.abs(world_y - lane_y)
+            column = np.abs(offsets[:, 1] - offsets[int(np.argmin(gap)), 1]) < 1e-9
+            cells = np.rint((world_x[column] - self.config.x_min) / self.config.cell).astype(np.int64)
+            keep = (cells >= 0) & (cells < self._heights.shape[1])
+            cells, values = cells[keep], heights[column][keep]
+            old = self._heights[lane, cells]
+            if not np.array_equal(old, values):
+                self._heights[lane, cells] = values
+                self._filled[lane] = None
+                changed = True
+        if changed:
+            self.version += 1
+        return changed
+
+    def profile(self, lane: int) -> NDArray[np.float64]:
+        """The lane's heights [m] per cell, cells not seen yet filled from the nearest seen one (0 without any)."""
+        filled = self._filled[lane]
+        if filled is None:
+            raw = self._heights[lane]
+            seen = np.flatnonzero(~np.isnan(raw))
+            if seen.size == 0:
+                filled = np.zeros_like(raw)
+            else:
+                index = np.arange(raw.size)
+                # the nearest seen cell: the one before or after, whichever is closer
+                after = np.searchsorted(seen, index).clip(0, seen.size - 1)
+                before = (after - 1).clip(0, seen.size - 1)
+                nearer = np.where(
+                    np.abs(seen[before] - index) <= np.abs(seen[after] - index), seen[before], seen[after]
+                )
+                filled = raw[nearer]
+            self._filled[lane] = filled
+        return filled
+
+    def heights_at(self, lane: int, x: NDArray[np.float64] | float) -> NDArray[np.float64]:
+        """The lane's profile at world ``x`` [m] (nearest cell)."""
+        cells = np.rint((np.asarray(x, dtype=np.float64) - self.config.x_min) / self.config.cell).astype(np.int64)
+        return self.profile(lane)[cells.clip(0, self._heights.shape[1] - 1)]
+
+    # ------------------------------------------------------------------ planning
+    def place(self, lane: int, nominal: float, low: float, high: float) -> Foothold:
+        """The foothold of ``lane`` near the nominal sole-point x ``nominal`` [m], within ``[low, high]`` [m] (the
+        reach), that rests best on one plane (module docstring)."""
+        c = self.config
+        start = max(nominal - c.search_back, low)
+        stop = min(nominal + c.search_ahead, high)
+        if stop < start:  # the reach and the window do not meet: the nearest reachable point
+            start = stop = min(max(nominal, low), high)
+        candidates = np.arange(start, stop + 0.5 * c.cell, c.cell)
+        profile = self.profile(lane)
+        offsets, centred = self._fit
+        first = np.rint((candidates + offsets[0] - c.x_min) / c.cell).astype(np.int64)
+        cells = (first[:, None] + np.arange(self._foot)[None, :]).clip(0, profile.size - 1)
+        heights = profile[cells]
+        # two surfaces per candidate: a level one at the footprint's median height (a tread, a stone, a platform:
+        # a plane fit across an edge would tilt the foot onto both levels) and a least-squares line (a ramp)
+        level = np.median(heights, axis=1)
+        flat = (np.abs(heights - level[:, None]) <= c.surface_tolerance).mean(axis=1)
+        mean = heights.mean(axis=1)
+        slope = (heights - mean[:, None]) @ centred / (centred @ centred)
+        line = mean[:, None] + slope[:, None] * (offsets[None, :] - offsets.mean())
+        sloped = (np.abs(heights - line) <= c.surface_tolerance).mean(axis=1)
+        use_line = sloped > flat
+        support = np.where(use_line, sloped, flat)
+        # terrain above the surface within riser_margin of the sole (a riser ahead of a short tread) would meet it:
+        # overhanging the lower side is a loss of support, standing against the higher one a collision
+        near = profile[(first[:, None] + self._clear[None, :]).clip(0, profile.size - 1)]
+        along = self._clear * c.cell + offsets[0]
+        surface = np.where(
+            use_line[:, None], mean[:, None] + slope[:, None] * (along[None, :] - offsets.mean()), level[:, None]
+        )
+        blocked = np.any(near > surface + c.surface_tolerance, axis=1)
+        score = support - blocked - c.distance_cost * np.abs(candidates - nominal)
+        best = int(np.argmax(score))
+        if use_line[best]:
+            z = float(mean[best] + slope[best] * (0.0 - offsets.mean()))  # the line at the sole point (offset 0)
+            return Foothold(float(candidates[best]), z, -math.atan(float(slope[best])), float(support[best]))
+        return Foothold(float(candidates[best]), float(level[best]), 0.0, float(support[best]))
+
+    def envelope(self, lane: int, start: float, end: float) -> SwingEnvelope:
+        """The height a swing of ``lane``'s sole point from x ``start`` to ``end`` [m] holds, and where: the highest
+        cell under the sole's length on the way (the sole's ends past the lift-off and landing footprints left out)
+        plus ``clearance``; the band is where that envelope stands above the lower end's surface."""
+        c = self.config
+        a, b = min(start, end), max(start, end)
+        xs = np.arange(a, b + 0.5 * c.cell, c.cell)
+        profile = self.profile(lane)
+        under = np.rint((xs[:, None] + np.arange(-c.heel, c.toe + 0.5 * c.cell, c.cell)[None, :] - c.x_min) / c.cell)
+        highest = profile[under.astype(np.int64).clip(0, profile.size - 1)].max(axis=1)
+        top = float(highest.max()) + c.clearance
+        ends = self.heights_at(lane, np.array([start, end]))
+        above = np.flatnonzero(highest > float(ends.min()) + 0.5 * c.clearance)
+        band = (float(xs[above[0]]), float(xs[above[-1]])) if above.size else (a, a)
+        return SwingEnvelope(max(top, float(ends.max()) + c.min_rise), band)

@@ -1,0 +1,127 @@
+"""The walker's terrain map: profiles filled from height scans, footholds placed on hand-made terrain against
+edges, risers and margins, pitched along ramps, swing envelopes over steps, and the pattern's CoM height plan over
+steps up and down (continuous in height and velocity)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from redundancy_gym.assets.terrain import Terrain, TerrainSegment
+from redundancy_gym.controllers import ControllerError
+from redundancy_gym.controllers.walking import GaitConfig, WalkingPattern
+from redundancy_gym.controllers.walking.terrain_map import TerrainMap, TerrainMapConfig
+
+LANES = (-0.09, 0.09)
+SCAN = np.array([[-0.2 + 0.1 * i, -0.3 + 0.1 * j] for i in range(17) for j in range(7)])  # BipedTerrain's default
+
+
+def _mapped(terrain: Terrain, until: float = 6.0) -> TerrainMap:
+    """A map filled by scans taken every 2 mm of a straight walk from x = 0 to ``until`` [m] (pelvis at 0.9 m)."""
+    terrain_map = TerrainMap(LANES)
+    for x in np.arange(0.0, until, 0.002):
+        points = np.column_stack((x + SCAN[:, 0], SCAN[:, 1]))
+        scan = terrain.heights(points) - 0.9
+        terrain_map.observe((float(x), 0.0, 0.9, 0.0), scan, SCAN)
+    return terrain_map
+
+
+def _boxes(*boxes: tuple[float, float, float]) -> Terrain:
+    """Full-width boxes (x0, x1, top) [m]."""
+    return Terrain(
+        (TerrainSegment("platform", boxes[0][0], boxes[-1][1], boxes=tuple((a, b, -1.0, 1.0, h) for a, b, h in boxes)),)
+    )
+
+
+def test_the_profile_locates_an_edge_to_a_cell_from_scans_0_1_m_apart() -> None:
+    terrain = _boxes((1.503, 2.0, 0.12))
+    heights = _mapped(terrain).profile(0)
+    x = -2.0 + 0.01 * np.arange(heights.size)
+    high = x[heights > 0.06]
+    # the edge at 1.503 m: the first cell whose centre lies within half a cell of it or past it
+    assert high[0] == pytest.approx(1.5, abs=0.011) and high[-1] == pytest.approx(2.0, abs=0.011)
+    assert np.allclose(heights[(x > 1.52) & (x < 1.98)], 0.12)
+
+
+def test_a_foothold_near_a_platform_edge_moves_onto_it_or_before_it_with_its_margin() -> None:
+    terrain_map = _mapped(_boxes((1.5, 2.5, 0.1)))
+    c = terrain_map.config
+    # nominal: the heel 5 cm before the edge (the sole straddles it): moves back before it or onto it
+    hold = terrain_map.place(0, 1.5 + c.heel - 0.05, 0.8, 2.5)
+    on = hold.x - c.heel >= 1.5 + c.margin - 0.01 and hold.z == pytest.approx(0.1)
+    before = hold.x + c.toe + c.riser_margin <= 1.5 + 0.01 and hold.z == pytest.approx(0.0)
+    assert on or before, hold
+    assert hold.support == 1.0 and hold.pitch == 0.0
+    # the far end: the toe may not overhang with its margin
+    end = terrain_map.place(0, 2.5 - c.toe + 0.03, 1.8, 2.6)
+    assert end.x + c.toe + c.margin <= 2.5 + 0.01 or end.x - c.heel - c.margin >= 2.5 - 0.01, end
+
+
+def test_a_tread_shorter_than_the_sole_keeps_the_toe_off_the_riser() -> None:
+    tread = 0.25  # a 0.26 m sole
+    terrain_map = _mapped(
+        _boxes((1.5, 1.5 + tread, 0.1), (1.5 + tread, 1.5 + 2 * tread, 0.2), (1.75 + tread, 3.0, 0.3))
+    )
+    c = terrain_map.config
+    hold = terrain_map.place(0, 1.5 + 0.5 * tread, 1.0, 2.2)
+    assert hold.z == pytest.approx(0.1) and hold.pitch == 0.0
+    riser = 1.5 + tread
+    assert hold.x + c.toe + c.riser_margin <= riser + 0.011  # the toe clear of the next riser
+    assert hold.x - c.heel < 1.5  # so the heel overhangs the lower side: the support that is left
+    assert 0.7 < hold.support < 1.0
+
+
+def test_a_ramp_pitches_the_foot_along_it() -> None:
+    angle = math.radians(8.0)
+    ramp = Terrain(
+        (TerrainSegment("slope", 1.0, 5.0, ramps=((1.0, 3.0, 3.0, 5.0, 2.0 * math.tan(angle), -1.0, 1.0),)),)
+    )
+    terrain_map = _mapped(ramp)
+    hold = terrain_map.place(1, 2.0, 1.5, 2.5)
+    assert hold.pitch == pytest.approx(-angle, abs=0.01)  # toes up, uphill
+    assert hold.z == pytest.approx((hold.x - 1.0) * math.tan(angle), abs=0.004)
+    down = terrain_map.place(1, 4.0, 3.5, 4.5)
+    assert down.pitch == pytest.approx(angle, abs=0.01)
+
+
+def test_the_swing_envelope_clears_a_step_with_its_clearance() -> None:
+    terrain_map = _mapped(_boxes((1.5, 1.8, 0.12), (1.8, 3.0, 0.24)))
+    c = terrain_map.config
+    envelope = terrain_map.envelope(0, 1.2, 1.9)  # from the ground onto the second level
+    assert envelope.top == pytest.approx(0.24 + c.clearance)
+    # the band begins where the toe reaches the first riser and lasts to the landing
+    assert envelope.band[0] == pytest.approx(1.5 - c.toe, abs=0.011) and envelope.band[1] == pytest.approx(1.9)
+    flat = terrain_map.envelope(0, 0.2, 0.8)
+    assert flat.band[1] <= flat.band[0]  # nothing to pass
+
+
+def test_bad_config_values_are_named() -> None:
+    with pytest.raises(ControllerError, match="TerrainMapConfig.cell must be a finite number > 0"):
+        TerrainMapConfig(cell=0.0)
+    with pytest.raises(ControllerError, match="TerrainMapConfig.margin must be a finite number >= 0"):
+        TerrainMapConfig(margin=-0.01)
+
+
+def test_the_com_height_plan_is_continuous_over_steps_up_and_down() -> None:
+    terrain = _boxes((0.9, 1.5, 0.1), (1.5, 2.4, 0.2), (2.4, 3.0, 0.1))
+    terrain_map = _mapped(terrain, until=4.0)
+    gait = GaitConfig()
+    pattern = WalkingPattern(gait, (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+    pattern.set_terrain(0.0, terrain_map, 0.0)
+    times = np.arange(0.0, 12.0, 0.002)
+    samples = [pattern.sample(t) for t in times]
+    z = np.array([s.com[2] for s in samples])
+    vz = np.array([s.com_velocity[2] for s in samples])
+    feet = np.array([s.feet[:, 2] for s in samples])
+    assert feet.max() >= 0.2 + terrain_map.config.clearance  # it climbs the upper level (the toe tip on the path)
+    assert z.max() == pytest.approx(0.2 + gait.com_height)
+    # C1: no jump in height or vertical velocity, and the velocity is the height's derivative
+    assert np.max(np.abs(np.diff(z))) < 0.002 and np.max(np.abs(np.diff(vz))) < 0.02
+    np.testing.assert_allclose(np.gradient(z, times)[1:-1], vz[1:-1], atol=2e-3)
+    # every stance foot stands on the terrain's surface under it
+    for s in samples[::50]:
+        for side in (0, 1):
+            if s.contact[side]:
+                assert s.feet[side, 2] == pytest.approx(float(terrain.heights(s.feet[side, :2])), abs=1e-9)

@@ -1,0 +1,36 @@
+"""The walking reference on BipedTerrain-v0, in the physics: onto and off a low platform, reading the terrain
+from the height scan only."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+
+import redundancy_gym  # noqa: F401 - registers the ids
+from redundancy_gym.policies import make_policy
+
+
+def test_the_walker_steps_onto_and_off_a_low_platform() -> None:
+    env = gym.make(
+        "redundancy_gym/BipedTerrain-v0",
+        segments=[{"kind": "platform", "height": 0.08, "length": 1.0}],
+        first_segment_distance=1.0,
+    )
+    policy = make_policy("walking", env)
+    obs, info = env.reset(seed=4100)
+    heights, supports = [], []
+    for _ in range(3000):
+        action, _ = policy.predict(obs)
+        obs, _, terminated, truncated, info = env.step(action)
+        heights.append(info["terrain_height"])
+        supports.append(info["support_fraction"])
+        if terminated or truncated:
+            break
+    assert info["is_success"] and not info["fell"], info
+    assert info["unsupported_steps"] == 0 and info["min_support_fraction"] >= 0.9
+    assert max(heights) == np.float64(0.08)  # the pelvis passed over the platform
+    assert info["touchdowns"] >= 8
+    # the pattern placed footholds on the platform's top (the map read from the scan)
+    pattern = policy.controller.pattern
+    tops = [float(pattern.foothold(j)[2]) for j in range(2, 12)]
+    assert any(abs(z - 0.08) < 1e-9 for z in tops) and tops[-1] == 0.0
