@@ -104,18 +104,18 @@ class BipedTerrainEnv(BipedWalkEnv):
 
     ``info`` holds every BipedWalk metric, plus the touchdown metrics of the last foot that landed (a foot lands
     when its normal force exceeds 1 N after at least 50 ms without; its touchdown is measured when it first carries
-    half the robot's weight, or when it lifts before that): ``support_fraction`` (share of the sole's bottom area
-    with the terrain within ``support_tolerance`` [m] below it: how much of the sole stands on the tread or stone; 1
-    before the first touchdown), ``edge_distance`` [m] (the signed distance of the sole's footprint from the nearest
-    edge of the box top it stands on, or of any box when it stands on the ground: negative when the sole overhangs
-    an edge or stands against a riser; capped at :data:`EDGE_DISTANCE_CAP`), ``touchdown_slip`` [m] (horizontal
-    motion of the sole from its first contact to the measurement), ``touchdowns`` and ``unsupported_steps`` (counts
-    in the episode), ``min_support_fraction`` (the episode's smallest), ``terrain_height`` [m] (under the pelvis),
-    ``terrain_kind`` (the class of the segment under the pelvis, ``"flat"`` between segments), ``terrain_end`` [m]
-    (x of the terrain's end) and ``course_end`` (``terrain_end + success_distance``). Changed: ``is_success`` is the
-    pelvis past ``course_end`` with no fall, no self-collision and no unsupported touchdown in the episode (the mean
-    speed does not count); a fall is the pelvis less than ``min_base_height`` above the terrain under it, or the
-    torso tilted past ``max_torso_tilt``.
+    half the robot's weight; a contact that ends before that is a scuff, counted in ``scuffs``, not a landing):
+    ``support_fraction`` (share of the sole's bottom area with the terrain within ``support_tolerance`` [m] below
+    it: how much of the sole stands on the tread or stone; 1 before the first touchdown), ``edge_distance`` [m] (the
+    signed distance of the sole's footprint from the nearest edge of the box top it stands on, or of any box when it
+    stands on the ground: negative when the sole overhangs an edge or stands against a riser; capped at
+    :data:`EDGE_DISTANCE_CAP`), ``touchdown_slip`` [m] (horizontal motion of the sole from its first contact to the
+    measurement), ``touchdowns`` and ``unsupported_steps`` (counts in the episode), ``min_support_fraction`` (the
+    episode's smallest), ``terrain_height`` [m] (under the pelvis), ``terrain_kind`` (the class of the segment under
+    the pelvis, ``"flat"`` between segments), ``terrain_end`` [m] (x of the terrain's end) and ``course_end``
+    (``terrain_end + success_distance``). Changed: ``is_success`` is the pelvis past ``course_end`` with no fall, no
+    self-collision and no unsupported touchdown in the episode (the mean speed does not count); a fall is the pelvis
+    less than ``min_base_height`` above the terrain under it, or the torso tilted past ``max_torso_tilt``.
 
     ## Starting State
     As BipedWalk: the standing posture with the soles on the ground at the origin, upper-body noise. The terrain is
@@ -318,6 +318,7 @@ class BipedTerrainEnv(BipedWalkEnv):
         self._pending: list[tuple[NDArray[np.float64], tuple[float, float, float]] | None] = [None, None]
         self._last = (1.0, EDGE_DISTANCE_CAP, 0.0)  # support fraction, edge distance [m], slip [m]
         self._touchdowns = 0
+        self._scuffs = 0
         self._unsupported = 0
         self._min_fraction = 1.0
         self._landed_unsupported = False
@@ -397,6 +398,7 @@ class BipedTerrainEnv(BipedWalkEnv):
             edge_distance=edge,
             touchdown_slip=slip,
             touchdowns=self._touchdowns,
+            scuffs=self._scuffs,
             unsupported_steps=self._unsupported,
             min_support_fraction=self._min_fraction,
             terrain_height=self._base_ground,
@@ -420,8 +422,11 @@ class BipedTerrainEnv(BipedWalkEnv):
                 if touching:
                     pending = (pending[0], self._touchdown(foot, pending[0]))
                     self._pending[foot] = pending
-                if not touching or normal[foot] >= 0.5 * self._weight:
+                if normal[foot] >= 0.5 * self._weight:
                     self._finish_touchdown(pending[1])
+                    self._pending[foot] = None
+                elif not touching:  # lifted before it carried weight: a swing that caught the terrain, no landing
+                    self._scuffs += 1
                     self._pending[foot] = None
             self._airborne[foot] = 0.0 if touching else self._airborne[foot] + self._dt
 

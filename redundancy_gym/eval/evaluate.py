@@ -66,6 +66,10 @@ class EpisodeSummary:
             the robot with an obstacle).
         stop_reason: for a policy with a ``stop_reason`` attribute (the ``walking`` policy), its value at the
             episode's end: why the walk stopped in front of an obstacle (None: it did not stop).
+        terrain_kind: BipedTerrain: the class of the last terrain segment the pelvis reached (``"flat"``: none),
+            where a failed walk failed.
+        unsupported_steps: BipedTerrain: touchdowns with less than the env's ``min_support`` of the sole supported.
+        min_support_fraction: BipedTerrain: the episode's smallest touchdown support fraction.
         sb3_predict_us: for an SB3 policy on its fast path (``Sb3Policy.fast_path``), the step time SB3's own
             ``predict`` would have given, per step [us]: ``sb3_predict`` timed on the step's observation right after
             the policy's ``predict`` (its action unused), plus the step's action-wrapper controller time as in
@@ -95,6 +99,9 @@ class EpisodeSummary:
     leaf_contacts: int | None = None
     obstacle_contact: bool | None = None
     stop_reason: str | None = None
+    terrain_kind: str | None = None
+    unsupported_steps: int | None = None
+    min_support_fraction: float | None = None
     sb3_predict_us: NDArray[np.float64] | None = None
 
 
@@ -138,6 +145,7 @@ class EvalReport:
             "episode_return_std": float(returns.std()),
             "episode_length": float(np.mean([e.length for e in s])),
             **self._walking_metrics(),
+            **self._terrain_metrics(),
             "per_episode": [_episode_row(e) for e in s],
         }
 
@@ -206,6 +214,24 @@ class EvalReport:
                 sum(e.speed_error_sq_sum or 0.0 for e in s) / max(sum(e.length for e in s), 1)
             )
         return out
+
+    def _terrain_metrics(self) -> dict[str, Any]:
+        """``unsupported_rate`` (share of episodes with a touchdown on less than the env's ``min_support`` of the
+        sole), ``min_support_fraction`` (the smallest over all episodes) and ``failures_by_terrain`` (failed episodes
+        per class of the last segment they reached, ``"flat"``: none), for BipedTerrain."""
+        s = self.summaries
+        if any(e.terrain_kind is None for e in s):
+            return {}
+        failures: dict[str, int] = {}
+        for e in s:
+            if not e.success:
+                kind = str(e.terrain_kind)
+                failures[kind] = failures.get(kind, 0) + 1
+        return {
+            "unsupported_rate": float(np.mean([bool(e.unsupported_steps) for e in s])),
+            "min_support_fraction": float(min(e.min_support_fraction or 0.0 for e in s)),
+            "failures_by_terrain": dict(sorted(failures.items())),
+        }
 
     def write_json(self, path: str | Path) -> Path:
         """Write :meth:`to_json` to ``path`` (parents created)."""
@@ -278,6 +304,7 @@ def run_episode(
     time_to_goal: float | None = None
     clearances = {"min_obstacle_clearance": math.inf, "min_self_clearance": math.inf}
     obstacle_contact = False
+    terrain_kind = "flat"
     state = None
     episode_start = np.array([True])
     while True:
@@ -302,6 +329,9 @@ def run_episode(
         ret += float(reward)
         collision = collision or bool(info.get("collision", False))
         obstacle_contact = obstacle_contact or bool(info.get("obstacle_contact", False))
+        kind = info.get("terrain_kind")
+        if kind is not None and kind != "flat":
+            terrain_kind = str(kind)
         now = float(info.get("time", len(rows) + 1))
         if time_to_goal is None and info.get("goal_reached", False):
             time_to_goal = now
@@ -355,6 +385,10 @@ def run_episode(
         summary.obstacle_contact = obstacle_contact
     if hasattr(policy, "stop_reason"):
         summary.stop_reason = policy.stop_reason
+    if "terrain_kind" in info:
+        summary.terrain_kind = terrain_kind
+        summary.unsupported_steps = int(info["unsupported_steps"])
+        summary.min_support_fraction = float(info["min_support_fraction"])
     if "fell" in info and "distance" in info:
         elapsed = float(info.get("time", 0.0))
         summary.fell = bool(info["fell"])
@@ -633,6 +667,11 @@ def format_report(report: dict[str, Any]) -> str:
     if "fall_rate" in report:
         rows.append(("fall rate", f"{report['fall_rate']:.3f}"))
         rows.append(("forward speed [m/s]", f"{report['forward_speed']:.3f}"))
+    if "failures_by_terrain" in report:
+        rows.append(("unsupported touchdown rate", f"{report['unsupported_rate']:.3f}"))
+        rows.append(("min support fraction", f"{report['min_support_fraction']:.2f}"))
+        failures = ", ".join(f"{k} {v}" for k, v in report["failures_by_terrain"].items()) or "none"
+        rows.append(("failures by terrain class", failures))
     for e in report.get("per_episode", []):  # a failed walk that stopped in front of an obstacle: why
         if not e["success"] and e.get("stop_reason"):
             rows.append((f"stopped, seed {e['seed']}", e["stop_reason"]))
@@ -667,6 +706,12 @@ def _episode_row(e: EpisodeSummary) -> dict[str, Any]:
         row["obstacle_contact"] = e.obstacle_contact
     if e.stop_reason is not None:
         row["stop_reason"] = e.stop_reason
+    if e.terrain_kind is not None:
+        row.update(
+            terrain_kind=e.terrain_kind,
+            unsupported_steps=e.unsupported_steps,
+            min_support_fraction=e.min_support_fraction,
+        )
     return row
 
 

@@ -44,7 +44,16 @@ class TerrainMapConfig:
         riser_margin: distance [m] kept between the sole's ends and terrain higher than the surface it stands on (a
             riser ahead of a short tread; the feet land a centimetre or two off their plan).
         surface_tolerance: a cell within this of the footprint's line supports the sole [m].
-        distance_cost: support traded per metre of foothold moved off the nominal one [1/m].
+        distance_cost: support traded per metre of foothold moved off the nominal one [1/m] (where every candidate
+            meets higher terrain).
+        rise_delay, descent_delay: the CoM's height moves up (down) to a step's level over one step duration from
+            this long [s] after the step's start.
+        landing_sink: a step down's landing is planned this far [m] below the surface.
+        descent_weight: a step down's swing gives its descent this many times its share of the single support.
+        min_slope: a footprint's fitted line steeper than this [rad] is a ramp (the foot pitched along it); a flatter
+            one is level ground.
+        support_slack: > 0: the foothold nearest the nominal one is taken among those within this of the best support
+            (0: the best of support less ``distance_cost`` times the distance).
         search_back, search_ahead: the window [m] around the nominal foothold searched.
         clearance: height [m] of the sole above the terrain it swings over.
         min_rise: a swing's apex at least this [m] above its higher end.
@@ -65,6 +74,12 @@ class TerrainMapConfig:
     riser_margin: float = 0.04
     surface_tolerance: float = 0.012
     distance_cost: float = 0.6
+    support_slack: float = 0.0
+    min_slope: float = 0.035
+    descent_weight: float = 1.0
+    landing_sink: float = 0.0
+    rise_delay: float = 0.0
+    descent_delay: float = 0.25
     search_back: float = 0.25
     search_ahead: float = 0.2
     clearance: float = 0.05
@@ -237,7 +252,9 @@ class TerrainMap:
         slope = (heights - mean[:, None]) @ centred / (centred @ centred)
         line = mean[:, None] + slope[:, None] * (offsets[None, :] - offsets.mean())
         sloped = (np.abs(heights - line) <= c.surface_tolerance).mean(axis=1)
-        use_line = sloped > flat
+        # a ramp only where the line is steeper than min_slope: on rough ground a line through the bumps would tilt
+        # the foot for nothing
+        use_line = (sloped > flat) & (np.abs(slope) > math.tan(c.min_slope))
         support = np.where(use_line, sloped, flat)
         # terrain above the surface within riser_margin of the sole (a riser ahead of a short tread) would meet it:
         # overhanging the lower side is a loss of support, standing against the higher one a collision
@@ -247,12 +264,21 @@ class TerrainMap:
             use_line[:, None], mean[:, None] + slope[:, None] * (along[None, :] - offsets.mean()), level[:, None]
         )
         blocked = np.any(near > surface + c.surface_tolerance, axis=1)
+        # the candidate nearest the nominal foothold among those (not blocked) within ``support_slack`` of the best
+        # support: a small gain in support is not worth an irregular step
         score = support - blocked - c.distance_cost * np.abs(candidates - nominal)
-        best = int(np.argmax(score))
+        free = ~blocked
+        if c.support_slack > 0.0 and free.any():
+            good = free & (support >= support[free].max() - c.support_slack)
+            best = int(np.flatnonzero(good)[np.argmin(np.abs(candidates[good] - nominal))])
+        else:
+            best = int(np.argmax(score))
         if use_line[best]:
             z = float(mean[best] + slope[best] * (0.0 - offsets.mean()))  # the line at the sole point (offset 0)
             return Foothold(float(candidates[best]), z, -math.atan(float(slope[best])), float(support[best]))
-        return Foothold(float(candidates[best]), float(level[best]), 0.0, float(support[best]))
+        # a rigid sole rests on the highest points under it: on a tread its top, on rough ground the highest bump
+        under = heights[best, int(round(c.margin / c.cell)) : self._foot - int(round(c.margin / c.cell))]
+        return Foothold(float(candidates[best]), float(under.max()), 0.0, float(support[best]))
 
     def envelope(self, lane: int, start: float, end: float) -> SwingEnvelope:
         """The height a swing of ``lane``'s sole point from x ``start`` to ``end`` [m] holds, and where: the highest

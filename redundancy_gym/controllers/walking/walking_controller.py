@@ -981,11 +981,11 @@ class WalkingController:
         # the measured DCM, c + c_dot / omega (x, y), in floats
         (com_x, com_y, _), (velocity_x, velocity_y, _) = com.tolist(), com_velocity.tolist()
         omega = self.stabilizer.omega
-        # on terrain the landings are chosen surfaces and the swings pass edges: no push-recovery step adjustment,
-        # which moves a landing and re-times its swing over flat ground
+        # on terrain the landings are chosen surfaces and the swings pass edges: push recovery, which moves a
+        # landing and re-times its swing over flat ground, acts only on a step over level ground
         adjustment = (
             None
-            if self.terrain is not None
+            if self.terrain is not None and not self.pattern.level_step(self.time)
             else self.step_adjuster.update(
                 self.pattern,
                 self.time,

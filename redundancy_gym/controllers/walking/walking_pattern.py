@@ -223,6 +223,7 @@ class WalkingPattern:
         self._terrain_shift = 0.0
         self._holds: dict[int, tuple[tuple[float, float, float], Foothold]] = {}
         self._terrain_open = 2
+        self._over_terrain: set[int] = set()  # steps whose swings pass terrain (held over it)
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -311,6 +312,10 @@ class WalkingPattern:
                 reach = previous + self.step_length + terrain.config.step_reach - shift
                 if hold.x > reach:
                     hold = terrain.place(lane, min(x - shift, reach), low, reach)
+            if stance_z - hold.z > terrain.config.height_step:
+                # a step down is planned to land a little below the surface: the foot meets the ground before its
+                # swing ends rather than after (the stance leg's compliance leaves the real foot high)
+                hold = Foothold(hold.x, hold.z - terrain.config.landing_sink, hold.pitch, hold.support)
             hold = Foothold(hold.x + shift, hold.z, hold.pitch, hold.support)
             self._holds[j] = (key, hold)
         return np.array((hold.x, y, hold.z))
@@ -355,29 +360,52 @@ class WalkingPattern:
         self._stale = True
         self._replan_from(t)
 
-    def _com_height(self, t: float, k: int) -> tuple[float, float]:
-        """The CoM's height [m] and vertical velocity [m/s] at ``t`` in step ``k``: ``com_height`` above the lower
-        of the step's stance foothold and landing, reached by a quintic (C2, at rest at both ends) over the whole step
-        from the last step's height: down before a landing below the stance foot, up while the foot that landed
-        higher carries the robot."""
-        if self._terrain is None or k < 0:
-            return self.ground + self.config.com_height, 0.0
-        height = self.config.com_height
+    def level_step(self, t: float) -> bool:
+        """Whether the step under way at ``t`` [s] swings over level ground: no terrain map, or lift-off, stance and
+        landing within the map's ``height_step`` of each other and nothing to pass between them (a step the push
+        recovery may move and re-time over flat ground; the standing start counts as level)."""
+        terrain = self._terrain
+        k = self.step_at(t)
+        if terrain is None or k < 0:
+            return True
+        self._nominal_swing(k)  # planned, so that _over_terrain knows it
+        heights = [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+        return k not in self._over_terrain and max(heights) - min(heights) <= terrain.config.height_step
 
-        crouch = self._terrain.config.crouch
+    def _com_height(self, t: float, k: int) -> tuple[float, float]:
+        """The CoM's height [m] and vertical velocity [m/s] at ``t`` in step ``k``.
+
+        Step ``i`` has a level: ``com_height`` above the lower of its stance foothold and landing (less ``crouch``
+        of a step down). The height moves from each level to the next by a quintic step (C2, at rest at both ends)
+        over one step duration, delayed from the step's start by the map's ``rise_delay`` or ``descent_delay``
+        [s]; the steps add up where they overlap. A step down is taken low; a step up is risen to while the foot
+        that landed higher takes the weight."""
+        if self._terrain is None:
+            return self.ground + self.config.com_height, 0.0
+        config = self._terrain.config
+        height = self.config.com_height
 
         def level(i: int) -> float:
             if i < 0:
                 return self.ground + height
             stance, landing = float(self.foothold(i + 1)[2]), float(self.foothold(i + 2)[2])
-            return min(stance, landing) + height - crouch * max(stance - landing, 0.0)
+            return min(stance, landing) + height - config.crouch * max(stance - landing, 0.0)
 
-        before, after = level(k - 1), level(k)
-        if before == after:
-            return after, 0.0
-        start, end = self.step_start(k), self.step_start(k + 1)
-        z, vz, _ = Quintic.from_boundary(end - start, before, after).evaluate(min(t - start, end - start))
-        return float(z), float(vz)
+        z, vz = level(k - 2), 0.0
+        for i in (k - 1, k):
+            if i < 0:
+                continue
+            change = level(i) - level(i - 1)
+            if change == 0.0:
+                continue
+            begin = self.step_start(i) + (config.rise_delay if change > 0.0 else config.descent_delay)
+            duration = self.step_start(i + 1) - self.step_start(i)
+            if t <= begin:
+                continue
+            share, rate, _ = Quintic.from_boundary(duration, 0.0, 1.0).evaluate(min(t - begin, duration))
+            z += change * float(share)
+            vz += change * float(rate)
+        return z, vz
 
     def _in_place(self, j: int, stop: int) -> NDArray[np.float64]:
         """Foothold ``j`` of a walk stopped in front of a box from foothold ``stop`` on: the feet step in place
@@ -973,11 +1001,16 @@ class WalkingPattern:
                 shift = self._terrain_shift
                 envelope = self._terrain.envelope(side, float(start[0]) - shift, float(end[0]) - shift)
                 b0, b1 = envelope.band
+                self._over_terrain.discard(k)
                 if b1 > b0:  # something to pass between lift-off and landing: held over, as over an obstacle box
+                    self._over_terrain.add(k)
                     # above both ends as planned (a foothold placed on an older map may stand above its profile)
                     top = max(envelope.top, max(float(start[2]), float(end[2])) + self._terrain.config.min_rise)
                     over = SwingModification("over", top - self.ground, 0.0, (b0 + shift, b1 + shift))
-                    self._swing_cache[k] = self._modified_swing(start, end, single, over)
+                    # a step down lands slowly: the leg's fall stopped late pushed the ZMP onto the stance toe
+                    down = float(start[2]) - float(end[2]) > self._terrain.config.height_step
+                    descent = self._terrain.config.descent_weight if down else 1.0
+                    self._swing_cache[k] = self._modified_swing(start, end, single, over, descent)
                     return self._swing_cache[k]
             self._swing_cache[k] = (
                 self._nominal_vertical(start, end, single),
@@ -986,7 +1019,12 @@ class WalkingPattern:
         return self._swing_cache[k]
 
     def _modified_swing(
-        self, start: NDArray[np.float64], end: NDArray[np.float64], single: float, modification: SwingModification
+        self,
+        start: NDArray[np.float64],
+        end: NDArray[np.float64],
+        single: float,
+        modification: SwingModification,
+        descent: float = 1.0,
     ) -> tuple[PiecewiseQuintic, PiecewiseQuintic]:
         """An SSTA swing (monograph 5.4.2): its control points at the ends of the band where it passes the box,
         raised to the box's height (``"over"``) or shifted sideways by the overlap (``"around"``); C2 throughout.
@@ -1009,7 +1047,7 @@ class WalkingPattern:
         shift = abs(modification.lateral)
         lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else shift)
         cross = b1 - b0
-        land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)
+        land = ((e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)) * descent
         total = lift + cross + land
         weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
         t1, t2, t3 = single * weights / weights.sum()
@@ -1197,12 +1235,24 @@ class WalkingPattern:
         rise, over = ADJUSTED_RISE * remaining, ADJUSTED_OVER * remaining
         top = max(float(z), self.ground + self.config.step_height)
         landing = self.foothold(k + 2)
-        vertical = PiecewiseQuintic(
-            [
-                Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
-                Quintic.from_boundary(remaining - rise, top, landing[2]),
-            ]
-        )
+        if self._terrain is None:
+            vertical = PiecewiseQuintic(
+                [
+                    Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
+                    Quintic.from_boundary(remaining - rise, top, landing[2]),
+                ]
+            )
+        else:  # over the terrain between here and the landing, held until above the landing, then down onto it
+            shift = self._terrain_shift
+            envelope = self._terrain.envelope(k % 2, float(xy[0]) - shift, float(landing[0]) - shift)
+            top = max(float(z), envelope.top, float(landing[2]) + self._terrain.config.min_rise)
+            vertical = PiecewiseQuintic(
+                [
+                    Quintic.from_boundary(rise, z, top, vz, 0.0, az, 0.0),
+                    Quintic.from_boundary(over - rise, top, top),
+                    Quintic.from_boundary(remaining - over, top, landing[2]),
+                ]
+            )
         horizontal = PiecewiseQuintic(
             [
                 Quintic.from_boundary(over, xy, landing[:2], vxy, 0.0, axy, 0.0),
