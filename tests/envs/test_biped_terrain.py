@@ -170,3 +170,18 @@ def test_it_is_a_biped_walk_env_with_the_scan_after_its_entries() -> None:
     layout = env.unwrapped.OBSERVATION_LAYOUT
     assert layout["height_scan"] == slice(81, 81 + 6 * 3)
     assert env.observation_space.shape == (81 + 18,)
+
+
+def test_a_landing_is_measured_when_the_foot_carries_weight_and_a_scuff_is_no_landing() -> None:
+    env = BipedTerrainEnv(terrain="platform", first_segment_distance=3.0)
+    env.reset(seed=0)
+    half = 0.5 * env._weight
+    # the right foot swings (no force for 0.1 s), catches an edge for two periods, lifts, then lands and loads
+    for right in [0.0] * 25 + [30.0, 30.0] + [0.0] * 25 + [40.0, 0.5 * half, 1.2 * half]:
+        env._track_touchdowns(np.array([right, 2.0 * half]))
+    assert env._scuffs == 1 and env._touchdowns == 1
+    assert env._last[0] == 1.0  # the standing sole on flat ground: fully supported
+    # a contact after a flicker of less than 50 ms off the ground is the same stance, not a new landing
+    env._track_touchdowns(np.array([0.0, 2.0 * half]))
+    env._track_touchdowns(np.array([1.2 * half, 2.0 * half]))
+    assert env._touchdowns == 1

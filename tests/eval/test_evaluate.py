@@ -160,3 +160,44 @@ def test_a_policys_stop_reason_is_kept_per_episode_and_printed_for_a_failed_epis
     assert "stop_reason" not in data["per_episode"][1]
     lines = [line.split(None, 3) for line in format_report(data).splitlines() if line.startswith("stopped")]
     assert lines == [["stopped,", "seed", "0", Stopping.stop_reason]]
+
+
+def test_terrain_metrics_count_failures_by_the_last_class_reached() -> None:
+    import numpy as np
+
+    from redundancy_gym.eval.evaluate import EpisodeSummary, EvalReport
+
+    def episode(seed: int, success: bool, kind: str, unsupported: int, support: float) -> EpisodeSummary:
+        return EpisodeSummary(
+            seed,
+            100,
+            1.0,
+            success,
+            False,
+            0.0,
+            0.0,
+            1.0,
+            1.0,
+            terrain_kind=kind,
+            unsupported_steps=unsupported,
+            min_support_fraction=support,
+            fell=not success,
+            forward_speed=0.4,
+        )
+
+    summaries = [
+        episode(0, True, "stairs", 0, 0.9),
+        episode(1, False, "stairs", 1, 0.3),
+        episode(2, False, "rough", 0, 0.8),
+        episode(3, False, "stairs", 0, 0.7),
+    ]
+    data = EvalReport("redundancy_gym/BipedTerrain-v0", "walking", 4, 0, {}, summaries, np.ones(4)).to_json()
+    assert data["failures_by_terrain"] == {"rough": 1, "stairs": 2}
+    assert data["unsupported_rate"] == 0.25 and data["min_support_fraction"] == 0.3
+    assert data["per_episode"][1]["terrain_kind"] == "stairs" and data["per_episode"][1]["unsupported_steps"] == 1
+    rows = {line[:37].strip(): line[37:].strip() for line in format_report(data).splitlines()}
+    assert rows["failures by terrain class"] == "rough 1, stairs 2" and rows["min support fraction"] == "0.30"
+    plain = EvalReport(
+        ENV_ID, "zero", 1, 0, {}, [EpisodeSummary(0, 1, 0.0, False, False, 0.0, 0.0, 1.0, 1.0)], np.ones(1)
+    )
+    assert "failures_by_terrain" not in plain.to_json()

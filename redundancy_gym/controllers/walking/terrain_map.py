@@ -157,7 +157,8 @@ class TerrainMap:
         n = int(round(self.config.length / self.config.cell)) + 1
         self._heights = np.full((2, n), np.nan)
         self._filled: list[NDArray[np.float64] | None] = [None, None]
-        self.version = 0  # counts the observations that changed a profile
+        self.version = 0  # counts the observations
+        self._column_cache: tuple[bytes, list[tuple[float, NDArray[np.int64]]]] | None = None
         c = self.config
         self._foot = int(round((c.heel + c.toe + 2.0 * c.margin) / c.cell)) + 1  # cells under a footprint
         offsets = np.arange(self._foot) * c.cell - (c.heel + c.margin)
@@ -175,7 +176,7 @@ class TerrainMap:
         scan: NDArray[np.float64],
         offsets: NDArray[np.float64],
     ) -> bool:
-        """Write a height scan into the lanes' profiles; returns whether a profile changed.
+        """Write a height scan into the lanes' profiles (returns True: they are written every time).
 
         Args:
             base: the pelvis's x, y, z [m] and yaw [rad] when the scan was taken.
@@ -183,26 +184,30 @@ class TerrainMap:
             offsets: the scan points (forward, left) [m] in the pelvis's heading frame (N, 2).
         """
         x, y, z, yaw = base
+        columns = self._columns(offsets)
         c, s = math.cos(yaw), math.sin(yaw)
-        world_x = x + c * offsets[:, 0] - s * offsets[:, 1]
-        world_y = y + s * offsets[:, 0] + c * offsets[:, 1]
-        heights = np.asarray(scan, dtype=np.float64) + z
-        changed = False
+        cell, x_min, n = self.config.cell, self.config.x_min, self._heights.shape[1]
         for lane, lane_y in enumerate(self.lanes):
-            # the points of the scan column nearest to the lane (one column: the scan is a grid)
-            gap = np.abs(world_y - lane_y)
-            column = np.abs(offsets[:, 1] - offsets[int(np.argmin(gap)), 1]) < 1e-9
-            cells = np.rint((world_x[column] - self.config.x_min) / self.config.cell).astype(np.int64)
-            keep = (cells >= 0) & (cells < self._heights.shape[1])
-            cells, values = cells[keep], heights[column][keep]
-            old = self._heights[lane, cells]
-            if not np.array_equal(old, values):
-                self._heights[lane, cells] = values
-                self._filled[lane] = None
-                changed = True
-        if changed:
-            self.version += 1
-        return changed
+            # the scan column nearest to the lane: its points write the lane's cells
+            column_y, index = min(columns, key=lambda col: abs(y + c * col[0] - lane_y))
+            forward = offsets[index, 0]
+            cells = np.rint((x + c * forward - s * column_y - x_min) / cell).astype(np.int64)
+            keep = (cells >= 0) & (cells < n)
+            self._heights[lane, cells[keep]] = scan[index][keep] + z
+            self._filled[lane] = None
+        self.version += 1
+        return True
+
+    def _columns(self, offsets: NDArray[np.float64]) -> list[tuple[float, NDArray[np.int64]]]:
+        """The scan's columns: each one's lateral offset [m] and the indices of its points (made once per scan
+        layout)."""
+        key = offsets.tobytes()
+        cached = self._column_cache
+        if cached is None or cached[0] != key:
+            ys = np.unique(np.round(offsets[:, 1], 9))
+            columns = [(float(v), np.flatnonzero(np.abs(offsets[:, 1] - v) < 1e-9)) for v in ys]
+            cached = self._column_cache = (key, columns)
+        return cached[1]
 
     def profile(self, lane: int) -> NDArray[np.float64]:
         """The lane's heights [m] per cell, cells not seen yet filled from the nearest seen one (0 without any)."""
@@ -276,14 +281,18 @@ class TerrainMap:
         if use_line[best]:
             z = float(mean[best] + slope[best] * (0.0 - offsets.mean()))  # the line at the sole point (offset 0)
             return Foothold(float(candidates[best]), z, -math.atan(float(slope[best])), float(support[best]))
-        # a rigid sole rests on the highest points under it: on a tread its top, on rough ground the highest bump
+        # a rigid sole rests on the highest points under it: a step within it (a tread's top above the ground its
+        # heel overhangs) is a surface; bumps lower than height_step are below what the scan resolves under a sole
+        # 15 cm wide (it samples the lane's centre line): the level is the footprint's median there
         under = heights[best, int(round(c.margin / c.cell)) : self._foot - int(round(c.margin / c.cell))]
-        return Foothold(float(candidates[best]), float(under.max()), 0.0, float(support[best]))
+        z = float(under.max()) if float(under.max()) - float(level[best]) > c.height_step else float(level[best])
+        return Foothold(float(candidates[best]), z, 0.0, float(support[best]))
 
     def envelope(self, lane: int, start: float, end: float) -> SwingEnvelope:
         """The height a swing of ``lane``'s sole point from x ``start`` to ``end`` [m] holds, and where: the highest
         cell under the sole's length on the way (the sole's ends past the lift-off and landing footprints left out)
-        plus ``clearance``; the band is where that envelope stands above the lower end's surface."""
+        plus ``clearance``; the band is where that envelope stands more than ``height_step`` above the lower end's
+        surface (lower bumps are passed by the nominal swing's height)."""
         c = self.config
         a, b = min(start, end), max(start, end)
         xs = np.arange(a, b + 0.5 * c.cell, c.cell)
@@ -292,6 +301,6 @@ class TerrainMap:
         highest = profile[under.astype(np.int64).clip(0, profile.size - 1)].max(axis=1)
         top = float(highest.max()) + c.clearance
         ends = self.heights_at(lane, np.array([start, end]))
-        above = np.flatnonzero(highest > float(ends.min()) + 0.5 * c.clearance)
+        above = np.flatnonzero(highest > float(ends.min()) + c.height_step)
         band = (float(xs[above[0]]), float(xs[above[-1]])) if above.size else (a, a)
         return SwingEnvelope(max(top, float(ends.max()) + c.min_rise), band)

@@ -224,6 +224,7 @@ class WalkingPattern:
         self._holds: dict[int, tuple[tuple[float, float, float], Foothold]] = {}
         self._terrain_open = 2
         self._over_terrain: set[int] = set()  # steps whose swings pass terrain (held over it)
+        self._height_steps: dict[float, Quintic] = {}  # the CoM height's unit step per duration [s]
         # toes down early in the swing, flat again well before touchdown: the trailing foot leaves the ground
         # without the ankle bending past its dorsiflexion limit
         peak, flat = config.swing_pitch_peak * self._single, config.swing_pitch_flat * self._single
@@ -293,10 +294,15 @@ class WalkingPattern:
         of the foothold before it, where the sole rests best on one plane (:meth:`TerrainMap.place`)."""
         terrain = self._terrain
         assert terrain is not None
+        cached = self._holds.get(j)
+        if cached is not None and j < self._terrain_open:
+            # placed when its swing began (kept without looking back at the footholds before it: this runs many
+            # times a period); a step adjustment (push recovery) moves it with the nominal foothold
+            hold = cached[1]
+            return np.array((hold.x + (x - cached[0][0]), y, hold.z))
         previous = float(self.foothold(j - 1)[0])
         key = (x, y, previous)
-        cached = self._holds.get(j)
-        if cached is not None and (j < self._terrain_open or cached[0] == key):
+        if cached is not None and cached[0] == key:
             hold = cached[1]
         else:
             shift = self._terrain_shift
@@ -402,7 +408,10 @@ class WalkingPattern:
             duration = self.step_start(i + 1) - self.step_start(i)
             if t <= begin:
                 continue
-            share, rate, _ = Quintic.from_boundary(duration, 0.0, 1.0).evaluate(min(t - begin, duration))
+            step = self._height_steps.get(duration)
+            if step is None:  # one unit step per step duration, made once
+                step = self._height_steps[duration] = Quintic.from_boundary(duration, 0.0, 1.0)
+            share, rate, _ = step.evaluate(min(t - begin, duration))
             z += change * float(share)
             vz += change * float(rate)
         return z, vz

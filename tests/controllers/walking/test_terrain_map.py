@@ -125,3 +125,18 @@ def test_the_com_height_plan_is_continuous_over_steps_up_and_down() -> None:
         for side in (0, 1):
             if s.contact[side]:
                 assert s.feet[side, 2] == pytest.approx(float(terrain.heights(s.feet[side, :2])), abs=1e-9)
+
+
+def test_a_push_recovery_shift_moves_a_landing_placed_on_the_map() -> None:
+    terrain_map = _mapped(_boxes((3.0, 3.5, 0.1)), until=2.0)
+    pattern = WalkingPattern(GaitConfig(), (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+    pattern.set_terrain(0.0, terrain_map, 0.0)
+    t = pattern.step_start(2) + 0.1  # step 2 swings foothold 2 to foothold 4
+    pattern.set_terrain(t, terrain_map, 0.0)
+    landing = pattern.foothold(4).copy()
+    assert pattern.level_step(t)  # flat ground: push recovery may move it
+    pattern.adjust_step(t, (0.05, -0.02), pattern.single_support)
+    np.testing.assert_allclose(pattern.foothold(4), landing + (0.05, -0.02, 0.0), atol=1e-12)
+    # a step onto the block is not level: no push recovery there
+    k = next(k for k in range(2, 12) if pattern.foothold(k + 2)[2] > 0.05)
+    assert not pattern.level_step(pattern.step_start(k) + 0.1)
