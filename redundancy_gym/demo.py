@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -14,6 +15,7 @@ from .eval.speed_error import plot_speed_error, speed_error_markdown
 from .eval.video import record_episode
 from .studies.obstacle_plots import plot_footholds_top_view, plot_swing_trajectories, record_obstacle_walk
 from .studies.point_to_point import FIG_5_10, plot_point_to_point, rollout_point_to_point
+from .studies.terrain_plots import plot_terrain_walk, record_terrain_walk
 from .studies.walking_plots import plot_angular_momentum, plot_com_zmp, record_walk
 
 __all__ = ["run_demo"]
@@ -22,6 +24,7 @@ _PLANAR = "redundancy_gym/PlanarReach-v0"
 _AGRI = "redundancy_gym/AgriReach-v0"
 _BIPED = "redundancy_gym/BipedWalk-v0"
 _OBSTACLES = "redundancy_gym/BipedObstacles-v0"
+_TERRAIN = "redundancy_gym/BipedTerrain-v0"
 # time limit of the demo's BipedObstacles episodes [control steps of 4 ms]: 10 s, where the beam and the triangle
 # course take 6.2 s (0.4 s start, course_end 2.32 m at 0.4 m/s); an episode with an obstacle contact does not end at
 # the course's end but at the time limit, which the registration sets for the longest random course (45 s)
@@ -89,6 +92,7 @@ def run_demo(
     written.extend(_agri(out, episodes=episodes, seed=seed, progress=progress, workers=workers))
     written.extend(_biped(out, episodes=min(episodes, 10), seed=seed, progress=progress, workers=workers))
     written.extend(_biped_obstacles(out, episodes=min(episodes, 5), seed=seed, progress=progress, workers=workers))
+    written.extend(_biped_terrain(out, seed=seed, progress=progress))
     written.extend(_predictive(out, seed=seed))
     written.extend(_ikd_study(out, progress=progress))
     for path in written:
@@ -234,6 +238,43 @@ def _biped_obstacles(out: Path, *, episodes: int, seed: int, progress: bool, wor
             progress=progress,
         )
         written.append(path)
+    return written
+
+
+DEMO_TERRAINS: dict[str, dict[str, Any]] = {
+    "stairs": {
+        "segments": [{"kind": "stairs", "steps": 4, "rise": 0.12, "tread": 0.3, "landing": 0.8}],
+        "first_segment_distance": 1.0,
+    },
+    "stepping_stones": {"terrain": "stepping_stones"},
+}
+"""The terrains of ``make demo``'s BipedTerrain figures: four 12 cm steps up and down, and a seeded stepping-stone
+field."""
+
+
+def _biped_terrain(out: Path, *, seed: int, progress: bool) -> list[Path]:
+    """The walking reference on BipedTerrain: a side view of a staircase and of stepping stones (terrain, planned
+    and measured feet and CoM, ZMP over time), and a video of the stairs at 25 fps. About 40 s."""
+    written = []
+    for name, env_kwargs in DEMO_TERRAINS.items():
+        trace = record_terrain_walk(env_kwargs, seed)
+        written.append(
+            plot_terrain_walk(
+                trace,
+                out / f"biped_terrain_{name}.png",
+                f"BipedTerrain-v0, {name.replace('_', ' ')} (seed {seed}): the walking reference from the side",
+            )
+        )
+    path, _ = record_episode(
+        _TERRAIN,
+        "walking",
+        out / "biped_terrain_stairs.mp4",
+        seed=seed,
+        env_kwargs=DEMO_TERRAINS["stairs"],
+        max_fps=_OBSTACLE_VIDEO_FPS,
+        progress=progress,
+    )
+    written.append(path)
     return written
 
 

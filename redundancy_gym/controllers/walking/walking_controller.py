@@ -432,6 +432,13 @@ class WalkingController:
             self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])))
         return self.terrain.observe(base, np.asarray(scan, dtype=np.float64), np.asarray(offsets, dtype=np.float64))
 
+    @property
+    def world_to_plan(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The rigid map ``(R, t)`` from the world to the plan's frame (``plan = R world + t``): the measured stance
+        sole put on its planned pose (:meth:`_in_stance_frame`); identity before the first measurement."""
+        rotation, translation = self._world_to_plan
+        return rotation.copy(), translation.copy()
+
     def _support_height(self, sample: PatternSample) -> float:
         """The ground height [m] the ZMP is measured on: the planned height of the feet on the ground (their mean in
         double support); the pattern's ground without a terrain map."""
