@@ -306,6 +306,10 @@ class WalkingPattern:
             hold = cached[1]
         else:
             shift = self._terrain_shift
+            # the nominal step from the foothold before, as placed: an absolute schedule would make up for a short
+            # step with a long one (a stone skipped, the next 0.6 m on)
+            before = self._holds.get(j - 1)
+            x = previous + (x - (before[0][0] if before is not None else previous)) if j >= 3 else x
             behind = float(self.foothold(j - 2)[0]) if j >= 2 else previous
             # ahead of the foot's own last foothold and of the other foot less a little, within a step's reach
             low = max(previous - 0.1, behind + 0.05) - shift
