@@ -978,9 +978,10 @@ class WalkingController:
             self._map_obstacles(force=self.pattern.resumable(self.time))
             if self._next is None:
                 start = self.pattern.sample(self.time)
-        if self.terrain is not None and start.step != self._terrain_planned:
+        if self.terrain is not None and start.step != self._terrain_planned and not self.pattern.turned:
             # once a step, the footholds not yet begun are placed on the terrain as the map knows it then, in the
-            # plan's frame: the world's shifted by the real stance foot's drift
+            # plan's frame: the world's shifted by the real stance foot's drift (terrain planning is for straight
+            # walks, as SSTA's: a walk turned by a yaw-rate command plans over flat ground)
             self._terrain_planned = start.step
             self.pattern.set_terrain(self.time, self.terrain, float(self._world_to_plan[1][0]))
             self._next = None

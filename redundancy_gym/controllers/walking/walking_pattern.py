@@ -333,7 +333,7 @@ class WalkingPattern:
     def foothold_pitch(self, j: int) -> float:
         """Pitch [rad] of the sole on foothold ``j`` (positive: toes down): along the terrain's surface there, 0 on
         flat ground or without a terrain map."""
-        if self._terrain is None or j < 2:
+        if self._terrain is None or j < 2 or self._turned:  # a turned walk plans over flat ground
             return 0.0
         self.foothold(j)  # placed, if not yet
         cached = self._holds.get(j)
@@ -376,7 +376,7 @@ class WalkingPattern:
         recovery may move and re-time over flat ground; the standing start counts as level)."""
         terrain = self._terrain
         k = self.step_at(t)
-        if terrain is None or k < 0:
+        if terrain is None or k < 0 or self._turned:
             return True
         self._nominal_swing(k)  # planned, so that _over_terrain knows it
         heights = [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
@@ -1009,7 +1009,7 @@ class WalkingPattern:
                     return self._swing_cache[k]
                 self._modifications.pop(k, None)
             single = self.step_single(k)
-            if self._terrain is not None:
+            if self._terrain is not None and not self._turned:
                 side = RIGHT if k % 2 == 0 else LEFT
                 shift = self._terrain_shift
                 envelope = self._terrain.envelope(side, float(start[0]) - shift, float(end[0]) - shift)
