@@ -188,7 +188,7 @@ def alternating_rounds(
 def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 << 20) -> Sampler:
     """A sampler of ``fn``'s time per call [s]: each sample times (:func:`timed_call`) a fixed number of calls
     lasting at least ``min_time`` [s]. The number is found on the first sample (which is therefore slower: run it in a
-    warm-up round) by doubling from one call, at most ``max_calls``.
+    warm-up round) by growing from one call, at most ``max_calls``, until two runs in a row last ``min_time``.
 
     Raises:
         BenchError: ``min_time`` not finite and > 0, or ``max_calls < 1``.
@@ -214,7 +214,11 @@ def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 <<
             while True:
                 elapsed = run(count)
                 if elapsed >= min_time or count >= max_calls:
-                    break
+                    # a second run decides: a first one slowed by the machine (an interrupt, another process) left
+                    # the count short, and later samples lasted less than min_time
+                    elapsed = run(count)
+                    if elapsed >= min_time or count >= max_calls:
+                        break
                 grow = 2 if elapsed <= 0.0 else max(2, min(16, int(min_time / elapsed) + 1))
                 count = min(max_calls, count * grow)
             number = count
