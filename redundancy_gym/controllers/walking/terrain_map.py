@@ -48,21 +48,14 @@ class TerrainMapConfig:
             meets higher terrain).
         rise_delay, descent_delay: the CoM's height moves up (down) to a step's level over one step duration from
             this long [s] after the step's start.
-        landing_sink: a step down's landing is planned this far [m] below the surface.
-        descent_weight: a step down's swing gives its descent this many times its share of the single support.
         min_slope: a footprint's fitted line steeper than this [rad] is a ramp (the foot pitched along it); a flatter
             one is level ground.
-        support_slack: > 0: the foothold nearest the nominal one is taken among those within this of the best support
-            (0: the best of support less ``distance_cost`` times the distance).
         search_back, search_ahead: the window [m] around the nominal foothold searched.
         clearance: height [m] of the sole above the terrain it swings over.
         min_rise: a swing's apex at least this [m] above its higher end.
         height_step: a landing more than this [m] above or below the stance foothold is a step up or down.
         step_reach: a step up or down reaches at most this [m] beyond the nominal step length (a longer one would
             stretch the leg past its length: the landing moves before the edge and the next step takes the height).
-        height_step_time: single-support duration of a step up or down, in nominal single supports.
-        crouch: share of a step down's height by which the CoM goes lower than ``com_height`` above the landing
-            while it is taken (the stance leg bends, the swing leg reaches the lower ground).
     """
 
     cell: float = 0.01
@@ -74,10 +67,7 @@ class TerrainMapConfig:
     riser_margin: float = 0.04
     surface_tolerance: float = 0.012
     distance_cost: float = 0.6
-    support_slack: float = 0.0
     min_slope: float = 0.035
-    descent_weight: float = 1.0
-    landing_sink: float = 0.0
     rise_delay: float = 0.0
     descent_delay: float = 0.25
     search_back: float = 0.25
@@ -86,8 +76,6 @@ class TerrainMapConfig:
     min_rise: float = 0.05
     height_step: float = 0.03
     step_reach: float = 0.03
-    crouch: float = 0.0
-    height_step_time: float = 1.0
 
     def __post_init__(self) -> None:
         for name in (
@@ -98,7 +86,6 @@ class TerrainMapConfig:
             "surface_tolerance",
             "search_back",
             "search_ahead",
-            "height_step_time",
         ):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0.0):
@@ -111,7 +98,6 @@ class TerrainMapConfig:
             "min_rise",
             "height_step",
             "step_reach",
-            "crouch",
         ):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):
@@ -175,8 +161,8 @@ class TerrainMap:
         base: tuple[float, float, float, float],
         scan: NDArray[np.float64],
         offsets: NDArray[np.float64],
-    ) -> bool:
-        """Write a height scan into the lanes' profiles (returns True: they are written every time).
+    ) -> None:
+        """Write a height scan into the lanes' profiles.
 
         Args:
             base: the pelvis's x, y, z [m] and yaw [rad] when the scan was taken.
@@ -196,7 +182,6 @@ class TerrainMap:
             self._heights[lane, cells[keep]] = scan[index][keep] + z
             self._filled[lane] = None
         self.version += 1
-        return True
 
     def _columns(self, offsets: NDArray[np.float64]) -> list[tuple[float, NDArray[np.int64]]]:
         """The scan's columns: each one's lateral offset [m] and the indices of its points (made once per scan
@@ -269,15 +254,7 @@ class TerrainMap:
             use_line[:, None], mean[:, None] + slope[:, None] * (along[None, :] - offsets.mean()), level[:, None]
         )
         blocked = np.any(near > surface + c.surface_tolerance, axis=1)
-        # the candidate nearest the nominal foothold among those (not blocked) within ``support_slack`` of the best
-        # support: a small gain in support is not worth an irregular step
-        score = support - blocked - c.distance_cost * np.abs(candidates - nominal)
-        free = ~blocked
-        if c.support_slack > 0.0 and free.any():
-            good = free & (support >= support[free].max() - c.support_slack)
-            best = int(np.flatnonzero(good)[np.argmin(np.abs(candidates[good] - nominal))])
-        else:
-            best = int(np.argmax(score))
+        best = int(np.argmax(support - blocked - c.distance_cost * np.abs(candidates - nominal)))
         if use_line[best]:
             z = float(mean[best] + slope[best] * (0.0 - offsets.mean()))  # the line at the sole point (offset 0)
             return Foothold(float(candidates[best]), z, -math.atan(float(slope[best])), float(support[best]))

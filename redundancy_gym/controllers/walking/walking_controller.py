@@ -419,18 +419,17 @@ class WalkingController:
         self.terrain: TerrainMap | None = None
         self._terrain_planned = -2  # the step of the last terrain planning
 
-    def observe_terrain(self, base: tuple[float, float, float, float], scan: ArrayLike, offsets: ArrayLike) -> bool:
+    def observe_terrain(self, base: tuple[float, float, float, float], scan: ArrayLike, offsets: ArrayLike) -> None:
         """Add a height scan to the terrain map (:class:`TerrainMap`, made at the first scan of a walk, its lanes
         the starting feet's): the pelvis's world x, y, z [m] and yaw [rad] when it was taken, terrain minus pelvis
         heights [m] (N,) and the scan points' offsets (forward, left) [m] in the pelvis's heading frame (N, 2).
-        The footholds not yet begun are placed on the map once a step (:meth:`WalkingPattern.set_terrain`).
-        Returns whether the map changed."""
+        The footholds not yet begun are placed on the map once a step (:meth:`WalkingPattern.set_terrain`)."""
         if self.pattern is None:
             raise ControllerError("call WalkingController.start(q, speed) before observe_terrain()")
         if self.terrain is None:
             feet = self.pattern.foothold(0), self.pattern.foothold(1)
             self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])))
-        return self.terrain.observe(base, np.asarray(scan, dtype=np.float64), np.asarray(offsets, dtype=np.float64))
+        self.terrain.observe(base, np.asarray(scan, dtype=np.float64), np.asarray(offsets, dtype=np.float64))
 
     @property
     def world_to_plan(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -322,10 +322,6 @@ class WalkingPattern:
                 reach = previous + self.step_length + terrain.config.step_reach - shift
                 if hold.x > reach:
                     hold = terrain.place(lane, min(x - shift, reach), low, reach)
-            if stance_z - hold.z > terrain.config.height_step:
-                # a step down is planned to land a little below the surface: the foot meets the ground before its
-                # swing ends rather than after (the stance leg's compliance leaves the real foot high)
-                hold = Foothold(hold.x, hold.z - terrain.config.landing_sink, hold.pitch, hold.support)
             hold = Foothold(hold.x + shift, hold.z, hold.pitch, hold.support)
             self._holds[j] = (key, hold)
         return np.array((hold.x, y, hold.z))
@@ -356,15 +352,6 @@ class WalkingPattern:
         self._terrain_open = k + 3 if k >= 0 else 2
         # the footholds not yet begun are placed again on the map as it is now
         self._holds = {j: v for j, v in self._holds.items() if j < self._terrain_open}
-        # steps up and down not yet begun take their own single-support time
-        scale = terrain.config.height_step_time
-        if scale != 1.0:
-            for i in range(max(k + 1, 0), k + 2 + self.config.preview_steps):
-                dz = float(self.foothold(i + 2)[2]) - float(self.foothold(i + 1)[2])
-                if abs(dz) > terrain.config.height_step:
-                    self._singles[i] = scale * self._single
-                else:
-                    self._singles.pop(i, None)
         kept = k if k >= 0 and t - self.step_start(k) > 0.01 * self.step_single(k) else k - 1
         self._swing_cache = {i: v for i, v in self._swing_cache.items() if i <= kept}
         self._stale = True
@@ -385,11 +372,11 @@ class WalkingPattern:
     def _com_height(self, t: float, k: int) -> tuple[float, float]:
         """The CoM's height [m] and vertical velocity [m/s] at ``t`` in step ``k``.
 
-        Step ``i`` has a level: ``com_height`` above the lower of its stance foothold and landing (less ``crouch``
-        of a step down). The height moves from each level to the next by a quintic step (C2, at rest at both ends)
-        over one step duration, delayed from the step's start by the map's ``rise_delay`` or ``descent_delay``
-        [s]; the steps add up where they overlap. A step down is taken low; a step up is risen to while the foot
-        that landed higher takes the weight."""
+        Step ``i`` has a level: ``com_height`` above the lower of its stance foothold and landing. The height moves
+        from each level to the next by a quintic step (C2, at rest at both ends) over one step duration, delayed
+        from the step's start by the map's ``rise_delay`` or ``descent_delay`` [s]; the steps add up where they
+        overlap. A step down is taken low; a step up is risen to while the foot that landed higher takes the
+        weight."""
         if self._terrain is None:
             return self.ground + self.config.com_height, 0.0
         config = self._terrain.config
@@ -399,7 +386,7 @@ class WalkingPattern:
             if i < 0:
                 return self.ground + height
             stance, landing = float(self.foothold(i + 1)[2]), float(self.foothold(i + 2)[2])
-            return min(stance, landing) + height - config.crouch * max(stance - landing, 0.0)
+            return min(stance, landing) + height
 
         z, vz = level(k - 2), 0.0
         for i in (k - 1, k):
@@ -1020,10 +1007,7 @@ class WalkingPattern:
                     # above both ends as planned (a foothold placed on an older map may stand above its profile)
                     top = max(envelope.top, max(float(start[2]), float(end[2])) + self._terrain.config.min_rise)
                     over = SwingModification("over", top - self.ground, 0.0, (b0 + shift, b1 + shift))
-                    # a step down lands slowly: the leg's fall stopped late pushed the ZMP onto the stance toe
-                    down = float(start[2]) - float(end[2]) > self._terrain.config.height_step
-                    descent = self._terrain.config.descent_weight if down else 1.0
-                    self._swing_cache[k] = self._modified_swing(start, end, single, over, descent)
+                    self._swing_cache[k] = self._modified_swing(start, end, single, over)
                     return self._swing_cache[k]
             self._swing_cache[k] = (
                 self._nominal_vertical(start, end, single),
@@ -1037,7 +1021,6 @@ class WalkingPattern:
         end: NDArray[np.float64],
         single: float,
         modification: SwingModification,
-        descent: float = 1.0,
     ) -> tuple[PiecewiseQuintic, PiecewiseQuintic]:
         """An SSTA swing (monograph 5.4.2): its control points at the ends of the band where it passes the box,
         raised to the box's height (``"over"``) or shifted sideways by the overlap (``"around"``); C2 throughout.
@@ -1060,7 +1043,7 @@ class WalkingPattern:
         shift = abs(modification.lateral)
         lift = (b0 - a) + (top - float(start[2]) if modification.kind == "over" else shift)
         cross = b1 - b0
-        land = ((e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)) * descent
+        land = (e - b1) + (top - float(end[2]) if modification.kind == "over" else shift)
         total = lift + cross + land
         weights = np.array([lift, cross, land]) + 0.25 * total + 1e-9
         t1, t2, t3 = single * weights / weights.sum()
