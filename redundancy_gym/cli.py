@@ -319,7 +319,8 @@ def _parser() -> argparse.ArgumentParser:
         "--envs",
         nargs="+",
         metavar="ENV",
-        help="learned, robustness: planar_reach, agri_reach, biped_walk, biped_obstacles (default: all)",
+        help="learned: planar_reach, agri_reach, biped_walk, biped_obstacles, biped_terrain; robustness: the first "
+        "four (default: all); the other envs' sections of an existing --json of the same seed and episodes are kept",
     )
 
     ba = _add_parser(

@@ -21,6 +21,7 @@ _WRAPPED: tuple[tuple[str, str, str], ...] = tuple(
         ("PlanarReach", ("TaskSpace", "Nullspace", "Residual")),
         ("AgriReach", ("TaskSpace", "Nullspace", "Residual")),
         ("BipedWalk", ("Residual", "WalkingCommand")),
+        ("BipedTerrain", ("Residual", "WalkingCommand")),
     )
     for suffix in wrappers
     for wrapper in (

@@ -9,7 +9,8 @@ order and reversed every other round), so that a slow moment of the machine hits
 ``steps_per_second`` is the median over the rounds; a ratio ``<ours>_vs_<peer>`` is the median over the rounds of
 the two rates measured in the same round (``ratio_rounds``: its median, min, max and spread ``(max - min) /
 median``). ``agri_vs_pusher`` is AgriReach-v0 over Pusher-v5, ``biped_vs_humanoid`` BipedWalk-v0 over
-Humanoid-v5 and ``biped_obstacles_vs_humanoid`` BipedObstacles-v0 (a random course per reset) over Humanoid-v5
+Humanoid-v5, ``biped_obstacles_vs_humanoid`` BipedObstacles-v0 (a random course per reset) and
+``biped_terrain_vs_humanoid`` BipedTerrain-v0 (random terrain, its height scan in every observation) over Humanoid-v5
 (per env step; ``sim_seconds_per_second`` also compares simulated time, since the two step
 different periods: 4 ms and 15 ms). Variants of our envs (by default
 AgriReach with ``prune=False``, the whole crop row in the scene and the collision model) are measured in the same
@@ -68,6 +69,7 @@ _SHORT = {
     "redundancy_gym/AgriReach-v0": "agri",
     "redundancy_gym/BipedWalk-v0": "biped",
     "redundancy_gym/BipedObstacles-v0": "biped_obstacles",
+    "redundancy_gym/BipedTerrain-v0": "biped_terrain",
     "Pusher-v5": "pusher",
     "Ant-v5": "ant",
     "Humanoid-v5": "humanoid",

@@ -114,6 +114,20 @@ LEARNED_SETTINGS: tuple[LearnedSetting, ...] = (
         rate="fall_rate",
         extra=(("obstacle_contact_rate", "obstacle contact rate", 1.0), ("forward_speed", "forward speed [m/s]", 1.0)),
     ),
+    LearnedSetting(
+        "biped_terrain",
+        "BipedTerrain-v0, stairs",
+        "redundancy_gym/BipedTerrain-v0",
+        {"terrain": "stairs"},
+        {"walking": ("walking", {})},
+        ("speed",),
+        rate="fall_rate",
+        extra=(
+            ("unsupported_rate", "unsupported touchdown rate", 1.0),
+            ("min_support_fraction", "min support fraction", 1.0),
+            ("forward_speed", "forward speed [m/s]", 1.0),
+        ),
+    ),
 )
 """The table's envs, in its order."""
 

@@ -7,6 +7,7 @@ choices, its help and its option checks from the rows.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -149,7 +150,10 @@ def _write_table(
     plot: Callable[..., list[Path]],
 ) -> None:
     """Print a table's markdown; write its JSON (``--json``), the markdown beside it (``.md``, under ``title``) and
-    its figures (``<stem>_<env>.png``)."""
+    its figures (``<stem>_<env>.png``). With ``--envs``, the other envs' sections of an existing JSON of the same seed
+    and episodes are kept (a table updated env by env)."""
+    if a.envs is not None:
+        table = _merged(table, a.json_path)
     text = markdown(table)
     print(text)
     path = write_json(table, a.json_path)
@@ -159,6 +163,20 @@ def _write_table(
     _wrote(md)
     for written in plot(table, path.parent, prefix=path.stem + "_"):
         _wrote(written)
+
+
+def _merged(table: dict[str, Any], path: str) -> dict[str, Any]:
+    """``table`` with the sections of the envs it lacks taken from the JSON at ``path``, in that file's order, when
+    the file holds a table of the same seed and episodes; ``table`` itself otherwise."""
+    try:
+        old = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return table
+    if not isinstance(old, dict) or (old.get("seed"), old.get("episodes")) != (table["seed"], table["episodes"]):
+        return table
+    envs = {key: table["envs"].get(key, section) for key, section in old.get("envs", {}).items()}
+    envs.update({key: section for key, section in table["envs"].items() if key not in envs})
+    return {**table, "envs": envs}
 
 
 def _learned(a: BenchArgs) -> int:

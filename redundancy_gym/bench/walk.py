@@ -39,6 +39,11 @@ walks, per controller.
 0.4 m/s, walked to the end of the course): with SSTA's planning (at the start and once a step) and RCA's swing-leg
 distances and (5.80) while an obstacle is within its gate. ``obstacles_vs_lola_cycle`` relates its median to the
 2 ms cycle in which Lola ran its whole controller with collision avoidance (a Xeon at 2.3 GHz; published).
+
+``terrain``: the same controller step on BipedTerrain-v0 (:data:`TERRAIN_COURSES`: stairs of 15 cm rises and 30 cm
+treads, a platform; 0.4 m/s, walked to the end): the height scan read into the terrain map, footholds placed on the
+map once a step, the CoM height and the swings over the terrain. ``terrain.step_us_median`` is the median over both
+walks' steps (target :data:`TERRAIN_TARGET_US`), ``terrain_vs_flat`` its ratio to the flat walk's median step.
 """
 
 from __future__ import annotations
@@ -72,6 +77,8 @@ __all__ = [
     "LOLA_IKD_CYCLE_US",
     "LOLA_OBSTACLE_CYCLE_US",
     "OBSTACLE_COURSES",
+    "TERRAIN_COURSES",
+    "TERRAIN_TARGET_US",
     "ZMP_PHASES",
     "format_walk_bench",
     "run_walk_bench",
@@ -87,6 +94,14 @@ LOLA_OBSTACLE_CYCLE_US = 2000.0
 redundancy resolution, force and position control in one 2 ms cycle)."""
 OBSTACLE_ENV_ID = "redundancy_gym/BipedObstacles-v0"
 OBSTACLE_COURSES = ("beam", "triangle")
+TERRAIN_ENV_ID = "redundancy_gym/BipedTerrain-v0"
+TERRAIN_COURSES: dict[str, dict[str, Any]] = {
+    "stairs": {"terrain": "stairs", "terrain_ranges": {"stairs": {"rise": (0.15, 0.15), "tread": (0.3, 0.3)}}},
+    "platform": {"terrain": "platform"},
+}
+"""``terrain``'s walks: name -> BipedTerrain-v0 keyword arguments (the issue's stairs: 15 cm rises, 30 cm treads)."""
+TERRAIN_TARGET_US = 150.0
+"""The terrain controller step's target median [us]."""
 PLAN_STEPS = 4
 """Steps of the plan's kinematic rollout in ``zmp_whole_body_plan`` (the first from standing, then steady ones)."""
 
@@ -129,6 +144,27 @@ def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], boo
     finally:
         env.close()
     return times, active, success, contacts
+
+
+def _terrain_walk(kwargs: dict[str, Any], seed: int) -> tuple[list[float], bool]:
+    """One walk over a terrain to its end; returns the predict times [us] (the height scan read into the terrain
+    map, the footholds placed once a step, the pattern, stabilizer and IK) and whether it succeeded."""
+    env = make_env(TERRAIN_ENV_ID, kwargs)
+    policy = WalkingPolicy(env)
+    times: list[float] = []
+    success = False
+    try:
+        obs, _ = env.reset(seed=seed)
+        while True:
+            (action, _), seconds = timed_call(partial(policy.predict, obs, episode_start=np.array([not times])))
+            times.append(seconds * 1e6)
+            obs, _, terminated, truncated, info = env.step(action)
+            if terminated or truncated:
+                success = bool(info["is_success"])
+                break
+    finally:
+        env.close()
+    return times, success
 
 
 ZMP_PHASES = ("single", "double", "touchdown", "liftoff")
@@ -324,6 +360,20 @@ def run_walk_bench(
         }
         all_times += times
     obstacle_median = float(np.median(all_times))
+    terrain: dict[str, Any] = {}
+    terrain_times: list[float] = []
+    for name, kwargs in tqdm(TERRAIN_COURSES.items(), desc="bench walk terrain", disable=not progress):
+        times, success = _terrain_walk(kwargs, seed)
+        times = times[1:]  # the first call plans the walk
+        terrain[name] = {
+            "env_kwargs": kwargs,
+            "step_us_median": float(np.median(times)),
+            "step_us_p99": float(np.percentile(times, 99)),
+            "steps": len(times),
+            "success": success,
+        }
+        terrain_times += times
+    terrain_median = float(np.median(terrain_times))
     controller_median = walk_rounds.median("clik") * 1e6
     ikd_median = walk_rounds.median("ikd") * 1e6
     return {
@@ -380,6 +430,15 @@ def run_walk_bench(
             "step_us_p99": float(np.percentile(all_times, 99)),
         },
         "obstacles_vs_lola_cycle": obstacle_median / LOLA_OBSTACLE_CYCLE_US,
+        "terrain": {
+            "env": TERRAIN_ENV_ID,
+            "target_speed": 0.4,
+            "courses": terrain,
+            "step_us_median": terrain_median,
+            "step_us_p99": float(np.percentile(terrain_times, 99)),
+            "within_target": terrain_median <= TERRAIN_TARGET_US,
+        },
+        "terrain_vs_flat": terrain_median / controller_median,
         "self_collision_pairs": sum(
             len(o.collision_model.layout().segment_pairs) for o in ik.objectives if isinstance(o, CollisionObjective)
         ),
@@ -446,6 +505,14 @@ def format_walk_bench(report: dict[str, Any]) -> str:
             f"obstacles_vs_lola_cycle = {report['obstacles_vs_lola_cycle']:.3f}  (median "
             f"{report['obstacles']['step_us_median']:.1f} us against Lola's {LOLA_OBSTACLE_CYCLE_US:.0f} us cycle with "
             "collision avoidance)",
+            *[
+                f"on terrain ({name}): median {r['step_us_median']:.1f} us  p99 {r['step_us_p99']:.1f} us"
+                f"{'' if r['success'] else '  (terrain not passed)'}"
+                for name, r in report["terrain"]["courses"].items()
+            ],
+            f"terrain controller step median {report['terrain']['step_us_median']:.1f} us (target "
+            f"<= {TERRAIN_TARGET_US:.0f} us: {'met' if report['terrain']['within_target'] else 'NOT met'}); "
+            f"terrain_vs_flat = {report['terrain_vs_flat']:.3f}",
         ]
     )
 

@@ -3,6 +3,7 @@ checks that name the benches that take an option, and the CLI's choices and help
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -45,3 +46,20 @@ def test_the_cli_offers_every_row(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     for name in BENCHES:
         assert name in out
+
+
+def test_a_table_of_some_envs_keeps_the_other_sections_of_the_same_seed_and_episodes(tmp_path) -> None:
+    from redundancy_gym.bench.table import _merged
+
+    path = tmp_path / "learned.json"
+    old = {"seed": 1, "episodes": 2, "envs": {"a": {"rows": "old a"}, "b": {"rows": "old b"}}}
+    path.write_text(json.dumps(old))
+    new = {"seed": 1, "episodes": 2, "envs": {"b": {"rows": "new b"}, "c": {"rows": "new c"}}}
+    merged = _merged(new, str(path))
+    # a's section kept, b's replaced in its place, c's appended
+    assert list(merged["envs"]) == ["a", "b", "c"]
+    assert [s["rows"] for s in merged["envs"].values()] == ["old a", "new b", "new c"]
+    # another seed or episode count: the old sections are of other episodes and are not mixed in
+    assert _merged({**new, "seed": 2}, str(path))["envs"] == new["envs"]
+    assert _merged({**new, "episodes": 3}, str(path))["envs"] == new["envs"]
+    assert _merged(new, str(tmp_path / "missing.json")) is new

@@ -46,6 +46,15 @@ def test_walk_bench_report(tmp_path) -> None:
     assert report["controller_vs_lola"] == pytest.approx(report["controller"]["step_us_median"] / LOLA_CYCLE_US)
     lola = report["controller_vs_lola_rounds"]
     assert lola["min"] <= report["controller_vs_lola"] <= lola["max"]
+    # the terrain walks are walked to their end: the stairs and the platform passed, every step timed
+    terrain = report["terrain"]
+    assert set(terrain["courses"]) == {"stairs", "platform"}
+    assert all(r["success"] and r["steps"] > 1000 for r in terrain["courses"].values())
+    assert terrain["within_target"] == (terrain["step_us_median"] <= 150.0)
+    assert report["terrain_vs_flat"] == pytest.approx(
+        terrain["step_us_median"] / report["controller"]["step_us_median"]
+    )
+    assert "on terrain (stairs)" in format_walk_bench(report)
     assert len(report["machine"]["load_average_end"]) == 3
     assert "ik_compiled_vs_python" in format_walk_bench(report)
     written = json.loads(write_json(report, tmp_path / "walk.json").read_text())

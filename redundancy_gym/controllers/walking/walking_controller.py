@@ -418,6 +418,8 @@ class WalkingController:
         self._base = None
         self.terrain: TerrainMap | None = None
         self._terrain_planned = -2  # the step of the last terrain planning
+        self._scan_pose: tuple[float, float, float] | None = None  # x, y, yaw of the last scan written
+        self._scan_reach = 0.0  # the farthest scan point from the pelvis [m]
 
     def observe_terrain(self, base: tuple[float, float, float, float], scan: ArrayLike, offsets: ArrayLike) -> None:
         """Add a height scan to the terrain map (:class:`TerrainMap`, made at the first scan of a walk, its lanes
@@ -429,6 +431,21 @@ class WalkingController:
         if self.terrain is None:
             feet = self.pattern.foothold(0), self.pattern.foothold(1)
             self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])))
+            points = np.asarray(offsets, dtype=np.float64)
+            self._scan_reach = float(np.max(np.hypot(points[:, 0], points[:, 1]))) if points.size else 0.0
+        x, y, _, yaw = (float(v) for v in base)
+        last = self._scan_pose
+        # the terrain is static: a scan adds to the map only once its points have moved by half a map cell (the
+        # pelvis moves 1-3 mm per period, so most periods' scans would write the same cells again)
+        tolerance = 0.5 * self.terrain.config.cell
+        if (
+            last is not None
+            and abs(x - last[0]) < tolerance
+            and abs(y - last[1]) < tolerance
+            and abs(yaw - last[2]) * self._scan_reach < tolerance
+        ):
+            return
+        self._scan_pose = (x, y, yaw)
         self.terrain.observe(base, np.asarray(scan, dtype=np.float64), np.asarray(offsets, dtype=np.float64))
 
     @property

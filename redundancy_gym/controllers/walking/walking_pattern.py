@@ -222,6 +222,9 @@ class WalkingPattern:
         self._terrain: TerrainMap | None = None
         self._terrain_shift = 0.0
         self._holds: dict[int, tuple[tuple[float, float, float], Foothold]] = {}
+        # footholds computed within one sample() or level_step() call, which change nothing they depend on: the
+        # terrain's placement and the CoM height read the same few footholds a dozen times a period
+        self._memo: dict[int, NDArray[np.float64]] | None = None
         self._terrain_open = 2
         self._over_terrain: set[int] = set()  # steps whose swings pass terrain (held over it)
         self._height_steps: dict[float, Quintic] = {}  # the CoM height's unit step per duration [s]
@@ -245,6 +248,15 @@ class WalkingPattern:
     def foothold(self, j: int) -> NDArray[np.float64]:
         """Sole position of foothold ``h_j`` [m]: ``h_0``/``h_1`` the starting right/left feet, then alternating
         (moved by the step adjustments made so far)."""
+        memo = self._memo
+        if memo is None:
+            return self._foothold(j)
+        h = memo.get(j)
+        if h is None:
+            h = memo[j] = self._foothold(j)
+        return h.copy()
+
+    def _foothold(self, j: int) -> NDArray[np.float64]:
         if j < 2:
             return self._start_feet[j].copy()
         side = RIGHT if j % 2 == 0 else LEFT
@@ -365,8 +377,12 @@ class WalkingPattern:
         k = self.step_at(t)
         if terrain is None or k < 0 or self._turned:
             return True
-        self._nominal_swing(k)  # planned, so that _over_terrain knows it
-        heights = [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+        self._memo = {}
+        try:
+            self._nominal_swing(k)  # planned, so that _over_terrain knows it
+            heights = [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+        finally:
+            self._memo = None
         return k not in self._over_terrain and max(heights) - min(heights) <= terrain.config.height_step
 
     def _com_height(self, t: float, k: int) -> tuple[float, float]:
@@ -763,6 +779,14 @@ class WalkingPattern:
 
     def _knots(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """ZMP knots from the start of ``first_step`` (-1: the standing start) to ``preview_steps`` steps ahead."""
+        saved = self._memo  # the knots read each foothold several times (push recovery previews them a dozen times)
+        self._memo = {}
+        try:
+            return self._knots_uncached(first_step)
+        finally:
+            self._memo = saved
+
+    def _knots_uncached(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         a = self.config.heel_toe_shift
         times, points = [], []
         if first_step < 0:
@@ -810,6 +834,13 @@ class WalkingPattern:
         k = self.step_at(t)
         if k > self._plan_step:
             self._replan(k)
+        self._memo = {}
+        try:
+            return self._sample(t, k)
+        finally:
+            self._memo = None
+
+    def _sample(self, t: float, k: int) -> PatternSample:
         # the plan's values and the swing as Python floats, the arrays built once each: this runs every control
         # period, where numpy's per-call overhead on 2- and 3-vectors cost several times the arithmetic (the
         # operations are the array form's, elementwise: the same floats)
@@ -1223,7 +1254,12 @@ class WalkingPattern:
         nominal, _ = self._nominal_swing_time(k, s)
         com = self._plan.sample(t).position
         if np.any(shift != 0.0):
-            self._shifts.append((k + 2, shift))
+            if self._shifts and self._shifts[-1][0] == k + 2:
+                # the same step adjusted again (every period while the DCM error stays beyond the margin): one
+                # entry per step, or every foothold would loop over hundreds of them
+                self._shifts[-1] = (k + 2, self._shifts[-1][1] + shift)
+            else:
+                self._shifts.append((k + 2, shift))
         self._singles[k] = float(single)
         remaining = float(single) - s
         # the foot rises to the step height (or holds a higher one) and reaches the landing above it, then
