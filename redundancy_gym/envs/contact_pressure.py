@@ -94,8 +94,12 @@ def contact_pressure(
         if side < 0:
             continue
         mujoco.mj_contactForce(model, data, i, force)
-        # the world z component of the contact-frame force: the frame's rows are its axes
-        fz = float(contact.frame[2] * force[0] + contact.frame[5] * force[1] + contact.frame[8] * force[2])
+        # the world z component of the contact-frame force: the frame's rows are its axes. The frame's normal
+        # points from geom1 to geom2 and the force is the one on geom2: on the sole when the ground is geom1 (a
+        # plane, a heightfield, a box of lower id), on the ground when the sole is (a ramp's mesh, whose type sorts
+        # after the sole's box): then the sole's is its opposite
+        sign = 1.0 if other == g2 else -1.0
+        fz = sign * float(contact.frame[2] * force[0] + contact.frame[5] * force[1] + contact.frame[8] * force[2])
         normal[side] += fz
         weighted[side] += fz * contact.pos[:2]
     cop = np.full((2, 2), np.nan)
@@ -200,6 +204,8 @@ def contact_pressure_kernel(dist, ncon, layout, efc_force, efc_type, foot, low, 
             if n > 2:
                 f2 = efc_force[adr + 2]
         fz = reals[r + frame + 2] * f0 + reals[r + frame + 5] * f1 + reals[r + frame + 8] * f2
+        if other == g1:  # the force on the sole: geom2's force reversed (the reference's comment)
+            fz = -fz
         normal[side] += fz
         weighted[side, 0] += fz * reals[r + pos]
         weighted[side, 1] += fz * reals[r + pos + 1]

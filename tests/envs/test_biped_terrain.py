@@ -185,3 +185,26 @@ def test_a_landing_is_measured_when_the_foot_carries_weight_and_a_scuff_is_no_la
     env._track_touchdowns(np.array([0.0, 2.0 * half]))
     env._track_touchdowns(np.array([1.2 * half, 2.0 * half]))
     assert env._touchdowns == 1
+
+
+@pytest.mark.parametrize("backend", ["python", "compiled"])
+def test_feet_on_a_ramp_carry_the_weight_upwards(backend: str) -> None:
+    # a ramp is a mesh, whose geom type sorts after the soles' boxes: MuJoCo's contact then has the sole as geom1
+    # and reports the force on the ramp; the sole's is its opposite (it read as a negative normal force)
+    env = BipedTerrainEnv(
+        segments=[{"kind": "slope", "angle": 3.0, "length": 2.0, "top": 1.0}],
+        first_segment_distance=1.0,
+        backend=backend,
+    )
+    env.reset(seed=0)
+    x = 2.0  # on the rising ramp
+    _pose(env, x, 0.0, float(env.terrain_heights(np.array([[x, 0.0]]))[0]) + env.data.qpos[2] + 0.01, 0.0)
+    normal = []
+    for _ in range(150):
+        _, _, terminated, _, info = env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+        assert not terminated
+        normal.append(info["normal_force"].copy())
+    assert env._ground[1] - env._ground[0] > 1  # the floor and the ramp's geoms
+    late = np.array(normal[-50:])
+    assert np.all(late >= 0.0)
+    assert late.sum(axis=1).mean() == pytest.approx(env._weight, rel=0.1)

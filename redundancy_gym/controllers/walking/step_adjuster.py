@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..exceptions import ControllerError
-from .walking_pattern import ADJUSTED_OVER, LEFT, WalkingPattern
+from .walking_pattern import ADJUSTED_OVER, LEFT, MAX_SHIFT, WalkingPattern
 
 __all__ = ["LAST_MOMENT", "MIN_SHIFT", "StepAdjuster", "StepAdjusterConfig", "StepAdjustment"]
 
@@ -270,6 +270,10 @@ class StepAdjuster:
         clipped = miss > 1e-9
         if float(np.max(np.abs(shift))) < MIN_SHIFT and single == s + remaining:
             return None  # nothing worth replanning the swing for
+        if not float(np.max(np.abs(shift))) <= MAX_SHIFT:
+            # a landing planned metres from the stance foot (a robot turned far off its plan, down on the ground):
+            # no step reaches it, and the pattern would refuse the shift
+            return None
         pattern.adjust_step(t, shift, single)
         self._error = dcm - pattern.dcm(t)  # what the new plan leaves
         return StepAdjustment(k, shift, single, error, clipped)

@@ -38,6 +38,8 @@ class TerrainMapConfig:
 
     Attributes:
         cell: profile cell length [m] along x.
+        lane_tolerance: a scan point writes a lane's cell only when it lies within this [m] of the lane's line (the
+            points of a row nearest to the lane; a yawed pelvis turns the scan's far rows off the lane).
         x_min, length: the profile's first x and its extent [m] (world frame).
         heel, toe: the sole's extent behind and ahead of the sole point [m].
         margin: length [m] added to the footprint at both ends: the distance kept from an edge.
@@ -59,6 +61,7 @@ class TerrainMapConfig:
     """
 
     cell: float = 0.01
+    lane_tolerance: float = 0.06
     x_min: float = -2.0
     length: float = 60.0
     heel: float = 0.095
@@ -80,6 +83,7 @@ class TerrainMapConfig:
     def __post_init__(self) -> None:
         for name in (
             "cell",
+            "lane_tolerance",
             "length",
             "heel",
             "toe",
@@ -144,7 +148,7 @@ class TerrainMap:
         self._heights = np.full((2, n), np.nan)
         self._filled: list[NDArray[np.float64] | None] = [None, None]
         self.version = 0  # counts the observations
-        self._column_cache: tuple[bytes, list[tuple[float, NDArray[np.int64]]]] | None = None
+        self._row_cache: tuple[bytes, NDArray[np.int64]] | None = None
         c = self.config
         self._foot = int(round((c.heel + c.toe + 2.0 * c.margin) / c.cell)) + 1  # cells under a footprint
         offsets = np.arange(self._foot) * c.cell - (c.heel + c.margin)
@@ -170,28 +174,38 @@ class TerrainMap:
             offsets: the scan points (forward, left) [m] in the pelvis's heading frame (N, 2).
         """
         x, y, z, yaw = base
-        columns = self._columns(offsets)
+        if offsets.shape[0] == 0:
+            return
+        rows = self._rows(offsets)
         c, s = math.cos(yaw), math.sin(yaw)
+        forward, left = offsets[:, 0], offsets[:, 1]
+        world_x = x + c * forward - s * left
+        world_y = y + s * forward + c * left
         cell, x_min, n = self.config.cell, self.config.x_min, self._heights.shape[1]
+        across = np.arange(rows.shape[0])
         for lane, lane_y in enumerate(self.lanes):
-            # the scan column nearest to the lane: its points write the lane's cells
-            column_y, index = min(columns, key=lambda col: abs(y + c * col[0] - lane_y))
-            forward = offsets[index, 0]
-            cells = np.rint((x + c * forward - s * column_y - x_min) / cell).astype(np.int64)
+            # per row of the scan, its point nearest to the lane's line writes the lane's cell there (a whole column
+            # would leave the lane at the far rows when the pelvis yaws a little: a stone's gap read as the stone)
+            distance = np.abs(world_y[rows] - lane_y)
+            nearest = distance.argmin(axis=1)
+            index = rows[across, nearest][distance[across, nearest] <= self.config.lane_tolerance]
+            cells = np.rint((world_x[index] - x_min) / cell).astype(np.int64)
             keep = (cells >= 0) & (cells < n)
-            self._heights[lane, cells[keep]] = scan[index][keep] + z
+            self._heights[lane, cells[keep]] = scan[index[keep]] + z
             self._filled[lane] = None
         self.version += 1
 
-    def _columns(self, offsets: NDArray[np.float64]) -> list[tuple[float, NDArray[np.int64]]]:
-        """The scan's columns: each one's lateral offset [m] and the indices of its points (made once per scan
-        layout)."""
+    def _rows(self, offsets: NDArray[np.float64]) -> NDArray[np.int64]:
+        """The scan's points grouped by row (equal forward offset): an index array (rows, points per row), made once
+        per scan layout (a layout whose rows differ in length is padded with the row's last point)."""
         key = offsets.tobytes()
-        cached = self._column_cache
+        cached = self._row_cache
         if cached is None or cached[0] != key:
-            ys = np.unique(np.round(offsets[:, 1], 9))
-            columns = [(float(v), np.flatnonzero(np.abs(offsets[:, 1] - v) < 1e-9)) for v in ys]
-            cached = self._column_cache = (key, columns)
+            xs = np.unique(np.round(offsets[:, 0], 9))
+            groups = [np.flatnonzero(np.abs(offsets[:, 0] - v) < 1e-9) for v in xs]
+            width = max(len(g) for g in groups)
+            rows = np.array([np.concatenate([g, np.full(width - len(g), g[-1])]) for g in groups], dtype=np.int64)
+            cached = self._row_cache = (key, rows)
         return cached[1]
 
     def profile(self, lane: int) -> NDArray[np.float64]:
@@ -273,7 +287,9 @@ class TerrainMap:
         c = self.config
         a, b = min(start, end), max(start, end)
         xs = np.arange(a, b + 0.5 * c.cell, c.cell)
-        profile = self.profile(lane)
+        # both lanes: the swing foot's inner edge passes a centimetre or two from the other lane's stones, and a
+        # foot that sways or yaws a little clips a higher one
+        profile = np.maximum(self.profile(0), self.profile(1))
         under = np.rint((xs[:, None] + np.arange(-c.heel, c.toe + 0.5 * c.cell, c.cell)[None, :] - c.x_min) / c.cell)
         highest = profile[under.astype(np.int64).clip(0, profile.size - 1)].max(axis=1)
         top = float(highest.max()) + c.clearance

@@ -64,6 +64,8 @@ def _is_float_array(value: object, shape: tuple[int, ...]) -> TypeGuard[NDArray[
     return type(value) is np.ndarray and value.dtype == _FLOAT64 and value.shape == shape
 
 
+MAX_TERRAIN_TURN = 0.2
+"""Largest sine of the plan's turn from the world [-] under which the terrain's lanes are mapped across into it."""
 COMMAND_REPLAN_INTERVAL = 0.04
 """Shortest time [s] between two CoM replans for new walking commands (:meth:`WalkingController.set_command`)."""
 
@@ -999,7 +1001,16 @@ class WalkingController:
             # plan's frame: the world's shifted by the real stance foot's drift (terrain planning is for straight
             # walks, as SSTA's: a walk turned by a yaw-rate command plans over flat ground)
             self._terrain_planned = start.step
-            self.pattern.set_terrain(self.time, self.terrain, float(self._world_to_plan[1][0]))
+            rotation, translation = self._world_to_plan
+            # across, the lanes are mapped into the plan's frame while its heading is near the world's (a plan
+            # turned further is a walk already lost: its footholds stay where the pattern puts them)
+            straight = abs(float(rotation[1, 0])) <= MAX_TERRAIN_TURN
+            self.pattern.set_terrain(
+                self.time,
+                self.terrain,
+                float(translation[0]),
+                (float(rotation[1, 0]), float(rotation[1, 1]), float(translation[1])) if straight else (0.0, 1.0, 0.0),
+            )
             self._next = None
             start = self.pattern.sample(self.time)
         # the measured DCM, c + c_dot / omega (x, y), in floats

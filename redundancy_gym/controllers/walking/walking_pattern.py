@@ -221,7 +221,9 @@ class WalkingPattern:
         # (keyed by what it was placed from), and the first foothold that may still move
         self._terrain: TerrainMap | None = None
         self._terrain_shift = 0.0
-        self._holds: dict[int, tuple[tuple[float, float, float], Foothold]] = {}
+        self._terrain_lateral = (0.0, 1.0, 0.0)  # world (x, y) -> plan y: r10 x + r11 y + t_y
+        # per foothold placed on the terrain: its nominal (x, y, previous x), the placement and the lateral shift
+        self._holds: dict[int, tuple[tuple[float, float, float], Foothold, float]] = {}
         # footholds computed within one sample() or level_step() call, which change nothing they depend on: the
         # terrain's placement and the CoM height read the same few footholds a dozen times a period
         self._memo: dict[int, NDArray[np.float64]] | None = None
@@ -311,11 +313,11 @@ class WalkingPattern:
             # placed when its swing began (kept without looking back at the footholds before it: this runs many
             # times a period); a step adjustment (push recovery) moves it with the nominal foothold
             hold = cached[1]
-            return np.array((hold.x + (x - cached[0][0]), y, hold.z))
+            return np.array((hold.x + (x - cached[0][0]), y + cached[2], hold.z))
         previous = float(self.foothold(j - 1)[0])
         key = (x, y, previous)
         if cached is not None and cached[0] == key:
-            hold = cached[1]
+            hold, lateral = cached[1], cached[2]
         else:
             shift = self._terrain_shift
             # the nominal step from the foothold before, as placed: an absolute schedule would make up for a short
@@ -335,8 +337,11 @@ class WalkingPattern:
                 if hold.x > reach:
                     hold = terrain.place(lane, min(x - shift, reach), low, reach)
             hold = Foothold(hold.x + shift, hold.z, hold.pitch, hold.support)
-            self._holds[j] = (key, hold)
-        return np.array((hold.x, y, hold.z))
+            # the nominal y is the lane's in the world: mapped into the plan's frame at the landing
+            r10, r11, t_y = self._terrain_lateral
+            lateral = r10 * (hold.x - shift) + r11 * y + t_y - y
+            self._holds[j] = (key, hold, lateral)
+        return np.array((hold.x, y + lateral, hold.z))
 
     def foothold_pitch(self, j: int) -> float:
         """Pitch [rad] of the sole on foothold ``j`` (positive: toes down): along the terrain's surface there, 0 on
@@ -347,10 +352,15 @@ class WalkingPattern:
         cached = self._holds.get(j)
         return 0.0 if cached is None else cached[1].pitch
 
-    def set_terrain(self, t: float, terrain: TerrainMap, shift: float) -> None:
+    def set_terrain(
+        self, t: float, terrain: TerrainMap, shift: float, lateral: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    ) -> None:
         """Place the footholds not yet begun at ``t`` [s] on ``terrain`` (:class:`TerrainMap`, world frame), whose
         x is the plan's less ``shift`` [m] (the drift of the real stance foot from the plan), and plan the swings and
         the CoM's height over them; the landing of the swing under way is kept. Walking straight along +x only.
+        ``lateral`` is the plan's y of a world point, ``(r10, r11, t_y)``: ``y_plan = r10 x + r11 y + t_y`` (the
+        second row of the world-to-plan map): the footholds not yet begun are placed across as their nominal y taken
+        in the world (the map's lanes, the stones' lanes), not where the drifted, turned plan would put them.
 
         Raises:
             ControllerError: the walk was turned by a yaw-rate command (:meth:`set_velocity`).
@@ -361,6 +371,7 @@ class WalkingPattern:
         if k > self._plan_step:
             self._replan(k)
         self._terrain, self._terrain_shift = terrain, float(shift)
+        self._terrain_lateral = (float(lateral[0]), float(lateral[1]), float(lateral[2]))
         self._terrain_open = k + 3 if k >= 0 else 2
         # the footholds not yet begun are placed again on the map as it is now
         self._holds = {j: v for j, v in self._holds.items() if j < self._terrain_open}

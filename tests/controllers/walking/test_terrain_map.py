@@ -140,3 +140,43 @@ def test_a_push_recovery_shift_moves_a_landing_placed_on_the_map() -> None:
     # a step onto the block is not level: no push recovery there
     k = next(k for k in range(2, 12) if pattern.foothold(k + 2)[2] > 0.05)
     assert not pattern.level_step(pattern.step_start(k) + 0.1)
+
+
+def _stone_lanes() -> Terrain:
+    """A stone 6 cm high under the right lane only (y in [-0.178, -0.005]), x in [2.0, 2.6]; ground elsewhere."""
+    return Terrain((TerrainSegment("stepping_stones", 2.0, 2.6, boxes=((2.0, 2.6, -0.178, -0.005, 0.06),)),))
+
+
+def test_a_yawed_scan_writes_each_lane_from_the_points_nearest_to_it() -> None:
+    terrain = _stone_lanes()
+    yaw = math.radians(6.0)  # the far rows of a scan column drift 0.15 m across at 1.4 m ahead
+    c, s = math.cos(yaw), math.sin(yaw)
+    terrain_map = TerrainMap(LANES)
+    for x in np.arange(0.8, 1.2, 0.01):
+        points = np.column_stack((x + c * SCAN[:, 0] - s * SCAN[:, 1], s * SCAN[:, 0] + c * SCAN[:, 1]))
+        terrain_map.observe((float(x), 0.0, 0.9, yaw), terrain.heights(points) - 0.9, SCAN)
+    xs = np.arange(2.05, 2.56, 0.01)
+    # the right lane sees its stone, the left lane the ground beside it: a whole column picked by the pelvis's
+    # offset would have read the far rows from the other lane
+    assert np.allclose(terrain_map.heights_at(0, xs), 0.06)
+    assert np.allclose(terrain_map.heights_at(1, xs), 0.0)
+
+
+def test_a_swing_clears_a_higher_stone_in_the_other_lane() -> None:
+    terrain_map = _mapped(_stone_lanes())
+    # the left foot swings over ground in its own lane beside the right lane's stone: held above the stone
+    envelope = terrain_map.envelope(1, 1.9, 2.7)
+    assert envelope.top == pytest.approx(0.06 + terrain_map.config.clearance)
+
+
+def test_footholds_not_begun_land_on_the_worlds_lanes_when_the_plan_has_drifted() -> None:
+    terrain_map = _mapped(_boxes((5.0, 6.0, 0.0)))  # flat ground: only the lanes matter
+    pattern = WalkingPattern(GaitConfig(), (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+    pattern.set_terrain(0.0, terrain_map, 0.0)
+    before = [pattern.foothold(j)[1] for j in range(4, 8)]
+    # the plan is the world turned by 0.02 rad and moved 3 cm to the left: y_plan = sin(a) x + cos(a) y + 0.03
+    a = 0.02
+    pattern.set_terrain(1.0, terrain_map, 0.0, (math.sin(a), math.cos(a), 0.03))
+    for j, y in zip(range(4, 8), before, strict=True):
+        h = pattern.foothold(j)
+        assert h[1] == pytest.approx(math.sin(a) * h[0] + math.cos(a) * y + 0.03)
