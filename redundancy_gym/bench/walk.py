@@ -48,7 +48,7 @@ walks' steps (target :data:`TERRAIN_TARGET_US`), ``terrain_vs_flat`` its ratio t
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from typing import Any, NamedTuple
 
@@ -120,51 +120,51 @@ class _Recorder:
         return self.solver.step(q, start, end, dt)
 
 
-def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], bool, int]:
-    """One walk over an obstacle course to its end; returns the predict times [us], whether RCA evaluated
-    distances in each period, whether it succeeded, and its obstacle contacts."""
-    env = make_env(OBSTACLE_ENV_ID, {"course": course})
-    policy = WalkingPolicy(env)
-    times: list[float] = []
-    active: list[bool] = []
-    contacts, success = 0, False
-    try:
-        obs, _ = env.reset(seed=seed)
-        while True:
-            # a partial, not a lambda over the loop's variables (ruff B023); timed_call calls it at once
-            (action, _), seconds = timed_call(partial(policy.predict, obs, episode_start=np.array([not times])))
-            times.append(seconds * 1e6)
-            avoidance = policy.last_command.avoidance if policy.last_command is not None else None
-            active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
-            obs, _, terminated, truncated, info = env.step(action)
-            contacts += int(info["obstacle_contact"])
-            if terminated or truncated:
-                success = bool(info["is_success"])
-                break
-    finally:
-        env.close()
-    return times, active, success, contacts
-
-
-def _terrain_walk(kwargs: dict[str, Any], seed: int) -> tuple[list[float], bool]:
-    """One walk over a terrain to its end; returns the predict times [us] (the height scan read into the terrain
-    map, the footholds placed once a step, the pattern, stabilizer and IK) and whether it succeeded."""
-    env = make_env(TERRAIN_ENV_ID, kwargs)
+def _timed_walk(
+    env_id: str, kwargs: dict[str, Any], seed: int, each: Callable[[WalkingPolicy, dict[str, Any]], None] | None = None
+) -> tuple[list[float], bool]:
+    """One walk of the ``walking`` policy to the episode's end; returns its predict times [us] and whether it
+    succeeded. ``each(policy, info)`` runs after every step."""
+    env = make_env(env_id, kwargs)
     policy = WalkingPolicy(env)
     times: list[float] = []
     success = False
     try:
         obs, _ = env.reset(seed=seed)
         while True:
+            # a partial, not a lambda over the loop's variables (ruff B023); timed_call calls it at once
             (action, _), seconds = timed_call(partial(policy.predict, obs, episode_start=np.array([not times])))
             times.append(seconds * 1e6)
             obs, _, terminated, truncated, info = env.step(action)
+            if each is not None:
+                each(policy, info)
             if terminated or truncated:
                 success = bool(info["is_success"])
                 break
     finally:
         env.close()
     return times, success
+
+
+def _obstacle_walk(course: str, seed: int) -> tuple[list[float], list[bool], bool, int]:
+    """One walk over an obstacle course to its end; returns the predict times [us], whether RCA evaluated
+    distances in each period, whether it succeeded, and its obstacle contacts."""
+    active: list[bool] = []
+    contacts: list[bool] = []
+
+    def record(policy: WalkingPolicy, info: dict[str, Any]) -> None:
+        avoidance = policy.last_command.avoidance if policy.last_command is not None else None
+        active.append(bool(avoidance is not None and np.isfinite(avoidance.distance)))
+        contacts.append(bool(info["obstacle_contact"]))
+
+    times, success = _timed_walk(OBSTACLE_ENV_ID, {"course": course}, seed, record)
+    return times, active, success, sum(contacts)
+
+
+def _terrain_walk(kwargs: dict[str, Any], seed: int) -> tuple[list[float], bool]:
+    """One walk over a terrain to its end; returns the predict times [us] (the height scan read into the terrain
+    map, the footholds placed once a step, the pattern, stabilizer and IK) and whether it succeeded."""
+    return _timed_walk(TERRAIN_ENV_ID, kwargs, seed)
 
 
 ZMP_PHASES = ("single", "double", "touchdown", "liftoff")

@@ -147,7 +147,6 @@ class TerrainMap:
         n = int(round(self.config.length / self.config.cell)) + 1
         self._heights = np.full((2, n), np.nan)
         self._filled: list[NDArray[np.float64] | None] = [None, None]
-        self.version = 0  # counts the observations
         self._row_cache: tuple[bytes, NDArray[np.int64]] | None = None
         c = self.config
         self._foot = int(round((c.heel + c.toe + 2.0 * c.margin) / c.cell)) + 1  # cells under a footprint
@@ -193,7 +192,6 @@ class TerrainMap:
             keep = (cells >= 0) & (cells < n)
             self._heights[lane, cells[keep]] = scan[index[keep]] + z
             self._filled[lane] = None
-        self.version += 1
 
     def _rows(self, offsets: NDArray[np.float64]) -> NDArray[np.int64]:
         """The scan's points grouped by row (equal forward offset): an index array (rows, points per row), made once

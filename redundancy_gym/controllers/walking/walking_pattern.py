@@ -14,9 +14,9 @@ decays as ``e^(-omega T)`` per step (about 5e-5 of a step after four 0.8 s steps
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import SupportsFloat
+from typing import Any, SupportsFloat, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -35,6 +35,8 @@ MIN_ADJUSTED_SWING = 0.01
 """Shortest swing left [s] that :meth:`WalkingPattern.adjust_step` replans."""
 MAX_SHIFT = 2.0
 """Largest foothold move [m] of one :meth:`WalkingPattern.adjust_step` (twice a leg's length)."""
+_R = TypeVar("_R")
+
 ADJUSTED_RISE = 0.35
 """Share of the remaining single support in which an adjusted swing rises to the step height."""
 ADJUSTED_OVER = 0.7
@@ -388,13 +390,24 @@ class WalkingPattern:
         k = self.step_at(t)
         if terrain is None or k < 0 or self._turned:
             return True
+        heights = self._memoized(self._step_heights, k)
+        return k not in self._over_terrain and max(heights) - min(heights) <= terrain.config.height_step
+
+    def _step_heights(self, k: int) -> list[float]:
+        """The heights [m] of step ``k``'s lift-off, stance and landing footholds, its swing planned (so that
+        ``_over_terrain`` knows it)."""
+        self._nominal_swing(k)
+        return [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+
+    def _memoized(self, compute: Callable[..., _R], *args: Any) -> _R:
+        """``compute(*args)`` with each foothold computed once within it (:meth:`foothold`): for calls that change
+        nothing a foothold depends on, which read the same few footholds many times (the outer scope kept)."""
+        saved = self._memo
         self._memo = {}
         try:
-            self._nominal_swing(k)  # planned, so that _over_terrain knows it
-            heights = [float(self.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+            return compute(*args)
         finally:
-            self._memo = None
-        return k not in self._over_terrain and max(heights) - min(heights) <= terrain.config.height_step
+            self._memo = saved
 
     def _com_height(self, t: float, k: int) -> tuple[float, float]:
         """The CoM's height [m] and vertical velocity [m/s] at ``t`` in step ``k``.
@@ -790,12 +803,8 @@ class WalkingPattern:
 
     def _knots(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """ZMP knots from the start of ``first_step`` (-1: the standing start) to ``preview_steps`` steps ahead."""
-        saved = self._memo  # the knots read each foothold several times (push recovery previews them a dozen times)
-        self._memo = {}
-        try:
-            return self._knots_uncached(first_step)
-        finally:
-            self._memo = saved
+        # the knots read each foothold several times (push recovery previews them a dozen times a period)
+        return self._memoized(self._knots_uncached, first_step)
 
     def _knots_uncached(self, first_step: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         a = self.config.heel_toe_shift
@@ -845,11 +854,7 @@ class WalkingPattern:
         k = self.step_at(t)
         if k > self._plan_step:
             self._replan(k)
-        self._memo = {}
-        try:
-            return self._sample(t, k)
-        finally:
-            self._memo = None
+        return self._memoized(self._sample, t, k)
 
     def _sample(self, t: float, k: int) -> PatternSample:
         # the plan's values and the swing as Python floats, the arrays built once each: this runs every control
