@@ -117,12 +117,17 @@ class Foothold:
         z: its height [m] (the surface line's height there).
         pitch: the sole's pitch [rad] along the surface (positive: toes down, a downhill surface).
         support: share [0, 1] of the (margin-extended) footprint on the surface.
+        roughness: peak-to-peak [m] of the profile under the sole (margins left out) about its surface, over the
+            cells within the map's ``height_step`` of it (an edge's other level is not roughness): 0 on a tread or a
+            stone, about a millimetre on a ramp (the profile's cells), up to a centimetre where a ramp meets the
+            ground, 1-3 cm on BipedTerrain's rough ground.
     """
 
     x: float
     z: float
     pitch: float
     support: float
+    roughness: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -267,15 +272,21 @@ class TerrainMap:
         )
         blocked = np.any(near > surface + c.surface_tolerance, axis=1)
         best = int(np.argmax(support - blocked - c.distance_cost * np.abs(candidates - nominal)))
+        inner = slice(int(round(c.margin / c.cell)), self._foot - int(round(c.margin / c.cell)))
+        # the sole's cells about its surface; those beyond height_step are another level (an edge's), not bumps
+        about = (heights[best] - (line[best] if use_line[best] else level[best]))[inner]
+        bumps = about[np.abs(about) <= c.height_step]
+        roughness = float(bumps.max() - bumps.min()) if bumps.size else 0.0
         if use_line[best]:
             z = float(mean[best] + slope[best] * (0.0 - offsets.mean()))  # the line at the sole point (offset 0)
-            return Foothold(float(candidates[best]), z, -math.atan(float(slope[best])), float(support[best]))
+            pitch = -math.atan(float(slope[best]))
+            return Foothold(float(candidates[best]), z, pitch, float(support[best]), roughness)
         # a rigid sole rests on the highest points under it: a step within it (a tread's top above the ground its
         # heel overhangs) is a surface; bumps lower than height_step are below what the scan resolves under a sole
         # 15 cm wide (it samples the lane's centre line): the level is the footprint's median there
-        under = heights[best, int(round(c.margin / c.cell)) : self._foot - int(round(c.margin / c.cell))]
+        under = heights[best, inner]
         z = float(under.max()) if float(under.max()) - float(level[best]) > c.height_step else float(level[best])
-        return Foothold(float(candidates[best]), z, 0.0, float(support[best]))
+        return Foothold(float(candidates[best]), z, 0.0, float(support[best]), roughness)
 
     def envelope(self, lane: int, start: float, end: float) -> SwingEnvelope:
         """The height a swing of ``lane``'s sole point from x ``start`` to ``end`` [m] holds, and where: the highest

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, SupportsFloat, TypeVar
 
 import numpy as np
@@ -35,6 +35,11 @@ MIN_ADJUSTED_SWING = 0.01
 """Shortest swing left [s] that :meth:`WalkingPattern.adjust_step` replans."""
 MAX_SHIFT = 2.0
 """Largest foothold move [m] of one :meth:`WalkingPattern.adjust_step` (twice a leg's length)."""
+MIN_STEP_WIDTH, MAX_STEP_WIDTH = 0.16, 0.30
+"""The distance [m] across between a foothold moved onto its lane in the world (:meth:`WalkingPattern.set_terrain`)
+and the foothold before it stays within these (or the nominal step's, where that is outside): a robot drifted a
+stride's width across returns to its lanes over a few steps instead of setting a foot onto the other's (soles
+0.15 m wide; :class:`StepAdjusterConfig`'s nearest landing beside the stance foot)."""
 _R = TypeVar("_R")
 
 ADJUSTED_RISE = 0.35
@@ -224,8 +229,9 @@ class WalkingPattern:
         self._terrain: TerrainMap | None = None
         self._terrain_shift = 0.0
         self._terrain_lateral = (0.0, 1.0, 0.0)  # world (x, y) -> plan y: r10 x + r11 y + t_y
-        # per foothold placed on the terrain: its nominal (x, y, previous x), the placement and the lateral shift
-        self._holds: dict[int, tuple[tuple[float, float, float], Foothold, float]] = {}
+        # per foothold placed on the terrain: its nominal (x, y, the previous foothold's x, y), the placement and the
+        # lateral shift
+        self._holds: dict[int, tuple[tuple[float, float, float, float], Foothold, float]] = {}
         # footholds computed within one sample() or level_step() call, which change nothing they depend on: the
         # terrain's placement and the CoM height read the same few footholds a dozen times a period
         self._memo: dict[int, NDArray[np.float64]] | None = None
@@ -316,8 +322,9 @@ class WalkingPattern:
             # times a period); a step adjustment (push recovery) moves it with the nominal foothold
             hold = cached[1]
             return np.array((hold.x + (x - cached[0][0]), y + cached[2], hold.z))
-        previous = float(self.foothold(j - 1)[0])
-        key = (x, y, previous)
+        before_hold = self.foothold(j - 1)
+        previous, other = float(before_hold[0]), float(before_hold[1])
+        key = (x, y, previous, other)
         if cached is not None and cached[0] == key:
             hold, lateral = cached[1], cached[2]
         else:
@@ -338,10 +345,16 @@ class WalkingPattern:
                 reach = previous + self.step_length + terrain.config.step_reach - shift
                 if hold.x > reach:
                     hold = terrain.place(lane, min(x - shift, reach), low, reach)
-            hold = Foothold(hold.x + shift, hold.z, hold.pitch, hold.support)
+            hold = replace(hold, x=hold.x + shift)
             # the nominal y is the lane's in the world: mapped into the plan's frame at the landing
             r10, r11, t_y = self._terrain_lateral
             lateral = r10 * (hold.x - shift) + r11 * y + t_y - y
+            # the step's width within [MIN_STEP_WIDTH, MAX_STEP_WIDTH]: a plan drifted 0.18 m across from the world
+            # had put a foot onto the other foot's lane, into the stance foot
+            side = 1.0 if j % 2 else -1.0  # the left foot's footholds are the odd ones
+            nominal = side * (y - other)
+            width = min(max(side * (y + lateral - other), min(MIN_STEP_WIDTH, nominal)), max(MAX_STEP_WIDTH, nominal))
+            lateral = other + side * width - y
             self._holds[j] = (key, hold, lateral)
         return np.array((hold.x, y + lateral, hold.z))
 
@@ -353,6 +366,15 @@ class WalkingPattern:
         self.foothold(j)  # placed, if not yet
         cached = self._holds.get(j)
         return 0.0 if cached is None else cached[1].pitch
+
+    def foothold_roughness(self, j: int) -> float:
+        """Peak-to-peak [m] of the terrain under the sole on foothold ``j`` about its surface
+        (:attr:`Foothold.roughness`): 0 on flat ground, treads, stones, ramps or without a terrain map."""
+        if self._terrain is None or j < 2 or self._turned:
+            return 0.0
+        self.foothold(j)  # placed, if not yet
+        cached = self._holds.get(j)
+        return 0.0 if cached is None else cached[1].roughness
 
     def set_terrain(
         self, t: float, terrain: TerrainMap, shift: float, lateral: tuple[float, float, float] = (0.0, 1.0, 0.0)

@@ -4,15 +4,17 @@ steps up and down (continuous in height and velocity)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 import pytest
 
-from redundancy_gym.assets.terrain import Terrain, TerrainSegment
+from redundancy_gym.assets.terrain import RoughPatch, Terrain, TerrainSegment
 from redundancy_gym.controllers import ControllerError
 from redundancy_gym.controllers.walking import GaitConfig, WalkingPattern
 from redundancy_gym.controllers.walking.terrain_map import TerrainMap, TerrainMapConfig
+from redundancy_gym.controllers.walking.walking_pattern import MAX_STEP_WIDTH, MIN_STEP_WIDTH
 
 LANES = (-0.09, 0.09)
 SCAN = np.array([[-0.2 + 0.1 * i, -0.3 + 0.1 * j] for i in range(17) for j in range(7)])  # BipedTerrain's default
@@ -180,3 +182,45 @@ def test_footholds_not_begun_land_on_the_worlds_lanes_when_the_plan_has_drifted(
     for j, y in zip(range(4, 8), before, strict=True):
         h = pattern.foothold(j)
         assert h[1] == pytest.approx(math.sin(a) * h[0] + math.cos(a) * y + 0.03)
+
+
+def _rough(amplitude: float, seed: int = 0) -> Terrain:
+    """A rough patch x in [1.5, 4.5] of vertex heights in [0, 2 amplitude] every 0.1 m (BipedTerrain's)."""
+    rng = np.random.default_rng(seed)
+    heights = np.zeros((9, 31))
+    heights[1:-1, 1:-1] = rng.uniform(0.0, 2.0 * amplitude, (7, 29))
+    patch = RoughPatch(1.5, -0.4, 0.1, heights.astype(np.float32).astype(np.float64))
+    return Terrain((TerrainSegment("rough", 1.5, 4.5, patches=(patch,)),))
+
+
+def test_roughness_is_zero_on_treads_and_edges_and_centimetres_on_rough_ground() -> None:
+    flat = _mapped(_boxes((1.5, 2.0, 0.1), (2.0, 3.0, 0.2)))
+    c = flat.config
+    assert flat.place(0, 1.75, 1.4, 2.1).roughness == 0.0  # on a tread
+    # a sole straddling the riser: the other level is an edge, not roughness
+    x = 2.0 + c.heel - 0.05
+    hold = flat.place(0, x, x, x)  # the reach allows this one position
+    assert hold.x - c.heel < 2.0 < hold.x + c.toe and hold.roughness == 0.0
+    ramp = _mapped(
+        Terrain((TerrainSegment("slope", 1.0, 5.0, ramps=((1.0, 3.0, 3.0, 5.0, 2.0 * math.tan(0.14), -1.0, 1.0),)),))
+    )
+    assert ramp.place(1, 2.0, 1.5, 2.5).roughness < 0.003  # the profile's cells along a ramp
+    for amplitude in (0.01, 0.03):
+        rough = _mapped(_rough(amplitude))
+        values = [rough.place(0, x, x - 0.1, x + 0.1).roughness for x in np.arange(2.0, 4.0, 0.3)]
+        # bumps of up to 2 amplitude under the lane's centre line, never more than the terrain's own range
+        assert min(values) > 0.3 * amplitude and max(values) <= 2.0 * amplitude + 1e-6
+
+
+def test_footholds_moved_onto_the_worlds_lanes_keep_the_step_width_within_its_bounds() -> None:
+    terrain_map = _mapped(_boxes((5.0, 6.0, 0.0)))
+    for drift in (-0.18, 0.18, 0.05):
+        pattern = WalkingPattern(GaitConfig(), (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+        pattern.set_terrain(0.0, terrain_map, 0.0)
+        # a plan drifted across from the world: its lanes at y_plan = y + drift
+        pattern.set_terrain(1.0, terrain_map, 0.0, (0.0, 1.0, drift))
+        ys = [float(pattern.foothold(j)[1]) for j in range(3, 12)]
+        widths = [abs(b - a) for a, b in itertools.pairwise(ys)]
+        assert min(widths) >= MIN_STEP_WIDTH - 1e-12 and max(widths) <= MAX_STEP_WIDTH + 1e-12, (drift, widths)
+        # back on the lanes within a few steps
+        assert ys[-1] == pytest.approx(0.09 + drift) and ys[-2] == pytest.approx(-0.09 + drift), (drift, ys)
