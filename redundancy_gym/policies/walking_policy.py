@@ -14,6 +14,7 @@ from ..controllers.walking import (
     FootForceGains,
     GaitConfig,
     RcaConfig,
+    SoleTiltConfig,
     SstaConfig,
     StabilizerGains,
     StepAdjusterConfig,
@@ -106,6 +107,9 @@ class WalkingPolicyConfig:
             (:class:`~redundancy_gym.controllers.walking.FootForceControl`: the soles' heights follow the measured
             normal forces against the plan's load share; 0: off; None: the walker's own,
             :data:`CLIK_FOOT_FORCE_GAIN` with ``ik="clik"``, 0 with ``"ikd"``).
+        sole_tilt: stance soles on footholds planned on rough ground take their measured tilt into the IK's
+            references (:class:`~redundancy_gym.controllers.walking.SoleTilt`); None: on where the observation has
+            a height scan (BipedTerrain-v0), off elsewhere (no terrain map, so no rough footholds either).
     """
 
     momentum_minimization: bool = True
@@ -138,6 +142,7 @@ class WalkingPolicyConfig:
     ikd_feedforward: bool = True
     correction_first_steps: int | None = None
     foot_force_gain: float | None = None
+    sole_tilt: bool | None = None
 
 
 class WalkingPolicy(PerEnvPolicy):
@@ -250,6 +255,9 @@ class WalkingPolicy(PerEnvPolicy):
                 correction_first_steps=(FIRST_STEP_TABLES if c.ik == "clik" else 0)
                 if c.correction_first_steps is None
                 else c.correction_first_steps,
+                sole_tilt=SoleTiltConfig()
+                if (self._scan is not None if c.sole_tilt is None else c.sole_tilt)
+                else None,
             )
         except ValueError as exc:  # ControllerError from the parts names the bad value
             raise PolicyError(f"invalid walking option: {exc}") from exc

@@ -11,6 +11,7 @@ from .measure_kernels import CompiledMeasurement, MeasurementResult, renamed_att
 from .quintic import PiecewiseQuintic, Quintic
 from .rca import LEG_SEGMENTS, Rca, RcaConfig, RcaState, return_quintic_no_overshoot_time
 from .servo_feedforward import ServoFeedforward, ServoFeedforwardTorques
+from .sole_tilt import SoleTilt, SoleTiltConfig
 from .ssta import (
     BLOCKED_COST,
     OBSTACLE_CLASSES,
@@ -75,6 +76,8 @@ __all__ = [
     "RcaState",
     "ServoFeedforward",
     "ServoFeedforwardTorques",
+    "SoleTilt",
+    "SoleTiltConfig",
     "Ssta",
     "SstaConfig",
     "Stabilizer",

@@ -35,6 +35,7 @@ from .gait_config import GaitConfig
 from .measure_kernels import CompiledMeasurement
 from .rca import Rca, RcaConfig, RcaState
 from .servo_feedforward import ServoFeedforward
+from .sole_tilt import SoleTilt, SoleTiltConfig, tilt_rotation
 from .ssta import ObstacleBox, Ssta, SstaConfig, StopReason, bounding_boxes
 from .stabilizer import Stabilizer, StabilizerGains, StabilizerOutput
 from .step_adjuster import StepAdjuster, StepAdjusterConfig, StepAdjustment
@@ -192,6 +193,8 @@ class WalkingController:
             LIPM plan). The CLIK still moves the standing start onto the pattern's first reference.
         foot_force: ground contact by force (:class:`FootForceControl`, foot force difference control): the soles'
             height references follow the measured normal forces against the plan's load share (None: off).
+        sole_tilt: stance soles on rough ground take their measured tilt into the IK's references
+            (:class:`SoleTilt`; None: off, the soles' references the plan's).
         correction_first_steps: the first steps of a walk (0-2) whose multi-body ZMP correction is estimated from
             their own rollout rather than taken from the steady steps' tables (:attr:`ZmpCorrection.first`).
         servo_stiffness: with ``ikd``, the position servos' ``k_p`` [N m/rad] per actuated joint: each period's
@@ -226,6 +229,7 @@ class WalkingController:
         servo_stiffness: ArrayLike | None = None,
         foot_force: FootForceGains | None = None,
         correction_first_steps: int = FIRST_STEP_TABLES,
+        sole_tilt: SoleTiltConfig | None = None,
     ) -> None:
         if not np.isfinite(dt) or dt <= 0.0:
             raise ControllerError(f"dt must be finite and > 0, got {dt!r}")
@@ -319,6 +323,9 @@ class WalkingController:
         self._ikd_com = (np.zeros(3), np.zeros(3))
         self.foot_force_gains = foot_force or FootForceGains()
         self.foot_force = FootForceControl(self.foot_force_gains) if self.foot_force_gains.active else None
+        self.sole_tilt = None if sole_tilt is None else SoleTilt(sole_tilt)
+        # the measured soles' orientations and positions (plan frame), read by sole_tilt
+        self._soles, self._sole_positions = np.zeros((2, 3, 3)), np.zeros((2, 3))
         self._base: tuple[PatternSample, _ReferenceBase] | None = None  # the last packed reference (its sample)
 
     # ------------------------------------------------------------------ start
@@ -414,6 +421,8 @@ class WalkingController:
         self.step_adjuster.reset()
         if self.foot_force is not None:
             self.foot_force.reset()
+        if self.sole_tilt is not None:
+            self.sole_tilt.reset()
         self.time = 0.0
         self._command_replan = -np.inf
         self._next = None
@@ -930,6 +939,8 @@ class WalkingController:
             return None
         if self.stance_frame:
             self._world_to_plan = (m.turn.copy(), m.shift.copy())
+        if self.sole_tilt is not None:
+            self._soles[:], self._sole_positions[:] = m.rotations[2:4], m.positions[2:4]
         # copies: the estimate outlives the period (WalkingCommand.contact), the kernel's buffers do not
         contact = ZmpEstimate(
             None if m.zmp is None else m.zmp.copy(), m.cop.copy(), m.normal_force.copy(), m.moment.copy()
@@ -981,6 +992,8 @@ class WalkingController:
             com, com_velocity, rotations, positions = self._in_stance_frame(
                 start, com, com_velocity, rotations, positions
             )
+        if self.sole_tilt is not None:
+            self._soles[:], self._sole_positions[:] = rotations[2:4], positions[2:4]
         contact = estimate_zmp(rotations[:2], positions[:2], forces, torques, ground=self._support_height(start))
         return com, com_velocity, contact
 
@@ -1047,6 +1060,8 @@ class WalkingController:
         )
         if self.foot_force is not None:
             self._press_feet(start, contact, start_ref, end_ref)
+        if self.sole_tilt is not None:
+            self._tilt_soles(start, contact, start_ref, end_ref)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)
@@ -1105,6 +1120,54 @@ class WalkingController:
         start_ref[38] += 0.5 * rate
         end_ref[32] -= 0.5 * rate
         end_ref[38] += 0.5 * rate
+
+    def _tilt_soles(
+        self,
+        start: PatternSample,
+        contact: ZmpEstimate,
+        start_ref: NDArray[np.float64],
+        end_ref: NDArray[np.float64],
+    ) -> None:
+        """:class:`SoleTilt`: the soles' orientation references of this period turned by their tilts, measured on the
+        footholds planned on rough ground."""
+        assert self.sole_tilt is not None and self.pattern is not None
+        tilt_control = self.sole_tilt
+        k = start.step
+        limits = [0.0, 0.0]
+        if k >= 0:
+            # in step k the stance sole stands on foothold k + 1, the swing sole lands on k + 2
+            for i in range(2):
+                limits[i] = tilt_control.limit(self.pattern.foothold_roughness(k + 1 if i == (k + 1) % 2 else k + 2))
+        if limits[0] == 0.0 and limits[1] == 0.0 and not tilt_control.tilt.any():
+            return  # flat footholds, soles as planned: the update would change nothing
+        right, left = contact.normal_force.tolist()
+        tipping = [False, False]
+        for i in range(2):
+            if limits[i] > 0.0 and start.contact[i]:
+                # the centre of pressure in the sole's frame (its heading from the measured orientation)
+                rotation, position = self._soles[i], self._sole_positions[i]
+                dx, dy = float(contact.cop[i, 0] - position[0]), float(contact.cop[i, 1] - position[1])
+                heading = math.atan2(rotation[1, 0], rotation[0, 0])
+                c, s = math.cos(heading), math.sin(heading)
+                tipping[i] = math.isfinite(dx + dy) and tilt_control.tipping((c * dx + s * dy, -s * dx + c * dy))
+        planned = start_ref[12:30].reshape(2, 3, 3)
+        tilt = tilt_control.update(
+            self.dt,
+            start.contact,
+            (limits[0], limits[1]),
+            (right, left),
+            planned,
+            self._soles,
+            (tipping[0], tipping[1]),
+        ).tolist()
+        for i in range(2):
+            roll, pitch = tilt[i]
+            if roll == 0.0 and pitch == 0.0:
+                continue
+            turn = tilt_rotation(roll, pitch)
+            for ref in (start_ref, end_ref):
+                sole = slice(12 + 9 * i, 21 + 9 * i)
+                ref[sole] = (ref[sole].reshape(3, 3) @ turn).ravel()
 
     def _avoid(self, start_ref: NDArray[np.float64], end_ref: NDArray[np.float64]) -> RcaState:
         """RCA (5.80)-(5.83): move the swing foot's position references of this period by the modification
