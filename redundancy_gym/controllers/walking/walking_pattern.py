@@ -35,12 +35,11 @@ MIN_ADJUSTED_SWING = 0.01
 """Shortest swing left [s] that :meth:`WalkingPattern.adjust_step` replans."""
 MAX_SHIFT = 2.0
 """Largest foothold move [m] of one :meth:`WalkingPattern.adjust_step` (twice a leg's length)."""
-MIN_STEP_WIDTH, MAX_STEP_WIDTH = 0.12, 0.30
+MIN_STEP_WIDTH, MAX_STEP_WIDTH = 0.16, 0.30
 """The distance [m] across between a foothold moved onto its lane in the world (:meth:`WalkingPattern.set_terrain`)
 and the foothold before it stays within these (or the nominal step's, where that is outside): a robot drifted a
-stride's width across returns to its lanes over a few steps instead of setting a foot onto the other's (a rough
-walk had a foot planned 2 cm beside the stance foot). The nominal width is 0.18 m; the residual learner's walks
-on stairs step 0.12-0.16 m wide and pass (a floor of 0.16 m changed them and failed one)."""
+stride's width across returns to its lanes over a few steps instead of setting a foot onto the other's (soles
+0.15 m wide; :class:`StepAdjusterConfig`'s nearest landing beside the stance foot)."""
 _R = TypeVar("_R")
 
 ADJUSTED_RISE = 0.35
