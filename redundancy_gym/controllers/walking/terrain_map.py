@@ -58,6 +58,8 @@ class TerrainMapConfig:
         height_step: a landing more than this [m] above or below the stance foothold is a step up or down.
         step_reach: a step up or down reaches at most this [m] beyond the nominal step length (a longer one would
             stretch the leg past its length: the landing moves before the edge and the next step takes the height).
+        rough_ground: a foothold whose :attr:`Foothold.roughness` exceeds this [m] stands on rough ground (treads,
+            stones and ramps: up to 9 mm where a ramp meets the ground).
     """
 
     cell: float = 0.01
@@ -79,6 +81,7 @@ class TerrainMapConfig:
     min_rise: float = 0.05
     height_step: float = 0.03
     step_reach: float = 0.03
+    rough_ground: float = 0.01
 
     def __post_init__(self) -> None:
         for name in (
@@ -102,6 +105,7 @@ class TerrainMapConfig:
             "min_rise",
             "height_step",
             "step_reach",
+            "rough_ground",
         ):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0):

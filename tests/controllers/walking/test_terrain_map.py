@@ -224,3 +224,29 @@ def test_footholds_moved_onto_the_worlds_lanes_keep_the_step_width_within_its_bo
         assert min(widths) >= MIN_STEP_WIDTH - 1e-12 and max(widths) <= MAX_STEP_WIDTH + 1e-12, (drift, widths)
         # back on the lanes within a few steps
         assert ys[-1] == pytest.approx(0.09 + drift) and ys[-2] == pytest.approx(-0.09 + drift), (drift, ys)
+
+
+def test_push_recovery_may_act_on_a_step_over_rough_ground_but_not_on_one_over_an_edge() -> None:
+    gait = GaitConfig()
+    rough = _rough(0.03)  # bumps up to 6 cm: the swings hold the envelope over them
+    pattern = WalkingPattern(gait, (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+    terrain_map = _mapped(rough)
+    pattern.set_terrain(0.0, terrain_map, 0.0)
+    rough_steps = [
+        k
+        for k in range(2, 14)
+        if max(pattern.foothold_roughness(j) for j in (k, k + 1, k + 2)) > terrain_map.config.rough_ground
+    ]
+    assert rough_steps
+    level = {k: pattern.level_step(pattern.step_start(k) + 0.01) for k in rough_steps}
+    # over rough ground: level when the footholds lie within height_step, the envelope's band over bumps aside
+    for k, is_level in level.items():
+        heights = [float(pattern.foothold(j)[2]) for j in (k, k + 1, k + 2)]
+        assert is_level == (max(heights) - min(heights) <= terrain_map.config.height_step), (k, heights)
+    assert any(level.values())
+    # stairs: the step onto a tread passes its riser, no step adjustment there
+    stairs = _mapped(_boxes((1.5, 1.8, 0.12), (1.8, 3.0, 0.24)))
+    pattern = WalkingPattern(gait, (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4)
+    pattern.set_terrain(0.0, stairs, 0.0)
+    over = [k for k in range(0, 12) if not pattern.level_step(pattern.step_start(k) + 0.01)]
+    assert over and all(pattern.foothold_roughness(j) == 0.0 for k in over for j in (k, k + 1, k + 2))
