@@ -66,8 +66,8 @@ class EpisodeSummary:
             the robot with an obstacle).
         stop_reason: for a policy with a ``stop_reason`` attribute (the ``walking`` policy), its value at the
             episode's end: why the walk stopped in front of an obstacle (None: it did not stop).
-        terrain_kind: BipedTerrain: the class of the last terrain segment the pelvis reached (``"flat"``: none),
-            where a failed walk failed.
+        terrain_kind: BipedTerrain: where a failed walk failed: the class of the last terrain segment the pelvis
+            reached before its first unsupported touchdown, or before it fell or ended (``"flat"``: none).
         unsupported_steps: BipedTerrain: touchdowns with less than the env's ``min_support`` of the sole supported.
         min_support_fraction: BipedTerrain: the episode's smallest touchdown support fraction.
         sb3_predict_us: for an SB3 policy on its fast path (``Sb3Policy.fast_path``), the step time SB3's own
@@ -218,7 +218,7 @@ class EvalReport:
     def _terrain_metrics(self) -> dict[str, Any]:
         """``unsupported_rate`` (share of episodes with a touchdown on less than the env's ``min_support`` of the
         sole), ``min_support_fraction`` (the smallest over all episodes) and ``failures_by_terrain`` (failed episodes
-        per class of the last segment they reached, ``"flat"``: none), for BipedTerrain."""
+        per class of the segment where they failed, :attr:`EpisodeSummary.terrain_kind`), for BipedTerrain."""
         s = self.summaries
         if any(e.terrain_kind is None for e in s):
             return {}
@@ -305,6 +305,7 @@ def run_episode(
     clearances = {"min_obstacle_clearance": math.inf, "min_self_clearance": math.inf}
     obstacle_contact = False
     terrain_kind = "flat"
+    failed_on_terrain = False
     state = None
     episode_start = np.array([True])
     while True:
@@ -330,8 +331,10 @@ def run_episode(
         collision = collision or bool(info.get("collision", False))
         obstacle_contact = obstacle_contact or bool(info.get("obstacle_contact", False))
         kind = info.get("terrain_kind")
-        if kind is not None and kind != "flat":
+        if kind is not None and kind != "flat" and not failed_on_terrain:
             terrain_kind = str(kind)
+        # a walk that lands a foot unsupported has failed there, though it may walk on to the course's end
+        failed_on_terrain = failed_on_terrain or bool(info.get("unsupported_steps", 0))
         now = float(info.get("time", len(rows) + 1))
         if time_to_goal is None and info.get("goal_reached", False):
             time_to_goal = now

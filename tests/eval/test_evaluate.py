@@ -162,7 +162,7 @@ def test_a_policys_stop_reason_is_kept_per_episode_and_printed_for_a_failed_epis
     assert lines == [["stopped,", "seed", "0", Stopping.stop_reason]]
 
 
-def test_terrain_metrics_count_failures_by_the_last_class_reached() -> None:
+def test_terrain_metrics_count_failures_by_the_class_where_they_failed() -> None:
     import numpy as np
 
     from redundancy_gym.eval.evaluate import EpisodeSummary, EvalReport
@@ -201,3 +201,42 @@ def test_terrain_metrics_count_failures_by_the_last_class_reached() -> None:
         ENV_ID, "zero", 1, 0, {}, [EpisodeSummary(0, 1, 0.0, False, False, 0.0, 0.0, 1.0, 1.0)], np.ones(1)
     )
     assert "failures_by_terrain" not in plain.to_json()
+
+
+def test_a_walk_that_lands_unsupported_fails_on_that_segment_though_it_walks_on() -> None:
+    import gymnasium as gym
+    import numpy as np
+
+    from redundancy_gym.eval.evaluate import run_episode
+
+    class Scripted(gym.Env):
+        """A walk over stones, flat ground and a slope: an unsupported touchdown on the stones at step 2."""
+
+        observation_space = gym.spaces.Box(-1.0, 1.0, (1,))
+        action_space = gym.spaces.Box(-1.0, 1.0, (1,))
+        kinds = ("flat", "stepping_stones", "stepping_stones", "flat", "slope", "slope")
+
+        def reset(self, *, seed: int | None = None, options: dict[str, object] | None = None) -> tuple:
+            self.n = 0
+            return np.zeros(1), {}
+
+        def step(self, action: object) -> tuple:
+            self.n += 1
+            info = {
+                "terrain_kind": self.kinds[self.n - 1],
+                "unsupported_steps": int(self.n >= 2 and self.unsupported),
+                "min_support_fraction": 0.4,
+            }
+            return np.zeros(1), 0.0, False, self.n == len(self.kinds), info
+
+    class Still:
+        def predict(self, obs: object, **_: object) -> tuple:
+            return np.zeros(1), None
+
+    env = Scripted()
+    env.unsupported = True
+    summary, _ = run_episode(env, Still(), 0)
+    assert summary.terrain_kind == "stepping_stones" and summary.unsupported_steps == 1
+    env.unsupported = False  # a walk that ends on the slope is reported there
+    summary, _ = run_episode(env, Still(), 0)
+    assert summary.terrain_kind == "slope"

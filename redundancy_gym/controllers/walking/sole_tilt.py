@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from ...validation import check_real
 from ..exceptions import ControllerError
 from .support_polygon import SOLE_HALF_WIDTH, SOLE_X
+from .terrain_map import TerrainMapConfig
 
 __all__ = ["SoleTilt", "SoleTiltConfig"]
 
@@ -52,7 +53,8 @@ class SoleTiltConfig:
         max_tilt: largest tilt [rad] about either axis taken into the reference (> 0).
         min_load: a sole's tilt is measured only while it carries more than this share of the measured total
             normal force [0, 1] (an unloaded sole's attitude is its own, not the ground's).
-        min_roughness: the terrain's roughness under the foothold [m] above which its sole adapts (>= 0).
+        min_roughness: the terrain's roughness under the foothold [m] above which its sole adapts (>= 0; by default
+            the map's :attr:`~.terrain_map.TerrainMapConfig.rough_ground`, where it calls the ground rough).
         release: time constant [s] of a lifted sole's return to the plan's orientation (> 0).
         edge_margin: a sole whose centre of pressure lies within this [m] of its edge is tipping: its tilt holds.
     """
@@ -60,7 +62,7 @@ class SoleTiltConfig:
     time_constant: float = 0.05
     max_tilt: float = 0.2
     min_load: float = 0.3
-    min_roughness: float = 0.01
+    min_roughness: float = TerrainMapConfig.rough_ground
     release: float = 0.1
     edge_margin: float = 0.015
 

@@ -363,18 +363,26 @@ class WalkingPattern:
         flat ground or without a terrain map."""
         if self._terrain is None or j < 2 or self._turned:  # a turned walk plans over flat ground
             return 0.0
-        self.foothold(j)  # placed, if not yet
-        cached = self._holds.get(j)
-        return 0.0 if cached is None else cached[1].pitch
+        cached = self._placed(j)
+        return 0.0 if cached is None else cached.pitch
 
     def foothold_roughness(self, j: int) -> float:
         """Peak-to-peak [m] of the terrain under the sole on foothold ``j`` about its surface
         (:attr:`Foothold.roughness`): 0 on flat ground, treads, stones, ramps or without a terrain map."""
         if self._terrain is None or j < 2 or self._turned:
             return 0.0
-        self.foothold(j)  # placed, if not yet
+        cached = self._placed(j)
+        return 0.0 if cached is None else cached.roughness
+
+    def _placed(self, j: int) -> Foothold | None:
+        """Foothold ``j`` as placed on the terrain map (placed now if not yet; None where it is not on the map)."""
         cached = self._holds.get(j)
-        return 0.0 if cached is None else cached[1].roughness
+        if cached is None or j >= self._terrain_open:
+            # placed, or placed again where what it depends on moved (a foothold whose swing has begun keeps its
+            # placement: read without computing its position, several times a period)
+            self.foothold(j)
+            cached = self._holds.get(j)
+        return None if cached is None else cached[1]
 
     def set_terrain(
         self, t: float, terrain: TerrainMap, shift: float, lateral: tuple[float, float, float] = (0.0, 1.0, 0.0)
