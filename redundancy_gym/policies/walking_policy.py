@@ -108,7 +108,8 @@ class WalkingPolicyConfig:
             normal forces against the plan's load share; 0: off; None: the walker's own,
             :data:`CLIK_FOOT_FORCE_GAIN` with ``ik="clik"``, 0 with ``"ikd"``).
         sole_tilt: stance soles on footholds planned on rough ground take their measured tilt into the IK's
-            references (:class:`~redundancy_gym.controllers.walking.SoleTilt`); None: on where the observation has
+            references and, in single support, are pressed towards the desired ZMP
+            (:class:`~redundancy_gym.controllers.walking.SoleTilt`); None: on where the observation has
             a height scan (BipedTerrain-v0), off elsewhere (no terrain map, so no rough footholds either).
     """
 

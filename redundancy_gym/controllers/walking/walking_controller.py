@@ -193,8 +193,9 @@ class WalkingController:
             LIPM plan). The CLIK still moves the standing start onto the pattern's first reference.
         foot_force: ground contact by force (:class:`FootForceControl`, foot force difference control): the soles'
             height references follow the measured normal forces against the plan's load share (None: off).
-        sole_tilt: stance soles on rough ground take their measured tilt into the IK's references
-            (:class:`SoleTilt`; None: off, the soles' references the plan's).
+        sole_tilt: stance soles on rough ground take their measured tilt into the IK's references and, in single
+            support, are pressed towards the stabilizer's desired ZMP (:class:`SoleTilt`; None: off, the soles'
+            references the plan's).
         correction_first_steps: the first steps of a walk (0-2) whose multi-body ZMP correction is estimated from
             their own rollout rather than taken from the steady steps' tables (:attr:`ZmpCorrection.first`).
         servo_stiffness: with ``ikd``, the position servos' ``k_p`` [N m/rad] per actuated joint: each period's
@@ -1061,7 +1062,7 @@ class WalkingController:
         if self.foot_force is not None:
             self._press_feet(start, contact, start_ref, end_ref)
         if self.sole_tilt is not None:
-            self._tilt_soles(start, contact, start_ref, end_ref)
+            self._tilt_soles(start, contact, start_ref, end_ref, feedback.desired_zmp)
         avoidance = None
         if self.rca is not None and self._obstacle_volumes:
             avoidance = self._avoid(start_ref, end_ref)
@@ -1127,9 +1128,11 @@ class WalkingController:
         contact: ZmpEstimate,
         start_ref: NDArray[np.float64],
         end_ref: NDArray[np.float64],
+        desired_zmp: NDArray[np.float64],
     ) -> None:
         """:class:`SoleTilt`: the soles' orientation references of this period turned by their tilts, measured on the
-        footholds planned on rough ground."""
+        footholds planned on rough ground, a single support's stance sole pressed towards ``desired_zmp`` (x, y) [m]
+        (the stabilizer's)."""
         assert self.sole_tilt is not None and self.pattern is not None
         tilt_control = self.sole_tilt
         k = start.step
@@ -1142,6 +1145,7 @@ class WalkingController:
             return  # flat footholds, soles as planned: the update would change nothing
         right, left = contact.normal_force.tolist()
         tipping = [False, False]
+        errors: list[tuple[float, float] | None] = [None, None]
         for i in range(2):
             if limits[i] > 0.0 and start.contact[i]:
                 # the centre of pressure in the sole's frame (its heading from the measured orientation)
@@ -1150,6 +1154,10 @@ class WalkingController:
                 heading = math.atan2(rotation[1, 0], rotation[0, 0])
                 c, s = math.cos(heading), math.sin(heading)
                 tipping[i] = math.isfinite(dx + dy) and tilt_control.tipping((c * dx + s * dy, -s * dx + c * dy))
+                if not start.contact[1 - i] and math.isfinite(dx + dy):
+                    ex = float(desired_zmp[0] - contact.cop[i, 0])
+                    ey = float(desired_zmp[1] - contact.cop[i, 1])
+                    errors[i] = (c * ex + s * ey, -s * ex + c * ey)
         planned = start_ref[12:30].reshape(2, 3, 3)
         tilt = tilt_control.update(
             self.dt,
@@ -1159,6 +1167,7 @@ class WalkingController:
             planned,
             self._soles,
             (tipping[0], tipping[1]),
+            (errors[0], errors[1]),
         ).tolist()
         for i in range(2):
             roll, pitch = tilt[i]

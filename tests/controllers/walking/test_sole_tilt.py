@@ -85,6 +85,28 @@ def test_flat_footholds_unloaded_and_tipping_soles_keep_their_tilt_and_a_lifted_
     assert np.abs(tilt.tilt[0]).max() < 0.01 * np.abs(held[0]).max()
 
 
+def test_a_single_support_sole_is_pressed_towards_the_desired_centre_of_pressure_within_the_bound() -> None:
+    tilt = SoleTilt(SoleTiltConfig(cop_gain=15.0))
+    planned = np.stack([np.eye(3)] * 2)
+    limits = (tilt.limit(0.03), tilt.limit(0.03))
+    # the desired CoP 4 cm ahead of and 1 cm to the left of the measured one; the sole measured as planned and
+    # tipping (its tilt otherwise held): toes pressed down, the left edge down, at the gain's rate
+    tilt.update(DT, (True, False), limits, (600.0, 0.0), planned, planned, (True, False), ((0.04, 0.01), None))
+    np.testing.assert_allclose(tilt.tilt, [(-DT * 15.0 * 0.01, DT * 15.0 * 0.04), (0.0, 0.0)], rtol=1e-12)
+    for _ in range(2000):  # pressed on, never past the ground's bound
+        tilt.update(DT, (True, False), limits, (600.0, 0.0), planned, planned, (True, False), ((0.04, 0.01), None))
+    np.testing.assert_allclose(tilt.tilt[0], (-limits[0], limits[0]), rtol=1e-12)
+    # not on flat footholds, not in the air
+    other = SoleTilt()
+    other.update(DT, (True, False), (0.0, 0.0), (600.0, 0.0), planned, planned, cop_error=((0.04, 0.01), None))
+    other.update(DT, (False, True), limits, (0.0, 600.0), planned, planned, cop_error=((0.04, 0.01), None))
+    assert not other.tilt.any()
+    # no gain, no pressing
+    off = SoleTilt(SoleTiltConfig(cop_gain=0.0))
+    off.update(DT, (True, False), limits, (600.0, 0.0), planned, planned, (True, False), ((0.04, 0.01), None))
+    assert not off.tilt.any()
+
+
 def test_a_centre_of_pressure_near_the_soles_edge_is_tipping() -> None:
     tilt = SoleTilt(SoleTiltConfig(edge_margin=0.015))
     assert not tilt.tipping((0.03, 0.0))
@@ -100,6 +122,7 @@ def test_a_centre_of_pressure_near_the_soles_edge_is_tipping() -> None:
         ("min_load", 1.5, r"in \[0, 1\]"),
         ("min_roughness", math.nan, r">= 0 \[m\]"),
         ("edge_margin", -0.01, r"in \[0, 0.075\] \[m\]"),
+        ("cop_gain", -1.0, r">= 0 \[rad/\(m s\)\]"),
     ],
 )
 def test_bad_config_values_are_named_with_their_range(name: str, value: float, bound: str) -> None:
