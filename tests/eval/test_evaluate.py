@@ -216,6 +216,9 @@ def test_a_walk_that_lands_unsupported_fails_on_that_segment_though_it_walks_on(
         action_space = gym.spaces.Box(-1.0, 1.0, (1,))
         kinds = ("flat", "stepping_stones", "stepping_stones", "flat", "slope", "slope")
 
+        def __init__(self, unsupported: bool) -> None:
+            self.unsupported = unsupported
+
         def reset(self, *, seed: int | None = None, options: dict[str, object] | None = None) -> tuple:
             self.n = 0
             return np.zeros(1), {}
@@ -233,10 +236,8 @@ def test_a_walk_that_lands_unsupported_fails_on_that_segment_though_it_walks_on(
         def predict(self, obs: object, **_: object) -> tuple:
             return np.zeros(1), None
 
-    env = Scripted()
-    env.unsupported = True
-    summary, _ = run_episode(env, Still(), 0)
+    summary, _ = run_episode(Scripted(unsupported=True), Still(), 0)
     assert summary.terrain_kind == "stepping_stones" and summary.unsupported_steps == 1
-    env.unsupported = False  # a walk that ends on the slope is reported there
-    summary, _ = run_episode(env, Still(), 0)
+    # a walk that ends on the slope is reported there
+    summary, _ = run_episode(Scripted(unsupported=False), Still(), 0)
     assert summary.terrain_kind == "slope"

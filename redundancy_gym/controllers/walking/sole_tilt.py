@@ -31,9 +31,9 @@ Holding a tipping sole is not resisting it. In single support the stance sole on
 towards the stabilizer's desired ZMP: its tilt turns at ``cop_gain`` times the desired minus the measured centre of
 pressure in the sole's frame, the sole's edge on the desired side pressed down (toes down for a desired CoP ahead,
 the left edge down for one to the left), the damping control of the ankle in Kajita et al. 2010 on the kinematic
-reference, within the same bound. A sole rolling back onto its heel under a robot that leans back is so pressed
-down at its toes instead of followed: on the development walks 19 of 32 against 14 of 32, falls 7 against 16
-(docs/terrain.md).
+reference, within the same bound. A sole rolling onto an edge or its heel is so pressed down on the other side
+instead of followed: on the development walks 19 of 32 against 14 of 32, falls 7 against 16, the roll doing the
+work (docs/terrain.md).
 """
 
 from __future__ import annotations

@@ -1151,10 +1151,12 @@ class WalkingController:
                 # the centre of pressure in the sole's frame (its heading from the measured orientation)
                 rotation, position = self._soles[i], self._sole_positions[i]
                 dx, dy = float(contact.cop[i, 0] - position[0]), float(contact.cop[i, 1] - position[1])
+                if not math.isfinite(dx + dy):
+                    continue
                 heading = math.atan2(rotation[1, 0], rotation[0, 0])
                 c, s = math.cos(heading), math.sin(heading)
-                tipping[i] = math.isfinite(dx + dy) and tilt_control.tipping((c * dx + s * dy, -s * dx + c * dy))
-                if not start.contact[1 - i] and math.isfinite(dx + dy):
+                tipping[i] = tilt_control.tipping((c * dx + s * dy, -s * dx + c * dy))
+                if not start.contact[1 - i]:
                     ex = float(desired_zmp[0] - contact.cop[i, 0])
                     ey = float(desired_zmp[1] - contact.cop[i, 1])
                     errors[i] = (c * ex + s * ey, -s * ex + c * ey)
