@@ -24,8 +24,9 @@ BORROW: dict[str, Any] = {**JIT, "_nrt": False}
 """:data:`JIT` without reference counting, for kernels that only borrow arrays."""
 
 # Which twin runs: every controller with a compiled twin (Clik/CompiledClik, WholeBodyIk/CompiledWholeBodyIk, the
-# walking measurement/CompiledMeasurement, PredictiveIk.optimize's Python loop/pik_optimize) and every policy option
-# that picks one takes ``backend`` with these choices and this default (checked by validation.check_backend).
+# walking measurement/CompiledMeasurement, PredictiveIk.optimize's Python loop/pik_optimize, TerrainMap.observe's
+# NumPy path/write_scan) and every policy option that picks one takes ``backend`` with these choices and this
+# default (checked by validation.check_backend).
 BACKENDS: tuple[str, ...] = ("compiled", "python")
 """The implementations a ``backend`` argument chooses between: the compiled twin, or the readable Python reference
 it is held equal to (to round-off) by the tests."""

@@ -442,7 +442,7 @@ class WalkingController:
             raise ControllerError("call WalkingController.start(q, speed) before observe_terrain()")
         if self.terrain is None:
             feet = self.pattern.foothold(0), self.pattern.foothold(1)
-            self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])))
+            self.terrain = TerrainMap((float(feet[0][1]), float(feet[1][1])), backend=self.ik_config.backend)
             points = np.asarray(offsets, dtype=np.float64)
             self._scan_reach = float(np.max(np.hypot(points[:, 0], points[:, 1]))) if points.size else 0.0
         x, y, _, yaw = (float(v) for v in base)
@@ -1141,7 +1141,7 @@ class WalkingController:
             # in step k the stance sole stands on foothold k + 1, the swing sole lands on k + 2
             for i in range(2):
                 limits[i] = tilt_control.limit(self.pattern.foothold_roughness(k + 1 if i == (k + 1) % 2 else k + 2))
-        if limits[0] == 0.0 and limits[1] == 0.0 and not tilt_control.tilt.any():
+        if limits[0] == 0.0 and limits[1] == 0.0 and not any(tilt_control.tilt.ravel().tolist()):
             return  # flat footholds, soles as planned: the update would change nothing
         right, left = contact.normal_force.tolist()
         tipping = [False, False]

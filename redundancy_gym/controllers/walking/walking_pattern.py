@@ -13,6 +13,7 @@ decays as ``e^(-omega T)`` per step (about 5e-5 of a step after four 0.8 s steps
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -41,6 +42,8 @@ and the foothold before it stays within these (or the nominal step's, where that
 stride's width across returns to its lanes over a few steps instead of setting a foot onto the other's (soles
 0.15 m wide; :class:`StepAdjusterConfig`'s nearest landing beside the stance foot)."""
 _R = TypeVar("_R")
+_M = TypeVar("_M", bound=Callable[..., Any])
+
 
 ADJUSTED_RISE = 0.35
 """Share of the remaining single support in which an adjusted swing rises to the step height."""
@@ -153,6 +156,25 @@ class _RetimedSwing:
     vertical: PiecewiseQuintic
 
 
+def _moves_footholds(method: _M) -> _M:
+    """Marks a :class:`WalkingPattern` method that changes what the footholds depend on (step adjustments, velocity
+    commands, obstacles, the terrain map): the footholds kept between calls are dropped, and within the method they
+    are computed afresh (memoized only where :meth:`WalkingPattern._memoized` says so)."""
+
+    @functools.wraps(method)
+    def changing(self: WalkingPattern, *args: Any, **kwargs: Any) -> Any:
+        self._keep(False)
+        self._changing += 1
+        try:
+            return method(self, *args, **kwargs)
+        finally:
+            self._changing -= 1
+            if self._changing == 0:
+                self._keep(True)
+
+    return changing  # type: ignore[return-value]
+
+
 class WalkingPattern:
     """Walking from a standing start along the starting heading (+x) at a commanded speed; later commands
     (:meth:`set_velocity`) change the velocity and turn the heading.
@@ -232,8 +254,16 @@ class WalkingPattern:
         # per foothold placed on the terrain: its nominal (x, y, the previous foothold's x, y), the placement and the
         # lateral shift
         self._holds: dict[int, tuple[tuple[float, float, float, float], Foothold, float]] = {}
-        # footholds computed within one sample() or level_step() call, which change nothing they depend on: the
-        # terrain's placement and the CoM height read the same few footholds a dozen times a period
+        # what is computed from the footholds and the step timing, kept until a method that moves them
+        # (:func:`_moves_footholds`) runs: the footholds (the terrain's placement, the CoM height and the step's
+        # levels read the same few a dozen times a period), each step's CoM height ramps, whether it is level and
+        # its swing foot's pitch blend; None within such a method, where only a :meth:`_memoized` scope keeps
+        # footholds (``_memo``)
+        self._footholds: dict[int, NDArray[np.float64]] | None = None
+        self._ramps: dict[int, tuple[float, list[tuple[float, float, float, Quintic]]]] | None = None
+        self._level_steps: dict[int, bool] | None = None
+        self._pitch_blends: dict[int, Quintic] | None = None
+        self._changing = 0
         self._memo: dict[int, NDArray[np.float64]] | None = None
         self._terrain_open = 2
         self._over_terrain: set[int] = set()  # steps whose swings pass terrain (held over it)
@@ -253,14 +283,24 @@ class WalkingPattern:
         self._start_zmp = zmp[0].copy()  # the first knot of the standing start, for a replan within it
         self._plan: DcmPlan = self.planner.plan(times, zmp, com)
         self._plan_step = -1
+        self._keep(True)
+
+    def _keep(self, on: bool) -> None:
+        """Keep what is computed from the footholds (``on``), or drop it and keep nothing (:func:`_moves_footholds`)."""
+        self._footholds = {} if on else None
+        self._ramps = {} if on else None
+        self._level_steps = {} if on else None
+        self._pitch_blends = {} if on else None
 
     # ------------------------------------------------------------------ footholds and timing
     def foothold(self, j: int) -> NDArray[np.float64]:
         """Sole position of foothold ``h_j`` [m]: ``h_0``/``h_1`` the starting right/left feet, then alternating
         (moved by the step adjustments made so far)."""
-        memo = self._memo
+        memo = self._footholds
         if memo is None:
-            return self._foothold(j)
+            memo = self._memo
+            if memo is None:
+                return self._foothold(j)
         h = memo.get(j)
         if h is None:
             h = memo[j] = self._foothold(j)
@@ -384,6 +424,7 @@ class WalkingPattern:
             cached = self._holds.get(j)
         return None if cached is None else cached[1]
 
+    @_moves_footholds
     def set_terrain(
         self, t: float, terrain: TerrainMap, shift: float, lateral: tuple[float, float, float] = (0.0, 1.0, 0.0)
     ) -> None:
@@ -423,6 +464,16 @@ class WalkingPattern:
         k = self.step_at(t)
         if terrain is None or k < 0 or self._turned:
             return True
+        kept = self._level_steps
+        level = kept.get(k) if kept is not None else None
+        if level is None:
+            level = self._level(k, terrain)
+            if kept is not None:
+                kept[k] = level
+        return level
+
+    def _level(self, k: int, terrain: TerrainMap) -> bool:
+        """:meth:`level_step` of step ``k`` on ``terrain``."""
         heights = self._memoized(self._step_heights, k)
         if max(heights) - min(heights) > terrain.config.height_step:
             return False
@@ -457,7 +508,28 @@ class WalkingPattern:
         weight."""
         if self._terrain is None:
             return self.ground + self.config.com_height, 0.0
-        config = self._terrain.config
+        kept = self._ramps
+        ramps = kept.get(k) if kept is not None else None
+        if ramps is None:
+            ramps = self._height_ramps(k, self._terrain)
+            if kept is not None:
+                kept[k] = ramps
+        z, ramp_list = ramps
+        vz = 0.0
+        for begin, duration, change, step in ramp_list:
+            if t <= begin:
+                continue
+            values = step.values(min(t - begin, duration))
+            assert values is not None  # a scalar profile
+            (share,), (rate,), _ = values
+            z += change * share
+            vz += change * rate
+        return z, vz
+
+    def _height_ramps(self, k: int, terrain: TerrainMap) -> tuple[float, list[tuple[float, float, float, Quintic]]]:
+        """Step ``k``'s CoM height before its ramps [m] (:meth:`_com_height`), and the ramps from each step's level to
+        the next that may act in it: their begin [s], duration [s], height change [m] and unit step."""
+        config = terrain.config
         height = self.config.com_height
 
         def level(i: int) -> float:
@@ -466,7 +538,7 @@ class WalkingPattern:
             stance, landing = float(self.foothold(i + 1)[2]), float(self.foothold(i + 2)[2])
             return min(stance, landing) + height
 
-        z, vz = level(k - 2), 0.0
+        ramps = []
         for i in (k - 1, k):
             if i < 0:
                 continue
@@ -475,15 +547,11 @@ class WalkingPattern:
                 continue
             begin = self.step_start(i) + (config.rise_delay if change > 0.0 else config.descent_delay)
             duration = self.step_start(i + 1) - self.step_start(i)
-            if t <= begin:
-                continue
             step = self._height_steps.get(duration)
             if step is None:  # one unit step per step duration, made once
                 step = self._height_steps[duration] = Quintic.from_boundary(duration, 0.0, 1.0)
-            share, rate, _ = step.evaluate(min(t - begin, duration))
-            z += change * float(share)
-            vz += change * float(rate)
-        return z, vz
+            ramps.append((begin, duration, change, step))
+        return level(k - 2), ramps
 
     def _in_place(self, j: int, stop: int) -> NDArray[np.float64]:
         """Foothold ``j`` of a walk stopped in front of a box from foothold ``stop`` on: the feet step in place
@@ -542,6 +610,7 @@ class WalkingPattern:
         """The commanded yaw rate [rad/s] (:meth:`set_velocity`)."""
         return self._yaw_rate
 
+    @_moves_footholds
     def set_velocity(
         self, t: float, forward: float, lateral: float = 0.0, replan: bool = True, yaw_rate: float = 0.0
     ) -> bool:
@@ -663,6 +732,7 @@ class WalkingPattern:
         self._nominal_swing(k)
         return self._modifications.get(k)
 
+    @_moves_footholds
     def set_obstacles(self, t: float, boxes: tuple[ObstacleBox, ...], ssta: Ssta) -> bool:
         """Plan the footholds and swings not yet begun at ``t`` [s] around obstacle ``boxes`` with ``ssta``
         (monograph 5.4.2): the walking line moves sideways where boxes are passed best beside the feet
@@ -1012,9 +1082,17 @@ class WalkingPattern:
             pitch[swing_side] += landing
             return
         single = self.step_single(k)
-        angle, angle_rate, _ = Quintic.from_boundary(single, lift_off, landing).evaluate(min(s, single))
-        pitch[swing_side] += float(angle)
-        rate[swing_side] += float(angle_rate)
+        kept = self._pitch_blends
+        blend = kept.get(k) if kept is not None else None
+        if blend is None:
+            blend = Quintic.from_boundary(single, lift_off, landing)
+            if kept is not None:
+                kept[k] = blend
+        values = blend.values(min(s, single))
+        assert values is not None  # a scalar profile
+        (angle,), (angle_rate,), _ = values
+        pitch[swing_side] += angle
+        rate[swing_side] += angle_rate
 
     def _swing_yaw(self, k: int, nominal: float) -> tuple[float, float]:
         """Heading [rad] and its rate [rad/s] of step ``k``'s swing foot at nominal swing time ``nominal`` [s]: a
@@ -1271,6 +1349,7 @@ class WalkingPattern:
             self._replan(k)
         return self._plan.sample(t).dcm
 
+    @_moves_footholds
     def preview_dcm(self, t: float, shift: ArrayLike, single: float) -> NDArray[np.float64]:
         """The planned DCM at ``t`` [m] that :meth:`adjust_step` ``(t, shift, single)`` would give (nothing changes).
 
@@ -1286,6 +1365,7 @@ class WalkingPattern:
             self._shifts, self._singles = shifts, singles
         return self.planner.first_dcm(times, zmp)
 
+    @_moves_footholds
     def adjust_step(self, t: float, shift: ArrayLike, single: float) -> None:
         """Move the swing foot's landing and every later foothold by ``shift`` (x, y) [m] and end the current single
         support ``single`` [s] after the step's start (sooner or later than planned, at most twice the nominal

@@ -4,6 +4,7 @@ steps up and down (continuous in height and velocity)."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 
@@ -250,3 +251,64 @@ def test_push_recovery_may_act_on_a_step_over_rough_ground_but_not_on_one_over_a
     pattern.set_terrain(0.0, stairs, 0.0)
     over = [k for k in range(0, 12) if not pattern.level_step(pattern.step_start(k) + 0.01)]
     assert over and all(pattern.foothold_roughness(j) == 0.0 for k in over for j in (k, k + 1, k + 2))
+
+
+def test_the_compiled_scan_write_is_the_numpy_one_bit_for_bit() -> None:
+    rng = np.random.default_rng(3)
+    # the default grid, and a layout whose rows differ in length (padded with the row's last point)
+    layouts = (SCAN, SCAN[SCAN[:, 1] < 0.15 + 0.05 * (SCAN[:, 0] > 0.5)])
+    for layout in layouts:
+        compiled, reference = TerrainMap(LANES), TerrainMap(LANES, backend="python")
+        for _ in range(200):
+            # poses along and off the map's ends, yawed up to 0.3 rad, drifted across
+            base = (rng.uniform(-3.0, 59.5), rng.uniform(-0.15, 0.15), 0.9, rng.uniform(-0.3, 0.3))
+            scan = np.asarray(rng.normal(0.0, 0.03, layout.shape[0]) - 0.9)
+            compiled.observe(base, scan, layout)
+            reference.observe(base, scan, layout)
+        assert np.isfinite(reference._heights).sum() > 1000
+        np.testing.assert_array_equal(compiled._heights, reference._heights)
+        for lane in (0, 1):
+            np.testing.assert_array_equal(compiled.profile(lane), reference.profile(lane))
+
+
+def test_a_bad_backend_is_named() -> None:
+    with pytest.raises(ControllerError, match="backend must be one of compiled, python"):
+        TerrainMap(LANES, backend="gpu")
+
+
+@pytest.mark.parametrize("terrain", ["rough", "stairs"])
+def test_what_the_pattern_keeps_between_periods_is_what_it_computes_afresh(terrain: str) -> None:
+    # the footholds, CoM height ramps, level steps and pitch blends kept between calls, against a twin that keeps
+    # nothing, through terrain replanning once a step and push recovery's previews and adjustments
+    ground = _rough(0.02) if terrain == "rough" else _boxes((1.0, 1.6, 0.1), (1.6, 2.2, 0.2), (2.2, 4.0, 0.05))
+    terrain_map = _mapped(ground, until=5.0)
+    kept, fresh = (WalkingPattern(GaitConfig(), (0.0, -0.09, 0.0), (0.0, 0.09, 0.0), (0.0, 0.0), 0.4) for _ in "ab")
+    fresh._keep(False)
+    fresh._keep = lambda on: WalkingPattern._keep(fresh, False)  # type: ignore[method-assign]
+    adjusted, planned = 0, -2
+    for t in np.arange(0.0, 9.0, 0.002).tolist():
+        k = kept.step_at(t)
+        if k != planned:  # once a step, as the walking controller does, the plan drifted by a millimetre a step
+            planned = k
+            for pattern in (kept, fresh):
+                pattern.set_terrain(t, terrain_map, 0.001 * k)
+        a, b = kept.sample(t), fresh.sample(t)
+        for field in dataclasses.fields(a):
+            name = field.name
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=f"{name} at t={t}")
+        assert kept.level_step(t) == fresh.level_step(t)
+        assert [kept.foothold_roughness(j) for j in range(k, k + 4)] == [
+            fresh.foothold_roughness(j) for j in range(k, k + 4)
+        ]
+        _, s, remaining = kept.swing_state(t)
+        if k >= 2 and 0.1 < s and remaining > 0.2 and kept.level_step(t):
+            single = s + 0.5 * remaining
+            period = round(t / 0.002) % 40
+            if period == 0:  # a preview, and an adjustment a period later, after a sample kept what it read
+                preview = kept.preview_dcm(t, (0.02, -0.01), single)
+                np.testing.assert_array_equal(preview, fresh.preview_dcm(t, (0.02, -0.01), single))
+            elif period == 1:
+                for pattern in (kept, fresh):
+                    pattern.adjust_step(t, (0.01, 0.005), single)
+                adjusted += 1
+    assert adjusted >= 3
