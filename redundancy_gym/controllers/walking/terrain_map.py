@@ -48,7 +48,11 @@ class TerrainMapConfig:
         margin: length [m] added to the footprint at both ends: the distance kept from an edge.
         riser_margin: distance [m] kept between the sole's ends and terrain higher than the surface it stands on (a
             riser ahead of a short tread; the feet land a centimetre or two off their plan).
-        surface_tolerance: a cell within this of the footprint's line supports the sole [m].
+        surface_tolerance: a cell within this of the footprint's level surface supports the sole [m].
+        line_tolerance: a cell within this of the footprint's fitted line (a ramp) supports the sole [m]: the
+            profile's cells lie within a millimetre of a ramp, and a sole across the top or foot of a ramp (a kink,
+            on which it rocks) deviates from the line through both by less than a centimetre (a third of the sole on
+            either side of a 6 deg kink: 4 mm).
         distance_cost: support traded per metre of foothold moved off the nominal one [1/m] (where every candidate
             meets higher terrain).
         rise_delay, descent_delay: the CoM's height moves up (down) to a step's level over one step duration from
@@ -85,11 +89,13 @@ class TerrainMapConfig:
     height_step: float = 0.03
     step_reach: float = 0.03
     rough_ground: float = 0.01
+    line_tolerance: float = 0.0025
 
     def __post_init__(self) -> None:
         for name in (
             "cell",
             "lane_tolerance",
+            "line_tolerance",
             "length",
             "heel",
             "toe",
@@ -282,7 +288,7 @@ class TerrainMap:
         mean = heights.mean(axis=1)
         slope = (heights - mean[:, None]) @ centred / (centred @ centred)
         line = mean[:, None] + slope[:, None] * (offsets[None, :] - offsets.mean())
-        sloped = (np.abs(heights - line) <= c.surface_tolerance).mean(axis=1)
+        sloped = (np.abs(heights - line) <= c.line_tolerance).mean(axis=1)
         # a ramp only where the line is steeper than min_slope: on rough ground a line through the bumps would tilt
         # the foot for nothing
         use_line = (sloped > flat) & (np.abs(slope) > math.tan(c.min_slope))

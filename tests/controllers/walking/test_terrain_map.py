@@ -312,3 +312,27 @@ def test_what_the_pattern_keeps_between_periods_is_what_it_computes_afresh(terra
                     pattern.adjust_step(t, (0.01, 0.005), single)
                 adjusted += 1
     assert adjusted >= 3
+
+
+@pytest.mark.parametrize("angle_deg", [6.0, 10.0])
+def test_a_foothold_does_not_straddle_a_ramps_kink(angle_deg: float) -> None:
+    # a sole across the top of a ramp (the ramp's slope under its heel, the level top under its toes) rocks on the
+    # ridge; a line through both deviates by under a centimetre, within a level's surface tolerance: only the
+    # line's own, tighter, tolerance tells the kink
+    angle = math.radians(angle_deg)
+    ramp = Terrain(
+        (TerrainSegment("slope", 1.0, 5.0, ramps=((1.0, 2.5, 3.5, 5.0, 1.5 * math.tan(angle), -1.0, 1.0),)),)
+    )
+    terrain_map = _mapped(ramp)
+    c = terrain_map.config
+    for kink in (2.5, 3.5):
+        for nominal in np.arange(kink - 0.15, kink + 0.15, 0.02):
+            hold = terrain_map.place(0, float(nominal), kink - 0.4, kink + 0.4)
+            heel, toe = hold.x - c.heel, hold.x + c.toe
+            # the sole lies along one of the two surfaces, most of it over that surface (not pitched in between, on the
+            # ridge)
+            sloping = abs(hold.pitch) > 0.5 * angle
+            over_ramp = (kink - heel if kink == 2.5 else toe - kink) / (toe - heel)
+            share = over_ramp if sloping else 1.0 - over_ramp
+            assert share >= 0.6, (kink, nominal, hold, share)
+            assert abs(hold.pitch) == pytest.approx(angle if sloping else 0.0, abs=0.02), (kink, nominal, hold)
