@@ -175,6 +175,17 @@ def _moves_footholds(method: _M) -> _M:
     return changing  # type: ignore[return-value]
 
 
+def _kept(kept: dict[int, _R] | None, k: int, compute: Callable[[], _R]) -> _R:
+    """Step ``k``'s value from ``kept`` (a :class:`WalkingPattern` cache of :func:`_moves_footholds`), computed and
+    kept there if missing; computed afresh where nothing is kept (None)."""
+    if kept is None:
+        return compute()
+    value = kept.get(k)
+    if value is None:
+        value = kept[k] = compute()
+    return value
+
+
 class WalkingPattern:
     """Walking from a standing start along the starting heading (+x) at a commanded speed; later commands
     (:meth:`set_velocity`) change the velocity and turn the heading.
@@ -464,13 +475,7 @@ class WalkingPattern:
         k = self.step_at(t)
         if terrain is None or k < 0 or self._turned:
             return True
-        kept = self._level_steps
-        level = kept.get(k) if kept is not None else None
-        if level is None:
-            level = self._level(k, terrain)
-            if kept is not None:
-                kept[k] = level
-        return level
+        return _kept(self._level_steps, k, lambda: self._level(k, terrain))
 
     def _level(self, k: int, terrain: TerrainMap) -> bool:
         """:meth:`level_step` of step ``k`` on ``terrain``."""
@@ -508,13 +513,8 @@ class WalkingPattern:
         weight."""
         if self._terrain is None:
             return self.ground + self.config.com_height, 0.0
-        kept = self._ramps
-        ramps = kept.get(k) if kept is not None else None
-        if ramps is None:
-            ramps = self._height_ramps(k, self._terrain)
-            if kept is not None:
-                kept[k] = ramps
-        z, ramp_list = ramps
+        terrain = self._terrain
+        z, ramp_list = _kept(self._ramps, k, lambda: self._height_ramps(k, terrain))
         vz = 0.0
         for begin, duration, change, step in ramp_list:
             if t <= begin:
@@ -1082,12 +1082,7 @@ class WalkingPattern:
             pitch[swing_side] += landing
             return
         single = self.step_single(k)
-        kept = self._pitch_blends
-        blend = kept.get(k) if kept is not None else None
-        if blend is None:
-            blend = Quintic.from_boundary(single, lift_off, landing)
-            if kept is not None:
-                kept[k] = blend
+        blend = _kept(self._pitch_blends, k, lambda: Quintic.from_boundary(single, lift_off, landing))
         values = blend.values(min(s, single))
         assert values is not None  # a scalar profile
         (angle,), (angle_rate,), _ = values
