@@ -45,9 +45,10 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --no-cache-dir --upgrade pip
 
-# the demo evaluates the shipped learned baselines (stable-baselines3 .zip files): core + the learn extra
+# the demo evaluates the shipped learned baselines (stable-baselines3 .zip files) and writes Minari datasets: core +
+# the learn and dataset extras
 $(VENV)/.learn-installed: pyproject.toml | $(VENV)/bin/python system-deps
-	$(BIN)/pip install -q --no-cache-dir -e ".[learn]"
+	$(BIN)/pip install -q --no-cache-dir -e ".[learn,dataset]"
 	touch $@
 
 $(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps

@@ -24,6 +24,7 @@ EPILOG = """examples:
   redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy clik --episodes 20 --env-kwargs '{"obstacle": false}'
   redundancy-gym train redundancy_gym/PlanarReach-v0 --config configs/ppo_planar_reach.yaml --steps 100000
   redundancy-gym eval redundancy_gym/PlanarReach-v0 --policy runs/ppo_PlanarReach-v0.zip
+  redundancy-gym collect redundancy_gym/PlanarReach-v0 --policy clik --episodes 50 --out datasets
 """
 ENV_HELP = "a registered env id, e.g. redundancy_gym/PlanarReach-v0 (redundancy-gym list shows them all)"
 POLICY_HELP = (
@@ -70,7 +71,9 @@ def _parser() -> argparse.ArgumentParser:
         prog="redundancy-gym", description=__doc__, epilog=EPILOG, formatter_class=_RawHelpFormatter
     )
     parser.add_argument("--version", action="version", version=f"redundancy-gym {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, metavar="{list,eval,train,baselines,render,bench,demo}")
+    sub = parser.add_subparsers(
+        dest="command", required=True, metavar="{list,eval,train,collect,baselines,render,bench,demo}"
+    )
 
     ls = _add_parser(sub, "list", "list the registered envs: spaces, control period, episode length, policies")
     ls.add_argument("--json", action="store_true", help="print JSON instead of a table")
@@ -238,6 +241,50 @@ def _parser() -> argparse.ArgumentParser:
         "goes to <out>_last.zip)",
     )
     tr.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    tr.add_argument(
+        "--dataset",
+        metavar="DIR",
+        help="with --algo bc: learn round 0 from this Minari dataset (redundancy-gym collect) instead of expert "
+        "rollouts; with dagger_rounds 0 in the config, from the dataset alone",
+    )
+
+    co = _add_parser(
+        sub,
+        "collect",
+        "record a policy's episodes as a Minari dataset (the dataset extra): observations, actions, rewards, "
+        "the env's metrics; its env spec, policy, seeds and success rate in the metadata",
+    )
+    co.add_argument("env_id", help=ENV_HELP)
+    co.add_argument("--wrapper", metavar="NAME", help=WRAPPER_HELP)
+    co.add_argument(
+        "--wrapper-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object of the wrapper's options"
+    )
+    co.add_argument(
+        "--policy", metavar="NAME|ZIP", help="the policy recorded (default: the env's reference, clik or walking)"
+    )
+    co.add_argument("--episodes", type=int, default=10, metavar="N", help="number of episodes")
+    co.add_argument("--seed", type=int, default=0, metavar="N", help="episode i is reset with seed + i")
+    co.add_argument(
+        "--out", default="datasets", metavar="DIR", help="root folder of the datasets (MINARI_DATASETS_PATH)"
+    )
+    co.add_argument("--dataset-id", metavar="ID", help="Minari id (default: redundancy_gym/<env name>/<policy>-v0)")
+    co.add_argument(
+        "--action-noise",
+        type=float,
+        default=0.0,
+        metavar="SIGMA",
+        help="Gaussian noise on the stepped action [fraction of its half range] (DART); the policy's own action "
+        "is kept as infos['expert_action']",
+    )
+    co.add_argument(
+        "--env-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object passed to gym.make"
+    )
+    co.add_argument(
+        "--policy-kwargs", type=_json_object, default={}, metavar="JSON", help="JSON object of policy options"
+    )
+    co.add_argument("--overwrite", action="store_true", help="replace a dataset of the same id in --out")
+    co.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     re = _add_parser(sub, "render", "record one episode as .mp4 or .gif")
     re.add_argument("env_id", help=ENV_HELP)
@@ -486,8 +533,8 @@ def _train(args: argparse.Namespace) -> None:
     if args.algo == "bc":
         _train_behaviour_cloning(args, config)
         return
-    if args.expert is not None:
-        raise EvalError("--expert applies to --algo bc only")
+    if args.expert is not None or args.dataset is not None:
+        raise EvalError("--expert and --dataset apply to --algo bc only")
     steps = args.steps if args.steps is not None else config.n_timesteps
     if steps is None:
         raise EvalError("give --steps, or a --config whose section has n_timesteps")
@@ -546,6 +593,30 @@ def _train(args: argparse.Namespace) -> None:
         keep=args.keep,
     )
     print(f"wrote {path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {path}")
+
+
+def _collect(args: argparse.Namespace) -> None:
+    from .datasets import collect_dataset
+
+    summary = collect_dataset(
+        args.env_id,
+        args.out,
+        policy=args.policy,
+        policy_kwargs=args.policy_kwargs,
+        env_kwargs=args.env_kwargs,
+        episodes=args.episodes,
+        seed=args.seed,
+        action_noise=args.action_noise,
+        dataset_id=args.dataset_id,
+        overwrite=args.overwrite,
+        progress=not args.no_progress,
+    )
+    print(f"wrote {summary.format()}")
+    print(
+        f'load it with: MINARI_DATASETS_PATH={args.out} python -c "import minari; '
+        f"print(minari.load_dataset('{summary.dataset_id}'))\"; clone it with: redundancy-gym train "
+        f"{args.env_id} --algo bc --dataset {summary.path}"
+    )
 
 
 def _workers(args: argparse.Namespace) -> int:
@@ -623,8 +694,11 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
         options["net_arch"] = tuple(options["net_arch"])
     if args.expert is not None:
         options["expert"] = args.expert
+    if args.dataset is not None:
+        options["dataset"] = args.dataset
     out = args.out or f"runs/bc_{args.env_id.split('/')[-1]}.zip"
-    print(f"behaviour cloning on {args.env_id} from {options.get('expert') or 'the reference'}, seed {args.seed}")
+    source = f"the dataset {args.dataset}" if args.dataset else options.get("expert") or "the reference"
+    print(f"behaviour cloning on {args.env_id} from {source}, seed {args.seed}")
     summary = train_behaviour_cloning(
         args.env_id,
         out,
@@ -664,7 +738,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         except BenchError as exc:
             parser.error(str(exc))
     try:
-        if args.command in ("eval", "train", "render"):
+        if args.command in ("eval", "train", "render", "collect"):
             _apply_wrapper(args)
         if args.command == "list":
             rows = list_envs()
@@ -692,6 +766,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 print(f"wrote {report.write_json(args.json_path)}")
         elif args.command == "train":
             _train(args)
+        elif args.command == "collect":
+            _collect(args)
         elif args.command == "baselines":
             _baselines(args)
         elif args.command == "demo":

@@ -40,7 +40,8 @@ def run_demo(
     """Evaluate the ``clik`` reference on PlanarReach (with and without obstacle) and AgriReach (medium and hard
     crops), the ``walking`` reference on BipedWalk and on BipedObstacles (beam and triangle), the shipped learned
     baselines against every analytic reference (appended to the speed-vs-error report), the references under
-    dynamics randomization (a short ``bench robustness``) and the kinematic IKD study; write JSON, PNG and MP4.
+    dynamics randomization (a short ``bench robustness``) and the kinematic IKD study; write JSON, PNG and MP4, and a
+    small Minari dataset of each reference per env (``datasets/``, listed with its size in ``datasets.json``).
 
     ``workers``: processes each evaluation's episodes are split across (the same numbers, timings excepted; with
     both cores busy the step times are those of a loaded machine).
@@ -95,6 +96,7 @@ def run_demo(
     written.extend(_biped_terrain(out, seed=seed, progress=progress))
     written.extend(_predictive(out, seed=seed))
     written.extend(_ikd_study(out, progress=progress))
+    written.append(_datasets(out, seed=seed, progress=progress))
     for path in written:
         print(f"wrote {path}")
     return written
@@ -276,6 +278,53 @@ def _biped_terrain(out: Path, *, seed: int, progress: bool) -> list[Path]:
     )
     written.append(path)
     return written
+
+
+DEMO_DATASETS: dict[str, tuple[str, dict[str, Any], int]] = {
+    "redundancy_gym/PlanarReach-v0": ("clik", {}, 2),
+    "redundancy_gym/AgriReach-v0": ("clik", {"difficulty": "medium"}, 2),
+    "redundancy_gym/BipedWalk-v0": ("walking", {}, 1),
+    "redundancy_gym/BipedObstacles-v0": ("walking", {}, 1),
+    "redundancy_gym/BipedTerrain-v0": ("walking", {"terrain": "platform"}, 1),
+}
+"""``make demo``'s datasets: env id -> (reference policy, env kwargs, episodes)."""
+
+
+def _datasets(out: Path, *, seed: int, progress: bool) -> Path:
+    """A small Minari dataset of the reference on every env (``redundancy-gym collect``), into ``out/datasets``;
+    ``datasets.json`` lists each with its episodes, steps, success rate and size. About a minute."""
+    from .datasets import DatasetError, collect_dataset
+
+    rows = []
+    for env_id, (policy, env_kwargs, episodes) in DEMO_DATASETS.items():
+        try:
+            summary = collect_dataset(
+                env_id,
+                out / "datasets",
+                policy=policy,
+                env_kwargs=env_kwargs,
+                episodes=episodes,
+                seed=seed,
+                overwrite=True,
+                progress=progress,
+            )
+        except DatasetError as exc:  # Minari missing: the rest of the demo stands
+            print(f"datasets skipped: {exc}")
+            break
+        print(summary.format())
+        rows.append(
+            {
+                "env_id": env_id,
+                "env_kwargs": env_kwargs,
+                "dataset_id": summary.dataset_id,
+                "path": str(summary.path),
+                "episodes": summary.episodes,
+                "steps": summary.steps,
+                "success_rate": summary.success_rate,
+                "size_bytes": summary.size_bytes,
+            }
+        )
+    return write_json({"datasets": rows}, out / "datasets.json")
 
 
 def _predictive(out: Path, *, seed: int) -> list[Path]:

@@ -1,5 +1,5 @@
-"""docs/architecture.md: geometry <- model <- controllers <- policies/wrappers <- eval <- learning <- studies <- bench
-<- demo <- cli; assets <- envs <- policies, wrappers, eval.
+"""docs/architecture.md: geometry <- model <- controllers <- policies/wrappers <- eval <- datasets <- learning
+<- studies <- bench <- demo <- cli; assets <- envs <- policies, wrappers, eval.
 
 The core (geometry, model, controllers) never imports gymnasium, mujoco, dm_control, envs, policies, wrappers or
 anything above them; envs never import controllers, policies or wrappers; policies never import wrappers (a wrapper
@@ -38,7 +38,7 @@ def _imports(path: Path) -> set[str]:
     return names
 
 
-FLOORS = ("eval", "learning", "studies", "bench", "demo", "cli")
+FLOORS = ("eval", "datasets", "learning", "studies", "bench", "demo", "cli")
 """The floors above policies and wrappers, lowest first: each may import those below it, never those above."""
 
 

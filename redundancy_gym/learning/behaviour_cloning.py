@@ -5,6 +5,8 @@ Round 0 rolls the reference (the expert) out and records ``(observation, expert 
 (DAgger, Ross et al. 2011) rolls the learner out, labels the states it visits with the expert's action and adds
 them to the data; after each round the network is fitted again on all data (mean squared error of the Gaussian
 policy's mean against the expert's action, Adam). The expert reads only the observation, so it can label any state.
+Round 0's data may come from a collected Minari dataset instead (``dataset``; :mod:`redundancy_gym.datasets`): with
+no DAgger rounds the network learns from the dataset alone.
 The policy's log standard deviation is set to ``log_std`` so that the saved agent acts nearly deterministically
 even when sampled (and could be fine-tuned with PPO from there).
 """
@@ -21,6 +23,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
+from ..datasets import load_demonstrations
 from ..eval.evaluate import make_env
 from ..policies import make_policy
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
@@ -92,7 +95,7 @@ def train_behaviour_cloning(
     expert_kwargs: dict[str, Any] | None = None,
     env_kwargs: dict[str, Any] | None = None,
     episodes: int = 20,
-    dagger_rounds: int = 4,
+    dagger_rounds: int | None = None,
     dagger_episodes: int = 10,
     epochs: int = 30,
     batch_size: int = 256,
@@ -102,6 +105,7 @@ def train_behaviour_cloning(
     seed: int = 0,
     progress: bool = True,
     log: Any = print,
+    dataset: str | Path | None = None,
 ) -> BehaviourCloningSummary:
     """Clone ``expert`` (a registered policy; default: the env's reference, ``clik`` or ``walking``) into an SB3 PPO
     policy and save it to ``out``.
@@ -113,7 +117,7 @@ def train_behaviour_cloning(
         expert: the policy to clone (None: the env's reference policy).
         expert_kwargs, env_kwargs: its options; ``gym.make`` keyword arguments.
         episodes: expert episodes of round 0 (seeds ``seed`` ...).
-        dagger_rounds: DAgger rounds after it (0: plain behaviour cloning).
+        dagger_rounds: DAgger rounds after it (0: plain behaviour cloning; None: 4, or 0 from a ``dataset``).
         dagger_episodes: learner episodes per DAgger round (seeds continue after the expert's).
         epochs: passes over all data after each round.
         batch_size, learning_rate: Adam's minibatch size and step size.
@@ -122,12 +126,18 @@ def train_behaviour_cloning(
         seed: seed of the network and the first episode.
         progress: a progress bar over the rounds.
         log: where the summary line goes (None: nowhere).
+        dataset: a Minari dataset of ``env_id`` (:func:`~redundancy_gym.datasets.collect_dataset`; its folder,
+            :func:`~redundancy_gym.datasets.find_dataset`) whose pairs are round 0's data in place of ``episodes``
+            expert rollouts; the expert then only labels the DAgger rounds (none with ``dagger_rounds=0``: the
+            dataset alone).
     """
     try:
         sb3 = import_stable_baselines3()
         import torch
     except ImportError as exc:
         raise LearningError(f"behaviour cloning needs the learn extra: {LEARN_EXTRA_HINT}") from exc
+    if dagger_rounds is None:
+        dagger_rounds = 0 if dataset is not None else 4
     for name, value, least in (
         ("episodes", episodes, 1),
         ("dagger_rounds", dagger_rounds, 0),
@@ -139,11 +149,17 @@ def train_behaviour_cloning(
             raise LearningError(f"{name} must be an int >= {least}, got {value!r}")
     if not math.isfinite(learning_rate) or learning_rate <= 0.0:
         raise LearningError(f"learning_rate must be finite and > 0, got {learning_rate!r}")
+    demonstrations = None
+    if dataset is not None:
+        demonstrations = load_demonstrations(dataset)
+        recorded = demonstrations.metadata.get("env_id")
+        if recorded != env_id:
+            raise LearningError(f"the dataset in {demonstrations.path} was collected on {recorded}, not {env_id}")
     clock = CpuClock().__enter__()
     env = make_env(env_id, env_kwargs)
     if expert is None:
         expert = "walking" if "Biped" in env_id else "clik"
-    teacher = make_policy(expert, env, **(expert_kwargs or {}))
+    teacher = make_policy(expert, env, **(expert_kwargs or {})) if demonstrations is None or dagger_rounds else None
     torch.manual_seed(seed)
     model = sb3.PPO(
         "MlpPolicy",
@@ -186,7 +202,16 @@ def train_behaviour_cloning(
         with tqdm(
             total=1 + dagger_rounds, desc=f"behaviour cloning {expert}", unit="round", disable=not progress
         ) as bar:
-            observations, labels, steps, _ = _rollout(env, lambda obs, start, label: label, teacher, episodes, seed)
+            if demonstrations is None:
+                observations, labels, steps, _ = _rollout(env, lambda obs, start, label: label, teacher, episodes, seed)
+            else:
+                if demonstrations.observations.shape[1:] != env.observation_space.shape:
+                    raise LearningError(
+                        f"the dataset's observations have shape {demonstrations.observations.shape[1:]}; "
+                        f"{env_id} observes {env.observation_space.shape}"
+                    )
+                observations, labels = list(demonstrations.observations), list(demonstrations.actions)
+                steps = len(observations)
             loss = fit(np.array(observations), np.array(labels))
             bar.update(1)
             success: list[float] = []
@@ -229,6 +254,7 @@ def train_behaviour_cloning(
             "learning_rate": learning_rate,
             "net_arch": list(net_arch),
             "log_std": log_std,
+            "dataset": None if demonstrations is None else str(demonstrations.path),
         },
         machine=machine(),
         result={"samples": len(observations), "action_mse": loss, "learner_success_per_dagger_round": list(success)},
