@@ -336,23 +336,29 @@ def _parser() -> argparse.ArgumentParser:
         "--steps",
         type=int,
         metavar="N",
-        help="soak only: steps per env instead of --seconds, split over the action sources",
+        help="soak: steps per env instead of --seconds, split over the action sources; curves: the largest "
+        "budget [environment steps] of every run (the smaller ones kept)",
     )
     be.add_argument(
-        "--trials", type=int, metavar="N", help="push only: trials per impulse level (default: 20, --quick: 5)"
+        "--trials",
+        type=int,
+        metavar="N",
+        help="push: trials per impulse level (default: 20, --quick: 5); curves: training seeds per learner "
+        "(default: 3, --quick: 1)",
     )
     be.add_argument(
         "--episodes",
         type=int,
         metavar="N",
-        help="learned, robustness: episodes per policy (and condition) from --seed (default: 20 and 10, --quick: 2)",
+        help="learned, robustness: episodes per policy (and condition) from --seed (default: 20 and 10, --quick: 2); "
+        "curves: held-out episodes per point (default: 10, --quick: 1)",
     )
     be.add_argument(
         "--workers",
         type=int,
         metavar="N",
         help="learned, robustness: split each evaluation's episodes across N processes (default: 1); scale: the "
-        "worker count compared with the serial loop (default: 2)",
+        "worker count compared with the serial loop (default: 2); curves: runs trained at once (default: 1)",
     )
     be.add_argument(
         "--ray",
@@ -367,7 +373,9 @@ def _parser() -> argparse.ArgumentParser:
         nargs="+",
         metavar="ENV",
         help="learned: planar_reach, agri_reach, biped_walk, biped_obstacles, biped_terrain; robustness: the first "
-        "four (default: all); the other envs' sections of an existing --json of the same seed and episodes are kept",
+        "four (default: all); the other envs' sections of an existing --json of the same seed and episodes are kept; "
+        "curves: planar_reach, agri_reach_easy/_medium/_hard, biped_walk, biped_obstacles, or one learner as "
+        "ENV-LEARNER (planar_reach-ppo)",
     )
 
     ba = _add_parser(

@@ -214,6 +214,30 @@ def _robustness(a: BenchArgs) -> int:
     return 0
 
 
+def _curves(a: BenchArgs) -> int:
+    from .curves import curves_markdown, plot_curves_bench, run_curves_bench
+
+    table = run_curves_bench(
+        a.json_path,
+        seeds=a.trials if a.trials is not None else (1 if a.quick else 3),
+        episodes=a.episodes if a.episodes is not None else (1 if a.quick else 10),
+        envs=a.envs,
+        steps=a.steps,
+        workers=a.workers if a.workers is not None else 1,
+        quick=a.quick,
+        progress=a.progress,
+    )
+    command = "redundancy-gym bench curves" + (" --quick" if a.quick else "") + f" --json {a.json_path}"
+    _write_table(
+        a,
+        table,
+        "Learning curves against the analytic references",
+        lambda t: curves_markdown(t, command=command),
+        plot_curves_bench,
+    )
+    return 0
+
+
 def _scale(a: BenchArgs) -> int:
     from .scale import format_scale_bench, run_scale_bench
 
@@ -310,6 +334,14 @@ BENCHES: Mapping[str, Bench] = {
             "the JSON)",
             frozenset({"episodes", "workers", "envs"}),
             _robustness,
+        ),
+        Bench(
+            "curves",
+            "learning curves: every learner per env at logarithmically spaced budgets, 3 training seeds "
+            "(--trials), held-out evaluations, the references as lines; resumable; --steps caps the budgets, "
+            "--envs picks envs or env-learner pairs (markdown and one PNG per env beside the JSON)",
+            frozenset({"episodes", "workers", "envs", "steps", "trials"}),
+            _curves,
         ),
         Bench(
             "scale",

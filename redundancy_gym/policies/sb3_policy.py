@@ -26,9 +26,12 @@ from .mlp_inference import MlpInference
 from .options import env_name
 from .shipped_models import SHIPPED_MODELS_DIR
 
-__all__ = ["SB3_ALGOS", "Sb3Policy", "is_shipped_model_file", "mlp_inference_from_sb3"]
+__all__ = ["SB3_ALGOS", "SB3_CONTRIB_ALGOS", "Sb3Policy", "is_shipped_model_file", "mlp_inference_from_sb3"]
 
 SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
+SB3_CONTRIB_ALGOS = ("TQC", "CrossQ")
+"""sb3-contrib's algorithms a ``.zip`` may hold (tried after :data:`SB3_ALGOS` where sb3-contrib is installed; the
+learning curves' sample-efficient learner)."""
 
 _LOG = logging.getLogger(__name__)
 # Without a logging configuration, Python's last-resort handler prints WARNING records to stderr: the CLI and a
@@ -67,7 +70,8 @@ class Sb3Policy:
         path: the ``.zip`` written by ``model.save``. Loading it can run code from the file (SB3 unpickles its
             objects): load only files you trust; one from outside the shipped models is logged with its path.
         env: the environment (checked against the model's spaces by SB3).
-        algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG when omitted.
+        algo: the SB3 algorithm class name; tried in the order PPO, SAC, TD3, A2C, DDPG, then sb3-contrib's TQC and
+            CrossQ (where installed), when omitted.
         fast_path: run a plain MLP's deterministic ``predict`` on the compiled fast path (False: SB3's always, for
             torch's float32 actions to the last bit: on a biped, a difference of 1e-6 can move a fall by steps).
 
@@ -90,12 +94,20 @@ class Sb3Policy:
         except ImportError as exc:  # the 'learn' extra
             raise PolicyError(f"loading a .zip policy needs stable-baselines3: {LEARN_EXTRA_HINT}") from exc
         _announce_origin(path)  # before the load: a file that runs code has been named by then
-        names = (algo,) if algo else SB3_ALGOS
+        sb3_contrib: Any = None
+        try:
+            import sb3_contrib
+        except ImportError:
+            pass
+        names = (algo,) if algo else SB3_ALGOS + (SB3_CONTRIB_ALGOS if sb3_contrib is not None else ())
         errors = []
         for name in names:
-            cls = getattr(sb3, name, None)
+            cls = getattr(sb3, name, None) if name in SB3_ALGOS else getattr(sb3_contrib, name, None)
             if cls is None:
-                raise PolicyError(f"unknown SB3 algorithm {name!r}; valid: {', '.join(SB3_ALGOS)}")
+                raise PolicyError(
+                    f"unknown SB3 algorithm {name!r}; valid: {', '.join(SB3_ALGOS + SB3_CONTRIB_ALGOS)} (the last "
+                    "two with sb3-contrib)"
+                )
             try:
                 self.model = cls.load(str(path), device="cpu")
                 self.algo = name

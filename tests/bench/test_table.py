@@ -30,7 +30,7 @@ def test_rows_take_known_options_only() -> None:
 
 
 def test_an_option_the_bench_does_not_take_names_the_benches_that_do() -> None:
-    with pytest.raises(BenchError, match=r"--trials applies to bench push only"):
+    with pytest.raises(BenchError, match=r"--trials applies to bench push, curves only"):
         check_bench_args("ssv", BenchArgs(json_path="x.json", trials=3))
     with pytest.raises(BenchError, match=r"--rounds must be >= 1"):
         check_bench_args("ssv", BenchArgs(json_path="x.json", rounds=0))

@@ -1,0 +1,427 @@
+"""``redundancy-gym bench curves``: learning curves of every learner per env, over logarithmically spaced budgets
+with 3 training seeds, evaluated on held-out seeds, against the analytic references (horizontal lines).
+
+Each (env, learner, seed) is one :class:`~redundancy_gym.learning.learning_curve.CurveRun`: its points are kept in
+``<json stem>/<run>.json`` beside the study's JSON (committed), its agent and replay buffer in ``runs/curves/`` (not
+committed). Running the bench again trains every run on from its last point to its last budget (raise a budget, or
+``--steps``, to extend); a run whose points exist but whose agent is gone (a fresh clone) keeps its points and is not
+extended. ``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that
+many runs at once (one process each, torch on one thread).
+
+Hyperparameters: PPO with stable-baselines3's defaults (rl-zoo3's tuned MuJoCo PPO is those defaults with
+``normalize: true``; our ``.zip`` policies carry no VecNormalize statistics, so observations are not normalized);
+SAC and TQC with rl-zoo3's MuJoCo settings (``learning_starts`` 10000, SB3's defaults otherwise; the replay buffer
+held at 300 000 transitions, the largest budget). CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import math
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..eval.evaluate import evaluate
+from ..eval.machine import machine_info
+from ..learning.learning_curve import CurveRun, budgets_between, train_learning_curve
+from .exceptions import BenchError
+
+__all__ = [
+    "CURVE_ENVS",
+    "CURVE_EVAL_SEED",
+    "CurveEnv",
+    "CurveLearner",
+    "curves_markdown",
+    "plot_curves_bench",
+    "run_curves_bench",
+]
+
+CURVE_EVAL_SEED = 40000
+"""First held-out seed of every point's evaluation (apart from the training seeds, the evaluation callback's 30000
+and the learned table's 20000)."""
+
+ON_POLICY_LAST, OFF_POLICY_LAST = 3_000_000, 300_000
+_OFF_POLICY = {"learning_starts": 10_000, "buffer_size": 300_000}
+
+
+@dataclass(frozen=True)
+class CurveLearner:
+    """One learner of an env: ``name`` (``ppo``, ``ppo-residual``), its algorithm, the env id it trains on (a
+    wrapped id for a wrapper's action), its budgets and hyperparameters."""
+
+    name: str
+    algo: str
+    env_id: str
+    budgets: tuple[int, ...]
+    hyperparameters: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CurveEnv:
+    """One env of the study: its key, title, env kwargs, error measure (a contract field, its label, unit and scale
+    from SI), failure rate field, references (label -> policy name) and learners."""
+
+    key: str
+    title: str
+    env_id: str
+    env_kwargs: dict[str, Any]
+    error: tuple[str, str, str, float]
+    rate: str
+    references: dict[str, str]
+    learners: tuple[CurveLearner, ...]
+
+
+def _arm_learners(env_id: str) -> tuple[CurveLearner, ...]:
+    return (
+        CurveLearner("ppo", "ppo", env_id, budgets_between(10_000, ON_POLICY_LAST)),
+        CurveLearner("sac", "sac", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
+        CurveLearner("tqc", "tqc", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
+    )
+
+
+def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
+    base = f"redundancy_gym/{name}-v0"
+    return (
+        CurveLearner("ppo", "ppo", base, budgets_between(10_000, 1_000_000)),
+        CurveLearner("sac", "sac", base, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
+        CurveLearner("ppo-residual", "ppo", f"redundancy_gym/{name}-Residual-v0", budgets_between(10_000, 1_000_000)),
+        CurveLearner(
+            "ppo-walking_command", "ppo", f"redundancy_gym/{name}-WalkingCommand-v0", budgets_between(10_000, 1_000_000)
+        ),
+    )
+
+
+_PLANAR, _AGRI = "redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0"
+_TRACKING = ("tracking_error_max", "tracking error max", "mm", 1e3)
+_GOAL = ("goal_error", "goal error at the end", "mm", 1e3)
+_SPEED = ("speed_error", "speed error (mean speed vs command)", "m/s", 1.0)
+CURVE_ENVS: tuple[CurveEnv, ...] = (
+    CurveEnv(
+        "planar_reach",
+        "PlanarReach-v0 with obstacle",
+        _PLANAR,
+        {"obstacle": True},
+        _TRACKING,
+        "collision_rate",
+        {"clik": "clik"},
+        _arm_learners(_PLANAR),
+    ),
+    *(
+        CurveEnv(
+            f"agri_reach_{d}",
+            f"AgriReach-v0 ({d})",
+            _AGRI,
+            {"difficulty": d},
+            _GOAL,
+            "collision_rate",
+            {"clik": "clik"},
+            _arm_learners(_AGRI),
+        )
+        for d in ("easy", "medium", "hard")
+    ),
+    CurveEnv(
+        "biped_walk",
+        "BipedWalk-v0 at 0.5 m/s",
+        "redundancy_gym/BipedWalk-v0",
+        {"target_speed": 0.5},
+        _SPEED,
+        "fall_rate",
+        {"walking": "walking"},
+        _biped_learners("BipedWalk"),
+    ),
+    CurveEnv(
+        "biped_obstacles",
+        "BipedObstacles-v0, random courses",
+        "redundancy_gym/BipedObstacles-v0",
+        {"course": "random"},
+        _SPEED,
+        "fall_rate",
+        {"walking": "walking"},
+        _biped_learners("BipedObstacles"),
+    ),
+)
+"""The study's envs, in its order."""
+
+QUICK = CurveEnv(
+    "planar_reach",
+    "PlanarReach-v0 with obstacle",
+    _PLANAR,
+    {"obstacle": True},
+    _TRACKING,
+    "collision_rate",
+    {"clik": "clik"},
+    (CurveLearner("ppo", "ppo", _PLANAR, (64, 128), {"n_steps": 64, "batch_size": 32}),),
+)
+"""``--quick``: a 2-point PPO curve on PlanarReach (seconds; CI)."""
+
+
+def _select(envs: Sequence[str] | None, quick: bool) -> list[tuple[CurveEnv, CurveLearner]]:
+    table = (QUICK,) if quick else CURVE_ENVS
+    pairs = [(env, learner) for env in table for learner in env.learners]
+    if envs is None:
+        return pairs
+    valid = [env.key for env in table] + [f"{env.key}-{learner.name}" for env, learner in pairs]
+    unknown = [name for name in envs if name not in valid]
+    if unknown:
+        raise BenchError(f"unknown curve env or learner {', '.join(unknown)}; valid: {', '.join(valid)}")
+    return [(e, learner) for e, learner in pairs if e.key in envs or f"{e.key}-{learner.name}" in envs]
+
+
+def _run(env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, episodes: int) -> CurveRun:
+    budgets = learner.budgets if steps is None else tuple(b for b in learner.budgets if b < steps) + (steps,)
+    return CurveRun(
+        name=f"{env.key}-{learner.name}-s{seed}",
+        env_id=learner.env_id,
+        env_kwargs=dict(env.env_kwargs),
+        algo=learner.algo,
+        seed=seed,
+        budgets=budgets,
+        hyperparameters=dict(learner.hyperparameters),
+        eval_episodes=episodes,
+        eval_seed=CURVE_EVAL_SEED,
+    )
+
+
+def _train_one(run: CurveRun, folder: str, agents: str) -> tuple[str, dict[str, Any] | str]:
+    """One run in a worker: its state, or why it was not extended."""
+    logging.getLogger("redundancy_gym.policies.sb3_policy").setLevel(logging.ERROR)  # its own agents, announced
+    try:
+        return run.name, train_learning_curve(run, folder, agents=agents)
+    except Exception as exc:  # a run that fails is a row that says so; the others go on
+        return run.name, f"{type(exc).__name__}: {exc}"
+
+
+def _references(env: CurveEnv, folder: Path, episodes: int, progress: bool) -> dict[str, dict[str, Any]]:
+    path = folder / f"references-{env.key}.json"
+    cached = json.loads(path.read_text()) if path.is_file() else {}
+    if cached.get("episodes") == episodes and cached.get("seed") == CURVE_EVAL_SEED:
+        return dict(cached["references"])
+    out = {}
+    for label, policy in env.references.items():
+        report = evaluate(
+            env.env_id, policy, episodes=episodes, seed=CURVE_EVAL_SEED, env_kwargs=env.env_kwargs, progress=progress
+        ).to_json()
+        out[label] = {k: report.get(k) for k in ("success_rate", env.rate, env.error[0])}
+    folder.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps({"episodes": episodes, "seed": CURVE_EVAL_SEED, "references": out}, indent=1) + "\n")
+    return out
+
+
+def _summary(points_by_seed: dict[str, list[dict[str, Any]]], error_key: str) -> dict[str, Any]:
+    """Per budget reached by every seed: success mean, min and max, the error's mean, CPU time's mean; and the first
+    budget whose mean success reaches 0.5 and 0.9 (None: not within the largest)."""
+    runs = [p for p in points_by_seed.values() if p]
+    rows = []
+    if runs:
+        common = sorted(set.intersection(*({q["budget"] for q in p} for p in runs)))
+        for budget in common:
+            at = [next(q for q in p if q["budget"] == budget) for p in runs]
+            success = [q.get("success_rate", 0.0) for q in at]
+            errors = [q[error_key] for q in at if error_key in q]
+            rows.append(
+                {
+                    "budget": budget,
+                    "steps_mean": float(np.mean([q["steps"] for q in at])),
+                    "success_mean": float(np.mean(success)),
+                    "success_min": float(min(success)),
+                    "success_max": float(max(success)),
+                    "error_mean": float(np.mean(errors)) if errors else None,
+                    "cpu_s_mean": float(np.mean([q["cpu_s"] for q in at])),
+                }
+            )
+    first = {}
+    for threshold in (0.5, 0.9):
+        hit = next((r["budget"] for r in rows if r["success_mean"] >= threshold), None)
+        first[f"first_{threshold}"] = hit
+    return {"by_budget": rows, "largest_budget": rows[-1]["budget"] if rows else None, **first}
+
+
+def run_curves_bench(
+    json_path: str | Path,
+    *,
+    seeds: int = 3,
+    episodes: int = 10,
+    envs: Sequence[str] | None = None,
+    steps: int | None = None,
+    workers: int = 1,
+    quick: bool = False,
+    agents: str | Path = "runs/curves",
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Train every selected run on to its last budget (module docstring) and gather the study: per env its
+    references, per learner the command, hyperparameters, every seed's points and the summary over seeds. With
+    ``envs``, the study's other envs and learners are read from their state files as they stand."""
+    if seeds < 1 or episodes < 1 or workers < 1:
+        raise BenchError(f"seeds, episodes and workers must be >= 1, got {seeds}, {episodes}, {workers}")
+    if steps is not None and steps < 1:
+        raise BenchError(f"--steps must be >= 1, got {steps}")
+    folder = Path(json_path).with_suffix("")
+    chosen = _select(envs, quick)
+    runs = [_run(env, learner, seed, steps, episodes) for env, learner in chosen for seed in range(seeds)]
+    notes: dict[str, str] = {}
+    from tqdm.auto import tqdm
+
+    with tqdm(total=len(runs), desc="bench curves", unit="run", disable=not progress) as bar:
+        if workers == 1:
+            results = []
+            for run in runs:
+                results.append(_train_one(run, str(folder), str(agents)))
+                bar.update(1)
+        else:
+            with ProcessPoolExecutor(max_workers=workers, mp_context=get_context("spawn")) as pool:
+                futures = [pool.submit(_train_one, run, str(folder), str(agents)) for run in runs]
+                results = []
+                for future in futures:
+                    results.append(future.result())
+                    bar.update(1)
+    for name, result in results:
+        if isinstance(result, str):
+            notes[name] = result
+    table_envs: dict[str, Any] = {}
+    for env in (QUICK,) if quick else CURVE_ENVS:
+        learners: dict[str, Any] = {}
+        for learner in env.learners:
+            points = {}
+            for seed in range(seeds):
+                path = folder / f"{env.key}-{learner.name}-s{seed}.json"
+                if path.is_file():
+                    points[str(seed)] = json.loads(path.read_text())["points"]
+            if not points:
+                continue
+            learners[learner.name] = {
+                **asdict(learner),
+                "command": f"redundancy-gym bench curves --envs {env.key}-{learner.name} --json {json_path}",
+                "seeds": points,
+                **_summary(points, env.error[0]),
+            }
+        if not learners:
+            continue
+        table_envs[env.key] = {
+            "title": env.title,
+            "env_id": env.env_id,
+            "env_kwargs": env.env_kwargs,
+            "error": {"key": env.error[0], "label": env.error[1], "unit": env.error[2], "scale": env.error[3]},
+            "rate": env.rate,
+            "references": _references(env, folder, episodes, progress),
+            "learners": learners,
+        }
+    return {
+        "seed": CURVE_EVAL_SEED,
+        "eval_seed": CURVE_EVAL_SEED,
+        "episodes": episodes,
+        "seeds": seeds,
+        "machine": machine_info(),
+        "notes": notes,
+        "envs": table_envs,
+    }
+
+
+def _budget(value: int | None, largest: int | None) -> str:
+    if value is None:
+        return f"not within {largest:,}" if largest else "-"
+    return f"{value:,}"
+
+
+def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym bench curves") -> str:
+    """Per env: the references, and per learner the largest budget its seeds reached, the success there (mean,
+    min-max over seeds), the error, the CPU time per seed and the first budgets at which the mean success reaches
+    0.5 and 0.9."""
+    lines = [
+        f"{table['seeds']} training seeds per learner; every point evaluated on held-out seeds "
+        f"{table['eval_seed']}-{table['eval_seed'] + table['episodes'] - 1} ({table['episodes']} episodes, the "
+        f"deterministic agent). Command: `{command}` (each learner's own in the JSON). CPU time: the training's, per "
+        "seed, evaluations excluded.",
+        "",
+    ]
+    for env in table["envs"].values():
+        err = env["error"]
+        lines += [f"### {env['title']}", "", f"`{env['env_id']}`, env kwargs `{json.dumps(env['env_kwargs'])}`.", ""]
+        refs = "; ".join(
+            f"{label}: success {r.get('success_rate', float('nan')):.2f}, {err['label']} "
+            f"{(r.get(err['key']) or float('nan')) * err['scale']:.3g} {err['unit']}"
+            for label, r in env["references"].items()
+        )
+        lines += [f"References: {refs}.", ""]
+        lines += [
+            f"| learner | seeds | largest budget [steps] | success (min-max) | {err['label']} [{err['unit']}] | "
+            "CPU per seed [min] | first >= 0.5 | first >= 0.9 |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        ]
+        for name, learner in env["learners"].items():
+            rows = learner["by_budget"]
+            if not rows:
+                lines.append(f"| {name} | {len(learner['seeds'])} | - | - | - | - | - | - |")
+                continue
+            last = rows[-1]
+            error = "-" if last["error_mean"] is None else f"{last['error_mean'] * err['scale']:.3g}"
+            lines.append(
+                f"| {name} | {len(learner['seeds'])} | {last['budget']:,} | {last['success_mean']:.2f} "
+                f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {last['cpu_s_mean'] / 60:.1f} | "
+                f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
+            )
+        lines.append("")
+    if table.get("notes"):
+        lines += ["Runs not extended:", ""] + [f"- {k}: {v}" for k, v in table["notes"].items()] + [""]
+    return "\n".join(lines)
+
+
+def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str = "curves_") -> list[Path]:
+    """One figure per env: success against environment steps and against CPU time, and the error against steps;
+    each learner's mean over seeds with its min-max band, the references as horizontal lines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..eval.plots import save_figure
+
+    written = []
+    for key, env in table["envs"].items():
+        err = env["error"]
+        fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+        for (name, learner), color in zip(env["learners"].items(), plt.get_cmap("tab10")(range(10)), strict=False):
+            rows = learner["by_budget"]
+            if not rows:
+                continue
+            steps = [r["steps_mean"] for r in rows]
+            cpu = [r["cpu_s_mean"] / 60 for r in rows]
+            mean = [r["success_mean"] for r in rows]
+            low, high = [r["success_min"] for r in rows], [r["success_max"] for r in rows]
+            label = f"{name} ({len(learner['seeds'])} seeds)"
+            axes[0].plot(steps, mean, "o-", color=color, label=label)
+            axes[0].fill_between(steps, low, high, color=color, alpha=0.15)
+            axes[1].plot(cpu, mean, "o-", color=color, label=label)
+            axes[1].fill_between(cpu, low, high, color=color, alpha=0.15)
+            errors = [np.nan if r["error_mean"] is None else r["error_mean"] * err["scale"] for r in rows]
+            axes[2].plot(steps, errors, "o-", color=color, label=label)
+        for label, ref in env["references"].items():
+            for ax in axes[:2]:
+                ax.axhline(ref.get("success_rate") or 0.0, ls="--", color="k", lw=1, label=f"{label} (reference)")
+            value = ref.get(err["key"])
+            if value is not None and math.isfinite(float(value)):
+                axes[2].axhline(float(value) * err["scale"], ls="--", color="k", lw=1, label=f"{label} (reference)")
+        for ax, xlabel, ylabel in (
+            (axes[0], "environment steps", "success rate"),
+            (axes[1], "training CPU time per seed [min]", "success rate"),
+            (axes[2], "environment steps", f"{err['label']} [{err['unit']}]"),
+        ):
+            ax.set_xscale("log")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+            ax.grid(True, which="both", alpha=0.3)
+        axes[0].set_ylim(-0.05, 1.05)
+        axes[1].set_ylim(-0.05, 1.05)
+        axes[2].set_yscale("log")
+        axes[0].legend(fontsize=8)
+        fig.suptitle(f"{env['title']}: learning curves (held-out seeds {table['eval_seed']}-)")
+        fig.tight_layout()
+        written.append(save_figure(fig, Path(directory) / f"{prefix}{key}.png"))
+    return written

@@ -1,0 +1,231 @@
+"""One learner's learning curve: trained in segments up to a list of budgets, evaluated on held-out seeds at each,
+resumable (the ``learn`` extra; TQC and CrossQ from sb3-contrib, which it brings).
+
+A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point), and
+in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point; off-policy learners also
+``<name>_replay.pkl``, their replay buffer).
+Called again, it loads the agent (and buffer) and trains on to the next budget, so an interrupted or extended study
+loses at most the segment under way. A resumed run is not bitwise the uninterrupted one (the envs restart from
+fresh resets); its points are still each a trained agent's at that many environment steps.
+
+Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
+training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads; the
+evaluations excluded), and the deterministic agent's evaluation on ``eval_episodes`` held-out episodes from
+``eval_seed`` through the evaluation harness (success rate, the failure rate, the env's error measures, return,
+episode length).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from ..eval.evaluate import evaluate, make_env
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from .exceptions import LearningError
+from .training_record import CpuClock
+
+__all__ = ["CURVE_ALGOS", "POINT_METRICS", "CurveRun", "budgets_between", "train_learning_curve"]
+
+CURVE_ALGOS: dict[str, tuple[str, str, bool]] = {
+    "ppo": ("stable_baselines3", "PPO", False),
+    "sac": ("stable_baselines3", "SAC", True),
+    "tqc": ("sb3_contrib", "TQC", True),
+    "crossq": ("sb3_contrib", "CrossQ", True),
+}
+"""algo -> (module, class, off-policy: keeps a replay buffer between segments)."""
+
+POINT_METRICS: tuple[str, ...] = (
+    "success_rate",
+    "collision_rate",
+    "fall_rate",
+    "tracking_error_rms",
+    "tracking_error_max",
+    "goal_error",
+    "speed_error",
+    "forward_speed",
+    "episode_return",
+    "episode_length",
+)
+"""The evaluation contract's fields a point keeps (those the env defines)."""
+
+
+@dataclass(frozen=True)
+class CurveRun:
+    """One learner on one env with one seed.
+
+    Attributes:
+        name: the run's file stem (``planar_reach-ppo-s0``).
+        env_id: the env trained and evaluated on (a wrapped id for a wrapper's action).
+        env_kwargs: its ``gym.make`` keyword arguments.
+        algo: a key of :data:`CURVE_ALGOS`.
+        seed: the agent's seed (its env is reset with it first).
+        budgets: the environment steps at which to evaluate, increasing.
+        hyperparameters: the algorithm's constructor keyword arguments.
+        eval_episodes, eval_seed: the held-out evaluation episodes of every point.
+        torch_threads: torch's CPU threads while training.
+    """
+
+    name: str
+    env_id: str
+    env_kwargs: dict[str, Any]
+    algo: str
+    seed: int
+    budgets: tuple[int, ...]
+    hyperparameters: dict[str, Any]
+    eval_episodes: int = 10
+    eval_seed: int = 40000
+    torch_threads: int = 1
+
+    def __post_init__(self) -> None:
+        if self.algo not in CURVE_ALGOS:
+            raise LearningError(f"unknown algo {self.algo!r}; valid: {', '.join(CURVE_ALGOS)}")
+        if not self.budgets or any(int(b) < 1 for b in self.budgets) or list(self.budgets) != sorted(self.budgets):
+            raise LearningError(f"budgets must be increasing ints >= 1, got {self.budgets!r}")
+        if self.eval_episodes < 1:
+            raise LearningError(f"eval_episodes must be >= 1, got {self.eval_episodes!r}")
+
+    def settings(self) -> dict[str, Any]:
+        """What a state file must match to be resumed (the budgets may grow)."""
+        kept = asdict(self)
+        kept.pop("budgets")
+        return kept
+
+
+def _load_state(path: Path, run: CurveRun) -> dict[str, Any]:
+    if not path.is_file():
+        return {"settings": run.settings(), "points": [], "cpu_s": 0.0, "wall_s": 0.0}
+    state: dict[str, Any] = json.loads(path.read_text())
+    if state.get("settings") != json.loads(json.dumps(run.settings())):
+        raise LearningError(
+            f"{path} was made with other settings ({state.get('settings')}); delete it (and its .zip) to restart, "
+            "or keep its settings"
+        )
+    return state
+
+
+def train_learning_curve(
+    run: CurveRun,
+    folder: str | Path,
+    *,
+    agents: str | Path | None = None,
+    log: Callable[[str], None] | None = print,
+) -> dict[str, Any]:
+    """Train ``run`` on to its last budget from where its state in ``folder`` (its agent in ``agents``, default
+    ``folder``) left off (module docstring); returns the state: ``{"settings", "points": [...], "cpu_s",
+    "wall_s"}``. A state with points whose agent is missing raises :class:`LearningError` (its points are kept)."""
+    try:
+        import_stable_baselines3()
+        import importlib
+
+        module_name, class_name, off_policy = CURVE_ALGOS[run.algo]
+        cls = getattr(importlib.import_module(module_name), class_name)
+        from stable_baselines3.common.env_util import make_vec_env
+        from stable_baselines3.common.vec_env import DummyVecEnv
+    except ImportError as exc:
+        raise LearningError(f"learning curves need the learn extra: {LEARN_EXTRA_HINT}") from exc
+    folder = Path(folder)
+    store = Path(agents) if agents is not None else folder
+    folder.mkdir(parents=True, exist_ok=True)
+    store.mkdir(parents=True, exist_ok=True)
+    state_path, model_path = folder / f"{run.name}.json", store / f"{run.name}.zip"
+    replay_path = store / f"{run.name}_replay.pkl"
+    state = _load_state(state_path, run)
+    reached = state["points"][-1]["steps"] if state["points"] else 0
+    todo = [int(b) for b in run.budgets if int(b) > reached]
+    if not todo:
+        return state
+    if state["points"] and not model_path.is_file():
+        raise LearningError(
+            f"{state_path} has points but its agent {model_path} is missing; delete the .json to restart"
+        )
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(run.torch_threads)
+    # our envs and wrapped ids report is_success; SB3's Monitor records it per episode
+    monitor = {"info_keywords": ("is_success",) if run.env_id.startswith("redundancy_gym/") else ()}
+    env = make_vec_env(
+        functools.partial(make_env, run.env_id, run.env_kwargs),
+        n_envs=1,
+        seed=run.seed + reached,  # a resumed segment starts from other resets than the first did
+        vec_env_cls=DummyVecEnv,
+        monitor_kwargs=monitor,
+    )
+    try:
+        if state["points"]:
+            model = cls.load(str(model_path), env=env, device="cpu")
+            if off_policy and replay_path.is_file():
+                model.load_replay_buffer(str(replay_path))
+        else:
+            try:
+                model = cls("MlpPolicy", env, seed=run.seed, device="cpu", verbose=0, **run.hyperparameters)
+            except TypeError as exc:
+                raise LearningError(f"invalid {class_name} hyperparameters: {exc}") from None
+        for budget in todo:
+            with CpuClock() as clock:
+                model.learn(
+                    total_timesteps=max(budget - int(model.num_timesteps), 1),
+                    reset_num_timesteps=False,
+                    progress_bar=False,
+                )
+            state["cpu_s"] += clock.cpu_s
+            state["wall_s"] += clock.wall_s
+            model.save(str(model_path))
+            if off_policy:
+                model.save_replay_buffer(str(replay_path))
+            report = evaluate(
+                run.env_id,
+                str(model_path),
+                episodes=run.eval_episodes,
+                seed=run.eval_seed,
+                env_kwargs=run.env_kwargs,
+                policy_kwargs={"algo": class_name},
+                progress=False,
+            ).to_json()
+            point: dict[str, Any] = {
+                "steps": int(model.num_timesteps),
+                "budget": budget,
+                "cpu_s": round(state["cpu_s"], 2),
+                "wall_s": round(state["wall_s"], 2),
+            }
+            for key in POINT_METRICS:
+                value = report.get(key)
+                if isinstance(value, (int, float)) and math.isfinite(float(value)):
+                    point[key] = float(value)
+            state["points"].append(point)
+            state_path.write_text(json.dumps(state, indent=1) + "\n")
+            if log is not None:
+                success, ret = point.get("success_rate", math.nan), point.get("episode_return", math.nan)
+                log(
+                    f"{run.name}: {point['steps']} steps, {point['cpu_s'] / 60:.1f} CPU-min, success {success:.2f}, "
+                    f"return {ret:.1f}"
+                )
+    finally:
+        env.close()
+        torch.set_num_threads(threads)
+    return state
+
+
+def budgets_between(first: int, last: int, per_decade: int = 2) -> tuple[int, ...]:
+    """Logarithmically spaced budgets from ``first`` to ``last`` (both kept), ``per_decade`` per factor 10, rounded
+    to 1-2-3-5 style round numbers (10k, 30k, 100k, ... at 2 per decade)."""
+    if first < 1 or last < first or per_decade < 1:
+        raise LearningError(f"budgets need 1 <= first <= last and per_decade >= 1, got {first}, {last}, {per_decade}")
+    out: list[int] = []
+    k = 0
+    while True:
+        value = first * 10 ** (k / per_decade)
+        if value > last * (1 + 1e-9):
+            break
+        digits = 10 ** math.floor(math.log10(value))
+        out.append(int(round(value / digits) * digits))
+        k += 1
+    if out[-1] != last:
+        out.append(last)
+    return tuple(sorted(set(out)))

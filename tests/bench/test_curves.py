@@ -1,0 +1,67 @@
+"""bench curves (seconds): the quick study writes its JSON, markdown and plot, says a learner that never reaches a
+threshold did not within its budget, picks runs by env or env-learner, and summarizes seeds over common budgets."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from redundancy_gym.bench.curves import _select, _summary, curves_markdown
+from redundancy_gym.bench.exceptions import BenchError
+from redundancy_gym.cli import main
+
+
+def test_the_quick_study_writes_a_two_point_curve(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "curves.json"
+    assert main(["bench", "curves", "--quick", "--json", str(path), "--no-progress"]) == 0
+    table = json.loads(path.read_text())
+    learner = table["envs"]["planar_reach"]["learners"]["ppo"]
+    assert [p["budget"] for p in learner["seeds"]["0"]] == [64, 128]
+    assert learner["largest_budget"] == 128 and learner["first_0.5"] is None  # 128 steps learn nothing
+    assert table["envs"]["planar_reach"]["references"]["clik"]["success_rate"] == 1.0
+    assert "not within 128" in path.with_suffix(".md").read_text()
+    assert (tmp_path / "curves_planar_reach.png").stat().st_size > 0
+    assert (tmp_path / "runs" / "curves" / "planar_reach-ppo-s0.zip").is_file()  # the agent, apart from the points
+
+
+def test_runs_are_picked_by_env_or_learner():
+    assert {learner.name for _, learner in _select(["planar_reach"], False)} == {"ppo", "sac", "tqc"}
+    assert [(e.key, learner.name) for e, learner in _select(["agri_reach_easy-ppo"], False)] == [
+        ("agri_reach_easy", "ppo")
+    ]
+    with pytest.raises(BenchError, match="unknown curve env or learner nowhere; valid: planar_reach"):
+        _select(["nowhere"], False)
+
+
+def test_the_summary_uses_budgets_every_seed_reached():
+    def points(successes):
+        return [
+            {"budget": b, "steps": b, "cpu_s": b / 100, "success_rate": s, "goal_error": 0.1 / b}
+            for b, s in zip((10, 100, 1000), successes, strict=False)
+        ]
+
+    summary = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}, "goal_error")
+    assert [r["budget"] for r in summary["by_budget"]] == [10, 100]  # seed 1 has not reached 1000
+    assert summary["by_budget"][1]["success_mean"] == pytest.approx(0.4)
+    assert summary["first_0.5"] is None and summary["largest_budget"] == 100
+    both = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.5, 0.8])}, "goal_error")
+    assert both["first_0.5"] == 100 and both["first_0.9"] == 1000
+    table = {
+        "seeds": 2,
+        "eval_seed": 40000,
+        "episodes": 3,
+        "envs": {
+            "x": {
+                "title": "X",
+                "env_id": "e",
+                "env_kwargs": {},
+                "error": {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3},
+                "references": {"clik": {"success_rate": 1.0, "goal_error": 0.001}},
+                "learners": {"ppo": {"seeds": {"0": [], "1": []}, **both}},
+            }
+        },
+    }
+    text = curves_markdown(table)
+    assert "| ppo | 2 | 1,000 | 0.90 (0.80-1.00) |" in text and "| 100 | 1,000 |" in text

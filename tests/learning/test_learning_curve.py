@@ -1,0 +1,85 @@
+"""A learning curve trained in segments (seconds): budgets met in order, a run extended from its last point keeps the
+points it had, other settings or a lost agent are refused, sb3-contrib's TQC trains and evaluates through the
+harness; the budget ladder is logarithmic."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from redundancy_gym.learning.exceptions import LearningError
+from redundancy_gym.learning.learning_curve import CurveRun, budgets_between, train_learning_curve
+
+PLANAR = "redundancy_gym/PlanarReach-v0"
+TINY_PPO = {"n_steps": 32, "batch_size": 16, "n_epochs": 1}
+
+
+def _run(budgets, **changes):
+    fields = dict(
+        name="pr-ppo-s0",
+        env_id=PLANAR,
+        env_kwargs={"obstacle": False},
+        algo="ppo",
+        seed=0,
+        budgets=budgets,
+        hyperparameters=TINY_PPO,
+        eval_episodes=1,
+    )
+    fields.update(changes)
+    return CurveRun(**fields)
+
+
+def test_a_curve_is_extended_from_its_last_point(tmp_path):
+    first = train_learning_curve(_run((32, 64)), tmp_path, log=None)
+    assert [p["steps"] for p in first["points"]] == [32, 64]
+    assert all(0.0 <= p["success_rate"] <= 1.0 and "tracking_error_max" in p for p in first["points"])
+    assert first["points"][1]["cpu_s"] >= first["points"][0]["cpu_s"] > 0.0
+    extended = train_learning_curve(_run((32, 64, 128)), tmp_path, log=None)
+    assert extended["points"][:2] == first["points"]  # the old points as they were
+    assert [p["steps"] for p in extended["points"]] == [32, 64, 128]
+    saved = json.loads((tmp_path / "pr-ppo-s0.json").read_text())
+    assert saved["points"] == extended["points"]
+    again = train_learning_curve(_run((32, 64, 128)), tmp_path, log=None)  # nothing left to train
+    assert again["points"] == extended["points"]
+
+
+def test_other_settings_or_a_lost_agent_are_refused(tmp_path):
+    train_learning_curve(_run((32,)), tmp_path, log=None)
+    with pytest.raises(LearningError, match="other settings"):
+        train_learning_curve(_run((32, 64), seed=1), tmp_path, log=None)
+    (tmp_path / "pr-ppo-s0.zip").unlink()
+    with pytest.raises(LearningError, match="agent .* is missing"):
+        train_learning_curve(_run((32, 64)), tmp_path, log=None)
+    assert len(json.loads((tmp_path / "pr-ppo-s0.json").read_text())["points"]) == 1  # kept
+
+
+def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
+    pytest.importorskip("sb3_contrib")
+    run = _run((40, 80), name="pr-tqc-s0", algo="tqc", hyperparameters={"learning_starts": 20, "batch_size": 16})
+    state = train_learning_curve(run, tmp_path, agents=tmp_path / "agents", log=None)
+    assert [p["steps"] for p in state["points"]] == [40, 80]
+    assert (tmp_path / "agents" / "pr-tqc-s0.zip").is_file()
+    assert (tmp_path / "agents" / "pr-tqc-s0_replay.pkl").is_file()
+
+
+@pytest.mark.parametrize(
+    ("changes", "named"),
+    [
+        ({"algo": "dqn"}, "algo"),
+        ({"budgets": ()}, "budgets"),
+        ({"budgets": (64, 32)}, "budgets"),
+        ({"eval_episodes": 0}, "eval_episodes"),
+    ],
+)
+def test_bad_runs_are_named(changes, named):
+    with pytest.raises(LearningError, match=named):
+        _run(changes.pop("budgets", (32,)), **changes)
+
+
+def test_budgets_are_logarithmic_round_numbers():
+    assert budgets_between(10_000, 3_000_000) == (10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000)
+    assert budgets_between(10_000, 300_000) == (10_000, 30_000, 100_000, 300_000)
+    assert budgets_between(1000, 5000) == (1000, 3000, 5000)  # the last budget kept
+    with pytest.raises(LearningError):
+        budgets_between(100, 10)
