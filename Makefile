@@ -19,11 +19,14 @@ lint: $(VENV)/.test-installed
 
 # the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb,
 # checkpoints in runs/baselines) into baselines/models/ with its training record, then evaluates every analytic
-# reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}
+# reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}; then
+# the learning curves (bench curves: many CPU-hours, resumable: run it again to go on) into
+# baselines/results/curves.{json,md,*.png}
 # (about 60 CPU-min of training and 5 min of evaluation here, 2 cores)
 baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym baselines
 	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress
+	$(BIN)/redundancy-gym bench curves --workers 2 --json baselines/results/curves.json --no-progress
 
 # libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
 # missing and run as root
