@@ -22,7 +22,7 @@ lint: $(VENV)/.test-installed
 # reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}; then
 # the learning curves (bench curves: many CPU-hours, resumable: run it again to go on) into
 # baselines/results/curves.{json,md,*.png}
-# (about 60 CPU-min of training and 5 min of evaluation here, 2 cores)
+# (the baselines: about 60 CPU-min of training and 5 min of evaluation here, 2 cores; the curves: many CPU-hours)
 baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym baselines
 	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress
