@@ -470,16 +470,19 @@ def format_registry() -> str:
         supported = supported_env_ids(entry.name, entry.kind)
         ids = "every env" if set(supported) == set(ENV_IDS) else ", ".join(i.split("/")[-1] for i in supported) or "-"
         table.append((entry.name, entry.kind, ids, entry.summary))
-    from .policies.shipped_models import model_name, shipped_models
+    from .policies.shipped_models import SHIPPED_MODELS_DIR, model_name, shipped_models
 
-    for stem in shipped_models():  # the learned baselines of baselines/models/, by short name
+    stems = shipped_models()
+    for stem in stems:  # the learned baselines of baselines/models/, by short name
         learner, action, slug, variant = model_name(stem)
         short = f"{learner}-{action}" + ("" if variant is None else f"-{variant}")
         table.append((short, "model", slug, f"shipped learned baseline baselines/models/{stem}.zip"))
     widths = [max(len(r[i]) for r in table) for i in range(3)]
-    return "\n".join(
+    text = "\n".join(
         "  ".join(cell.ljust(w) for cell, w in zip(r[:3], widths, strict=True)) + "  " + r[3] for r in table
     )
+    found = f"{len(stems)} shipped model(s)" if stems else "no shipped models (*.zip)"
+    return f"{text}\n\n{found} in {SHIPPED_MODELS_DIR}"
 
 
 def format_env_list(rows: list[dict[str, Any]]) -> str:
@@ -639,10 +642,11 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _baselines(args: argparse.Namespace) -> None:
-    from .learning.baselines import baselines, train_baseline
+    from .learning.baselines import BASELINES_DIR, baselines, train_baseline
 
     chosen = baselines(args.names)
     if args.list:
+        print(f"{len(chosen)} baseline(s) in {BASELINES_DIR}:")
         for b in chosen:
             record = b.record()
             trained = "not trained" if record is None else f"{record.env_steps} steps, {record.cpu_s / 60:.1f} CPU-min"

@@ -18,6 +18,7 @@ from tqdm.auto import tqdm
 
 from .. import ENV_IDS, make_policy
 from ..wrappers.action_check import CONTROLLER_TIME_ATTRIBUTE
+from .compile_clock import COMPILE_CLOCK
 from .exceptions import EvalError
 from .json_writer import write_json
 from .parallel import run_parallel
@@ -74,6 +75,9 @@ class EpisodeSummary:
             ``predict`` would have given, per step [us]: ``sb3_predict`` timed on the step's observation right after
             the policy's ``predict`` (its action unused), plus the step's action-wrapper controller time as in
             ``step_time_us``; ``None`` for every other policy.
+        compile_time_s: numba compilation [s] inside the episode's timed calls (a kernel's first call in a process
+            without its cached machine code), taken out of their step times
+            (:mod:`~redundancy_gym.eval.compile_clock`).
     """
 
     seed: int
@@ -103,6 +107,7 @@ class EpisodeSummary:
     unsupported_steps: int | None = None
     min_support_fraction: float | None = None
     sb3_predict_us: NDArray[np.float64] | None = None
+    compile_time_s: float = 0.0
 
 
 @dataclass
@@ -139,6 +144,7 @@ class EvalReport:
             "min_clearance": _finite_or_none(min(e.min_clearance for e in s)),
             **self._clearance_metrics(),
             "step_time_us": _time_stats(times, first),
+            "compile_time_s": float(sum(e.compile_time_s for e in s)),
             **self._sb3_metrics(),
             "compute_time_per_episode_ms": float(times.sum()) * 1e-3 / len(s),
             "episode_return": float(returns.mean()),
@@ -308,19 +314,32 @@ def run_episode(
     failed_on_terrain = False
     state = None
     episode_start = np.array([True])
+    compiled_s = 0.0
     while True:
+        compiling = COMPILE_CLOCK.seconds
         t0 = time.perf_counter_ns()
         action, state = policy.predict(obs, state=state, episode_start=episode_start, deterministic=True)
         elapsed_us = (time.perf_counter_ns() - t0) * 1e-3
+        # a kernel compiled inside the call is the compiler's time, not the step's (compile_time_s)
+        compiled = COMPILE_CLOCK.seconds - compiling
+        if compiled > 0.0:
+            compiled_s += compiled
+            elapsed_us = max(elapsed_us - compiled * 1e6, 0.0)
         sb3_us = 0.0
         if sb3_predict is not None:  # after the policy's own timing, which it leaves as it was
             t0 = time.perf_counter_ns()
             sb3_predict(obs, state=None, episode_start=episode_start, deterministic=True)
             sb3_us = (time.perf_counter_ns() - t0) * 1e-3
         episode_start = np.array([False])
+        compiling = COMPILE_CLOCK.seconds
         obs, reward, terminated, truncated, info = env.step(action)
         if controller is not None:  # an action wrapper's controller is part of the policy: its time counts too
             controller_us = float(getattr(controller, CONTROLLER_TIME_ATTRIBUTE))
+            compiled = COMPILE_CLOCK.seconds - compiling  # the controller's or the env's: bounded by the former
+            if compiled > 0.0:
+                taken = min(compiled * 1e6, controller_us)
+                compiled_s += taken * 1e-6
+                controller_us -= taken
             elapsed_us += controller_us
             sb3_us += controller_us
         if sb3_predict is not None:
@@ -368,6 +387,7 @@ def run_episode(
         min_clearance=float(np.min(trace.min_clearance)),
         first_step_us=float(trace.step_time_us[0]),
         sb3_predict_us=np.asarray(sb3_times, dtype=np.float64) if sb3_predict is not None else None,
+        compile_time_s=compiled_s,
     )
     if "tracking_error" in info:
         summary.tracking_error_max = float(np.max(trace.tracking_error))
@@ -664,6 +684,10 @@ def format_report(report: dict[str, Any]) -> str:
             else ()
         ),
         ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
+        (
+            "numba compilation [s]",
+            f"{report.get('compile_time_s', 0.0):.2f} (out of the step times; 0 once the kernels are cached)",
+        ),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
         ("episode length [steps]", f"{report['episode_length']:.1f}"),
     ]

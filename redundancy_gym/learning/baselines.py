@@ -101,14 +101,23 @@ def _parse(path: Path) -> Baseline:
     return Baseline(path.stem, learner, action, next(iter(data)), path, slug, variant)
 
 
-def baselines(names: Sequence[str] = (), directory: str | Path = BASELINES_DIR) -> list[Baseline]:
-    """The baselines of ``directory``'s YAML files (all, or those named, in the order given).
+def baselines(names: Sequence[str] = (), directory: str | Path | None = None) -> list[Baseline]:
+    """The baselines of ``directory``'s YAML files (all, or those named, in the order given; default directory:
+    :data:`BASELINES_DIR`).
 
     Raises:
-        LearningError: a name without a file (the message lists the files), or a file not named or laid out as a
-            baseline.
+        LearningError: no baseline file in ``directory`` (the message names it), a name without a file (the message
+            lists the files), or a file not named or laid out as a baseline.
     """
+    directory = BASELINES_DIR if directory is None else directory
     found = {p.stem: p for p in sorted(Path(directory).glob("*.yaml"))}
+    if not found:
+        where = (
+            "does not exist"
+            if not Path(directory).is_dir()
+            else "holds no baseline file (<learner>-<action>-<env>.yaml)"
+        )
+        raise LearningError(f"no baselines found: {directory} {where}")
     missing = [n for n in names if n not in found]
     if missing:
         raise LearningError(f"no baseline {', '.join(missing)} in {directory}; baselines: {', '.join(found) or 'none'}")

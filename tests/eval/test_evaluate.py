@@ -241,3 +241,34 @@ def test_a_walk_that_lands_unsupported_fails_on_that_segment_though_it_walks_on(
     # a walk that ends on the slope is reported there
     summary, _ = run_episode(Scripted(unsupported=False), Still(), 0)
     assert summary.terrain_kind == "slope"
+
+
+def test_numba_compilation_is_counted_apart_from_the_step_times() -> None:
+    import gymnasium as gym
+    import numba
+
+    from redundancy_gym import make_policy
+    from redundancy_gym.eval.evaluate import run_episode
+
+    @numba.njit(cache=False)
+    def fresh(x: float) -> float:  # compiles at its first call: a cold kernel in this process
+        return x * 2.0 + 1.0
+
+    class CompilingClik:
+        """The clik policy, with a kernel compiled inside its first predict."""
+
+        def __init__(self, env):
+            self.inner = make_policy("clik", env)
+            self.calls = 0
+
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):
+            self.calls += 1
+            if self.calls == 1:
+                fresh(1.0)
+            return self.inner.predict(obs, state=state, episode_start=episode_start, deterministic=deterministic)
+
+    env = gym.make("redundancy_gym/PlanarReach-v0", max_episode_steps=5)
+    summary, trace = run_episode(env, CompilingClik(env), 0)
+    assert summary.compile_time_s > 0.02  # a fresh njit takes tens of milliseconds to compile
+    # the first step's time is the policy's own, not the compiler's
+    assert trace.step_time_us[0] < summary.compile_time_s * 1e6 / 2

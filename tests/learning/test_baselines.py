@@ -84,3 +84,26 @@ def test_a_baseline_trains_into_a_models_directory_with_its_record(tmp_path) -> 
     assert record is not None and record.env_steps == 8192 and record.env_id == baseline.env_id
     assert record.result["kept"] == "best"
     assert (tmp_path / "work" / "ppo-residual-planar_reach_last.zip").is_file()
+
+
+@pytest.mark.parametrize("folder", ["empty", "missing"])
+def test_listing_no_baselines_names_the_folder_and_fails(tmp_path, monkeypatch, capsys, folder) -> None:
+    from redundancy_gym.cli import main
+
+    where = tmp_path / folder
+    if folder == "empty":
+        where.mkdir()
+    monkeypatch.setattr("redundancy_gym.learning.baselines.BASELINES_DIR", where)
+    assert main(["baselines", "--list"]) == 2
+    err = capsys.readouterr().err
+    assert f"no baselines found: {where}" in err
+    assert ("does not exist" if folder == "missing" else "holds no baseline file") in err
+
+
+def test_listing_says_where_it_looked(capsys) -> None:
+    from redundancy_gym.cli import main
+
+    assert main(["baselines", "--list"]) == 0
+    assert f"baseline(s) in {BASELINES_DIR}:" in capsys.readouterr().out.splitlines()[0]
+    assert main(["list"]) == 0
+    assert capsys.readouterr().out.rstrip().endswith(f"shipped model(s) in {BASELINES_DIR / 'models'}")
