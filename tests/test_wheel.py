@@ -178,3 +178,23 @@ def test_the_installed_package_lists_evaluates_and_sees_its_baselines(
     for b in baselines():
         assert b.name in lines, listed
         assert "not trained" not in lines[b.name] and "steps" in lines[b.name], lines[b.name]
+
+    # a Minari dataset from the installed package, opened by a plain script with minari alone
+    pytest.importorskip("minari", reason="the dataset extra")
+    out = _run(
+        [python, script, "collect", "redundancy_gym/PlanarReach-v0", "--episodes", "1", "--out", "ds", "--no-progress"],
+        cwd=tmp_path,
+        env=env,
+        timeout=300,
+    )
+    assert "redundancy_gym/PlanarReach/clik-v0" in out
+    probe = (
+        "import os, minari, redundancy_gym; os.environ['MINARI_DATASETS_PATH'] = 'ds'; "
+        "d = minari.load_dataset('redundancy_gym/PlanarReach/clik-v0'); e = d.recover_environment(); "
+        "print(d.total_steps, e.spec.id, d.storage.metadata['policy'])"
+    )
+    assert _run([python, "-c", probe], cwd=tmp_path, env=env, timeout=120).split()[-3:] == [
+        "250",
+        "redundancy_gym/PlanarReach-v0",
+        "clik",
+    ]
