@@ -289,11 +289,17 @@ def run_curves_bench(
                     points[str(seed)] = json.loads(path.read_text())["points"]
             if not points:
                 continue
+            summary = _summary(points, env.error[0])
+            # the command that gives these points: capped at the largest budget reached where that is short of
+            # the learner's last (running it without --steps extends the curve)
+            reached = summary["largest_budget"]
+            cap = f" --steps {reached}" if reached is not None and reached < learner.budgets[-1] else ""
             learners[learner.name] = {
                 **asdict(learner),
-                "command": f"redundancy-gym bench curves --envs {env.key}-{learner.name} --json {json_path}",
+                "command": f"redundancy-gym bench curves --envs {env.key}-{learner.name}{cap} --trials {seeds} "
+                f"--json {json_path}",
                 "seeds": points,
-                **_summary(points, env.error[0]),
+                **summary,
             }
         if not learners:
             continue
@@ -330,8 +336,8 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
     lines = [
         f"{table['seeds']} training seeds per learner; every point evaluated on held-out seeds "
         f"{table['eval_seed']}-{table['eval_seed'] + table['episodes'] - 1} ({table['episodes']} episodes, the "
-        f"deterministic agent). Command: `{command}` (each learner's own in the JSON). CPU time: the training's, per "
-        "seed, evaluations excluded.",
+        f"deterministic agent). Command: `{command}`; each learner's points come from the command under its table. "
+        "CPU time: the training's, per seed, evaluations excluded.",
         "",
     ]
     for env in table["envs"].values():
@@ -360,6 +366,10 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
                 f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {last['cpu_s_mean'] / 60:.1f} | "
                 f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
             )
+        lines.append("")
+        lines += [
+            f"- {name}: `{learner['command']}`" for name, learner in env["learners"].items() if "command" in learner
+        ]
         lines.append("")
     if table.get("notes"):
         lines += ["Runs not extended:", ""] + [f"- {k}: {v}" for k, v in table["notes"].items()] + [""]

@@ -227,7 +227,12 @@ def _curves(a: BenchArgs) -> int:
         quick=a.quick,
         progress=a.progress,
     )
-    command = "redundancy-gym bench curves" + (" --quick" if a.quick else "") + f" --json {a.json_path}"
+    command = "redundancy-gym bench curves" + (" --quick" if a.quick else "")
+    command += f" --envs {' '.join(a.envs)}" if a.envs else ""
+    command += f" --steps {a.steps}" if a.steps is not None else ""
+    command += f" --trials {a.trials}" if a.trials is not None else ""
+    command += f" --workers {a.workers}" if a.workers is not None else ""
+    command += f" --json {a.json_path}"
     _write_table(
         a,
         table,
