@@ -83,7 +83,7 @@ def test_cli_writes_json_markdown_and_one_plot_per_env(tmp_path, capsys) -> None
     capsys.readouterr()
     with pytest.raises(SystemExit):
         main(["bench", "ssv", "--episodes", "3"])
-    assert "--episodes applies to bench learned, robustness, scale only" in capsys.readouterr().err
+    assert "--episodes applies to bench learned, robustness, curves, scale only" in capsys.readouterr().err
 
 
 def test_unknown_env_is_named() -> None:

@@ -65,4 +65,4 @@ def test_cli_rejects_trials_for_other_benches() -> None:
     result = subprocess.run(
         [sys.executable, "-m", "redundancy_gym.cli", "bench", "ssv", "--trials", "3"], capture_output=True, text=True
     )
-    assert result.returncode == 2 and "--trials applies to bench push only" in result.stderr
+    assert result.returncode == 2 and "--trials applies to bench push, curves only" in result.stderr
