@@ -15,7 +15,8 @@ from redundancy_gym.learning.training_record import read_training_record
 
 ENV_ID = "redundancy_gym/PlanarReach-v0"
 ROOT = Path(__file__).resolve().parents[2]
-CONFIGS = sorted((ROOT / "configs").glob("*_*.yaml"))
+# the SB3 learners' configs (rl-zoo3 reads them); bc_*.yaml hold behaviour cloning's options (test below)
+CONFIGS = sorted(p for p in (ROOT / "configs").glob("*_*.yaml") if p.name.split("_")[0] in ("ppo", "sac"))
 
 
 def _smoke_config(tmp_path: Path, **overrides) -> Path:
@@ -260,3 +261,17 @@ def test_train_on_async_envs_gives_the_sync_agent(tmp_path) -> None:
     a, b = (PPO.load(p, device="cpu") for p in paths)
     for x, y in zip(a.policy.parameters(), b.policy.parameters(), strict=True):
         np.testing.assert_array_equal(x.detach().numpy(), y.detach().numpy())
+
+
+def test_behaviour_cloning_configs_hold_its_options() -> None:
+    import inspect
+
+    from redundancy_gym.learning.behaviour_cloning import train_behaviour_cloning
+
+    options = set(inspect.signature(train_behaviour_cloning).parameters)
+    paths = sorted((ROOT / "configs").glob("bc_*.yaml"))
+    assert paths
+    for path in paths:
+        for env_id, section in yaml.safe_load(path.read_text()).items():
+            assert set(section) <= options, (path.name, env_id)
+            assert load_config(path, env_id).hyperparameters == section
