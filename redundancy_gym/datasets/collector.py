@@ -38,8 +38,9 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 from ..eval.evaluate import make_env, reseed_policy
-from ..policies import make_policy
+from ..policies import make_policy, reference_policy
 from ..sb3_import import install_hint
+from ..validation import check_required_int, check_required_real
 from .exceptions import DatasetError
 
 __all__ = ["MINARI_EXTRA_HINT", "CollectSummary", "collect_dataset", "import_minari"]
@@ -158,16 +159,13 @@ def collect_dataset(
     minari = import_minari()
     from minari.data_collector import EpisodeBuffer
 
-    if not isinstance(episodes, int) or isinstance(episodes, bool) or episodes < 1:
-        raise DatasetError(f"episodes must be an int >= 1, got {episodes!r}")
-    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        raise DatasetError(f"seed must be an int >= 0, got {seed!r}")
-    if not (isinstance(action_noise, (int, float)) and math.isfinite(action_noise) and action_noise >= 0.0):
-        raise DatasetError(
-            f"action_noise must be a finite number >= 0 [fraction of the half range], got {action_noise!r}"
-        )
+    episodes = check_required_int("episodes", episodes, low=1, error=DatasetError)
+    seed = check_required_int("seed", seed, low=0, error=DatasetError)
+    action_noise = check_required_real(
+        "action_noise", action_noise, low=0.0, unit="fraction of the half range", error=DatasetError
+    )
     out = Path(out).resolve()  # Minari joins a relative root to paths it already made relative
-    policy_name = policy or ("walking" if "Biped" in env_id else "clik")
+    policy_name = policy or reference_policy(env_id)
     dataset_id = dataset_id or default_dataset_id(env_id, policy_name)
     from minari.dataset.minari_dataset import parse_dataset_id
 

@@ -25,7 +25,7 @@ from tqdm.auto import tqdm
 
 from ..datasets import load_demonstrations
 from ..eval.evaluate import make_env
-from ..policies import make_policy
+from ..policies import make_policy, reference_policy
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
@@ -158,7 +158,7 @@ def train_behaviour_cloning(
     clock = CpuClock().__enter__()
     env = make_env(env_id, env_kwargs)
     if expert is None:
-        expert = "walking" if "Biped" in env_id else "clik"
+        expert = reference_policy(env_id)
     teacher = make_policy(expert, env, **(expert_kwargs or {})) if demonstrations is None or dagger_rounds else None
     torch.manual_seed(seed)
     model = sb3.PPO(

@@ -42,6 +42,7 @@ __all__ = [
     "make_policy",
     "missing_capabilities",
     "policy_supports",
+    "reference_policy",
     "register",
     "registered",
     "supported_env_ids",
@@ -50,6 +51,13 @@ __all__ = [
 ]
 
 KINDS: tuple[str, ...] = ("policy", "wrapper")
+
+
+def reference_policy(env_id: str) -> str:
+    """The analytic reference of an env id by name: ``walking`` on the bipeds, ``clik`` on the arms (what behaviour
+    cloning clones and ``collect`` records when no policy is named)."""
+    return "walking" if "Biped" in env_id else "clik"
+
 
 CAPABILITY_ATTRIBUTES: dict[str, tuple[str, ...]] = {
     # a joint-velocity arm whose TCP follows a path given in the observation (PlanarReach)
