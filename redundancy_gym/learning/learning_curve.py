@@ -4,8 +4,9 @@ resumable (the ``learn`` extra; TQC and CrossQ from sb3-contrib, which it brings
 A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point), and
 in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point; off-policy learners also
 ``<name>_replay.pkl``, their replay buffer).
-Called again, it loads the agent (and buffer) and trains on to the next budget, so an interrupted or extended study
-loses at most the segment under way. A resumed run is not bitwise the uninterrupted one (the envs restart from
+Within a segment the agent (and buffer) is saved every ``checkpoint_every`` environment steps and the state notes
+the steps saved (``checkpoint_steps``); called again, it loads the agent (and buffer) and trains on to the next
+budget, so an interrupted or extended study loses at most the steps since the last checkpoint. A resumed run is not bitwise the uninterrupted one (the envs restart from
 fresh resets); its points are still each a trained agent's at that many environment steps.
 
 Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
@@ -114,11 +115,15 @@ def train_learning_curve(
     folder: str | Path,
     *,
     agents: str | Path | None = None,
+    checkpoint_every: int = 100_000,
     log: Callable[[str], None] | None = print,
 ) -> dict[str, Any]:
     """Train ``run`` on to its last budget from where its state in ``folder`` (its agent in ``agents``, default
-    ``folder``) left off (module docstring); returns the state: ``{"settings", "points": [...], "cpu_s",
-    "wall_s"}``. A state with points whose agent is missing raises :class:`LearningError` (its points are kept)."""
+    ``folder``) left off, saving the agent every ``checkpoint_every`` environment steps (module docstring); returns
+    the state: ``{"settings", "points": [...], "cpu_s", "wall_s"}``. A state with points or a checkpoint whose agent
+    is missing raises :class:`LearningError` (its points are kept)."""
+    if checkpoint_every < 1:
+        raise LearningError(f"checkpoint_every must be >= 1 environment step, got {checkpoint_every!r}")
     try:
         import_stable_baselines3()
         import importlib
@@ -140,9 +145,12 @@ def train_learning_curve(
     todo = [int(b) for b in run.budgets if int(b) > reached]
     if not todo:
         return state
-    if state["points"] and not model_path.is_file():
+    # steps trained past the last point, saved at a checkpoint of an interrupted segment
+    reached = max(reached, int(state.get("checkpoint_steps", 0)))
+    if reached and not model_path.is_file():
         raise LearningError(
-            f"{state_path} has points but its agent {model_path} is missing; delete the .json to restart"
+            f"{state_path} has points or a checkpoint but its agent {model_path} is missing; delete the .json to "
+            "restart"
         )
     import torch
 
@@ -158,7 +166,7 @@ def train_learning_curve(
         monitor_kwargs=monitor,
     )
     try:
-        if state["points"]:
+        if reached:
             model = cls.load(str(model_path), env=env, device="cpu")
             if off_policy and replay_path.is_file():
                 model.load_replay_buffer(str(replay_path))
@@ -168,17 +176,21 @@ def train_learning_curve(
             except TypeError as exc:
                 raise LearningError(f"invalid {class_name} hyperparameters: {exc}") from None
         for budget in todo:
-            with CpuClock() as clock:
-                model.learn(
-                    total_timesteps=max(budget - int(model.num_timesteps), 1),
-                    reset_num_timesteps=False,
-                    progress_bar=False,
-                )
-            state["cpu_s"] += clock.cpu_s
-            state["wall_s"] += clock.wall_s
-            model.save(str(model_path))
-            if off_policy:
-                model.save_replay_buffer(str(replay_path))
+            # SB3 ends a learn() call only after a whole PPO rollout: a budget already passed is evaluated as is
+            while int(model.num_timesteps) < budget:
+                with CpuClock() as clock:
+                    model.learn(
+                        total_timesteps=min(budget - int(model.num_timesteps), checkpoint_every),
+                        reset_num_timesteps=False,
+                        progress_bar=False,
+                    )
+                state["cpu_s"] += clock.cpu_s
+                state["wall_s"] += clock.wall_s
+                model.save(str(model_path))
+                if off_policy:
+                    model.save_replay_buffer(str(replay_path))
+                state["checkpoint_steps"] = int(model.num_timesteps)
+                state_path.write_text(json.dumps(state, indent=1) + "\n")
             report = evaluate(
                 run.env_id,
                 str(model_path),
@@ -199,6 +211,7 @@ def train_learning_curve(
                 if isinstance(value, (int, float)) and math.isfinite(float(value)):
                     point[key] = float(value)
             state["points"].append(point)
+            state.pop("checkpoint_steps", None)
             state_path.write_text(json.dumps(state, indent=1) + "\n")
             if log is not None:
                 success, ret = point.get("success_rate", math.nan), point.get("episode_return", math.nan)

@@ -1,6 +1,6 @@
 """A learning curve trained in segments (seconds): budgets met in order, a run extended from its last point keeps the
-points it had, other settings or a lost agent are refused, sb3-contrib's TQC trains and evaluates through the
-harness; the budget ladder is logarithmic."""
+points it had, an interrupted segment resumes from its checkpoint, other settings or a lost agent are refused,
+sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is logarithmic."""
 
 from __future__ import annotations
 
@@ -42,6 +42,28 @@ def test_a_curve_is_extended_from_its_last_point(tmp_path):
     assert saved["points"] == extended["points"]
     again = train_learning_curve(_run((32, 64, 128)), tmp_path, log=None)  # nothing left to train
     assert again["points"] == extended["points"]
+
+
+def test_an_interrupted_segment_resumes_from_its_last_checkpoint(tmp_path, monkeypatch):
+    from redundancy_gym.learning import learning_curve
+
+    evaluate = learning_curve.evaluate
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(learning_curve, "evaluate", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        train_learning_curve(_run((96,)), tmp_path, checkpoint_every=32, log=None)
+    saved = json.loads((tmp_path / "pr-ppo-s0.json").read_text())
+    assert saved["points"] == [] and saved["checkpoint_steps"] == 96 and saved["cpu_s"] > 0.0
+    monkeypatch.setattr(learning_curve, "evaluate", evaluate)
+    resumed = train_learning_curve(_run((96,)), tmp_path, checkpoint_every=32, log=None)
+    assert [p["steps"] for p in resumed["points"]] == [96]  # the saved agent, not trained again
+    assert resumed["points"][0]["cpu_s"] == pytest.approx(saved["cpu_s"], abs=0.01)
+    assert "checkpoint_steps" not in json.loads((tmp_path / "pr-ppo-s0.json").read_text())
+    with pytest.raises(LearningError, match="checkpoint_every"):
+        train_learning_curve(_run((128,)), tmp_path, checkpoint_every=0, log=None)
 
 
 def test_other_settings_or_a_lost_agent_are_refused(tmp_path):
