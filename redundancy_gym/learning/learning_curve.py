@@ -1,13 +1,14 @@
 """One learner's learning curve: trained in segments up to a list of budgets, evaluated on held-out seeds at each,
 resumable (the ``learn`` extra; TQC and CrossQ from sb3-contrib, which it brings).
 
-A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point), and
-in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point; off-policy learners also
-``<name>_replay.pkl``, their replay buffer).
-Within a segment the agent (and buffer) is saved every ``checkpoint_every`` environment steps and the state notes
-the steps saved (``checkpoint_steps``); called again, it loads the agent (and buffer) and trains on to the next
-budget, so an interrupted or extended study loses at most the steps since the last checkpoint. A resumed run is not bitwise the uninterrupted one (the envs restart from
-fresh resets); its points are still each a trained agent's at that many environment steps.
+A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point and
+checkpoint), and in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point or
+checkpoint; off-policy learners also ``<name>_replay.pkl``, their replay buffer). Within a segment the agent (and
+buffer) is saved every ``checkpoint_every`` environment steps and the state notes the steps saved
+(``checkpoint_steps``); called again, it loads the agent (and buffer) and trains on to the next budget, so an
+interrupted or extended study loses at most the steps since the last checkpoint. A resumed run is not bitwise the
+uninterrupted one (the envs restart from fresh resets); its points are still each a trained agent's at that many
+environment steps.
 
 Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
 training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads; the
