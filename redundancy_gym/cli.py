@@ -1,8 +1,9 @@
 """redundancy-gym: Gymnasium environments on MuJoCo for redundant robots, with model-based reference policies.
 
 Subcommands: list (the envs and the policies each accepts), eval (a policy over episodes: table and JSON),
-train (a stable-baselines3 agent), render (one episode as a video), bench (benchmarks) and demo (everything
-into one folder). Run "redundancy-gym <subcommand> --help" for its options.
+train (a stable-baselines3 agent), collect (a reference's episodes as a dataset), baselines (the learned baselines),
+render (one episode as a video), bench (benchmarks), warmup (numba's cache filled ahead) and demo (everything into
+one folder). Run "redundancy-gym <subcommand> --help" for its options.
 """
 
 from __future__ import annotations
@@ -72,7 +73,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"redundancy-gym {__version__}")
     sub = parser.add_subparsers(
-        dest="command", required=True, metavar="{list,eval,train,collect,baselines,render,bench,demo}"
+        dest="command", required=True, metavar="{list,eval,train,collect,baselines,render,bench,warmup,demo}"
     )
 
     ls = _add_parser(sub, "list", "list the registered envs: spaces, control period, episode length, policies")
@@ -375,8 +376,19 @@ def _parser() -> argparse.ArgumentParser:
         help="learned: planar_reach, agri_reach, biped_walk, biped_obstacles, biped_terrain; robustness: the first "
         "four (default: all); the other envs' sections of an existing --json of the same seed and episodes are kept; "
         "curves: planar_reach, agri_reach_easy/_medium/_hard, biped_walk, biped_obstacles, or one learner as "
-        "ENV-LEARNER (planar_reach-ppo)",
+        "ENV-LEARNER (planar_reach-ppo); startup: probes (import, list, quick_start, an env id such as "
+        "PlanarReach-v0, policy:clik)",
     )
+
+    wu = _add_parser(
+        sub,
+        "warmup",
+        "fill numba's cache ahead of use: make each env, step it, and run every analytic policy it supports once "
+        "(a first episode, test run or cluster worker then loads compiled kernels; NUMBA_CACHE_DIR moves the cache)",
+    )
+    wu.add_argument("env_ids", nargs="*", metavar="ENV", help="env ids to warm up (default: every registered one)")
+    wu.add_argument("--workers", type=int, default=1, metavar="N", help="warm up in N processes (default: 1)")
+    wu.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     ba = _add_parser(
         sub,
@@ -641,6 +653,17 @@ def _workers(args: argparse.Namespace) -> int:
     return ray_cpus(args.ray)
 
 
+def _warmup(args: argparse.Namespace) -> None:
+    from .eval.warmup import numba_cache_location, warmup
+
+    rows = warmup(args.env_ids or None, workers=args.workers, progress=not args.no_progress)
+    width = max(len(row.env_id) for row in rows)
+    for row in rows:
+        policies = ", ".join(row.policies) or "-"
+        print(f"{row.env_id.ljust(width)}  {row.seconds:7.1f} s  (compiling {row.compile_s:5.1f} s)  {policies}")
+    print(f"{len(rows)} env id(s) warmed up; numba cache: {numba_cache_location()} (NUMBA_CACHE_DIR moves it)")
+
+
 def _baselines(args: argparse.Namespace) -> None:
     from .learning.baselines import BASELINES_DIR, baselines, train_baseline
 
@@ -801,6 +824,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"wrote {path} ({summary.length} steps, success={summary.success})")
         elif args.command == "bench":
             return bench_entry.run(bench_args)
+        elif args.command == "warmup":
+            _warmup(args)
     except (EvalError, PolicyError, EnvConfigError, ValueError) as exc:
         print(f"redundancy-gym {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -1,11 +1,12 @@
-"""The numba options of every compiled kernel, defined once (geometry, model and controllers import them; the
-lowest layer of the package, beside :mod:`redundancy_gym.validation`)."""
+"""The numba options of every compiled kernel and how an owner compiles its kernels (at their first call), defined
+once (geometry, model and controllers import them; the lowest layer of the package, beside
+:mod:`redundancy_gym.validation`)."""
 
 from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["BACKENDS", "BORROW", "BORROW_EXACT", "DEFAULT_BACKEND", "JIT", "JIT_EXACT"]
+__all__ = ["BACKENDS", "BORROW", "BORROW_EXACT", "DEFAULT_BACKEND", "JIT", "JIT_EXACT", "LazyEntryPoint"]
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # in the kernels is guarded or measured afterwards). The fast-math subset allows fused multiply-adds, reciprocal
@@ -36,3 +37,37 @@ DEFAULT_BACKEND = "compiled"
 
 BORROW_EXACT: dict[str, Any] = {**JIT_EXACT, "_nrt": False}
 """:data:`JIT_EXACT` without reference counting, for exact kernels that only borrow arrays."""
+
+
+class LazyEntryPoint:
+    """A compiled kernel's entry point as an attribute of the object that calls it, compiled (or loaded from
+    numba's on-disk cache) at its first call, not when its owner is built: an env, controller or policy that is
+    made but never stepped (``redundancy-gym list``, a wrapper's reference, a collision batch a policy does not
+    query) compiles nothing.
+
+    At its first call it compiles ``kernel`` for ``signature`` (a numba signature string; ``None``: the types of
+    that call's arguments), puts the compiled entry point in ``owner.<attribute>`` in its place and calls it; from
+    then on the owner calls the entry point directly, which skips the dispatcher's type matching on every call.
+    """
+
+    __slots__ = ("_attribute", "_kernel", "_owner", "_signature")
+
+    def __init__(self, owner: object, attribute: str, kernel: Any, signature: str | None = None) -> None:
+        self._owner = owner
+        self._attribute = attribute
+        self._kernel = kernel
+        self._signature = signature
+
+    def resolve(self, *args: Any) -> Any:
+        """Compile (or load) the kernel for the signature, or for ``args``' types, and put its entry point in
+        the owner's attribute; returns it."""
+        from numba import typeof
+
+        signature = self._signature if self._signature is not None else tuple(typeof(a) for a in args)
+        entry = self._kernel.compile(signature)
+        setattr(self._owner, self._attribute, entry)
+        self._owner = None  # the owner holds the entry point now; no cycle left behind
+        return entry
+
+    def __call__(self, *args: Any) -> Any:
+        return self.resolve(*args)(*args)

@@ -243,6 +243,18 @@ def _curves(a: BenchArgs) -> int:
     return 0
 
 
+def _startup(a: BenchArgs) -> int:
+    from .startup import format_startup_bench, run_startup_bench
+
+    report = run_startup_bench(names=a.envs, quick=a.quick, progress=a.progress)
+    command = "redundancy-gym bench startup" + (" --quick" if a.quick else "")
+    command += f" --envs {' '.join(a.envs)}" if a.envs else ""
+    report["command"] = command + f" --json {a.json_path}"
+    print(format_startup_bench(report))
+    _wrote(write_json(report, a.json_path))
+    return 0
+
+
 def _scale(a: BenchArgs) -> int:
     from .scale import format_scale_bench, run_scale_bench
 
@@ -347,6 +359,14 @@ BENCHES: Mapping[str, Bench] = {
             "--envs picks envs or env-learner pairs (markdown and one PNG per env beside the JSON)",
             frozenset({"episodes", "workers", "envs", "steps", "trials"}),
             _curves,
+        ),
+        Bench(
+            "startup",
+            "what a new process pays before its first step: import, list, the quick start, every env's first step "
+            "and every reference's first predict, each in a fresh process with an empty numba cache and again "
+            "warm; --envs picks probes",
+            frozenset({"envs"}),
+            _startup,
         ),
         Bench(
             "scale",

@@ -10,6 +10,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..kernel_options import LazyEntryPoint
 from .exceptions import GeometryError
 from .primitives import SSV
 from .ssv_kernels import GROUP_OF, cull_pairs_at, near_pairs_at, smallest_pair_at, ssv_pairs_at, ssv_pairs_grouped
@@ -259,18 +260,13 @@ class PairBatch:
             dtype=np.int64,
         )
         self._header_address = int(self._header.ctypes.data)
-        # compile (or load from cache) once per process, not in the first control step
-        if not ssv_pairs_at.signatures:
-            ssv_pairs_at(self._header_address)
-        if not near_pairs_at.signatures:
-            near_pairs_at(self._header_address, 0.0, 0, 0)
-        # every volume's bounding sphere, which compute_near keeps for the fixed ones (and the compile, once)
-        cull_pairs_at(self._header_address, 0.0)
+        # every volume's bounding sphere, which compute_near keeps for the fixed ones (the small broad phase
+        # compiles here; the narrow phases at their first call, so a batch never queried compiles nothing more)
+        self._cull_kernel = LazyEntryPoint(self, "_cull_kernel", cull_pairs_at)
+        self._cull_kernel(self._header_address, 0.0)
         self._active[:] = 1  # the broad phase above wrote the mask
-        # the compiled entry points skip the dispatcher's type matching on every call
-        self._kernel = ssv_pairs_at.overloads[ssv_pairs_at.signatures[0]].entry_point
-        self._cull_kernel = cull_pairs_at.overloads[cull_pairs_at.signatures[0]].entry_point
-        self._near_kernel = near_pairs_at.overloads[near_pairs_at.signatures[0]].entry_point
+        self._kernel = LazyEntryPoint(self, "_kernel", ssv_pairs_at)
+        self._near_kernel = LazyEntryPoint(self, "_near_kernel", near_pairs_at)
         self._frames: tuple[NDArray[np.float64], ...] | None = None
         self._frames_address = 0
 

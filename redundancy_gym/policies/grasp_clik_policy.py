@@ -18,13 +18,12 @@ from numpy.typing import NDArray
 from ..controllers.clik.clik import Clik, ClikResult
 from ..controllers.clik.clik_kernels import OK
 from ..controllers.clik.compiled_clik import CompiledClik
-from ..controllers.kernels.buffers import compiled_entry_point
 from ..controllers.objectives.collision_objective import CollisionObjective
 from ..controllers.objectives.joint_limit_objective import JointLimitObjective
 from ..controllers.tasks.frame_axis_task import FrameAxisTask
 from ..geometry import SSV, Segment
 from ..geometry.grasp_path import GraspPath, GraspPathTiming
-from ..kernel_options import DEFAULT_BACKEND
+from ..kernel_options import DEFAULT_BACKEND, LazyEntryPoint
 from ..model import RobotModel, collision_geometry_from_mjcf
 from .exceptions import PolicyError
 from .grasp_clik_kernels import grasp_clik_action
@@ -229,7 +228,7 @@ class GraspClikPolicy(PerEnvPolicy):
             and self._time is not None
             and self._speeds.shape == (self._nv,)
         ):
-            self._fused = compiled_entry_point(grasp_clik_action, _FUSED_SIGNATURE)
+            self._fused = LazyEntryPoint(self, "_fused", grasp_clik_action, _FUSED_SIGNATURE)
             if self._outputs.size != self.controller.output_size:
                 self._outputs = np.zeros(self.controller.output_size)
 

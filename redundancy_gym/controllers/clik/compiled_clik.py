@@ -6,9 +6,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ...geometry import PackedVolumes
+from ...kernel_options import LazyEntryPoint
 from ...model import ModelError
 from ..exceptions import ControllerError
-from ..kernels.buffers import buffer_view, compiled_entry_point
+from ..kernels.buffers import buffer_view
 from ..kernels.chain_fields import chain_arrays
 from ..objectives.collision_kernels import bounding_spheres, collision_fields, no_collision_arrays
 from ..objectives.collision_objective import CollisionObjective
@@ -173,10 +174,13 @@ class CompiledClik:
         self._outputs = self._field("outputs")
         self._version = -1
         self._refresh_environment()
-        self._kernel = compiled_entry_point(clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
+        self._kernel = LazyEntryPoint(self, "_kernel", clik_step, "int64(float64[::1], int64[::1], boolean, boolean)")
         # q, target and velocity in any layout (a strided view of an observation is read as it is)
-        self._array_kernel = compiled_entry_point(
-            clik_step_arrays, "int64(float64[::1], int64[::1], float64[:], float64[:], float64[:], boolean)"
+        self._array_kernel = LazyEntryPoint(
+            self,
+            "_array_kernel",
+            clik_step_arrays,
+            "int64(float64[::1], int64[::1], float64[:], float64[:], float64[:], boolean)",
         )
         self._close_pairs = clik_close_pairs
         self._pair_distances = np.zeros(8)

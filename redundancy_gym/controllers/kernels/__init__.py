@@ -2,7 +2,7 @@
 factorization and solve) and the package's numba options (re-exported from :mod:`redundancy_gym.kernel_options`)."""
 
 from ...kernel_options import BORROW, BORROW_EXACT, JIT, JIT_EXACT
-from .buffers import buffer_view, compiled_entry_point, pack_fields
+from .buffers import buffer_view, pack_fields
 from .linalg import cholesky_factor, cholesky_solve, rotation_error, rotation_error_into
 
 __all__ = [
@@ -13,7 +13,6 @@ __all__ = [
     "buffer_view",
     "cholesky_factor",
     "cholesky_solve",
-    "compiled_entry_point",
     "pack_fields",
     "rotation_error",
     "rotation_error_into",

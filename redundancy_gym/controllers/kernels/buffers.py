@@ -9,8 +9,7 @@ by field index with :func:`float_field` and :func:`int_field`.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numba import njit
@@ -23,7 +22,6 @@ __all__ = [
     "borrowed_float_field",
     "borrowed_int_field",
     "buffer_view",
-    "compiled_entry_point",
     "float_field",
     "int_field",
     "pack_fields",
@@ -67,14 +65,6 @@ def buffer_view(
     k = float_fields.index(name)
     offset, size = int(i[2 * k]), int(i[2 * k + 1])
     return f[offset : offset + size]
-
-
-def compiled_entry_point(kernel: Any, signature: str) -> Callable[..., Any]:
-    """``kernel`` compiled for ``signature`` (or loaded from numba's cache) once per process; its entry point,
-    which skips the dispatcher's type matching on every call."""
-    if not kernel.signatures:
-        kernel.compile(signature)
-    return kernel.overloads[kernel.signatures[0]].entry_point
 
 
 @njit(**JIT)

@@ -9,9 +9,10 @@ from typing import TypeGuard
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ...kernel_options import LazyEntryPoint
 from ...model import ModelError
 from ..exceptions import ControllerError
-from ..kernels.buffers import buffer_view, compiled_entry_point, pack_fields
+from ..kernels.buffers import buffer_view, pack_fields
 from ..kernels.chain_fields import chain_arrays
 from ..objectives.actuated_objective import ActuatedObjective
 from ..objectives.collision_kernels import bounding_spheres, collision_fields, no_collision_arrays
@@ -163,7 +164,7 @@ class CompiledWholeBodyIk:
             ik.max_velocity,
             0.0,
         ]
-        self._kernel = compiled_entry_point(whole_body_step, "int64(float64[::1], int64[::1])")
+        self._kernel = LazyEntryPoint(self, "_kernel", whole_body_step, "int64(float64[::1], int64[::1])")
 
     def _field(self, name: str) -> NDArray[np.float64]:
         """The view of one float field of the kernel buffer (writes reach the kernel)."""

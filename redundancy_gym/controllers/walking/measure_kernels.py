@@ -22,11 +22,11 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from ...kernel_options import JIT
+from ...kernel_options import JIT, LazyEntryPoint
 from ...model import RobotModel
 from ...model.chain_kernels import FREE, PRISMATIC, place_frame
 from ..exceptions import ControllerError
-from ..kernels.buffers import buffer_view, compiled_entry_point, float_field, int_field, pack_fields
+from ..kernels.buffers import buffer_view, float_field, int_field, pack_fields
 from ..kernels.chain_fields import (
     CHAIN_INT_FIELDS,
     CHAIN_PLACEMENT_FIELDS,
@@ -387,7 +387,7 @@ class CompiledMeasurement:
         self._turn = views["turn"].reshape(3, 3)
         self._cop = views["cop"].reshape(2, 2)
         self._moment = views["moment"].reshape(2, 3)
-        self._kernel = compiled_entry_point(measure_step, "int64(float64[::1], int64[::1])")
+        self._kernel = LazyEntryPoint(self, "_kernel", measure_step, "int64(float64[::1], int64[::1])")
 
     def measure(
         self,

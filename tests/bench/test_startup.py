@@ -1,0 +1,37 @@
+"""bench startup (seconds): each probe runs in a fresh process, cold with an empty numba cache and warm with the cache
+that run filled, so a warm run compiles nothing; unknown probes are named; the report states its targets."""
+
+from __future__ import annotations
+
+import pytest
+
+from redundancy_gym.bench.exceptions import BenchError
+from redundancy_gym.bench.startup import STARTUP_TARGETS, format_startup_bench, run_startup_bench, startup_probes
+
+
+def test_a_warm_process_loads_what_the_cold_one_compiled():
+    report = run_startup_bench(names=["import", "PlanarReach-v0"], progress=False)
+    probe = report["probes"]["PlanarReach-v0"]
+    cold, warm = probe["cold"], probe["warm"]
+    assert "error" not in cold and "error" not in warm, probe
+    assert cold["compile_s"] > 0.0  # the env's first step compiled its kernels into the empty cache
+    assert warm["compile_s"] == 0.0  # and the next process loaded them
+    for run in (cold, warm):
+        assert 0.0 < run["first_step_s"] <= run["total_s"] <= run["process_s"]
+    imported = report["probes"]["import"]["cold"]
+    assert 0.0 < imported["import_s"] <= imported["process_s"]
+    assert set(report["targets"]) == set(STARTUP_TARGETS)
+    assert report["targets"]["quick_start_cold"]["met"] is None  # not measured in this run: not claimed
+    text = format_startup_bench(report)
+    assert "PlanarReach-v0" in text and "quick_start_cold: <= 8 s, not measured" in text
+
+
+def test_probes_cover_every_env_and_reference_and_unknown_ones_are_named():
+    from redundancy_gym import ENV_IDS
+
+    names = [p.name for p in startup_probes()]
+    assert {"import", "list", "quick_start", "policy:clik", "policy:walking"} <= set(names)
+    assert {env_id.split("/")[-1] for env_id in ENV_IDS} <= set(names)
+    assert [p.name for p in startup_probes(quick=True)] == ["import", "PlanarReach-v0"]
+    with pytest.raises(BenchError, match=r"unknown startup probe nope; valid: import, list, quick_start"):
+        startup_probes(["nope"])
