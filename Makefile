@@ -5,10 +5,13 @@ BIN := $(VENV)/bin
 
 .PHONY: demo test lint baselines system-deps clean
 
+# warmup compiles every env's and reference's kernels into numba's cache first, two processes at a time
 demo: $(VENV)/.learn-installed
+	$(BIN)/redundancy-gym warmup --workers 2 --no-progress
 	$(BIN)/redundancy-gym demo --out results
 
 test: $(VENV)/.test-installed
+	$(BIN)/redundancy-gym warmup --workers 2 --no-progress
 	$(BIN)/python -m pytest -q
 
 # the linter, the formatter's check and the type checker, as CI runs them before the tests (configured in pyproject.toml)
