@@ -59,24 +59,26 @@ class LazyEntryPoint:
     then on the owner calls the entry point directly, which skips the dispatcher's type matching on every call.
     """
 
-    __slots__ = ("_attribute", "_kernel", "_owner", "_signature")
+    __slots__ = ("_attribute", "_entry", "_kernel", "_owner", "_signature")
 
     def __init__(self, owner: object, attribute: str, kernel: Any, signature: str | None = None) -> None:
-        self._owner = owner
+        self._owner: object | None = owner
         self._attribute = attribute
         self._kernel = kernel
         self._signature = signature
+        self._entry: Any = None
 
     def resolve(self, *args: Any) -> Any:
         """Compile (or load) the kernel for the signature, or for ``args``' types, and put its entry point in
-        the owner's attribute; returns it."""
-        from numba import typeof
+        the owner's attribute; returns it (a stand-in kept elsewhere goes on calling it)."""
+        if self._entry is None:
+            from numba import typeof
 
-        signature = self._signature if self._signature is not None else tuple(typeof(a) for a in args)
-        entry = self._kernel.compile(signature)
-        setattr(self._owner, self._attribute, entry)
-        self._owner = None  # the owner holds the entry point now; no cycle left behind
-        return entry
+            signature = self._signature if self._signature is not None else tuple(typeof(a) for a in args)
+            self._entry = self._kernel.compile(signature)
+            setattr(self._owner, self._attribute, self._entry)
+            self._owner = None  # the owner holds the entry point now; no cycle left behind
+        return self._entry
 
     def __call__(self, *args: Any) -> Any:
         return self.resolve(*args)(*args)
