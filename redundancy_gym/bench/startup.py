@@ -4,7 +4,8 @@
 Every probe runs twice in its own fresh Python process (``sys.executable``): first with ``NUMBA_CACHE_DIR`` set to a
 new empty folder, then again with the same folder. ``process_s`` is the parent's wall clock around the process
 (interpreter start, imports, everything a user waits for); inside, each probe times its stages with
-``time.perf_counter`` and reads the numba compile time (:data:`~redundancy_gym.eval.compile_clock.COMPILE_CLOCK`).
+``time.perf_counter`` and reads numba's time compiling kernels (``compile_s``) and compiling or loading them from
+the cache (``kernels_s``, :data:`~redundancy_gym.eval.compile_clock.COMPILE_CLOCK`).
 
 The probes: ``import`` (``import redundancy_gym``), ``list`` (``redundancy-gym list``), ``quick_start`` (the README's
 quick start: PlanarReach, ``clik``, one episode), every registered env id (``gym.make``, ``reset``, the first
@@ -57,7 +58,8 @@ def _lap(name, start):
     return now
 """
 _FOOTER = """
-_t["compile_s"] = COMPILE_CLOCK.seconds
+_t["compile_s"] = COMPILE_CLOCK.compiling_seconds
+_t["kernels_s"] = COMPILE_CLOCK.seconds
 _t["total_s"] = time.perf_counter() - _t0
 print("STARTUP " + json.dumps(_t))
 """

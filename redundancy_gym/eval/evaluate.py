@@ -75,8 +75,8 @@ class EpisodeSummary:
             ``predict`` would have given, per step [us]: ``sb3_predict`` timed on the step's observation right after
             the policy's ``predict`` (its action unused), plus the step's action-wrapper controller time as in
             ``step_time_us``; ``None`` for every other policy.
-        compile_time_s: numba compilation [s] inside the episode's timed calls (a kernel's first call in a process
-            without its cached machine code), taken out of their step times
+        compile_time_s: numba kernel preparation [s] inside the episode's timed calls (a kernel's first call in a
+            process compiles it, or loads its machine code from the cache), taken out of their step times
             (:mod:`~redundancy_gym.eval.compile_clock`).
     """
 
@@ -685,8 +685,8 @@ def format_report(report: dict[str, Any]) -> str:
         ),
         ("first step of an episode, mean [us]", f"{step['first_step_mean']:.1f} (plans, builds models)"),
         (
-            "numba compilation [s]",
-            f"{report.get('compile_time_s', 0.0):.2f} (out of the step times; 0 once the kernels are cached)",
+            "numba compiling or cache loading [s]",
+            f"{report.get('compile_time_s', 0.0):.2f} (out of the step times; compiling only on a first run)",
         ),
         ("episode return", f"{report['episode_return']:.3f} +- {report['episode_return_std']:.3f}"),
         ("episode length [steps]", f"{report['episode_length']:.1f}"),

@@ -63,7 +63,7 @@ def warmup_env(env_id: str) -> WarmupRow:
 
     if env_id not in ENV_IDS:
         raise EvalError(f"unknown env id {env_id!r}; valid: {', '.join(ENV_IDS)}")
-    start, compiled = time.perf_counter(), COMPILE_CLOCK.seconds
+    start, compiled = time.perf_counter(), COMPILE_CLOCK.compiling_seconds
     env = gym.make(env_id)
     ran: list[str] = []
     try:
@@ -78,7 +78,7 @@ def warmup_env(env_id: str) -> WarmupRow:
             ran.append(name)
     finally:
         env.close()
-    return WarmupRow(env_id, time.perf_counter() - start, COMPILE_CLOCK.seconds - compiled, tuple(ran))
+    return WarmupRow(env_id, time.perf_counter() - start, COMPILE_CLOCK.compiling_seconds - compiled, tuple(ran))
 
 
 def warmup(env_ids: Sequence[str] | None = None, *, workers: int = 1, progress: bool = True) -> list[WarmupRow]:
