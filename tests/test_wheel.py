@@ -1,6 +1,7 @@
 """The wheel is what a pip-install user gets: it carries the MJCF files, the shipped learned baselines with their
-training records, the baselines' configs and configs/, and installed outside the checkout it lists the envs,
-evaluates a shipped model by its short name and lists the baselines with their models.
+training records, the baselines' configs and configs/, and installed outside the checkout it lists the envs, warms
+numba's cache up beside its own sources, evaluates a shipped model by its short name and lists the baselines with
+their models.
 
 The wheel is built offline from a copy of the working tree (``pip wheel --no-build-isolation`` with the installed
 setuptools; building in place would write build/ and the egg-info into the checkout) and installed with
@@ -165,6 +166,13 @@ def test_the_installed_package_lists_evaluates_and_sees_its_baselines(
     listed = _run([python, script, "list"], cwd=tmp_path, env=env, timeout=600)
     assert "redundancy_gym/PlanarReach-v0" in listed
     assert "ppo-nullspace" in listed and "shipped learned baseline" in listed
+
+    # warmup for a wheel user: it runs the env's references and names the installed package's cache
+    warmed = _run(
+        [python, script, "warmup", "redundancy_gym/PlanarReach-v0", "--no-progress"], cwd=tmp_path, env=env, timeout=600
+    )
+    assert "clik, predictive, global" in warmed
+    assert f"numba cache: __pycache__ folders beside the sources in {(target / 'redundancy_gym').resolve()}" in warmed
 
     report = tmp_path / "report.json"
     env_id = "redundancy_gym/PlanarReach-Nullspace-v0"
