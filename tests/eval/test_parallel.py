@@ -21,7 +21,7 @@ from redundancy_gym.eval.evaluate import evaluate
 from redundancy_gym.eval.exceptions import EvalError
 from redundancy_gym.eval.parallel import ParallelEvalError
 
-TIMINGS = ("step_time_us", "compute_time_per_episode_ms")
+TIMINGS = ("step_time_us", "compute_time_per_episode_ms", "compile_time_s")  # compile_time_s: cache loads too
 
 
 def _without_timings(report: dict) -> dict:

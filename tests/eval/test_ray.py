@@ -18,7 +18,7 @@ from redundancy_gym.eval.parallel import LOCAL_RAY, ParallelEvalError, run_paral
 ray = pytest.importorskip("ray")
 
 evaluate_module = importlib.import_module("redundancy_gym.eval.evaluate")  # the module, not the function
-TIMINGS = ("step_time_us", "sb3_predict_us", "compute_time_per_episode_ms")
+TIMINGS = ("step_time_us", "sb3_predict_us", "compute_time_per_episode_ms", "compile_time_s")
 
 
 def _without_timings(report: dict) -> dict:
