@@ -46,7 +46,11 @@ def numba_cache_location() -> str:
     from ..controllers.clik.clik_kernels import clik_step
 
     # numba's own choice for a kernel of this package: beside its source, or per user where that is read-only
-    path = Path(clik_step._cache._cache_path)
+    # (a private attribute of numba's dispatcher: a numba without it gets the general answer)
+    cache_path = getattr(getattr(clik_step, "_cache", None), "_cache_path", None)
+    if cache_path is None:
+        return "numba's default: __pycache__ beside the sources, or its per-user cache folder where they are read-only"
+    path = Path(cache_path)
     package = Path(__file__).resolve().parents[1]
     if package in path.resolve().parents:
         return f"__pycache__ folders beside the sources in {package}"
