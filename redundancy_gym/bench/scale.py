@@ -57,10 +57,11 @@ WITHOUT_RAY = frozenset({"agri_reach_1000"})
 """Cases measured without the Ray rows: those show Ray's start-up cost, which the 200-episode case shows too, and
 on 1000 episodes they would add about 10 min."""
 
-TIMING_SUFFIXES = ("_us", "_ms")
+TIMING_SUFFIXES = ("_us", "_ms", "_time_s")
 """The evaluation contract names its compute timings by their unit (``step_time_us``,
-``compute_time_per_episode_ms``, ``sb3_predict_us``, ``per_episode``'s ``first_step_us``); they differ between runs,
-and no other field ends so."""
+``compute_time_per_episode_ms``, ``sb3_predict_us``, ``per_episode``'s ``first_step_us``, ``compile_time_s``: numba
+compiling or loading kernels, in every process that runs episodes); they differ between runs, and no other field
+ends so."""
 
 
 def amdahl_serial_fraction(speedup: float, n: int) -> float:
