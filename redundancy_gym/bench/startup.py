@@ -150,12 +150,12 @@ print("STARTUP " + json.dumps({"exit_code": code, "total_s": time.perf_counter()
 def startup_probes(names: Sequence[str] | None = None, quick: bool = False) -> list[StartupProbe]:
     """The probes by name (default: all; ``quick``: ``import`` and PlanarReach-v0's first step); unknown names
     raise :class:`BenchError` naming the valid ones."""
-    from ..policies import registered, supported_env_ids
+    from ..policies import GENERIC_POLICIES, registered, supported_env_ids
     from ..registration import ENV_IDS
 
     everything = [_IMPORT, _LIST, _QUICK_START, *(_env_probe(env_id) for env_id in ENV_IDS)]
     for entry in registered("policy"):
-        if entry.name in ("zero", "random"):  # not references; they compile nothing of their own
+        if entry.name in GENERIC_POLICIES:
             continue
         supported = supported_env_ids(entry.name)
         if supported:

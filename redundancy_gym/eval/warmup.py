@@ -24,8 +24,6 @@ from .exceptions import EvalError
 
 __all__ = ["WarmupRow", "numba_cache_location", "warmup", "warmup_env"]
 
-_NOT_REFERENCES = ("zero", "random")
-
 
 class WarmupRow(NamedTuple):
     """One env id warmed up: its wall time [s], of which numba compiled [s], and the policies it ran."""
@@ -57,23 +55,29 @@ def numba_cache_location() -> str:
     return str(path.parents[1])
 
 
+def _check_env_ids(ids: Sequence[str]) -> None:
+    from ..registration import ENV_IDS
+
+    unknown = [e for e in ids if e not in ENV_IDS]
+    if unknown:
+        raise EvalError(f"unknown env id {', '.join(unknown)}; valid: {', '.join(ENV_IDS)}")
+
+
 def warmup_env(env_id: str) -> WarmupRow:
     """Compile (or load) every kernel that ``env_id`` and its analytic policies run (module docstring)."""
     import gymnasium as gym
     import numpy as np
 
-    from ..policies import make_policy, supported_policies
-    from ..registration import ENV_IDS
+    from ..policies import GENERIC_POLICIES, make_policy, supported_policies
 
-    if env_id not in ENV_IDS:
-        raise EvalError(f"unknown env id {env_id!r}; valid: {', '.join(ENV_IDS)}")
+    _check_env_ids([env_id])
     start, compiled = time.perf_counter(), COMPILE_CLOCK.compiling_seconds
     env = gym.make(env_id)
     ran: list[str] = []
     try:
         obs, _ = env.reset(seed=0)
         env.step(np.zeros(env.action_space.shape, dtype=env.action_space.dtype))
-        policies = [p for p in supported_policies(env) if p not in _NOT_REFERENCES]
+        policies = [p for p in supported_policies(env) if p not in GENERIC_POLICIES]
         for name in policies:
             obs, _ = env.reset(seed=0)
             policy = make_policy(name, env)
@@ -90,9 +94,7 @@ def warmup(env_ids: Sequence[str] | None = None, *, workers: int = 1, progress: 
     from ..registration import ENV_IDS
 
     ids = list(ENV_IDS if env_ids is None else env_ids)
-    unknown = [e for e in ids if e not in ENV_IDS]
-    if unknown:
-        raise EvalError(f"unknown env id {', '.join(unknown)}; valid: {', '.join(ENV_IDS)}")
+    _check_env_ids(ids)
     if workers < 1:
         raise EvalError(f"workers must be >= 1, got {workers!r}")
     from tqdm.auto import tqdm

@@ -15,6 +15,7 @@ from .options import config_from_options, env_name
 from .per_env_policy import PerEnvPolicy, Policy, observation_time_index
 from .registry import (
     CAPABILITY_ATTRIBUTES,
+    GENERIC_POLICIES,
     KINDS,
     POLICY_NAMES,
     WRAPPER_NAMES,
@@ -65,6 +66,7 @@ __all__ = [
     "missing_capabilities",
     "observation_time_index",
     "policy_supports",
+    "GENERIC_POLICIES",
     "reference_policy",
     "register",
     "registered",

@@ -29,6 +29,7 @@ from .shipped_models import is_shipped_name, shipped_model_path
 
 __all__ = [
     "CAPABILITY_ATTRIBUTES",
+    "GENERIC_POLICIES",
     "KINDS",
     "POLICY_NAMES",
     "WRAPPER_NAMES",
@@ -51,6 +52,11 @@ __all__ = [
 ]
 
 KINDS: tuple[str, ...] = ("policy", "wrapper")
+
+
+GENERIC_POLICIES: tuple[str, ...] = ("zero", "random")
+"""The registered policies that are no analytic reference: every env takes them and they run no kernel of their
+own (``warmup`` and ``bench startup`` skip them)."""
 
 
 def reference_policy(env_id: str) -> str:
