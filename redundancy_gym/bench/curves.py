@@ -8,10 +8,11 @@ committed). Running the bench again trains every run on from its last point to i
 extended. ``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that
 many runs at once (one process each, torch on one thread).
 
-Hyperparameters: PPO with stable-baselines3's defaults (rl-zoo3's tuned MuJoCo PPO is those defaults with
-``normalize: true``; our ``.zip`` policies carry no VecNormalize statistics, so observations are not normalized);
-SAC and TQC with rl-zoo3's MuJoCo settings (``learning_starts`` 10000, SB3's defaults otherwise; the replay buffer
-held at 300 000 transitions, the largest budget). CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+Hyperparameters: PPO with stable-baselines3's defaults, plain (``ppo``) and behind SB3's ``VecNormalize``
+(``ppo-norm``: rl-zoo3's PPO ``mujoco-defaults`` are SB3's defaults with ``normalize: true``; the agent's statistics
+are saved beside its ``.zip`` and read by its policy); SAC and TQC with rl-zoo3's MuJoCo settings
+(``learning_starts`` 10000, SB3's defaults otherwise; the replay buffer held at 300 000 transitions, the largest
+budget). CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
@@ -62,6 +63,7 @@ class CurveLearner:
     env_id: str
     budgets: tuple[int, ...]
     hyperparameters: dict[str, Any] = field(default_factory=dict)
+    normalize: bool = False
 
 
 @dataclass(frozen=True)
@@ -82,6 +84,7 @@ class CurveEnv:
 def _arm_learners(env_id: str) -> tuple[CurveLearner, ...]:
     return (
         CurveLearner("ppo", "ppo", env_id, budgets_between(10_000, ON_POLICY_LAST)),
+        CurveLearner("ppo-norm", "ppo", env_id, budgets_between(10_000, ON_POLICY_LAST), normalize=True),
         CurveLearner("sac", "sac", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
         CurveLearner("tqc", "tqc", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
     )
@@ -100,6 +103,10 @@ def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
 
 
 _PLANAR, _AGRI = "redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0"
+_RETURN = ("episode_return", "episode_length")
+# what a learner that learned nothing earns: the arms hold still, the bipeds hold the standing posture
+_ARM_REFERENCES = {"clik": "clik", "zero action": "zero"}
+_BIPED_REFERENCES = {"walking": "walking", "zero action": "zero"}
 _TRACKING = ("tracking_error_max", "tracking error max", "mm", 1e3)
 _GOAL = ("goal_error", "goal error at the end", "mm", 1e3)
 _SPEED = ("speed_error", "speed error (mean speed vs command)", "m/s", 1.0)
@@ -111,7 +118,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
         {"obstacle": True},
         _TRACKING,
         "collision_rate",
-        {"clik": "clik"},
+        _ARM_REFERENCES,
         _arm_learners(_PLANAR),
     ),
     *(
@@ -122,7 +129,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
             {"difficulty": d},
             _GOAL,
             "collision_rate",
-            {"clik": "clik"},
+            _ARM_REFERENCES,
             _arm_learners(_AGRI),
         )
         for d in ("easy", "medium", "hard")
@@ -134,7 +141,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
         {"target_speed": 0.5},
         _SPEED,
         "fall_rate",
-        {"walking": "walking"},
+        _BIPED_REFERENCES,
         _biped_learners("BipedWalk"),
     ),
     CurveEnv(
@@ -144,7 +151,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
         {"course": "random"},
         _SPEED,
         "fall_rate",
-        {"walking": "walking"},
+        _BIPED_REFERENCES,
         _biped_learners("BipedObstacles"),
     ),
 )
@@ -180,6 +187,7 @@ def _run(env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, epi
         hyperparameters=dict(learner.hyperparameters),
         eval_episodes=episodes,
         eval_seed=CURVE_EVAL_SEED,
+        normalize=learner.normalize,
     )
 
 
@@ -195,14 +203,15 @@ def _train_one(run: CurveRun, folder: str, agents: str) -> tuple[str, dict[str, 
 def _references(env: CurveEnv, folder: Path, episodes: int, progress: bool) -> dict[str, dict[str, Any]]:
     path = folder / f"references-{env.key}.json"
     cached = json.loads(path.read_text()) if path.is_file() else {}
-    if cached.get("episodes") == episodes and cached.get("seed") == CURVE_EVAL_SEED:
+    same = cached.get("episodes") == episodes and cached.get("seed") == CURVE_EVAL_SEED
+    if same and list(cached.get("references", {})) == list(env.references):
         return dict(cached["references"])
     out = {}
     for label, policy in env.references.items():
         report = evaluate(
             env.env_id, policy, episodes=episodes, seed=CURVE_EVAL_SEED, env_kwargs=env.env_kwargs, progress=progress
         ).to_json()
-        out[label] = {k: report.get(k) for k in ("success_rate", env.rate, env.error[0])}
+        out[label] = {k: report.get(k) for k in ("success_rate", env.rate, env.error[0], *_RETURN)}
     folder.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps({"episodes": episodes, "seed": CURVE_EVAL_SEED, "references": out}, indent=1) + "\n")
     return out
@@ -219,6 +228,7 @@ def _summary(points_by_seed: dict[str, list[dict[str, Any]]], error_key: str) ->
             at = [next(q for q in p if q["budget"] == budget) for p in runs]
             success = [q.get("success_rate", 0.0) for q in at]
             errors = [q[error_key] for q in at if error_key in q]
+            returns = [q["episode_return"] for q in at if "episode_return" in q]
             rows.append(
                 {
                     "budget": budget,
@@ -227,6 +237,7 @@ def _summary(points_by_seed: dict[str, list[dict[str, Any]]], error_key: str) ->
                     "success_min": float(min(success)),
                     "success_max": float(max(success)),
                     "error_mean": float(np.mean(errors)) if errors else None,
+                    "return_mean": float(np.mean(returns)) if returns else None,
                     "cpu_s_mean": float(np.mean([q["cpu_s"] for q in at])),
                 }
             )
@@ -346,24 +357,27 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
         refs = "; ".join(
             f"{label}: success {r.get('success_rate', float('nan')):.2f}, {err['label']} "
             f"{(r.get(err['key']) or float('nan')) * err['scale']:.3g} {err['unit']}"
+            + (f", return {r['episode_return']:.1f}" if r.get("episode_return") is not None else "")
             for label, r in env["references"].items()
         )
         lines += [f"References: {refs}.", ""]
         lines += [
             f"| learner | seeds | largest budget [steps] | success (min-max) | {err['label']} [{err['unit']}] | "
-            "CPU per seed [min] | first >= 0.5 | first >= 0.9 |",
-            "| --- | --- | --- | --- | --- | --- | --- | --- |",
+            "return | CPU per seed [min] | first >= 0.5 | first >= 0.9 |",
+            "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
         for name, learner in env["learners"].items():
             rows = learner["by_budget"]
             if not rows:
-                lines.append(f"| {name} | {len(learner['seeds'])} | - | - | - | - | - | - |")
+                lines.append(f"| {name} | {len(learner['seeds'])} | - | - | - | - | - | - | - |")
                 continue
             last = rows[-1]
             error = "-" if last["error_mean"] is None else f"{last['error_mean'] * err['scale']:.3g}"
+            ret = "-" if last.get("return_mean") is None else f"{last['return_mean']:.1f}"
             lines.append(
                 f"| {name} | {len(learner['seeds'])} | {last['budget']:,} | {last['success_mean']:.2f} "
-                f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {last['cpu_s_mean'] / 60:.1f} | "
+                f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {ret} | "
+                f"{last['cpu_s_mean'] / 60:.1f} | "
                 f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
             )
         lines.append("")
@@ -405,12 +419,12 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             axes[1].fill_between(cpu, low, high, color=color, alpha=0.15)
             errors = [np.nan if r["error_mean"] is None else r["error_mean"] * err["scale"] for r in rows]
             axes[2].plot(steps, errors, "o-", color=color, label=label)
-        for label, ref in env["references"].items():
+        for (label, ref), style in zip(env["references"].items(), ("--", ":", "-."), strict=False):
             for ax in axes[:2]:
-                ax.axhline(ref.get("success_rate") or 0.0, ls="--", color="k", lw=1, label=f"{label} (reference)")
+                ax.axhline(ref.get("success_rate") or 0.0, ls=style, color="k", lw=1, label=f"{label} (reference)")
             value = ref.get(err["key"])
             if value is not None and math.isfinite(float(value)):
-                axes[2].axhline(float(value) * err["scale"], ls="--", color="k", lw=1, label=f"{label} (reference)")
+                axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=f"{label} (reference)")
         for ax, xlabel, ylabel in (
             (axes[0], "environment steps", "success rate"),
             (axes[1], "training CPU time per seed [min]", "success rate"),

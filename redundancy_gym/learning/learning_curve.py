@@ -3,7 +3,9 @@ resumable (the ``learn`` extra; TQC and CrossQ from sb3-contrib, which it brings
 
 A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point and
 checkpoint), and in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point or
-checkpoint; off-policy learners also ``<name>_replay.pkl``, their replay buffer). Within a segment the agent (and
+checkpoint; off-policy learners also ``<name>_replay.pkl``, their replay buffer; a run with ``normalize`` also
+``<name>_vecnormalize.pkl``, SB3's ``VecNormalize`` statistics, which the evaluation's policy reads beside the
+``.zip``). Within a segment the agent (and
 buffer) is saved every ``checkpoint_every`` environment steps (100k on-policy, 20k off-policy by default) and the
 state notes the steps saved (``checkpoint_steps``); called again, it loads the agent (and buffer) and trains on to
 the next budget, so an interrupted or extended study loses at most the steps since the last checkpoint. A resumed
@@ -28,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..eval.evaluate import evaluate, make_env
+from ..policies.sb3_policy import vecnormalize_path
 from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
 from .exceptions import LearningError
 from .training_record import CpuClock
@@ -71,6 +74,9 @@ class CurveRun:
         hyperparameters: the algorithm's constructor keyword arguments.
         eval_episodes, eval_seed: the held-out evaluation episodes of every point.
         torch_threads: torch's CPU threads while training.
+        normalize: train behind SB3's ``VecNormalize`` (observations and rewards normalized by running
+            statistics, observations clipped to +-10, rl-zoo3's ``normalize: true``; the statistics frozen for
+            the evaluations).
     """
 
     name: str
@@ -83,6 +89,7 @@ class CurveRun:
     eval_episodes: int = 10
     eval_seed: int = 40000
     torch_threads: int = 1
+    normalize: bool = False
 
     def __post_init__(self) -> None:
         if self.algo not in CURVE_ALGOS:
@@ -96,6 +103,8 @@ class CurveRun:
         """What a state file must match to be resumed (the budgets may grow)."""
         kept = asdict(self)
         kept.pop("budgets")
+        if not self.normalize:  # states written before the option existed stay valid
+            kept.pop("normalize")
         return kept
 
 
@@ -134,7 +143,7 @@ def train_learning_curve(
         every = checkpoint_every or (20_000 if off_policy else 100_000)
         cls = getattr(importlib.import_module(module_name), class_name)
         from stable_baselines3.common.env_util import make_vec_env
-        from stable_baselines3.common.vec_env import DummyVecEnv
+        from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
     except ImportError as exc:
         raise LearningError(f"learning curves need the learn extra: {LEARN_EXTRA_HINT}") from exc
     folder = Path(folder)
@@ -143,6 +152,7 @@ def train_learning_curve(
     store.mkdir(parents=True, exist_ok=True)
     state_path, model_path = folder / f"{run.name}.json", store / f"{run.name}.zip"
     replay_path = store / f"{run.name}_replay.pkl"
+    stats_path = vecnormalize_path(model_path)
     state = _load_state(state_path, run)
     reached = state["points"][-1]["steps"] if state["points"] else 0
     todo = [int(b) for b in run.budgets if int(b) > reached]
@@ -168,6 +178,18 @@ def train_learning_curve(
         vec_env_cls=DummyVecEnv,
         monitor_kwargs=monitor,
     )
+    normalizer: VecNormalize | None = None
+    if run.normalize:
+        if reached:
+            if not stats_path.is_file():
+                env.close()
+                raise LearningError(f"{state_path} normalizes, but its statistics {stats_path} are missing")
+            normalizer = VecNormalize.load(str(stats_path), env)
+            normalizer.training = True
+        else:
+            gamma = float(run.hyperparameters.get("gamma", 0.99))
+            normalizer = VecNormalize(env, norm_obs=True, norm_reward=True, clip_obs=10.0, gamma=gamma)
+        env = normalizer
     try:
         if reached:
             model = cls.load(str(model_path), env=env, device="cpu")
@@ -192,6 +214,8 @@ def train_learning_curve(
                 model.save(str(model_path))
                 if off_policy:
                     model.save_replay_buffer(str(replay_path))
+                if normalizer is not None:
+                    normalizer.save(str(stats_path))
                 state["checkpoint_steps"] = int(model.num_timesteps)
                 state_path.write_text(json.dumps(state, indent=1) + "\n")
             report = evaluate(

@@ -5,6 +5,10 @@
 overhead) where the model is a plain MLP (:func:`mlp_inference_from_sb3` reads its weights); :attr:`Sb3Policy.fast_path`
 says whether it is, and :meth:`Sb3Policy.sb3_predict` is SB3's own ``predict`` (to time against it).
 
+A model trained behind SB3's ``VecNormalize`` needs its observation statistics: saved with
+``VecNormalize.save`` as ``<stem>_vecnormalize.pkl`` beside ``<stem>.zip`` (:func:`vecnormalize_path`), they are
+loaded with the model and every ``predict`` (both paths) normalizes the observation as ``VecNormalize`` does.
+
 A ``.zip`` is code, not data: stable-baselines3 unpickles the objects it holds (the policy class, schedules,
 spaces), and unpickling can run any code the file's author put there. Loading one from outside the package's
 shipped models (:data:`~redundancy_gym.policies.shipped_models.SHIPPED_MODELS_DIR`) logs where it came from, once
@@ -14,6 +18,7 @@ per file and process, so that a user sees which file ran.
 from __future__ import annotations
 
 import logging
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +31,15 @@ from .mlp_inference import MlpInference
 from .options import env_name
 from .shipped_models import SHIPPED_MODELS_DIR
 
-__all__ = ["SB3_ALGOS", "SB3_CONTRIB_ALGOS", "Sb3Policy", "is_shipped_model_file", "mlp_inference_from_sb3"]
+__all__ = [
+    "SB3_ALGOS",
+    "SB3_CONTRIB_ALGOS",
+    "ObservationNormalization",
+    "Sb3Policy",
+    "is_shipped_model_file",
+    "mlp_inference_from_sb3",
+    "vecnormalize_path",
+]
 
 SB3_ALGOS = ("PPO", "SAC", "TD3", "A2C", "DDPG")
 SB3_CONTRIB_ALGOS = ("TQC", "CrossQ")
@@ -44,6 +57,54 @@ def is_shipped_model_file(path: str | Path) -> bool:
     return Path(path).resolve().parent == SHIPPED_MODELS_DIR.resolve()
 
 
+def vecnormalize_path(model_path: str | Path) -> Path:
+    """Where the ``VecNormalize`` statistics of the model saved at ``model_path`` (``<stem>.zip``) are kept:
+    ``<stem>_vecnormalize.pkl`` in the same folder."""
+    path = Path(model_path)
+    return path.with_name(f"{path.stem}_vecnormalize.pkl")
+
+
+@dataclass(frozen=True)
+class ObservationNormalization:
+    """SB3 ``VecNormalize``'s observation normalization: ``clip((obs - mean) / sqrt(var + epsilon), -clip, clip)``
+    in float32, as ``VecNormalize.normalize_obs`` gives it to the agent.
+
+    Attributes:
+        mean, var: the running mean and variance of each observation entry, frozen at saving.
+        epsilon: added to the variance; clip: the bound of a normalized entry.
+    """
+
+    mean: NDArray[np.float64]
+    var: NDArray[np.float64]
+    epsilon: float
+    clip: float
+
+    @classmethod
+    def load(cls, path: str | Path) -> ObservationNormalization:
+        """The statistics of a ``VecNormalize.save`` file (a pickle: it can run code, as a ``.zip`` can).
+
+        Raises:
+            PolicyError: the file is no ``VecNormalize`` pickle, or does not normalize observations.
+        """
+        import pickle
+
+        try:
+            with open(path, "rb") as handle:
+                saved = pickle.load(handle)
+            rms, epsilon, clip = saved.obs_rms, float(saved.epsilon), float(saved.clip_obs)
+            norm_obs = bool(saved.norm_obs)
+        except Exception as exc:  # an unpickling error, or an object without VecNormalize's attributes
+            raise PolicyError(f"{path} is not a VecNormalize file saved by stable-baselines3: {exc}") from None
+        if not norm_obs or not hasattr(rms, "mean"):
+            raise PolicyError(f"{path} does not normalize observations (norm_obs=False or Dict statistics)")
+        return cls(np.asarray(rms.mean, dtype=np.float64), np.asarray(rms.var, dtype=np.float64), epsilon, clip)
+
+    def __call__(self, observation: NDArray[np.floating]) -> NDArray[np.float32]:
+        """``observation`` (one, or a batch) normalized: ``VecNormalize``'s arithmetic, to the bit."""
+        scaled = (observation - self.mean) / np.sqrt(self.var + self.epsilon)
+        return np.clip(scaled, -self.clip, self.clip).astype(np.float32)
+
+
 def _announce_origin(path: Path) -> None:
     """Log, once per file in this process, that ``path`` is loaded from outside the shipped models: unpickling it
     can run code from the file."""
@@ -52,7 +113,8 @@ def _announce_origin(path: Path) -> None:
         return
     _ANNOUNCED.add(where)
     _LOG.warning(
-        "loading the policy %s (not one of redundancy_gym's shipped models): an SB3 .zip holds pickled objects "
+        "loading the policy file %s (not one of redundancy_gym's shipped models): an SB3 .zip or VecNormalize .pkl "
+        "holds pickled objects "
         "and loading it can run code from the file; load only files you trust",
         where,
     )
@@ -77,6 +139,8 @@ class Sb3Policy:
 
     Attributes:
         model: the loaded SB3 model; algo: its class name.
+        normalization: the observation statistics of ``<stem>_vecnormalize.pkl`` beside the ``.zip``
+            (:func:`vecnormalize_path`), applied before every ``predict``, or None where there is no such file.
         inference: the fast path, or None.
         fast_path: whether a deterministic ``predict`` runs :attr:`inference`.
         fast_path_reason: the network the fast path runs (``"PPO MLP 20 -> 64x64 -> 4 (tanh)"``), or why there is
@@ -118,6 +182,16 @@ class Sb3Policy:
             raise PolicyError(f"{path} is not a stable-baselines3 model of {', '.join(names)} ({'; '.join(errors)})")
         if env is not None:
             self._check_spaces(path, env)
+        stats = vecnormalize_path(path)
+        self.normalization: ObservationNormalization | None = None
+        if stats.is_file():
+            _announce_origin(stats)
+            self.normalization = ObservationNormalization.load(stats)
+            shape = getattr(self.model.observation_space, "shape", None)
+            if self.normalization.mean.shape != shape:
+                raise PolicyError(
+                    f"{stats} holds statistics of shape {self.normalization.mean.shape}, but {path} observes {shape}"
+                )
         self.inference: MlpInference | None
         if fast_path:
             self.inference, self.fast_path_reason = mlp_inference_from_sb3(self.model)
@@ -153,9 +227,11 @@ class Sb3Policy:
         Raises:
             PolicyError: on the fast path, an observation of neither shape (SB3 raises a ValueError).
         """
+        if self.normalization is not None:
+            observation = self.normalization(observation)
         if deterministic and self.inference is not None:
             return self.inference(observation), state
-        return self.sb3_predict(observation, state, episode_start, deterministic)
+        return self._sb3_predict(observation, state, episode_start, deterministic)
 
     def sb3_predict(
         self,
@@ -164,7 +240,15 @@ class Sb3Policy:
         episode_start: Any = None,
         deterministic: bool = True,
     ) -> tuple[NDArray[np.floating], Any]:
-        """SB3's own ``model.predict``, whatever the fast path (an evaluation times both: ``sb3_predict_us``)."""
+        """SB3's own ``model.predict``, whatever the fast path (an evaluation times both: ``sb3_predict_us``); the
+        observation normalized first where the model has :attr:`normalization`."""
+        if self.normalization is not None:
+            observation = self.normalization(observation)
+        return self._sb3_predict(observation, state, episode_start, deterministic)
+
+    def _sb3_predict(
+        self, observation: NDArray[np.floating], state: Any, episode_start: Any, deterministic: bool
+    ) -> tuple[NDArray[np.floating], Any]:
         return self.model.predict(observation, state=state, episode_start=episode_start, deterministic=deterministic)
 
 

@@ -27,7 +27,7 @@ def test_the_quick_study_writes_a_two_point_curve(tmp_path, monkeypatch):
 
 
 def test_runs_are_picked_by_env_or_learner():
-    assert {learner.name for _, learner in _select(["planar_reach"], False)} == {"ppo", "sac", "tqc"}
+    assert {learner.name for _, learner in _select(["planar_reach"], False)} == {"ppo", "ppo-norm", "sac", "tqc"}
     assert [(e.key, learner.name) for e, learner in _select(["agri_reach_easy-ppo"], False)] == [
         ("agri_reach_easy", "ppo")
     ]

@@ -85,6 +85,57 @@ def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
     assert (tmp_path / "agents" / "pr-tqc-s0_replay.pkl").is_file()
 
 
+def test_a_normalized_run_saves_its_statistics_and_its_policy_reads_them(tmp_path):
+    import numpy as np
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from redundancy_gym.eval.evaluate import make_env
+    from redundancy_gym.policies import make_policy
+
+    state = train_learning_curve(_run((32,), normalize=True), tmp_path, log=None)
+    stats = tmp_path / "pr-ppo-s0_vecnormalize.pkl"
+    assert stats.is_file() and state["settings"]["normalize"] is True
+    extended = train_learning_curve(_run((32, 64), normalize=True), tmp_path, log=None)  # resumed with its stats
+    assert [p["steps"] for p in extended["points"]] == [32, 64]
+    env = make_env(PLANAR, {"obstacle": False})
+    saved = VecNormalize.load(str(stats), DummyVecEnv([lambda: make_env(PLANAR, {"obstacle": False})]))
+    assert saved.obs_rms.count > 64  # updated while training on, not restarted
+    policy = make_policy(str(tmp_path / "pr-ppo-s0.zip"), env)
+    assert policy.normalization is not None
+    obs, _ = env.reset(seed=3)
+    normalized = saved.normalize_obs(obs)
+    assert np.array_equal(policy.normalization(obs), normalized)
+    expected, _ = PPO.load(str(tmp_path / "pr-ppo-s0.zip"), device="cpu").predict(normalized, deterministic=True)
+    np.testing.assert_allclose(policy.predict(obs)[0], expected, atol=1e-5)  # the fast path on normalized input
+    np.testing.assert_allclose(policy.sb3_predict(obs)[0], expected, atol=0)
+    raw, _ = PPO.load(str(tmp_path / "pr-ppo-s0.zip"), device="cpu").predict(obs, deterministic=True)
+    assert not np.allclose(raw, expected)  # the statistics change what the agent does
+    # a plain run keeps its old settings (states written before the option existed stay valid)
+    assert "normalize" not in _run((32,)).settings()
+
+
+def test_statistics_of_another_shape_or_no_statistics_are_refused(tmp_path):
+    import numpy as np
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    from redundancy_gym.eval.evaluate import make_env
+    from redundancy_gym.policies import make_policy
+    from redundancy_gym.policies.exceptions import PolicyError
+
+    train_learning_curve(_run((32,), normalize=True), tmp_path, log=None)
+    stats = tmp_path / "pr-ppo-s0_vecnormalize.pkl"
+    env = make_env(PLANAR, {"obstacle": False})
+    saved = VecNormalize.load(str(stats), DummyVecEnv([lambda: make_env(PLANAR, {"obstacle": False})]))
+    saved.obs_rms.mean = np.zeros(3)
+    saved.save(str(stats))
+    with pytest.raises(PolicyError, match=r"statistics of shape \(3,\)"):
+        make_policy(str(tmp_path / "pr-ppo-s0.zip"), env)
+    stats.write_bytes(b"not a pickle")
+    with pytest.raises(PolicyError, match="not a VecNormalize file"):
+        make_policy(str(tmp_path / "pr-ppo-s0.zip"), env)
+
+
 @pytest.mark.parametrize(
     ("changes", "named"),
     [
