@@ -440,35 +440,31 @@ def _format_shape(shape: Any) -> str:
 
 
 def list_envs() -> list[dict[str, Any]]:
-    """One row per registered env id: spaces, control period, episode length and the policies it accepts."""
+    """One row per registered env id: spaces, control period, episode length and the policies and wrappers it
+    accepts, read from its :data:`~redundancy_gym.registration.ENV_CARDS` entry (no env is built)."""
     import gymnasium as gym
 
-    from . import ENV_IDS
-    from .policies import missing_capabilities, registered, supported_policies
+    from .policies import registered
+    from .registration import ENV_CARDS
 
     rows = []
-    for env_id in ENV_IDS:
-        spec = gym.spec(env_id)
-        env = gym.make(env_id)
-        try:
-            dt = getattr(env.unwrapped, "dt", None)
-            steps = spec.max_episode_steps
-            rows.append(
-                {
-                    "id": env_id,
-                    "observation_shape": list(env.observation_space.shape or ()),
-                    "action_shape": list(env.action_space.shape or ()),
-                    "control_period_s": None if dt is None else float(dt),
-                    "max_episode_steps": steps,
-                    "episode_s": None if dt is None or steps is None else round(float(dt) * steps, 6),
-                    "policies": [*supported_policies(env), "SB3 .zip"],
-                    "wrappers": [
-                        e.name for e in registered("wrapper") if not missing_capabilities(e.name, env, "wrapper")
-                    ],
-                }
-            )
-        finally:
-            env.close()
+    for env_id, card in ENV_CARDS.items():
+        dt, steps = card.control_period_s, gym.spec(env_id).max_episode_steps
+        rows.append(
+            {
+                "id": env_id,
+                "observation_shape": list(card.observation_shape),
+                "action_shape": list(card.action_shape),
+                "control_period_s": dt,
+                "max_episode_steps": steps,
+                "episode_s": None if steps is None else round(dt * steps, 6),
+                "policies": [
+                    *(e.name for e in registered("policy") if e.implementation_for(card.capabilities)),
+                    "SB3 .zip",
+                ],
+                "wrappers": [e.name for e in registered("wrapper") if e.implementation_for(card.capabilities)],
+            }
+        )
     return rows
 
 

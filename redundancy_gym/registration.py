@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import gymnasium as gym
 
-__all__ = ["BASE_ENV_IDS", "ENV_IDS", "WRAPPED_ENV_IDS", "register_envs", "wrapped_env_id"]
+__all__ = ["BASE_ENV_IDS", "ENV_CARDS", "ENV_IDS", "WRAPPED_ENV_IDS", "EnvCard", "register_envs", "wrapped_env_id"]
 
 BASE_ENV_IDS: tuple[str, ...] = (
     "redundancy_gym/PlanarReach-v0",
@@ -37,6 +39,47 @@ WRAPPED_ENV_IDS: tuple[str, ...] = tuple(w for w, _, _ in _WRAPPED)
 """The env ids of an env in an action wrapper (``redundancy_gym.wrappers``): ``<Env>-<Wrapper>-v0``."""
 
 ENV_IDS: tuple[str, ...] = BASE_ENV_IDS + WRAPPED_ENV_IDS
+
+
+class EnvCard(NamedTuple):
+    """What an env id's default env offers, known without building it.
+
+    Attributes:
+        observation_shape, action_shape: its spaces' shapes with the default keyword arguments.
+        control_period_s: its ``dt`` [s].
+        capabilities: what the policy registry reads (``redundancy_gym.policies.env_capabilities`` of the built env:
+            its declared ``CAPABILITIES`` and those of its action space).
+    """
+
+    observation_shape: tuple[int, ...]
+    action_shape: tuple[int, ...]
+    control_period_s: float
+    capabilities: frozenset[str]
+
+
+_BOX = frozenset({"box_action", "bounded_action"})
+_BIPED = _BOX | {"biped"}
+ENV_CARDS: dict[str, EnvCard] = {
+    "redundancy_gym/PlanarReach-v0": EnvCard((20,), (4,), 0.01, _BOX | {"tcp_reference", "tcp_tracking"}),
+    "redundancy_gym/AgriReach-v0": EnvCard((530,), (9,), 0.01, _BOX | {"grasp_task"}),
+    "redundancy_gym/BipedWalk-v0": EnvCard((81,), (22,), 0.004, _BIPED),
+    "redundancy_gym/BipedObstacles-v0": EnvCard((193,), (22,), 0.004, _BIPED),
+    "redundancy_gym/BipedTerrain-v0": EnvCard((200,), (22,), 0.004, _BIPED),
+    # an action wrapper keeps its env's observation and period; the action is its own, no capability but the box's
+    "redundancy_gym/PlanarReach-TaskSpace-v0": EnvCard((20,), (2,), 0.01, _BOX),
+    "redundancy_gym/PlanarReach-Nullspace-v0": EnvCard((20,), (4,), 0.01, _BOX),
+    "redundancy_gym/PlanarReach-Residual-v0": EnvCard((20,), (4,), 0.01, _BOX),
+    "redundancy_gym/AgriReach-TaskSpace-v0": EnvCard((530,), (5,), 0.01, _BOX),
+    "redundancy_gym/AgriReach-Nullspace-v0": EnvCard((530,), (9,), 0.01, _BOX),
+    "redundancy_gym/AgriReach-Residual-v0": EnvCard((530,), (9,), 0.01, _BOX),
+    "redundancy_gym/BipedWalk-Residual-v0": EnvCard((81,), (22,), 0.004, _BOX),
+    "redundancy_gym/BipedWalk-WalkingCommand-v0": EnvCard((81,), (3,), 0.004, _BOX),
+    "redundancy_gym/BipedTerrain-Residual-v0": EnvCard((200,), (22,), 0.004, _BOX),
+    "redundancy_gym/BipedTerrain-WalkingCommand-v0": EnvCard((200,), (3,), 0.004, _BOX),
+}
+"""Every env id's :class:`EnvCard`: what ``redundancy-gym list`` and the policy registry's tables of supported env ids
+read instead of building the 15 envs (seconds, and kernels compiled for a table). ``tests/test_registration.py``
+builds each env and holds it equal to its card."""
 
 
 def register_envs() -> None:

@@ -16,7 +16,6 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, fields
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -173,7 +172,6 @@ def register(name: str, kind: str, implementations: Iterable[Implementation], su
                 f"unknown capability {', '.join(unknown)} of {kind} {name!r}; valid: {', '.join(CAPABILITY_ATTRIBUTES)}"
             )
     _REGISTRY[name] = RegistryEntry(name, kind, implementations, summary)
-    _registered_support.cache_clear()
 
 
 def registered(kind: str) -> tuple[RegistryEntry, ...]:
@@ -279,26 +277,11 @@ def supported_policies(env: Any) -> tuple[str, ...]:
     return tuple(e.name for e in registered("policy") if policy_supports(e.name, env))
 
 
-@lru_cache(maxsize=1)
 def _registered_support() -> dict[str, frozenset[str]]:
-    """Capabilities of every env id redundancy_gym registers (each env is built once, with its defaults)."""
-    try:  # the join layer reads gymnasium's registry only here, for messages and `redundancy-gym list`
-        import gymnasium as gym
+    """Capabilities of every env id redundancy_gym registers, read from its card (no env is built)."""
+    from ..registration import ENV_CARDS
 
-        from ..registration import ENV_IDS
-    except ImportError:
-        return {}
-    support = {}
-    for env_id in ENV_IDS:
-        try:
-            env = gym.make(env_id)
-        except Exception:  # an env that cannot be built here (a missing optional dependency) is left out
-            continue
-        try:
-            support[env_id] = env_capabilities(env)
-        finally:
-            env.close()
-    return support
+    return {env_id: card.capabilities for env_id, card in ENV_CARDS.items()}
 
 
 def supported_env_ids(name: str, kind: str = "policy") -> tuple[str, ...]:

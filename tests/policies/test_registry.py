@@ -116,7 +116,6 @@ def test_a_registered_policy_of_ones_own_is_built_and_listed() -> None:
         from redundancy_gym.policies import registry
 
         registry._REGISTRY.pop("hold", None)
-        registry._registered_support.cache_clear()
         sys.modules.pop("_own_policies", None)
 
 
