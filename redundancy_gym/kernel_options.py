@@ -6,7 +6,16 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["BACKENDS", "BORROW", "BORROW_EXACT", "DEFAULT_BACKEND", "JIT", "JIT_EXACT", "LazyEntryPoint"]
+__all__ = [
+    "BACKENDS",
+    "BORROW",
+    "BORROW_EXACT",
+    "DEFAULT_BACKEND",
+    "JIT",
+    "JIT_EXACT",
+    "LazyEntryPoint",
+    "njit_on_first_call",
+]
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # in the kernels is guarded or measured afterwards). The fast-math subset allows fused multiply-adds and ignoring
@@ -77,3 +86,36 @@ class LazyEntryPoint:
 
     def __call__(self, *args: Any) -> Any:
         return self.resolve(*args)(*args)
+
+
+class _LazyJit:
+    """A module-level function that numba compiles for one signature at its first call (see
+    :func:`njit_on_first_call`); it then puts the compiled dispatcher in the module in its place."""
+
+    __slots__ = ("_options", "_py_func", "_signature")
+
+    def __init__(self, py_func: Any, signature: Any, options: dict[str, Any]) -> None:
+        self._py_func = py_func
+        self._signature = signature
+        self._options = options
+
+    def __call__(self, *args: Any) -> Any:
+        import sys
+
+        from numba import njit
+
+        dispatcher = njit(self._signature, **self._options)(self._py_func)
+        setattr(sys.modules[self._py_func.__module__], self._py_func.__name__, dispatcher)
+        return dispatcher(*args)
+
+
+def njit_on_first_call(signature: Any, **options: Any) -> Any:
+    """``numba.njit(signature, **options)`` deferred from import to the function's first call: a decorator for a
+    module-level kernel with one explicit signature that Python code calls by its module global (the compiled
+    dispatcher replaces that global, so later calls cost what a plain ``njit`` function's do). Importing the module
+    (``redundancy-gym list``, a policy registry lookup) then compiles nothing."""
+
+    def wrap(py_func: Any) -> Any:
+        return _LazyJit(py_func, signature, options)
+
+    return wrap

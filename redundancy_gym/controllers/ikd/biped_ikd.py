@@ -7,12 +7,12 @@ from collections.abc import Sequence
 from typing import Any, NamedTuple, cast
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numpy.typing import ArrayLike, NDArray
 
 from ...constants import GRAVITY
 from ...geometry.potentials import PiecewisePotential, piecewise_potential_kernel
-from ...kernel_options import JIT_EXACT
+from ...kernel_options import JIT_EXACT, njit_on_first_call
 from ...model import AccelerationTerms, RobotModel
 from ..clik.redundancy_resolution import MAX_COORDINATE, WeightMatrix, check_configuration, check_finite
 from ..exceptions import ControllerError
@@ -421,7 +421,7 @@ def _limit_offset(
     return out
 
 
-@njit(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **JIT_EXACT)
+@njit_on_first_call(_B(_V, _V, _V, _V, types.int64, types.int64, _F, _F, _F, _F, _F, _F, _B, _CV), **JIT_EXACT)
 def _limit_offset_into(
     q,
     offset,
@@ -453,7 +453,7 @@ def _limit_offset_into(
     return True
 
 
-@njit(_B(_V, _V, _GOAL, types.int64, types.int64, _F), **JIT_EXACT)
+@njit_on_first_call(_B(_V, _V, _GOAL, types.int64, types.int64, _F), **JIT_EXACT)
 def _valid(q, qdot, goal, nq, nv, max_coordinate):  # pragma: no cover - compiled
     """Whether the inputs have the documented shapes and are finite, ``|q|`` within ``max_coordinate``
     (``goal``: as :func:`_goal` packs it)."""
@@ -504,7 +504,7 @@ def _valid(q, qdot, goal, nq, nv, max_coordinate):  # pragma: no cover - compile
 _SOLVE_ARGUMENTS = (_V, _T, _M, _T, _M, _V, _M, _V, _GOAL, _V, _V, _M)
 
 
-@njit(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(*_SOLVE_ARGUMENTS, *(_F,) * 8, *(_B,) * 4), **JIT_EXACT)
+@njit_on_first_call(types.Tuple((_CV, _CV, _CV, _F, _F, _B))(*_SOLVE_ARGUMENTS, *(_F,) * 8, *(_B,) * 4), **JIT_EXACT)
 def _solve(
     qdot,
     rotation,

@@ -9,11 +9,11 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
-from numba import njit, types
+from numba import types
 from numpy.typing import ArrayLike, NDArray
 
 from ...constants import GRAVITY
-from ...kernel_options import DEFAULT_BACKEND, JIT_EXACT
+from ...kernel_options import DEFAULT_BACKEND, JIT_EXACT, njit_on_first_call
 from ...model import RobotModel
 from ...validation import check_backend
 from ..exceptions import ControllerError
@@ -533,7 +533,7 @@ _CV = types.Array(types.float64, 1, "C")
 _F, _B = types.float64, types.boolean
 
 
-@njit(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **JIT_EXACT)
+@njit_on_first_call(types.void(_V, _V, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _F, _CV), **JIT_EXACT)
 def _assemble(
     ref,
     ahead,
@@ -576,7 +576,7 @@ def _assemble(
     buffer[68], buffer[69], buffer[70], buffer[71] = plan_x, plan_y, plan_xdot, plan_ydot
 
 
-@njit(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **JIT_EXACT)
+@njit_on_first_call(types.Tuple((_CV, _F, _CV, _CV, _B))(_M, _V, _V, _V, _V, _F, _F, _F, _F, _B), **JIT_EXACT)
 def _finish(
     centroidal, qdot, qddot, com_acceleration, moment, dt, mass, max_velocity, hold_force, success
 ):  # pragma: no cover - compiled
