@@ -444,7 +444,7 @@ def list_envs() -> list[dict[str, Any]]:
     accepts, read from its :data:`~redundancy_gym.registration.ENV_CARDS` entry (no env is built)."""
     import gymnasium as gym
 
-    from .policies import registered
+    from .policies import supported_names
     from .registration import ENV_CARDS
 
     rows = []
@@ -458,11 +458,8 @@ def list_envs() -> list[dict[str, Any]]:
                 "control_period_s": dt,
                 "max_episode_steps": steps,
                 "episode_s": None if steps is None else round(dt * steps, 6),
-                "policies": [
-                    *(e.name for e in registered("policy") if e.implementation_for(card.capabilities)),
-                    "SB3 .zip",
-                ],
-                "wrappers": [e.name for e in registered("wrapper") if e.implementation_for(card.capabilities)],
+                "policies": [*supported_names(env_id), "SB3 .zip"],
+                "wrappers": list(supported_names(env_id, "wrapper")),
             }
         )
     return rows

@@ -31,6 +31,7 @@ from .registry import (
     register,
     registered,
     supported_env_ids,
+    supported_names,
     supported_policies,
 )
 
@@ -71,6 +72,7 @@ __all__ = [
     "register",
     "registered",
     "supported_env_ids",
+    "supported_names",
     "supported_policies",
 ]
 

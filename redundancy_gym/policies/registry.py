@@ -46,6 +46,7 @@ __all__ = [
     "register",
     "registered",
     "supported_env_ids",
+    "supported_names",
     "supported_policies",
     "unsupported_error",
 ]
@@ -277,17 +278,22 @@ def supported_policies(env: Any) -> tuple[str, ...]:
     return tuple(e.name for e in registered("policy") if policy_supports(e.name, env))
 
 
-def _registered_support() -> dict[str, frozenset[str]]:
-    """Capabilities of every env id redundancy_gym registers, read from its card (no env is built)."""
+def supported_env_ids(name: str, kind: str = "policy") -> tuple[str, ...]:
+    """The registered env ids on which the policy (or wrapper) ``name`` can be built (read from their cards, no env
+    is built)."""
     from ..registration import ENV_CARDS
 
-    return {env_id: card.capabilities for env_id, card in ENV_CARDS.items()}
-
-
-def supported_env_ids(name: str, kind: str = "policy") -> tuple[str, ...]:
-    """The registered env ids on which the policy (or wrapper) ``name`` can be built."""
     entry = lookup(name, kind)
-    return tuple(env_id for env_id, caps in _registered_support().items() if entry.implementation_for(caps))
+    return tuple(env_id for env_id, card in ENV_CARDS.items() if entry.implementation_for(card.capabilities))
+
+
+def supported_names(env_id: str, kind: str = "policy") -> tuple[str, ...]:
+    """The registered policies (or wrappers) that the registered env id ``env_id`` supports, read from its card (no
+    env is built)."""
+    from ..registration import ENV_CARDS
+
+    capabilities = ENV_CARDS[env_id].capabilities
+    return tuple(e.name for e in registered(kind) if e.implementation_for(capabilities))
 
 
 def unsupported_error(
