@@ -12,7 +12,10 @@ Hyperparameters: PPO with stable-baselines3's defaults, plain (``ppo``) and behi
 (``ppo-norm``: rl-zoo3's PPO ``mujoco-defaults`` are SB3's defaults with ``normalize: true``; the agent's statistics
 are saved beside its ``.zip`` and read by its policy); SAC and TQC with rl-zoo3's MuJoCo settings
 (``learning_starts`` 10000, SB3's defaults otherwise; the replay buffer held at 300 000 transitions, the largest
-budget). CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+budget). On the bipeds, the residual on the walking reference with SB3's defaults (``ppo-residual``: its exploration
+noise starts at a standard deviation of 1, the residual's full bound) and with the noise started at exp(-2) = 0.14 of
+it (``ppo-residual-quiet``: ``log_std_init`` -2, as rl-zoo3's tuned PPO settings of the PyBullet walkers), so
+that the first rollouts walk as the reference does. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
@@ -96,6 +99,13 @@ def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
         CurveLearner("ppo", "ppo", base, budgets_between(10_000, 1_000_000)),
         CurveLearner("sac", "sac", base, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
         CurveLearner("ppo-residual", "ppo", f"redundancy_gym/{name}-Residual-v0", budgets_between(10_000, 1_000_000)),
+        CurveLearner(
+            "ppo-residual-quiet",
+            "ppo",
+            f"redundancy_gym/{name}-Residual-v0",
+            budgets_between(10_000, 1_000_000),
+            {"policy_kwargs": {"log_std_init": -2.0}},
+        ),
         CurveLearner(
             "ppo-walking_command", "ppo", f"redundancy_gym/{name}-WalkingCommand-v0", budgets_between(10_000, 1_000_000)
         ),
@@ -438,7 +448,8 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
         axes[1].set_ylim(-0.05, 1.05)
         axes[2].set_yscale("log")
         axes[0].legend(fontsize=8)
-        fig.suptitle(f"{env['title']}: learning curves (held-out seeds {table['eval_seed']}-)")
+        last_seed = table["eval_seed"] + table["episodes"] - 1
+        fig.suptitle(f"{env['title']}: learning curves (held-out seeds {table['eval_seed']}-{last_seed})")
         fig.tight_layout()
         written.append(save_figure(fig, Path(directory) / f"{prefix}{key}.png"))
     return written
