@@ -15,7 +15,9 @@ are saved beside its ``.zip`` and read by its policy); SAC and TQC with rl-zoo3'
 budget). On the bipeds, the residual on the walking reference with SB3's defaults (``ppo-residual``: its exploration
 noise starts at a standard deviation of 1, the residual's full bound) and with the noise started at exp(-2) = 0.14 of
 it (``ppo-residual-quiet``: ``log_std_init`` -2, as rl-zoo3's tuned PPO settings of the PyBullet walkers), so
-that the first rollouts walk as the reference does. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+that the first rollouts walk as the reference does; and with that noise and rl-zoo3's learning rate for those
+walkers, 3e-5, a tenth of SB3's default (``ppo-residual-slow``), so that each update moves the policy less far from
+the reference it starts at. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
@@ -43,6 +45,7 @@ __all__ = [
     "CURVE_EVAL_SEED",
     "CurveEnv",
     "CurveLearner",
+    "budget_table",
     "curves_markdown",
     "plot_curves_bench",
     "run_curves_bench",
@@ -105,6 +108,13 @@ def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
             f"redundancy_gym/{name}-Residual-v0",
             budgets_between(10_000, 1_000_000),
             {"policy_kwargs": {"log_std_init": -2.0}},
+        ),
+        CurveLearner(
+            "ppo-residual-slow",
+            "ppo",
+            f"redundancy_gym/{name}-Residual-v0",
+            budgets_between(10_000, 1_000_000),
+            {"learning_rate": 3e-5, "policy_kwargs": {"log_std_init": -2.0}},
         ),
         CurveLearner(
             "ppo-walking_command", "ppo", f"redundancy_gym/{name}-WalkingCommand-v0", budgets_between(10_000, 1_000_000)
@@ -350,6 +360,31 @@ def _budget(value: int | None, largest: int | None) -> str:
     return f"{value:,}"
 
 
+def budget_table(table: dict[str, Any]) -> list[str]:
+    """The study in one markdown table: per env and learner the largest budget every seed reached, the mean success
+    there, the best mean success over the budgets and where (a learner can peak and unlearn), and the first budgets
+    at which the mean success reaches 0.5 and 0.9."""
+    lines = [
+        "| env | learner | seeds | largest budget [steps] | success there | best success (at [steps]) | first >= 0.5 | "
+        "first >= 0.9 |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for env in table["envs"].values():
+        for name, learner in env["learners"].items():
+            rows = learner["by_budget"]
+            if not rows:
+                continue
+            last = rows[-1]
+            best = max(rows, key=lambda row: row["success_mean"])
+            peak = f"{best['success_mean']:.2f}" + (f" ({best['budget']:,})" if best["success_mean"] > 0 else "")
+            lines.append(
+                f"| {env['title']} | {name} | {len(learner['seeds'])} | {last['budget']:,} | "
+                f"{last['success_mean']:.2f} | {peak} | "
+                f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
+            )
+    return [*lines, ""]
+
+
 def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym bench curves") -> str:
     """Per env: the references, and per learner the largest budget its seeds reached, the success there (mean,
     min-max over seeds), the error, the CPU time per seed and the first budgets at which the mean success reaches
@@ -360,6 +395,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
         f"deterministic agent). Command: `{command}`; each learner's points come from the command under its table. "
         "CPU time: the training's, per seed, evaluations excluded.",
         "",
+        *budget_table(table),
     ]
     for env in table["envs"].values():
         err = env["error"]

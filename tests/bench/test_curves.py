@@ -1,5 +1,6 @@
 """bench curves (seconds): the quick study writes its JSON, markdown and plot, says a learner that never reaches a
-threshold did not within its budget, picks runs by env or env-learner, and summarizes seeds over common budgets."""
+threshold did not within its budget, picks runs by env or env-learner, summarizes seeds over common budgets and
+names a learner's best budget when it unlearns."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import json
 
 import pytest
 
-from redundancy_gym.bench.curves import _select, _summary, curves_markdown
+from redundancy_gym.bench.curves import _select, _summary, budget_table, curves_markdown
 from redundancy_gym.bench.exceptions import BenchError
 from redundancy_gym.cli import main
 
@@ -35,13 +36,15 @@ def test_runs_are_picked_by_env_or_learner():
         _select(["nowhere"], False)
 
 
-def test_the_summary_uses_budgets_every_seed_reached():
-    def points(successes):
-        return [
-            {"budget": b, "steps": b, "cpu_s": b / 100, "success_rate": s, "goal_error": 0.1 / b}
-            for b, s in zip((10, 100, 1000), successes, strict=False)
-        ]
+def points(successes):
+    """A seed's points at budgets 10, 100 and 1000, as far as ``successes`` goes."""
+    return [
+        {"budget": b, "steps": b, "cpu_s": b / 100, "success_rate": s, "goal_error": 0.1 / b}
+        for b, s in zip((10, 100, 1000), successes, strict=False)
+    ]
 
+
+def test_the_summary_uses_budgets_every_seed_reached():
     summary = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}, "goal_error")
     assert [r["budget"] for r in summary["by_budget"]] == [10, 100]  # seed 1 has not reached 1000
     assert summary["by_budget"][1]["success_mean"] == pytest.approx(0.4)
@@ -65,3 +68,13 @@ def test_the_summary_uses_budgets_every_seed_reached():
     }
     text = curves_markdown(table)
     assert "| ppo | 2 | 1,000 | 0.90 (0.80-1.00) |" in text and "| 100 | 1,000 |" in text
+
+
+def test_the_budget_table_names_the_peak_of_a_learner_that_unlearns():
+    peaked = _summary({"0": points([0.8, 1.0, 0.0]), "1": points([0.6, 1.0, 0.2])}, "goal_error")
+    never = _summary({"0": points([0.0, 0.0, 0.0])}, "goal_error")
+    envs = {"x": {"title": "X", "learners": {"slow": {"seeds": {"0": [], "1": []}, **peaked}}}}
+    envs["y"] = {"title": "Y", "learners": {"ppo": {"seeds": {"0": []}, **never}}}
+    lines = budget_table({"envs": envs})
+    assert "| X | slow | 2 | 1,000 | 0.10 | 1.00 (100) | 10 | 100 |" in lines
+    assert "| Y | ppo | 1 | 1,000 | 0.00 | 0.00 | not within 1,000 | not within 1,000 |" in lines
