@@ -380,7 +380,8 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
     min-max over seeds), the error, the CPU time per seed and the first budgets at which the mean success reaches
     0.5 and 0.9."""
     lines = [
-        f"{table['seeds']} training seeds per learner; every point evaluated on held-out seeds "
+        f"{table['seeds']} training seeds per learner (the seeds column: how many have points so far); every point "
+        "evaluated on held-out seeds "
         f"{table['eval_seed']}-{table['eval_seed'] + table['episodes'] - 1} ({table['episodes']} episodes, the "
         f"deterministic agent). Command: `{command}`; each learner's points come from the command under its table. "
         "CPU time: the training's, per seed, evaluations excluded.",
