@@ -62,8 +62,8 @@ def test_a_shipped_model_reproduces_its_table_row(key, label, row):
         assert got["success"] == want["success"] and got["collision"] == want["collision"]
         # deterministic on one machine; another CPU may round in the last digits, which a long episode amplifies:
         # BipedTerrain's seed 20000 (stairs, 13000 steps to the time limit, no fall, three steps landing with less
-        # than half the sole supported) returned 8346.58 on an AVX-512 machine (2026-12-05) against the row's 8277.52, while the row's other 19
-        # episodes matched it to the printed digit
+        # than half the sole supported) returned 8346.58 on an AVX-512 machine (2026-12-05) against the row's
+        # 8277.52, while the row's other 19 episodes matched it to the printed digit
         rel = 1e-2 if want["length"] > 10_000 else 1e-3
         assert got["return"] == pytest.approx(want["return"], rel=rel, abs=1e-3)
 
