@@ -370,9 +370,14 @@ def budget_table(table: dict[str, Any]) -> list[str]:
             lines.append(
                 f"| {env['title']} | {name} | {len(learner['seeds'])} | {last['budget']:,} | "
                 f"{last['success_mean']:.2f} | {peak} | "
-                f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
+                f"{_firsts(learner, last['budget'])} |"
             )
     return [*lines, ""]
+
+
+def _firsts(learner: dict[str, Any], largest: int) -> str:
+    """The two table cells of the first budgets at which a learner's mean success reaches 0.5 and 0.9."""
+    return f"{_budget(learner['first_0.5'], largest)} | {_budget(learner['first_0.9'], largest)}"
 
 
 def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym bench curves") -> str:
@@ -415,7 +420,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
                 f"| {name} | {len(learner['seeds'])} | {last['budget']:,} | {last['success_mean']:.2f} "
                 f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {ret} | "
                 f"{last['cpu_s_mean'] / 60:.1f} | "
-                f"{_budget(learner['first_0.5'], last['budget'])} | {_budget(learner['first_0.9'], last['budget'])} |"
+                f"{_firsts(learner, last['budget'])} |"
             )
         lines.append("")
         lines += [
