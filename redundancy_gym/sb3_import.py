@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 from types import ModuleType
+from typing import Any
 
 from .rendering_backend import guard_triton
 
-__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint"]
+__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint", "silent_logger"]
 
 
 def install_hint(extra: str) -> str:
@@ -31,3 +32,14 @@ def import_stable_baselines3() -> ModuleType:
     except ImportError as exc:
         raise ImportError(f"stable-baselines3 is not installed; {LEARN_EXTRA_HINT}") from exc
     return stable_baselines3
+
+
+def silent_logger() -> Any:
+    """An SB3 logger that writes nowhere, for a ``model.set_logger`` before ``learn``.
+
+    With ``verbose=0`` and no TensorBoard folder, SB3 still creates an empty ``<tmp>/SB3-<date>`` folder on every
+    ``learn()`` call (its logger's default); a learning curve calls ``learn`` once per segment and left dozens.
+    """
+    from stable_baselines3.common.logger import Logger
+
+    return Logger(folder=None, output_formats=[])

@@ -31,7 +31,7 @@ from typing import Any
 
 from ..eval.evaluate import evaluate, make_env
 from ..policies.sb3_policy import vecnormalize_path
-from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, silent_logger
 from .exceptions import LearningError
 from .training_record import CpuClock
 
@@ -200,6 +200,7 @@ def train_learning_curve(
                 model = cls("MlpPolicy", env, seed=run.seed, device="cpu", verbose=0, **run.hyperparameters)
             except TypeError as exc:
                 raise LearningError(f"invalid {class_name} hyperparameters: {exc}") from None
+        model.set_logger(silent_logger())
         for budget in todo:
             # SB3 ends a learn() call only after a whole PPO rollout: a budget already passed is evaluated as is
             while int(model.num_timesteps) < budget:

@@ -22,7 +22,7 @@ from typing import Any
 
 from ..eval.evaluate import make_env
 from ..registration import ENV_IDS
-from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, silent_logger
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
 
@@ -429,6 +429,8 @@ def train(
                 )
             except TypeError as exc:  # a keyword the algorithm does not take
                 raise LearningError(f"invalid {algo.upper()} hyperparameters: {exc}") from None
+            if tensorboard_log is None:
+                model.set_logger(silent_logger())
             total = int(steps)
             rollout = int(getattr(model, "n_steps", 0) or 0) * n_envs  # on-policy learners collect whole rollouts
             if rollout and total % rollout:

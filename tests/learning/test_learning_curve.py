@@ -5,6 +5,7 @@ sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is
 from __future__ import annotations
 
 import json
+import tempfile
 
 import pytest
 
@@ -30,7 +31,10 @@ def _run(budgets, **changes):
     return CurveRun(**fields)
 
 
-def test_a_curve_is_extended_from_its_last_point(tmp_path):
+def test_a_curve_is_extended_from_its_last_point(tmp_path, monkeypatch):
+    temporary = tmp_path / "tmp"  # SB3's default logger made a folder here per learn() call
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     first = train_learning_curve(_run((32, 64)), tmp_path, log=None)
     assert [p["steps"] for p in first["points"]] == [32, 64]
     assert all(0.0 <= p["success_rate"] <= 1.0 and "tracking_error_max" in p for p in first["points"])
@@ -42,6 +46,7 @@ def test_a_curve_is_extended_from_its_last_point(tmp_path):
     assert saved["points"] == extended["points"]
     again = train_learning_curve(_run((32, 64, 128)), tmp_path, log=None)  # nothing left to train
     assert again["points"] == extended["points"]
+    assert not list(temporary.glob("SB3-*"))
 
 
 def test_an_interrupted_segment_resumes_from_its_last_checkpoint(tmp_path, monkeypatch):

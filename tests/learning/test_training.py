@@ -3,6 +3,7 @@ import math
 import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -174,9 +175,13 @@ def test_rl_zoo3_trains_on_our_config(tmp_path) -> None:
     assert main(["eval", ENV_ID, "--policy", str(models[0]), "--episodes", "1", "--no-progress"]) == 0
 
 
-def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, capsys) -> None:
+def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, capsys, monkeypatch) -> None:
     """--eval-freq evaluates on seeds apart from training, --checkpoint-freq saves along the way, --keep best ships
-    the evaluation's best agent (the last goes beside it), and the record beside the .zip states steps and cost."""
+    the evaluation's best agent (the last goes beside it), and the record beside the .zip states steps and cost;
+    without --tensorboard-log no SB3-<date> folder is left in the temporary folder (SB3's default logger)."""
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     zip_path = tmp_path / "m.zip"
     config = _smoke_config(tmp_path, n_timesteps=1024, n_envs=2, n_steps=128, batch_size=64, n_epochs=1)
     assert (
@@ -211,6 +216,7 @@ def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, c
     # one PlanarReach episode of 250 steps; a return is a finite sum of per-step rewards
     assert math.isfinite(record.result["best_eval_return"])
     assert record.settings["hyperparameters"]["n_steps"] == 128 and record.machine["cores"] >= 1
+    assert not list(temporary.glob("SB3-*"))
 
 
 def test_keep_best_needs_the_eval_callback(tmp_path, capsys) -> None:
