@@ -23,6 +23,7 @@ _WRAPPED: tuple[tuple[str, str, str], ...] = tuple(
         ("PlanarReach", ("TaskSpace", "Nullspace", "Residual")),
         ("AgriReach", ("TaskSpace", "Nullspace", "Residual")),
         ("BipedWalk", ("Residual", "WalkingCommand")),
+        ("BipedObstacles", ("Residual", "WalkingCommand")),
         ("BipedTerrain", ("Residual", "WalkingCommand")),
     )
     for suffix in wrappers
@@ -74,11 +75,13 @@ ENV_CARDS: dict[str, EnvCard] = {
     "redundancy_gym/AgriReach-Residual-v0": EnvCard((530,), (9,), 0.01, _BOX),
     "redundancy_gym/BipedWalk-Residual-v0": EnvCard((81,), (22,), 0.004, _BOX),
     "redundancy_gym/BipedWalk-WalkingCommand-v0": EnvCard((81,), (3,), 0.004, _BOX),
+    "redundancy_gym/BipedObstacles-Residual-v0": EnvCard((193,), (22,), 0.004, _BOX),
+    "redundancy_gym/BipedObstacles-WalkingCommand-v0": EnvCard((193,), (3,), 0.004, _BOX),
     "redundancy_gym/BipedTerrain-Residual-v0": EnvCard((200,), (22,), 0.004, _BOX),
     "redundancy_gym/BipedTerrain-WalkingCommand-v0": EnvCard((200,), (3,), 0.004, _BOX),
 }
 """Every env id's :class:`EnvCard`: what ``redundancy-gym list`` and the policy registry's tables of supported env ids
-read instead of building the 15 envs (seconds, and kernels compiled for a table). ``tests/test_registration.py``
+read instead of building the 17 envs (seconds, and kernels compiled for a table). ``tests/test_registration.py``
 builds each env and holds it equal to its card."""
 
 
