@@ -23,6 +23,13 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(1234)
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _sb3_logs_in_the_session_folder(tmp_path_factory: pytest.TempPathFactory) -> None:
+    """The tests that train as a user's plain script does (SB3's default logger) put its ``SB3-<date>`` folders
+    under pytest's own temporary folder, not in /tmp; child processes inherit it."""
+    os.environ.setdefault("SB3_LOGDIR", str(tmp_path_factory.mktemp("sb3_logs")))
+
+
 # hypothesis profiles for tests/fuzz: "fast" (default, `make test`: deterministic, a few dozen examples per
 # test) and "nightly" (>= 1000 examples per test): HYPOTHESIS_PROFILE=nightly pytest tests/fuzz
 try:
