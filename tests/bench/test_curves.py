@@ -97,5 +97,5 @@ def test_every_learner_of_the_study_trains_on_a_registered_env_id():
     from redundancy_gym.bench.curves import CURVE_ENVS
     from redundancy_gym.registration import ENV_IDS
 
-    missing = [(env.key, learner.name, learner.env_id) for env in CURVE_ENVS for learner in env.learners]
-    assert [m for m in missing if m[2] not in ENV_IDS] == []
+    learners = [(env.key, learner.name, learner.env_id) for env in CURVE_ENVS for learner in env.learners]
+    assert [entry for entry in learners if entry[2] not in ENV_IDS] == []

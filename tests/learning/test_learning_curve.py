@@ -35,6 +35,7 @@ def test_a_curve_is_extended_from_its_last_point(tmp_path, monkeypatch):
     temporary = tmp_path / "tmp"  # SB3's default logger made a folder here per learn() call
     temporary.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)  # the session sets it (conftest); SB3 would write there instead
     first = train_learning_curve(_run((32, 64)), tmp_path, log=None)
     assert [p["steps"] for p in first["points"]] == [32, 64]
     assert all(0.0 <= p["success_rate"] <= 1.0 and "tracking_error_max" in p for p in first["points"])

@@ -182,6 +182,7 @@ def test_eval_callback_checkpoints_keep_best_and_the_training_record(tmp_path, c
     temporary = tmp_path / "tmp"
     temporary.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(temporary))
+    monkeypatch.delenv("SB3_LOGDIR", raising=False)  # the session sets it (conftest); SB3 would write there instead
     zip_path = tmp_path / "m.zip"
     config = _smoke_config(tmp_path, n_timesteps=1024, n_envs=2, n_steps=128, batch_size=64, n_epochs=1)
     assert (
