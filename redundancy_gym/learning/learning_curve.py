@@ -5,12 +5,13 @@ A run keeps its state in a folder: ``<name>.json`` (settings and the points so f
 checkpoint), and in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point or
 checkpoint; off-policy learners also ``<name>_replay.pkl``, their replay buffer; a run with ``normalize`` also
 ``<name>_vecnormalize.pkl``, SB3's ``VecNormalize`` statistics, which the evaluation's policy reads beside the
-``.zip``). Within a segment the agent (and
-buffer) is saved every ``checkpoint_every`` environment steps (100k on-policy, 20k off-policy by default) and the
-state notes the steps saved (``checkpoint_steps``); called again, it loads the agent (and buffer) and trains on to
-the next budget, so an interrupted or extended study loses at most the steps since the last checkpoint. A resumed
-run is not bitwise the uninterrupted one (the envs restart from fresh resets); its points are still each a trained
-agent's at that many environment steps.
+``.zip``). Within a segment the agent (and buffer) is saved every ``checkpoint_every`` environment steps (100k
+on-policy, 20k off-policy by default) and the state notes the steps saved (``checkpoint_steps``); called again, it
+loads the agent (and buffer) and trains on to the next budget, so an interrupted or extended study loses at most the
+steps since the last checkpoint. The agents folder may be shared by several state folders: a run without points
+refuses to start over an agent already there, and a resumed agent must have trained the steps its state says (either
+is another run's). A resumed run is not bitwise the uninterrupted one (the envs restart from fresh resets); its
+points are still each a trained agent's at that many environment steps.
 
 Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
 training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads; the
@@ -165,6 +166,15 @@ def train_learning_curve(
             f"{state_path} has points or a checkpoint but its agent {model_path} is missing; delete the .json to "
             "restart"
         )
+    # the agents folder is shared by every state folder (every --json): a run starting afresh must not overwrite
+    # the agent of a same-named run whose state lives elsewhere (hours of off-policy training)
+    stale = [p for p in (model_path, replay_path, stats_path) if p.is_file()]
+    if not reached and stale:
+        raise LearningError(
+            f"{state_path} has no points, but {stale[0]} exists: the agent of a run of the same name whose state is "
+            "in another folder (another --json), or of a deleted state; move it away, or delete it (and its "
+            "_replay.pkl / _vecnormalize.pkl) to start this run afresh"
+        )
     import torch
 
     threads = torch.get_num_threads()
@@ -193,6 +203,11 @@ def train_learning_curve(
     try:
         if reached:
             model = cls.load(str(model_path), env=env, device="cpu")
+            if int(model.num_timesteps) != reached:
+                raise LearningError(
+                    f"{model_path} has trained {int(model.num_timesteps)} steps, but {state_path} says {reached}: "
+                    "it is another run's agent; restore this run's, or delete both to restart"
+                )
             if off_policy and replay_path.is_file():
                 model.load_replay_buffer(str(replay_path))
         else:

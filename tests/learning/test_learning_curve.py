@@ -162,3 +162,19 @@ def test_budgets_are_logarithmic_round_numbers():
     assert budgets_between(1000, 5000) == (1000, 3000, 5000)  # the last budget kept
     with pytest.raises(LearningError):
         budgets_between(100, 10)
+
+
+def test_another_state_folders_agent_is_neither_overwritten_nor_resumed(tmp_path):
+    """One agents folder serves every state folder (every --json of the bench): a same-named run elsewhere must not
+    start afresh over this one's agent, nor resume from an agent that trained other steps than its state says."""
+    agents = tmp_path / "agents"
+    train_learning_curve(_run((32, 64)), tmp_path / "study", agents=agents, log=None)
+    agent = (agents / "pr-ppo-s0.zip").read_bytes()
+    with pytest.raises(LearningError, match="has no points, but .*pr-ppo-s0.zip exists"):
+        train_learning_curve(_run((32,)), tmp_path / "elsewhere", agents=agents, log=None)
+    assert (agents / "pr-ppo-s0.zip").read_bytes() == agent  # untouched
+    assert not (tmp_path / "elsewhere" / "pr-ppo-s0.json").exists()
+    train_learning_curve(_run((32,)), tmp_path / "other", agents=tmp_path / "other_agents", log=None)
+    (tmp_path / "other_agents" / "pr-ppo-s0.zip").replace(agents / "pr-ppo-s0.zip")  # a 32-step agent
+    with pytest.raises(LearningError, match="has trained 32 steps, but .* says 64"):
+        train_learning_curve(_run((32, 64, 128)), tmp_path / "study", agents=agents, log=None)
