@@ -26,7 +26,8 @@ lint: $(VENV)/.test-installed
 # checkpoints in runs/baselines) into baselines/models/ with its training record, then evaluates every analytic
 # reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}; then
 # the learning curves (bench curves: many CPU-hours, resumable: run it again to go on) into
-# baselines/results/curves.{json,md,*.png}
+# baselines/results/curves.{json,md,*.png}; runs whose agents are not in runs/curves/ (a fresh clone) keep their
+# committed points, and the command names them and exits 1
 # (the baselines: about 60 CPU-min of training and 5 min of evaluation here, 2 cores; the curves: many CPU-hours)
 baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym baselines

@@ -8,6 +8,7 @@ choices, its help and its option checks from the rows.
 from __future__ import annotations
 
 import json
+import sys
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -240,7 +241,10 @@ def _curves(a: BenchArgs) -> int:
         lambda t: curves_markdown(t, command=command),
         plot_curves_bench,
     )
-    return 0
+    # the study is written either way; a script or Makefile still learns that what it asked for was not trained
+    for name, why in table["notes"].items():
+        print(f"not extended: {name}: {why}", file=sys.stderr)
+    return 1 if table["notes"] else 0
 
 
 def _startup(a: BenchArgs) -> int:
@@ -356,7 +360,8 @@ BENCHES: Mapping[str, Bench] = {
             "curves",
             "learning curves: every learner per env at logarithmically spaced budgets, 3 training seeds "
             "(--trials), held-out evaluations, the references as lines; resumable; --steps caps the budgets, "
-            "--envs picks envs or env-learner pairs (markdown and one PNG per env beside the JSON)",
+            "--envs picks envs or env-learner pairs (markdown and one PNG per env beside the JSON; exit status 1 "
+            "when a run could not be trained on)",
             frozenset({"episodes", "workers", "envs", "steps", "trials"}),
             _curves,
         ),

@@ -99,3 +99,15 @@ def test_every_learner_of_the_study_trains_on_a_registered_env_id():
 
     learners = [(env.key, learner.name, learner.env_id) for env in CURVE_ENVS for learner in env.learners]
     assert [entry for entry in learners if entry[2] not in ENV_IDS] == []
+
+
+def test_a_run_that_cannot_be_trained_on_is_written_up_and_fails_the_command(tmp_path, monkeypatch, capsys):
+    """A second study (another --json) finds the first's agent in the shared runs/curves: its run is refused, the
+    refusal is in the study's notes and on stderr, and the exit status says the command did not do what it asked."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["bench", "curves", "--quick", "--json", str(tmp_path / "a.json"), "--no-progress"]) == 0
+    assert main(["bench", "curves", "--quick", "--json", str(tmp_path / "b.json"), "--no-progress"]) == 1
+    notes = json.loads((tmp_path / "b.json").read_text())["notes"]
+    assert "has no points, but" in notes["planar_reach-ppo-s0"]
+    assert "not extended: planar_reach-ppo-s0" in capsys.readouterr().err
+    assert "Runs not extended" in (tmp_path / "b.md").read_text()
