@@ -3,10 +3,11 @@ with 3 training seeds, evaluated on held-out seeds, against the analytic referen
 
 Each (env, learner, seed) is one :class:`~redundancy_gym.learning.learning_curve.CurveRun`: its points are kept in
 ``<json stem>/<run>.json`` beside the study's JSON (committed), its agent and replay buffer in ``runs/curves/`` (not
-committed; shared by every ``--json``, so a run with no points refuses to start over a same-named agent there). Running the bench again trains every run on from its last point to its last budget (raise a budget, or
-``--steps``, to extend); a run whose points exist but whose agent is gone (a fresh clone) keeps its points and is not
-extended. ``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that
-many runs at once (one process each, torch on one thread).
+committed; shared by every ``--json``, so a run with no points refuses to start over a same-named agent there).
+Running the bench again trains every run on from its last point to its last budget (raise a budget, or ``--steps``,
+to extend); a run whose points exist but whose agent is gone (a fresh clone) keeps its points and is not extended.
+``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that many
+runs at once (one process each, torch on one thread).
 
 Hyperparameters: PPO with stable-baselines3's defaults, plain (``ppo``) and behind SB3's ``VecNormalize``
 (``ppo-norm``: rl-zoo3's PPO ``mujoco-defaults`` are SB3's defaults with ``normalize: true``; the agent's statistics
