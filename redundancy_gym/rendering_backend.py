@@ -11,8 +11,9 @@ Two facts of a headless Linux machine shape this module:
   triton lazily, when the first optimizer is built; triton brings a second LLVM, and if Mesa's was mapped first
   the process dies with a segmentation fault. Loaded the other way round both live side by side (tested by
   ``tests/test_rendering_backend.py`` in subprocesses, every import order, every backend). :func:`guard_triton`
-  imports triton first when it is installed (about 0.1 s) and, where Mesa is already mapped (someone imported
-  MuJoCo under ``MUJOCO_GL=osmesa`` before this package), marks triton unavailable instead: torch then takes its
+  imports triton first when it is installed and a GPU driver is present (about 0.15 s) and, where Mesa is already
+  mapped (someone imported MuJoCo under ``MUJOCO_GL=osmesa`` before this package) or no GPU driver is (triton
+  compiles GPU kernels only, so it could run nothing), marks triton unavailable instead: torch then takes its
   no-triton path, which is all a CPU agent uses.
 
 ``import redundancy_gym`` calls both, so a user's script needs no helper and no import order.
@@ -25,7 +26,7 @@ import importlib.util
 import os
 import platform
 import sys
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 __all__ = [
@@ -33,6 +34,7 @@ __all__ = [
     "RenderBackendError",
     "can_open_window",
     "configure_rendering",
+    "gpu_driver_present",
     "guard_triton",
     "mesa_loaded",
     "require_render_backend",
@@ -53,6 +55,8 @@ _NVIDIA_EGL_VENDORS = (
 )
 _DISABLED = ("disable", "disabled", "off", "false", "0")
 _MESA_MAPPINGS = ("libOSMesa", "libLLVM", "swrast_dri", "libgallium", "llvmpipe")
+# the device nodes of the GPU drivers triton compiles for: NVIDIA, AMD's ROCm, and WSL's GPU paravirtualization
+_GPU_DRIVER_NODES = (Path("/dev/nvidiactl"), Path("/proc/driver/nvidia"), Path("/dev/kfd"), Path("/dev/dxg"))
 
 
 class RenderBackendError(RuntimeError):
@@ -164,12 +168,29 @@ def mesa_loaded() -> bool:
     return any(name in maps for name in _MESA_MAPPINGS)
 
 
-def guard_triton() -> str:
+def gpu_driver_present(nodes: Sequence[Path] = _GPU_DRIVER_NODES) -> bool:
+    """Whether a GPU driver that triton can compile for is installed (Linux: its device node; elsewhere assumed).
+
+    Args:
+        nodes: the device nodes to look for (injectable for tests).
+    """
+    if platform.system() != "Linux":
+        return True
+    return any(node.exists() for node in nodes)
+
+
+def guard_triton(gpu: bool | None = None) -> str:
     """Keep torch's triton from loading its LLVM after Mesa's; returns what was done.
 
     ``"absent"``: triton is not installed; ``"loaded"``: it was imported already (first, so safe);
     ``"imported"``: imported now, before any Mesa library; ``"blocked"``: Mesa was mapped first, so triton is
-    marked unavailable (``import triton`` raises ImportError and torch runs without it).
+    marked unavailable (``import triton`` raises ImportError and torch runs without it); ``"unused"``: no GPU
+    driver is present, so triton, which compiles GPU kernels only, is marked unavailable the same way instead of
+    being imported (that import was about 0.15 s of every ``import redundancy_gym`` on a CPU machine). Set
+    ``TRITON_INTERPRET=1`` (triton's CPU interpreter) to have it imported all the same.
+
+    Args:
+        gpu: whether a GPU driver is present (default: :func:`gpu_driver_present`).
     """
     if sys.modules.get("triton", False) is None:
         return "blocked"
@@ -180,6 +201,9 @@ def guard_triton() -> str:
     if mesa_loaded():
         sys.modules["triton"] = None  # type: ignore[assignment]  # import raises ImportError from now on
         return "blocked"
+    if not (gpu_driver_present() if gpu is None else gpu) and os.environ.get("TRITON_INTERPRET", "") in ("", "0"):
+        sys.modules["triton"] = None  # type: ignore[assignment]
+        return "unused"
     try:
         import triton  # noqa: F401
     except Exception:  # a broken triton install must not break the package; torch copes without it

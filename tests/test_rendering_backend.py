@@ -4,17 +4,26 @@ segmentation fault must fail the test, not the test run)."""
 from __future__ import annotations
 
 import ctypes.util
+import importlib.machinery
 import os
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
-from redundancy_gym.rendering_backend import RenderBackendError, require_render_backend, select_backend
+from redundancy_gym.rendering_backend import (
+    RenderBackendError,
+    gpu_driver_present,
+    require_render_backend,
+    select_backend,
+)
 
 HAS_OSMESA = ctypes.util.find_library("OSMesa") is not None
 HAS_EGL = ctypes.util.find_library("EGL") is not None
+# on the path, whatever the package's guard put in sys.modules
+HAS_TRITON = importlib.machinery.PathFinder.find_spec("triton") is not None
 
 _IMPORTS = {
     "package_first": "import redundancy_gym\nfrom stable_baselines3 import PPO\n",
@@ -70,6 +79,51 @@ def test_render_then_train_in_one_process(gl: str | None) -> None:
     result = _run("import redundancy_gym, gymnasium as gym\nfrom stable_baselines3 import PPO\n" + _RENDER + _TRAIN, gl)
     assert result.returncode == 0, (result.returncode, result.stderr[-2000:])
     assert "rendered" in result.stdout and "trained" in result.stdout
+
+
+# the package's own import has run guard_triton already; undo its choice, then guard as a GPU machine would
+_GUARD_AS = """
+import sys
+import redundancy_gym.rendering_backend as rb
+sys.modules.pop("triton", None)
+{setup}print("guard:", rb.guard_triton(gpu={gpu}))
+"""
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.skipif(not HAS_TRITON, reason="triton is not installed (it comes with torch on Linux x86-64)")
+@pytest.mark.parametrize("gl", _backends())
+def test_on_a_gpu_machine_triton_is_imported_before_mesa_and_both_work(gl: str | None) -> None:
+    imports = "import gymnasium as gym\nfrom stable_baselines3 import PPO\n"
+    result = _run(_GUARD_AS.format(gpu=True, setup="") + imports + _RENDER + _TRAIN, gl)
+    assert result.returncode == 0, (result.returncode, result.stderr[-2000:])
+    assert "guard: imported" in result.stdout and "rendered" in result.stdout and "trained" in result.stdout
+
+
+@pytest.mark.skipif(not HAS_TRITON, reason="triton is not installed (it comes with torch on Linux x86-64)")
+@pytest.mark.parametrize(("interpret", "expected"), [(None, "unused"), ("1", "imported")])
+def test_without_a_gpu_driver_triton_is_not_imported(interpret: str | None, expected: str) -> None:
+    setup = "" if interpret is None else f"import os\nos.environ['TRITON_INTERPRET'] = {interpret!r}\n"
+    probe = """
+try:
+    import triton
+    print("triton importable")
+except ImportError:
+    print("triton unavailable")
+"""
+    result = _run(_GUARD_AS.format(gpu=False, setup=setup) + probe, None)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert f"guard: {expected}" in result.stdout
+    assert ("triton unavailable" if expected == "unused" else "triton importable") in result.stdout
+
+
+def test_gpu_driver_present_looks_for_a_driver_device_node(tmp_path: Path) -> None:
+    if sys.platform != "linux":
+        pytest.skip("device nodes are looked for on Linux only")
+    node = tmp_path / "nvidiactl"
+    assert not gpu_driver_present((node,))
+    node.touch()
+    assert gpu_driver_present((tmp_path / "kfd", node))
 
 
 @pytest.mark.skipif(not (HAS_OSMESA or HAS_EGL), reason="no headless OpenGL library on this machine")
