@@ -324,7 +324,8 @@ def _parser() -> argparse.ArgumentParser:
         type=int,
         metavar="N",
         help="ssv, envs, ik, walk, pik, scale: alternating timing rounds of ours and the peer (after a "
-        "warm-up; ratios are medians over the rounds; default: each bench's, --quick: 3)",
+        "warm-up; ratios are medians over the rounds; default: each bench's, --quick: 3); startup: warm runs "
+        "per probe, the median reported (default: 5, --quick: 3)",
     )
     budget = be.add_mutually_exclusive_group()
     budget.add_argument(

@@ -1,8 +1,10 @@
 """``redundancy-gym bench startup``: what a new process pays before its first step, with an empty numba cache
 (cold: a first run, a fresh machine, a new cluster worker) and with the cache that run filled (warm).
 
-Every probe runs twice in its own fresh Python process (``sys.executable``): first with ``NUMBA_CACHE_DIR`` set to a
-new empty folder, then again with the same folder. ``process_s`` is the parent's wall clock around the process
+Every probe runs in its own fresh Python process (``sys.executable``): first with ``NUMBA_CACHE_DIR`` set to a
+new empty folder, then ``rounds`` times again with the same folder; the warm result is the run with the median
+``process_s`` (a single warm run varies by about 0.1 s, as much as a target's margin), with every run's
+``process_s`` beside it (``process_s_runs``). ``process_s`` is the parent's wall clock around the process
 (interpreter start, imports, everything a user waits for); inside, each probe times its stages with
 ``time.perf_counter`` and reads numba's time compiling kernels (``compile_s``) and compiling or loading them from
 the cache (``kernels_s``, :data:`~redundancy_gym.eval.compile_clock.COMPILE_CLOCK`).
@@ -186,11 +188,32 @@ def _run(probe: StartupProbe, cache: str, timeout: float) -> dict[str, Any]:
     return {"process_s": wall, **stages}
 
 
+def _median_run(runs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """The run with the median ``process_s`` (the lower one of an even count), every run's ``process_s`` beside
+    it; the first failed run if any failed."""
+    failed = [run for run in runs if "error" in run]
+    if failed:
+        return failed[0]
+    ordered = sorted(runs, key=lambda run: run["process_s"])
+    return {**ordered[(len(ordered) - 1) // 2], "process_s_runs": [run["process_s"] for run in runs]}
+
+
 def run_startup_bench(
-    *, names: Sequence[str] | None = None, quick: bool = False, timeout: float = 1800.0, progress: bool = True
+    *,
+    names: Sequence[str] | None = None,
+    quick: bool = False,
+    rounds: int = 5,
+    timeout: float = 1800.0,
+    progress: bool = True,
 ) -> dict[str, Any]:
-    """Every probe cold then warm (module docstring): ``{"machine", "probes": {name: {"summary", "cold",
-    "warm"}}, "targets": {name: {"probe", "run", "limit_s", "measured_s", "met"}}}``."""
+    """Every probe cold, then warm ``rounds`` times (module docstring): ``{"machine", "rounds", "probes": {name:
+    {"summary", "cold", "warm"}}, "targets": {name: {"probe", "run", "limit_s", "measured_s", "met"}}}``.
+
+    Raises:
+        BenchError: ``rounds < 1`` or an unknown probe name.
+    """
+    if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 1:
+        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
     probes = startup_probes(names, quick)
     from tqdm.auto import tqdm
 
@@ -198,7 +221,7 @@ def run_startup_bench(
     for probe in tqdm(probes, desc="bench startup", unit="probe", disable=not progress):
         with tempfile.TemporaryDirectory(prefix="numba-cold-") as cache:
             cold = _run(probe, cache, timeout)
-            warm = _run(probe, cache, timeout)
+            warm = _median_run([_run(probe, cache, timeout) for _ in range(rounds)])
         results[probe.name] = {"summary": probe.summary, "cold": cold, "warm": warm}
     targets = {}
     for name, (probe_name, run, limit) in STARTUP_TARGETS.items():
@@ -213,7 +236,9 @@ def run_startup_bench(
     return {
         "machine": machine_info(),
         "method": "each probe in a fresh process: cold with an empty NUMBA_CACHE_DIR, then warm with the cache "
-        "that run filled; process_s is the wall time around the process",
+        "that run filled, the run with the median of `rounds` warm runs; process_s is the wall time around the "
+        "process",
+        "rounds": rounds,
         "probes": results,
         "targets": targets,
     }

@@ -250,8 +250,9 @@ def _curves(a: BenchArgs) -> int:
 def _startup(a: BenchArgs) -> int:
     from .startup import format_startup_bench, run_startup_bench
 
-    report = run_startup_bench(names=a.envs, quick=a.quick, progress=a.progress)
+    report = run_startup_bench(names=a.envs, quick=a.quick, progress=a.progress, **a.rounds_kwargs())
     command = "redundancy-gym bench startup" + (" --quick" if a.quick else "")
+    command += f" --rounds {a.rounds}" if a.rounds is not None else ""
     command += f" --envs {' '.join(a.envs)}" if a.envs else ""
     report["command"] = command + f" --json {a.json_path}"
     print(format_startup_bench(report))
@@ -369,8 +370,8 @@ BENCHES: Mapping[str, Bench] = {
             "startup",
             "what a new process pays before its first step: import, list, the quick start, every env's first step "
             "and every reference's first predict, each in a fresh process with an empty numba cache and again "
-            "warm; --envs picks probes",
-            frozenset({"envs"}),
+            "warm (the median of --rounds warm runs, default 5); --envs picks probes",
+            frozenset({"envs", "rounds"}),
             _startup,
         ),
         Bench(

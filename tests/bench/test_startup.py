@@ -10,10 +10,12 @@ from redundancy_gym.bench.startup import STARTUP_TARGETS, format_startup_bench, 
 
 
 def test_a_warm_process_loads_what_the_cold_one_compiled():
-    report = run_startup_bench(names=["import", "PlanarReach-v0"], progress=False)
+    report = run_startup_bench(names=["import", "PlanarReach-v0"], rounds=3, progress=False)
     probe = report["probes"]["PlanarReach-v0"]
     cold, warm = probe["cold"], probe["warm"]
     assert "error" not in cold and "error" not in warm, probe
+    assert report["rounds"] == 3 and len(warm["process_s_runs"]) == 3
+    assert warm["process_s"] == sorted(warm["process_s_runs"])[1]  # the median run is the one reported
     assert cold["compile_s"] > 0.0  # the env's first step compiled its kernels into the empty cache
     assert warm["compile_s"] == 0.0 < warm["kernels_s"]  # and the next process loaded them
     for run in (cold, warm):
@@ -24,6 +26,17 @@ def test_a_warm_process_loads_what_the_cold_one_compiled():
     assert report["targets"]["quick_start_cold"]["met"] is None  # not measured in this run: not claimed
     text = format_startup_bench(report)
     assert "PlanarReach-v0" in text and "quick_start_cold: <= 8 s, not measured" in text
+
+
+def test_the_warm_result_is_the_median_run_and_a_failed_run_is_not_hidden():
+    from redundancy_gym.bench.startup import _median_run
+
+    runs = [{"process_s": 2.0, "x": 2}, {"process_s": 1.0, "x": 1}, {"process_s": 9.0, "x": 9}]
+    assert _median_run(runs) == {"process_s": 2.0, "x": 2, "process_s_runs": [2.0, 1.0, 9.0]}
+    assert _median_run(runs[:2])["x"] == 1  # an even count: the lower of the two middle runs
+    assert _median_run([*runs, {"error": "exit 1: boom"}]) == {"error": "exit 1: boom"}
+    with pytest.raises(BenchError, match=r"rounds must be an integer >= 1, got 0"):
+        run_startup_bench(names=["import"], rounds=0, progress=False)
 
 
 def test_probes_cover_every_env_and_reference_and_unknown_ones_are_named():
