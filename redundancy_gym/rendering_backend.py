@@ -56,7 +56,9 @@ _NVIDIA_EGL_VENDORS = (
 _DISABLED = ("disable", "disabled", "off", "false", "0")
 _MESA_MAPPINGS = ("libOSMesa", "libLLVM", "swrast_dri", "libgallium", "llvmpipe")
 # the device nodes of the GPU drivers triton compiles for: NVIDIA, AMD's ROCm, and WSL's GPU paravirtualization
-_GPU_DRIVER_NODES = (Path("/dev/nvidiactl"), Path("/proc/driver/nvidia"), Path("/dev/kfd"), Path("/dev/dxg"))
+_GPU_DRIVER_NODES = tuple(
+    Path(node) for node in ("/dev/nvidiactl", "/dev/nvidia0", "/proc/driver/nvidia", "/dev/kfd", "/dev/dxg")
+)
 
 
 class RenderBackendError(RuntimeError):
