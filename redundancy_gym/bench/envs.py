@@ -51,7 +51,7 @@ from ..eval.evaluate import controller_clock
 from ..eval.machine import finish_machine_info, machine_info
 from ..registration import BASE_ENV_IDS, WRAPPED_ENV_IDS
 from .exceptions import BenchError
-from .timing import CLOCK, alternating_rounds
+from .timing import CLOCK, alternating_rounds, check_rounds
 
 __all__ = ["PEERS", "VARIANTS", "format_envs_bench", "run_envs_bench"]
 
@@ -268,8 +268,7 @@ def run_envs_bench(
     """
     if not np.isfinite(seconds) or seconds <= 0:
         raise BenchError(f"seconds must be finite and > 0, got {seconds}")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     machine = machine_info()
     env_kwargs = env_kwargs or {}
     variants = {k: v for k, v in (VARIANTS if variants is None else variants).items() if v[0] in envs}

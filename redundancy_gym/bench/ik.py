@@ -39,7 +39,7 @@ from ..geometry import LSS, PSS, Segment, distance
 from ..policies.grasp_clik_policy import GraspClikPolicy, obstacle_volumes
 from ..sb3_import import install_hint
 from .exceptions import BenchError
-from .timing import CLOCK, TimedPasses, alternating_rounds, timed_call
+from .timing import CLOCK, TimedPasses, alternating_rounds, check_rounds, timed_call
 
 if TYPE_CHECKING:
     from ..envs.agri_reach import AgriReachEnv
@@ -223,8 +223,7 @@ def run_ik_bench(
     """
     if repeats < 1:
         raise BenchError(f"repeats must be >= 1, got {repeats}")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     machine = machine_info()
     env = gym.make(ENV_ID, difficulty=difficulty)
     try:

@@ -58,7 +58,7 @@ from ..studies.predictive_figures import (  # noqa: E402
     velocity_jumps,
 )
 from .exceptions import BenchError  # noqa: E402
-from .timing import CLOCK, alternating_rounds, timed_call  # noqa: E402
+from .timing import CLOCK, alternating_rounds, check_rounds, timed_call  # noqa: E402
 
 __all__ = ["agri_update_rounds", "format_pik_bench", "run_pik_bench"]
 
@@ -180,8 +180,7 @@ def run_pik_bench(
     """
     if episodes < 1:
         raise BenchError(f"episodes must be >= 1, got {episodes}")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     machine = machine_info()
     report: dict[str, Any] = {"benchmark": "pik", "seed": seed, "machine": None}  # the machine is filled in last
     planar = {}

@@ -31,7 +31,7 @@ from ..eval.machine import finish_machine_info, machine_info
 from ..geometry import LSS, PSS, SSV, TSS, PairBatch, distance
 from .coal_shapes import to_coal
 from .exceptions import BenchError
-from .timing import CLOCK, alternating_rounds, timed_calls
+from .timing import CLOCK, alternating_rounds, check_rounds, timed_calls
 
 __all__ = ["PAIR_TYPES", "TABLE_5_1", "format_ssv_bench", "run_ssv_bench"]
 
@@ -130,8 +130,7 @@ def run_ssv_bench(
         raise BenchError(f"batch sizes must be positive integers, got {list(batch_sizes)}")
     if 100 not in sizes:
         raise BenchError("batch sizes must include 100 (ratio_vs_coal_batch100)")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     if not np.isfinite(min_time) or min_time <= 0.0:
         raise BenchError(f"min_time must be finite and > 0 s, got {min_time!r}")
     machine = machine_info()

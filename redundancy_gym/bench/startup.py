@@ -29,6 +29,7 @@ from typing import Any
 
 from ..eval.machine import machine_info
 from .exceptions import BenchError
+from .timing import check_rounds
 
 __all__ = [
     "STARTUP_TARGETS",
@@ -212,8 +213,7 @@ def run_startup_bench(
     Raises:
         BenchError: ``rounds < 1`` or an unknown probe name.
     """
-    if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     probes = startup_probes(names, quick)
     from tqdm.auto import tqdm
 
@@ -221,7 +221,7 @@ def run_startup_bench(
     for probe in tqdm(probes, desc="bench startup", unit="probe", disable=not progress):
         with tempfile.TemporaryDirectory(prefix="numba-cold-") as cache:
             cold = _run(probe, cache, timeout)
-            warm = _median_run([_run(probe, cache, timeout) for _ in range(rounds)])
+            warm = _median_run([_run(probe, cache, timeout) for _ in range(int(rounds))])
         results[probe.name] = {"summary": probe.summary, "cold": cold, "warm": warm}
     targets = {}
     for name, (probe_name, run, limit) in STARTUP_TARGETS.items():

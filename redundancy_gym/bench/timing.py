@@ -37,7 +37,16 @@ from tqdm.auto import tqdm
 
 from .exceptions import BenchError
 
-__all__ = ["CLOCK", "RatioStats", "Rounds", "TimedPasses", "alternating_rounds", "timed_call", "timed_calls"]
+__all__ = [
+    "CLOCK",
+    "RatioStats",
+    "Rounds",
+    "TimedPasses",
+    "alternating_rounds",
+    "check_rounds",
+    "timed_call",
+    "timed_calls",
+]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -142,6 +151,12 @@ class Rounds:
         return np.asarray(self.samples[name], dtype=np.float64)
 
 
+def check_rounds(rounds: float) -> None:
+    """Raise :class:`BenchError` unless ``rounds`` is a whole number >= 1 (every bench's ``--rounds``)."""
+    if int(rounds) != rounds or rounds < 1:
+        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+
+
 def alternating_rounds(
     samplers: Mapping[str, Sampler], *, rounds: int, warmup: int = 1, progress: bool = False, desc: str = "rounds"
 ) -> Rounds:
@@ -164,8 +179,7 @@ def alternating_rounds(
     """
     if not samplers:
         raise BenchError("alternating_rounds needs at least one candidate")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     if int(warmup) != warmup or warmup < 0:
         raise BenchError(f"warmup must be an integer >= 0, got {warmup!r}")
     names = tuple(samplers)

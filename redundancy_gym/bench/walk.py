@@ -69,7 +69,7 @@ from ..eval.evaluate import make_env
 from ..eval.machine import finish_machine_info, machine_info
 from ..policies.walking_policy import WalkingPolicy
 from .exceptions import BenchError
-from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, timed_call
+from .timing import CLOCK, RatioStats, TimedPasses, alternating_rounds, check_rounds, timed_call
 
 __all__ = [
     "EVENT_WINDOW",
@@ -310,8 +310,7 @@ def run_walk_bench(
     """
     if repeats < 1:
         raise BenchError(f"repeats must be >= 1, got {repeats}")
-    if int(rounds) != rounds or rounds < 1:
-        raise BenchError(f"rounds must be an integer >= 1, got {rounds!r}")
+    check_rounds(rounds)
     if not np.isfinite(duration) or duration <= 0.0:
         raise BenchError(f"duration must be finite and > 0, got {duration!r}")
     machine = machine_info()
