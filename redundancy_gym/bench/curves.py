@@ -18,7 +18,9 @@ noise starts at a standard deviation of 1, the residual's full bound) and with t
 it (``ppo-residual-quiet``: ``log_std_init`` -2, as rl-zoo3's tuned PPO settings of the PyBullet walkers), so
 that the first rollouts walk as the reference does; and with that noise and rl-zoo3's learning rate for those
 walkers, 3e-5, a tenth of SB3's default (``ppo-residual-slow``), so that each update moves the policy less far from
-the reference it starts at. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+the reference it starts at. On AgriReach easy, PPO trained with ``energy_weight`` 0 (``ppo-no-energy``; evaluated
+with the env's own weights like every learner) asks whether the energy term is why PPO learns to hold still
+instead of reaching. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
@@ -63,7 +65,8 @@ _OFF_POLICY = {"learning_starts": 10_000, "buffer_size": 300_000}
 @dataclass(frozen=True)
 class CurveLearner:
     """One learner of an env: ``name`` (``ppo``, ``ppo-residual``), its algorithm, the env id it trains on (a
-    wrapped id for a wrapper's action), its budgets and hyperparameters."""
+    wrapped id for a wrapper's action), its budgets and hyperparameters; ``train_env_kwargs`` change the training
+    env only (a reward variant: its points are evaluated on the env as the study defines it)."""
 
     name: str
     algo: str
@@ -71,6 +74,7 @@ class CurveLearner:
     budgets: tuple[int, ...]
     hyperparameters: dict[str, Any] = field(default_factory=dict)
     normalize: bool = False
+    train_env_kwargs: dict[str, Any] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -114,6 +118,12 @@ def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
 
 
 _PLANAR, _AGRI = "redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0"
+# the ladder's question on easy: is the energy term why PPO holds still? Trained without it, evaluated with it
+_NO_ENERGY = (
+    CurveLearner(
+        "ppo-no-energy", "ppo", _AGRI, budgets_between(10_000, ON_POLICY_LAST), train_env_kwargs={"energy_weight": 0.0}
+    ),
+)
 _RETURN = ("episode_return", "episode_length")
 # what a learner that learned nothing earns: the arms hold still, the bipeds hold the standing posture
 _ARM_REFERENCES = {"clik": "clik", "zero action": "zero"}
@@ -141,7 +151,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
             _GOAL,
             "collision_rate",
             _ARM_REFERENCES,
-            _arm_learners(_AGRI),
+            _arm_learners(_AGRI) + (_NO_ENERGY if d == "easy" else ()),
         )
         for d in ("easy", "medium", "hard")
     ),
@@ -199,6 +209,7 @@ def _run(env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, epi
         eval_episodes=episodes,
         eval_seed=CURVE_EVAL_SEED,
         normalize=learner.normalize,
+        train_env_kwargs=dict(learner.train_env_kwargs),
     )
 
 

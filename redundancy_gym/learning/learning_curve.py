@@ -26,7 +26,7 @@ import functools
 import json
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +78,9 @@ class CurveRun:
         normalize: train behind SB3's ``VecNormalize`` (observations and rewards normalized by running
             statistics, observations clipped to +-10, rl-zoo3's ``normalize: true``; the statistics frozen for
             the evaluations).
+        train_env_kwargs: keyword arguments on top of ``env_kwargs`` for the training env only (a reward variant,
+            such as another ``energy_weight``); every point is evaluated on ``env_kwargs`` alone, so its success,
+            error and return compare with the other learners' and the references'.
     """
 
     name: str
@@ -91,6 +94,7 @@ class CurveRun:
     eval_seed: int = 40000
     torch_threads: int = 1
     normalize: bool = False
+    train_env_kwargs: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.algo not in CURVE_ALGOS:
@@ -104,8 +108,11 @@ class CurveRun:
         """What a state file must match to be resumed (the budgets may grow)."""
         kept = asdict(self)
         kept.pop("budgets")
-        if not self.normalize:  # states written before the option existed stay valid
+        # states written before these options existed stay valid
+        if not self.normalize:
             kept.pop("normalize")
+        if not self.train_env_kwargs:
+            kept.pop("train_env_kwargs")
         return kept
 
 
@@ -182,7 +189,7 @@ def train_learning_curve(
     # our envs and wrapped ids report is_success; SB3's Monitor records it per episode
     monitor = {"info_keywords": ("is_success",) if run.env_id.startswith("redundancy_gym/") else ()}
     env = make_vec_env(
-        functools.partial(make_env, run.env_id, run.env_kwargs),
+        functools.partial(make_env, run.env_id, {**run.env_kwargs, **run.train_env_kwargs}),
         n_envs=1,
         seed=run.seed + reached,  # a resumed segment starts from other resets than the first did
         vec_env_cls=DummyVecEnv,

@@ -91,6 +91,39 @@ def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
     assert (tmp_path / "agents" / "pr-tqc-s0_replay.pkl").is_file()
 
 
+def test_a_reward_variant_trains_on_its_kwargs_and_is_evaluated_on_the_envs(tmp_path, monkeypatch):
+    import torch
+    from stable_baselines3 import PPO
+
+    from redundancy_gym.learning import learning_curve
+
+    made, evaluated = [], []
+    make_env, evaluate = learning_curve.make_env, learning_curve.evaluate
+
+    def recording_make(env_id, env_kwargs=None, **rest):
+        made.append(dict(env_kwargs or {}))
+        return make_env(env_id, env_kwargs, **rest)
+
+    def recording_evaluate(*args, **kwargs):
+        evaluated.append(dict(kwargs["env_kwargs"]))
+        return evaluate(*args, **kwargs)
+
+    monkeypatch.setattr(learning_curve, "make_env", recording_make)
+    monkeypatch.setattr(learning_curve, "evaluate", recording_evaluate)
+    variant = train_learning_curve(
+        _run((32,), name="variant", train_env_kwargs={"energy_weight": 4000.0}), tmp_path, log=None
+    )
+    assert made == [{"obstacle": False, "energy_weight": 4000.0}]  # trained on the variant's reward
+    assert evaluated == [{"obstacle": False}]  # evaluated on the env as defined
+    assert variant["settings"]["train_env_kwargs"] == {"energy_weight": 4000.0}
+    train_learning_curve(_run((32,)), tmp_path, log=None)
+    assert made[-1] == {"obstacle": False}
+    # the same seed and steps on another reward: another agent
+    weights = [PPO.load(str(tmp_path / f"{n}.zip"), device="cpu").policy.state_dict() for n in ("variant", "pr-ppo-s0")]
+    assert any(not torch.equal(weights[0][k], weights[1][k]) for k in weights[0])
+    assert "train_env_kwargs" not in _run((32,)).settings()  # states written before the option stay valid
+
+
 def test_a_normalized_run_saves_its_statistics_and_its_policy_reads_them(tmp_path):
     import numpy as np
     from stable_baselines3 import PPO
