@@ -20,7 +20,9 @@ that the first rollouts walk as the reference does; and with that noise and rl-z
 walkers, 3e-5, a tenth of SB3's default (``ppo-residual-slow``), so that each update moves the policy less far from
 the reference it starts at. On AgriReach easy, PPO trained with ``energy_weight`` 0 (``ppo-no-energy``; evaluated
 with the env's own weights like every learner) asks whether the energy term is why PPO learns to hold still
-instead of reaching. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+instead of reaching; PPO observing none of the plant parts (``ppo-no-obstacles``: ``observed_obstacles`` 0 in
+training and evaluation; easy's approach corridors are clear by construction) whether the obstacle rows are why it
+does not reach. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
@@ -65,8 +67,10 @@ _OFF_POLICY = {"learning_starts": 10_000, "buffer_size": 300_000}
 @dataclass(frozen=True)
 class CurveLearner:
     """One learner of an env: ``name`` (``ppo``, ``ppo-residual``), its algorithm, the env id it trains on (a
-    wrapped id for a wrapper's action), its budgets and hyperparameters; ``train_env_kwargs`` change the training
-    env only (a reward variant: its points are evaluated on the env as the study defines it)."""
+    wrapped id for a wrapper's action), its budgets and hyperparameters; ``env_kwargs`` change the env it trains
+    and is evaluated on (what its agent observes, such as ``observed_obstacles``: the task, its reward and its
+    success stay the study's), ``train_env_kwargs`` the training env only (a reward variant: its points are
+    evaluated on the env as the study defines it)."""
 
     name: str
     algo: str
@@ -74,6 +78,7 @@ class CurveLearner:
     budgets: tuple[int, ...]
     hyperparameters: dict[str, Any] = field(default_factory=dict)
     normalize: bool = False
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
     train_env_kwargs: dict[str, Any] = field(default_factory=dict)
 
 
@@ -118,10 +123,14 @@ def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
 
 
 _PLANAR, _AGRI = "redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0"
-# the ladder's question on easy: is the energy term why PPO holds still? Trained without it, evaluated with it
-_NO_ENERGY = (
+# the ladder's questions on easy: is the energy term why PPO holds still (trained without it, evaluated with it)?
+# Are the obstacle rows (480 of the 530 observation entries) why it does not reach (observing none of them)?
+_EASY_VARIANTS = (
     CurveLearner(
         "ppo-no-energy", "ppo", _AGRI, budgets_between(10_000, ON_POLICY_LAST), train_env_kwargs={"energy_weight": 0.0}
+    ),
+    CurveLearner(
+        "ppo-no-obstacles", "ppo", _AGRI, budgets_between(10_000, ON_POLICY_LAST), env_kwargs={"observed_obstacles": 0}
     ),
 )
 _RETURN = ("episode_return", "episode_length")
@@ -151,7 +160,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
             _GOAL,
             "collision_rate",
             _ARM_REFERENCES,
-            _arm_learners(_AGRI) + (_NO_ENERGY if d == "easy" else ()),
+            _arm_learners(_AGRI) + (_EASY_VARIANTS if d == "easy" else ()),
         )
         for d in ("easy", "medium", "hard")
     ),
@@ -201,7 +210,7 @@ def _run(env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, epi
     return CurveRun(
         name=f"{env.key}-{learner.name}-s{seed}",
         env_id=learner.env_id,
-        env_kwargs=dict(env.env_kwargs),
+        env_kwargs={**env.env_kwargs, **learner.env_kwargs},
         algo=learner.algo,
         seed=seed,
         budgets=budgets,

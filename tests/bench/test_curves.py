@@ -37,6 +37,17 @@ def test_runs_are_picked_by_env_or_learner():
         _select(["nowhere"], False)
 
 
+def test_a_variant_changes_the_env_it_trains_and_is_evaluated_on_or_only_the_training_env():
+    from redundancy_gym.bench.curves import _run
+
+    (env, no_energy), (_, blind) = _select(["agri_reach_easy-ppo-no-obstacles", "agri_reach_easy-ppo-no-energy"], False)
+    run = _run(env, blind, 0, None, 10)
+    assert run.env_kwargs == {"difficulty": "easy", "observed_obstacles": 0} and run.train_env_kwargs == {}
+    run = _run(env, no_energy, 0, None, 10)
+    assert run.env_kwargs == {"difficulty": "easy"} and run.train_env_kwargs == {"energy_weight": 0.0}
+    assert env.env_kwargs == {"difficulty": "easy"}  # the study's env is left as it was
+
+
 def points(successes):
     """A seed's points at budgets 10, 100 and 1000, as far as ``successes`` goes."""
     return [
