@@ -508,7 +508,8 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             cpu = [r["cpu_s_mean"] / 60 for r in rows]
             mean = [r["success_mean"] for r in rows]
             low, high = [r["success_min"] for r in rows], [r["success_max"] for r in rows]
-            label = f"{name} ({len(learner['seeds'])} seeds)"
+            count = len(learner["seeds"])
+            label = f"{name} ({count} seed{'' if count == 1 else 's'})"
             axes[0].plot(steps, mean, "o-", color=color, label=label)
             axes[0].fill_between(steps, low, high, color=color, alpha=0.15)
             axes[1].plot(cpu, mean, "o-", color=color, label=label)
