@@ -22,7 +22,8 @@ the reference it starts at. On AgriReach easy, PPO trained with ``energy_weight`
 with the env's own weights like every learner) asks whether the energy term is why PPO learns to hold still
 instead of reaching; PPO observing none of the plant parts (``ppo-no-obstacles``: ``observed_obstacles`` 0 in
 training and evaluation; easy's approach corridors are clear by construction) whether the obstacle rows are why it
-does not reach. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
+does not reach; on that observation, PPO with rl-zoo3's tuned Reacher settings (``ppo-reacher-no-obstacles``) and
+TQC (``tqc-no-obstacles``) whether the learner is. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
 MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
