@@ -442,7 +442,10 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
         f"{table['seeds']} training seeds per learner (the seeds column: how many have points so far); every point "
         "evaluated on held-out seeds "
         f"{table['eval_seed']}-{table['eval_seed'] + table['episodes'] - 1} ({table['episodes']} episodes, the "
-        f"deterministic agent). Command: `{command}`; each learner's points come from the command under its table. "
+        "deterministic agent). Largest budget: the largest that every seed with points has reached, where the means "
+        "are taken; points of single seeds beyond it are listed under each env's table. Success: the mean over "
+        "those seeds. This file was last written by `"
+        f"{command}`; each learner's points come from the command under its table. "
         "CPU time: the training's, per seed, evaluations excluded.",
         "",
         *budget_table(table),
@@ -477,6 +480,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
                 f"{_firsts(learner, last['budget'])} |"
             )
         lines.append("")
+        lines += _beyond(env)
         lines += [
             f"- {name}: `{learner['command']}`" for name, learner in env["learners"].items() if "command" in learner
         ]
@@ -484,6 +488,29 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
     if table.get("notes"):
         lines += ["Runs not extended:", ""] + [f"- {k}: {v}" for k, v in table["notes"].items()] + [""]
     return "\n".join(lines)
+
+
+def _beyond(env: dict[str, Any]) -> list[str]:
+    """One line per learner whose seeds went past its largest common budget: each such seed's furthest point, so
+    that a seed lost or behind does not hide what the others reached."""
+    err = env["error"]
+    lines = []
+    for name, learner in env["learners"].items():
+        rows = learner["by_budget"]
+        common = rows[-1]["budget"] if rows else 0
+        further = []
+        for seed, points in learner["seeds"].items():
+            if points and points[-1]["budget"] > common:
+                last = points[-1]
+                error = last.get(err["key"])
+                shown = "-" if error is None else f"{float(error) * err['scale']:.3g} {err['unit']}"
+                further.append(
+                    f"seed {seed} at {last['steps']:,} steps: success {last.get('success_rate', 0.0):.2f}, "
+                    f"{err['label']} {shown}"
+                )
+        if further:
+            lines.append(f"- {name} beyond {common:,} steps (not every seed there): " + "; ".join(further) + ".")
+    return [*lines, ""] if lines else []
 
 
 def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str = "curves_") -> list[Path]:
@@ -510,22 +537,28 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             mean = [r["success_mean"] for r in rows]
             low, high = [r["success_min"] for r in rows], [r["success_max"] for r in rows]
             count = len(learner["seeds"])
-            label = f"{name} ({count} seed{'' if count == 1 else 's'})"
+            # learners that never succeed draw on top of each other at 0: the legend says each one's best
+            best = max(mean)
+            label = f"{name} ({count} seed{'' if count == 1 else 's'}, best {best:.2f})"
             axes[0].plot(steps, mean, "o-", color=color, label=label)
             axes[0].fill_between(steps, low, high, color=color, alpha=0.15)
             axes[1].plot(cpu, mean, "o-", color=color, label=label)
             axes[1].fill_between(cpu, low, high, color=color, alpha=0.15)
             errors = [np.nan if r["error_mean"] is None else r["error_mean"] * err["scale"] for r in rows]
             axes[2].plot(steps, errors, "o-", color=color, label=label)
+        handles = []
         for (label, ref), style in zip(env["references"].items(), ("--", ":", "-."), strict=False):
+            name = f"{label} ({'baseline' if label == 'zero action' else 'reference'})"
             for ax in axes[:2]:
-                ax.axhline(ref.get("success_rate") or 0.0, ls=style, color="k", lw=1, label=f"{label} (reference)")
+                ax.axhline(ref.get("success_rate") or 0.0, ls=style, color="k", lw=1, label=name)
             value = ref.get(err["key"])
             if value is not None and math.isfinite(float(value)):
-                axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=f"{label} (reference)")
+                handles.append(axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=name))
+        axes[0].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)), label="0.5 (the table's first threshold)")
+        axes[1].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)))
         for ax, xlabel, ylabel in (
             (axes[0], "environment steps", "success rate"),
-            (axes[1], "training CPU time per seed [min]", "success rate"),
+            (axes[1], "training CPU time per seed [min] (runs on several machines)", "success rate"),
             (axes[2], "environment steps", f"{err['label']} [{err['unit']}]"),
         ):
             ax.set_xscale("log")
@@ -540,8 +573,13 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
         axes[1].set_ylim(-0.05, 1.05)
         axes[2].set_yscale("log")
         axes[0].legend(fontsize=8)
+        if handles:
+            axes[2].legend(handles=handles, fontsize=8)
         last_seed = table["eval_seed"] + table["episodes"] - 1
-        fig.suptitle(f"{env['title']}: learning curves (held-out seeds {table['eval_seed']}-{last_seed})")
+        fig.suptitle(
+            f"{env['title']}: learning curves, mean over training seeds with min-max band (held-out seeds "
+            f"{table['eval_seed']}-{last_seed})"
+        )
         fig.tight_layout()
         written.append(save_figure(fig, Path(directory) / f"{prefix}{key}.png"))
     return written

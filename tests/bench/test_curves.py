@@ -82,6 +82,35 @@ def test_the_summary_uses_budgets_every_seed_reached():
     assert "| ppo | 2 | 1,000 | 0.90 (0.80-1.00) |" in text and "| 100 | 1,000 |" in text
 
 
+def test_the_markdown_lists_the_points_of_seeds_beyond_the_common_budget():
+    """A seed lost or behind caps the learner's row at the budget every seed reached; what the others reached past it
+    is listed under the env's table, not hidden."""
+    seeds = {"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}
+    table = {
+        "seeds": 2,
+        "eval_seed": 40000,
+        "episodes": 3,
+        "envs": {
+            "x": {
+                "title": "X",
+                "env_id": "e",
+                "env_kwargs": {},
+                "error": {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3},
+                "references": {},
+                "learners": {"ppo": {"seeds": seeds, **_summary(seeds, "goal_error")}},
+            }
+        },
+    }
+    text = curves_markdown(table)
+    assert "| ppo | 2 | 100 | 0.40 (0.20-0.60) |" in text
+    beyond = "- ppo beyond 100 steps (not every seed there): seed 0 at 1,000 steps: success 1.00, goal error 0.1 mm."
+    assert beyond in text
+    assert "seed 1 at" not in text
+    seeds["1"] = points([0.0, 0.2, 0.4])
+    table["envs"]["x"]["learners"]["ppo"] = {"seeds": seeds, **_summary(seeds, "goal_error")}
+    assert "beyond" not in curves_markdown(table).split("Largest budget")[1].split("### X")[1]
+
+
 def test_the_budget_table_names_the_peak_of_a_learner_that_unlearns():
     peaked = _summary({"0": points([0.8, 1.0, 0.0]), "1": points([0.6, 1.0, 0.2])}, "goal_error")
     never = _summary({"0": points([0.0, 0.0, 0.0])}, "goal_error")
