@@ -56,6 +56,13 @@ def points(successes):
     ]
 
 
+def one_env_table(learners, references):
+    """A study of one env ``x`` with 2 training seeds, as ``run_curves_bench`` writes it."""
+    error = {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3}
+    env = {"title": "X", "env_id": "e", "env_kwargs": {}, "error": error, "references": references}
+    return {"seeds": 2, "eval_seed": 40000, "episodes": 3, "envs": {"x": {**env, "learners": learners}}}
+
+
 def test_the_summary_uses_budgets_every_seed_reached():
     summary = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}, "goal_error")
     assert [r["budget"] for r in summary["by_budget"]] == [10, 100]  # seed 1 has not reached 1000
@@ -63,22 +70,8 @@ def test_the_summary_uses_budgets_every_seed_reached():
     assert summary["first_0.5"] is None and summary["largest_budget"] == 100
     both = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.5, 0.8])}, "goal_error")
     assert both["first_0.5"] == 100 and both["first_0.9"] == 1000
-    table = {
-        "seeds": 2,
-        "eval_seed": 40000,
-        "episodes": 3,
-        "envs": {
-            "x": {
-                "title": "X",
-                "env_id": "e",
-                "env_kwargs": {},
-                "error": {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3},
-                "references": {"clik": {"success_rate": 1.0, "goal_error": 0.001}},
-                "learners": {"ppo": {"seeds": {"0": [], "1": []}, **both}},
-            }
-        },
-    }
-    text = curves_markdown(table)
+    references = {"clik": {"success_rate": 1.0, "goal_error": 0.001}}
+    text = curves_markdown(one_env_table({"ppo": {"seeds": {"0": [], "1": []}, **both}}, references))
     assert "| ppo | 2 | 1,000 | 0.90 (0.80-1.00) |" in text and "| 100 | 1,000 |" in text
 
 
@@ -86,21 +79,7 @@ def test_the_markdown_lists_the_points_of_seeds_beyond_the_common_budget():
     """A seed lost or behind caps the learner's row at the budget every seed reached; what the others reached past it
     is listed under the env's table, not hidden."""
     seeds = {"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}
-    table = {
-        "seeds": 2,
-        "eval_seed": 40000,
-        "episodes": 3,
-        "envs": {
-            "x": {
-                "title": "X",
-                "env_id": "e",
-                "env_kwargs": {},
-                "error": {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3},
-                "references": {},
-                "learners": {"ppo": {"seeds": seeds, **_summary(seeds, "goal_error")}},
-            }
-        },
-    }
+    table = one_env_table({"ppo": {"seeds": seeds, **_summary(seeds, "goal_error")}}, {})
     text = curves_markdown(table)
     assert "| ppo | 2 | 100 | 0.40 (0.20-0.60) |" in text
     beyond = "- ppo beyond 100 steps (not every seed there): seed 0 at 1,000 steps: success 1.00, goal error 0.1 mm."
