@@ -202,7 +202,8 @@ def alternating_rounds(
 def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 << 20) -> Sampler:
     """A sampler of ``fn``'s time per call [s]: each sample times (:func:`timed_call`) a fixed number of calls
     lasting at least ``min_time`` [s]. The number is found on the first sample (which is therefore slower: run it in a
-    warm-up round) by growing from one call, at most ``max_calls``, until two runs in a row last ``min_time``.
+    warm-up round) by growing from one call, at most ``max_calls``, until two runs in a row last ``min_time``; a later
+    sample that runs short (the calibration was slowed by the machine) doubles the number until one lasts ``min_time``.
 
     Raises:
         BenchError: ``min_time`` not finite and > 0, or ``max_calls < 1``.
@@ -237,7 +238,13 @@ def timed_calls(fn: Callable[[], Any], *, min_time: float, max_calls: int = 1 <<
                 count = min(max_calls, count * grow)
             number = count
             return elapsed / count
-        return run(number) / number
+        elapsed = run(number)
+        # a calibration slowed by the machine in both its runs left the count short: grow it until a run lasts
+        # min_time, so that every sample times at least that long
+        while elapsed < min_time and number < max_calls:
+            number = min(max_calls, number * 2)
+            elapsed = run(number)
+        return elapsed / number
 
     return sample
 
