@@ -548,12 +548,12 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             axes[2].plot(steps, errors, "o-", color=color, label=label)
         handles = []
         for (label, ref), style in zip(env["references"].items(), ("--", ":", "-."), strict=False):
-            name = f"{label} ({'baseline' if label == 'zero action' else 'reference'})"
+            shown = f"{label} ({'baseline' if label == 'zero action' else 'reference'})"
             for ax in axes[:2]:
-                ax.axhline(ref.get("success_rate") or 0.0, ls=style, color="k", lw=1, label=name)
+                ax.axhline(ref.get("success_rate") or 0.0, ls=style, color="k", lw=1, label=shown)
             value = ref.get(err["key"])
             if value is not None and math.isfinite(float(value)):
-                handles.append(axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=name))
+                handles.append(axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=shown))
         axes[0].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)), label="0.5 (the table's first threshold)")
         axes[1].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)))
         for ax, xlabel, ylabel in (
