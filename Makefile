@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint baselines system-deps clean
+.PHONY: demo test lint baselines wheel system-deps clean
 
 # warmup compiles every env's and reference's kernels into numba's cache first, two processes at a time
 demo: $(VENV)/.learn-installed
@@ -33,6 +33,13 @@ baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym baselines
 	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress
 	$(BIN)/redundancy-gym bench curves --workers 2 --json baselines/results/curves.json --no-progress
+
+# a wheel for pip-install users in dist/, carrying the kernels compiled ahead for the x86-64-v3 CPU (about a minute
+# on 2 cores): a new process copies them into its numba cache instead of compiling
+# (docs/architecture.md#kernels-shipped-in-the-wheel)
+wheel: $(VENV)/.test-installed
+	$(BIN)/redundancy-gym warmup --pack --workers 2 --no-progress
+	$(BIN)/pip wheel -q --no-deps --no-build-isolation -w dist .
 
 # libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
 # missing and run as root

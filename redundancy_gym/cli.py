@@ -390,6 +390,12 @@ def _parser() -> argparse.ArgumentParser:
     wu.add_argument("env_ids", nargs="*", metavar="ENV", help="env ids to warm up (default: every registered one)")
     wu.add_argument("--workers", type=int, default=1, metavar="N", help="warm up in N processes (default: 1)")
     wu.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    wu.add_argument(
+        "--pack",
+        action="store_true",
+        help="instead, compile the kernels for the portable x86-64-v3 CPU into redundancy_gym/packed_kernels/, "
+        "which a wheel built next ships (a new process then copies them into its numba cache)",
+    )
 
     ba = _add_parser(
         sub,
@@ -648,8 +654,15 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _warmup(args: argparse.Namespace) -> None:
-    from .eval.warmup import numba_cache_location, warmup
+    from .eval.warmup import numba_cache_location, pack_kernels, warmup
 
+    if args.pack:
+        packed = pack_kernels(args.env_ids or None, workers=args.workers, progress=not args.no_progress)
+        print(
+            f"{packed.kernels} kernels ({packed.entries} compiled entries, {packed.size_bytes / 2**20:.1f} MiB) "
+            f"packed in {packed.folder} in {packed.seconds:.0f} s"
+        )
+        return
     rows = warmup(args.env_ids or None, workers=args.workers, progress=not args.no_progress)
     width = max(len(row.env_id) for row in rows)
     for row in rows:

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from .kernel_pack import install_seeding
+
 __all__ = [
     "BACKENDS",
     "BORROW",
@@ -16,6 +18,9 @@ __all__ = [
     "LazyEntryPoint",
     "njit_on_first_call",
 ]
+
+# before any kernel is defined: every module that defines kernels imports this one first
+install_seeding()
 
 # error_model="numpy": a division by zero gives inf instead of a checked branch that raises (every division
 # in the kernels is guarded or measured afterwards). The fast-math subset allows fused multiply-adds and ignoring

@@ -12,6 +12,7 @@ Python consults after PYTHONPATH.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
@@ -20,9 +21,12 @@ import sys
 import zipfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 
+from redundancy_gym.kernel_pack import PACK_CPU_FEATURES, host_magic_tuple, pack_tag
 from redundancy_gym.learning.baselines import BASELINES_DIR, baselines
 from redundancy_gym.policies.shipped_models import SHIPPED_MODELS_DIR, shipped_models
 
@@ -79,6 +83,11 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     tmp = tmp_path_factory.mktemp("wheel")
     source = tmp / "source"
     shutil.copytree(ROOT, source, symlinks=True, ignore=_skip_in_copy)
+    # the quick start's kernels compiled ahead for x86-64-v3, as `make wheel` packs every env's (a fresh clone has
+    # no pack; this one holds PlanarReach's, about a minute to compile on 2 cores)
+    from redundancy_gym.eval.warmup import pack_kernels
+
+    pack_kernels(["redundancy_gym/PlanarReach-v0"], root=source / "redundancy_gym" / "packed_kernels", progress=False)
     command = [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "--no-index", "-q"]
     _run([*command, "-w", str(tmp / "dist"), str(source)], cwd=tmp, timeout=300)
     (built,) = (tmp / "dist").glob("redundancy_gym-*.whl")
@@ -131,6 +140,9 @@ def test_the_wheel_holds_the_models_records_configs_and_mjcf(wheel: Path) -> Non
     with zipfile.ZipFile(wheel) as archive:
         names = set(archive.namelist())
     expected = _expected_data()
+    packed = f"redundancy_gym/packed_kernels/{pack_tag()}/"
+    assert f"{packed}manifest.json" in names
+    assert {n.rsplit(".", 1)[-1] for n in names if n.startswith(packed + "controllers/clik/")} == {"nbi", "nbc"}
     stems = shipped_models()
     assert stems, "no shipped models in the checkout"
     for stem in stems:  # each model with its training record
@@ -206,3 +218,73 @@ def test_the_installed_package_lists_evaluates_and_sees_its_baselines(
         "redundancy_gym/PlanarReach-v0",
         "clik",
     ]
+
+
+# the README's quick start for 120 steps: numba's compile time in the process, and a hash of the trajectory
+EPISODE = """
+import hashlib, json, time
+start = time.perf_counter()
+import gymnasium as gym, numpy as np, redundancy_gym
+from redundancy_gym.eval.compile_clock import COMPILE_CLOCK
+from redundancy_gym.kernel_pack import seeding_state
+COMPILE_CLOCK.install()
+env = gym.make("redundancy_gym/PlanarReach-v0")
+policy = redundancy_gym.make_policy("clik", env)
+obs, _ = env.reset(seed=11)
+digest = hashlib.sha256()
+for _ in range(120):
+    action, _ = policy.predict(obs, deterministic=True)
+    obs, reward, terminated, truncated, _ = env.step(action)
+    digest.update(obs.tobytes() + action.tobytes() + np.float64(reward).tobytes())
+    if terminated or truncated:
+        break
+state = seeding_state()
+print("EPISODE " + json.dumps({"compiling_s": COMPILE_CLOCK.compiling_seconds, "sha256": digest.hexdigest(),
+      "seconds": time.perf_counter() - start, "pack": str(state.pack), "reason": state.reason,
+      "file": redundancy_gym.__file__}))
+"""
+
+
+def _episode(cwd: Path, env: dict[str, str]) -> dict[str, Any]:
+    out = _run([sys.executable, "-c", EPISODE], cwd=cwd, env=env, timeout=900)
+    line = next(x for x in out.splitlines() if x.startswith("EPISODE "))
+    result: dict[str, Any] = json.loads(line[len("EPISODE ") :])
+    return result
+
+
+@pytest.mark.timeout(1500)
+def test_a_fresh_process_of_the_installed_wheel_loads_its_packed_kernels_and_runs_bit_for_bit(
+    installed: tuple[Path, dict[str, str]], tmp_path: Path
+) -> None:
+    """With an empty numba cache, the installed package copies the wheel's x86-64-v3 kernels into it and compiles
+    nothing; the episode is the one kernels compiled for this host give (this process's own, compiled here)."""
+    target, env = installed
+    magic = host_magic_tuple()
+    if PACK_CPU_FEATURES - {f[1:] for f in magic[2].split(",") if f.startswith("+")}:
+        pytest.skip(f"this CPU ({magic[1]}) is not x86-64-v3: the pack is refused")
+    seeded = _episode(tmp_path, {**env, "NUMBA_CACHE_DIR": str(tmp_path / "empty")})
+    assert Path(seeded["file"]).resolve().is_relative_to(target.resolve())
+    assert seeded["pack"] == str(target / "redundancy_gym" / "packed_kernels" / pack_tag()), seeded["reason"]
+    assert seeded["compiling_s"] == 0.0, seeded  # every kernel loaded from the copied entries
+    assert list((tmp_path / "empty").rglob("*.nbi"))
+
+    import gymnasium as gym
+
+    import redundancy_gym
+
+    digest = hashlib.sha256()
+    env_ = gym.make("redundancy_gym/PlanarReach-v0")
+    policy = redundancy_gym.make_policy("clik", env_)
+    obs, _ = env_.reset(seed=11)
+    for _ in range(120):
+        action, _ = policy.predict(obs, deterministic=True)
+        obs, reward, terminated, truncated, _ = env_.step(action)
+        digest.update(obs.tobytes() + action.tobytes() + np.float64(reward).tobytes())
+        if terminated or truncated:
+            break
+    env_.close()
+    assert seeded["sha256"] == digest.hexdigest()
+
+    # the pack switched off: the same process compiles, to the same episode
+    off = _episode(tmp_path, {**env, "NUMBA_CACHE_DIR": str(tmp_path / "cold"), "REDUNDANCY_GYM_KERNEL_PACK": "none"})
+    assert off["pack"] == "None" and off["compiling_s"] > 0 and off["sha256"] == seeded["sha256"]

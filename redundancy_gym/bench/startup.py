@@ -172,8 +172,8 @@ def startup_probes(names: Sequence[str] | None = None, quick: bool = False) -> l
     return [by_name[n] for n in names]
 
 
-def _run(probe: StartupProbe, cache: str, timeout: float) -> dict[str, Any]:
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONHASHSEED": "0"}
+def _run(probe: StartupProbe, cache: str, timeout: float, extra_env: dict[str, str] | None = None) -> dict[str, Any]:
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache, "PYTHONHASHSEED": "0", **(extra_env or {})}
     start = time.perf_counter()
     try:
         done = subprocess.run(
@@ -217,12 +217,18 @@ def run_startup_bench(
     probes = startup_probes(names, quick)
     from tqdm.auto import tqdm
 
+    from ..kernel_pack import seeding_state
+
+    pack = seeding_state()
     results: dict[str, Any] = {}
     for probe in tqdm(probes, desc="bench startup", unit="probe", disable=not progress):
         with tempfile.TemporaryDirectory(prefix="numba-cold-") as cache:
             cold = _run(probe, cache, timeout)
             warm = _median_run([_run(probe, cache, timeout) for _ in range(int(rounds))])
         results[probe.name] = {"summary": probe.summary, "cold": cold, "warm": warm}
+        if pack.pack is not None:  # the same cold process compiling every kernel, as without a pack
+            with tempfile.TemporaryDirectory(prefix="numba-cold-") as cache, tempfile.TemporaryDirectory() as none:
+                results[probe.name]["cold_unpacked"] = _run(probe, cache, timeout, {"REDUNDANCY_GYM_KERNEL_PACK": none})
     targets = {}
     for name, (probe_name, run, limit) in STARTUP_TARGETS.items():
         measured = results.get(probe_name, {}).get(run, {}).get("process_s")
@@ -237,7 +243,9 @@ def run_startup_bench(
         "machine": machine_info(),
         "method": "each probe in a fresh process: cold with an empty NUMBA_CACHE_DIR, then warm with the cache "
         "that run filled, the run with the median of `rounds` warm runs; process_s is the wall time around the "
-        "process",
+        "process; where a kernel pack fits (kernel_pack), cold copies its kernels into the empty cache and "
+        "cold_unpacked is a cold run with the pack switched off",
+        "kernel_pack": {"folder": None if pack.pack is None else str(pack.pack), "reason": pack.reason},
         "rounds": rounds,
         "probes": results,
         "targets": targets,
@@ -254,13 +262,17 @@ def format_startup_bench(report: dict[str, Any]) -> str:
         value = run.get(key)
         return "-" if value is None else f"{value:.2f}"
 
-    rows = [("probe", "cold process [s]", "warm process [s]", "cold compile [s]", "cold first step [s]")]
+    unpacked = any("cold_unpacked" in r for r in report["probes"].values())
+    rows: list[tuple[str, ...]] = [
+        ("probe", "cold process [s]", "warm process [s]", "cold compile [s]", "cold first step [s]")
+    ]
+    if unpacked:
+        rows[0] += ("cold without the pack [s]",)
     for name, result in report["probes"].items():
         cold, warm = result["cold"], result["warm"]
         first = "first_predict_s" if "first_predict_s" in cold else "first_step_s"
-        rows.append(
-            (name, cell(cold, "process_s"), cell(warm, "process_s"), cell(cold, "compile_s"), cell(cold, first))
-        )
+        row = (name, cell(cold, "process_s"), cell(warm, "process_s"), cell(cold, "compile_s"), cell(cold, first))
+        rows.append(row + ((cell(result.get("cold_unpacked", {}), "process_s"),) if unpacked else ()))
     widths = [max(len(r[k]) for r in rows) for k in range(len(rows[0]))]
     lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
     errors = [
@@ -269,7 +281,9 @@ def format_startup_bench(report: dict[str, Any]) -> str:
         for run in ("cold", "warm")
         if "error" in r[run]
     ]
-    lines += [""] + [f"error: {e}" for e in errors]
+    pack = report.get("kernel_pack", {})
+    lines += ["", f"kernel pack: {pack.get('folder') or 'none (' + str(pack.get('reason')) + ')'}"]
+    lines += [f"error: {e}" for e in errors]
     for name, t in report["targets"].items():
         measured = "not measured" if t["measured_s"] is None else f"{t['measured_s']:.2f} s"
         verdict = "" if t["met"] is None else (" met" if t["met"] else " NOT met")

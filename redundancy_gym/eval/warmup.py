@@ -8,6 +8,10 @@ wrapper's reference). numba writes the cache where :func:`numba_cache_location` 
 else ``__pycache__`` folders beside the package's sources, else (a read-only install) its per-user cache folder. A
 worker that shares the folder (or the installed package) shares the cache; the cache is valid for the same
 package sources, Python, numba and CPU.
+
+``redundancy-gym warmup --pack`` (:func:`pack_kernels`) compiles the same kernels for the portable x86-64-v3 CPU
+into the package instead, for a wheel to carry: a process of an installed wheel then copies them into its cache
+(:mod:`redundancy_gym.kernel_pack`) and compiles nothing the warm-up covers.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ from typing import NamedTuple
 from .compile_clock import COMPILE_CLOCK
 from .exceptions import EvalError
 
-__all__ = ["WarmupRow", "numba_cache_location", "warmup", "warmup_env"]
+__all__ = ["PackResult", "WarmupRow", "numba_cache_location", "pack_kernels", "warmup", "warmup_env"]
 
 
 class WarmupRow(NamedTuple):
@@ -111,3 +115,89 @@ def warmup(env_ids: Sequence[str] | None = None, *, workers: int = 1, progress: 
                     rows.append(row)
                     bar.update(1)
     return rows
+
+
+class PackResult(NamedTuple):
+    """A pack written by :func:`pack_kernels`: its folder, how many kernels (cache index files) and compiled
+    entries it holds, its size [bytes], and the warm-up's wall time [s]."""
+
+    folder: Path
+    kernels: int
+    entries: int
+    size_bytes: int
+    seconds: float
+
+
+def pack_kernels(
+    env_ids: Sequence[str] | None = None, *, workers: int = 1, root: str | Path | None = None, progress: bool = True
+) -> PackResult:
+    """Compile every kernel that ``env_ids`` (default: every registered one) and their analytic policies run for the
+    portable CPU :data:`~redundancy_gym.kernel_pack.PACK_CPU`, in a separate process with an empty cache, and lay
+    numba's cache files out by the package's folders in ``root``/:func:`~redundancy_gym.kernel_pack.pack_tag`
+    (default root: :func:`~redundancy_gym.kernel_pack.pack_root`), with a manifest; a wheel built next ships them
+    (:mod:`redundancy_gym.kernel_pack`). The tag's folder is replaced."""
+    import json
+    import os
+    import pickle
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    from numba.core.caching import _CacheLocator
+
+    from ..kernel_pack import PACK_CPU, PACKAGE_DIR, pack_root, pack_tag, sources_digest
+
+    ids = list(env_ids) if env_ids else []
+    _check_env_ids(ids)
+    if workers < 1:
+        raise EvalError(f"workers must be >= 1, got {workers!r}")
+    folder = Path(root if root is not None else pack_root()) / pack_tag()
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="redundancy_gym_pack_") as cache:
+        env = {**os.environ, "NUMBA_CACHE_DIR": cache, "NUMBA_CPU_NAME": PACK_CPU, "NUMBA_CPU_FEATURES": ""}
+        args = ["warmup", "--workers", str(workers), *([] if progress else ["--no-progress"]), *ids]
+        code = "import sys; from redundancy_gym.cli import main; sys.exit(main(sys.argv[1:]))"
+        done = subprocess.run([sys.executable, "-c", code, *args], env=env, check=False)
+        if done.returncode != 0:
+            raise EvalError(f"the warm-up for the pack exited {done.returncode}")
+        # numba names a cache folder after the source folder's path (_CacheLocator.get_suitable_cache_subpath)
+        by_subpath = {
+            _CacheLocator.get_suitable_cache_subpath(str(d / "module.py")): d.relative_to(PACKAGE_DIR)
+            for d in [PACKAGE_DIR, *(p for p in PACKAGE_DIR.rglob("*") if p.is_dir())]
+        }
+        if folder.exists():
+            shutil.rmtree(folder)
+        kernels = entries = size = 0
+        for sub in sorted(Path(cache).iterdir()):
+            relative = by_subpath.get(sub.name)
+            if relative is None:
+                continue  # another package's kernels
+            target = folder / relative
+            target.mkdir(parents=True, exist_ok=True)
+            for path in sorted(sub.iterdir()):
+                if path.suffix not in (".nbi", ".nbc"):
+                    continue
+                shutil.copyfile(path, target / path.name)
+                size += path.stat().st_size
+                if path.suffix == ".nbi":
+                    kernels += 1
+                    with path.open("rb") as handle:
+                        pickle.load(handle)  # numba's version
+                        entries += len(pickle.loads(handle.read())[1])
+    import llvmlite.binding as ll
+
+    manifest = {
+        "tag": pack_tag(),
+        "cpu": PACK_CPU,
+        "triple": ll.get_process_triple(),
+        "sources_sha256": sources_digest(),
+        "env_ids": ids or "every registered env id",
+        "kernels": kernels,
+        "entries": entries,
+        "size_bytes": size,
+        "command": "redundancy-gym warmup --pack " + " ".join(ids),
+    }
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
+    return PackResult(folder, kernels, entries, size, time.perf_counter() - start)

@@ -14,6 +14,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+# packed kernels are copied into numba's cache when their module is defined, which kernel_options sets up
+from .. import kernel_options  # noqa: F401
+
 __all__ = ["GraspPath", "GraspPathTiming", "grasp_path_durations", "sample_grasp_path"]
 
 

@@ -15,6 +15,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from ..kernel_options import JIT_EXACT
 from .exceptions import GeometryError
 
 __all__ = ["CubicPotential", "PiecewisePotential", "PotentialValue", "QuadraticPotential", "piecewise_potential_kernel"]
@@ -91,7 +92,7 @@ class PiecewisePotential:
         return self.evaluate(distance).slope
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**JIT_EXACT)
 def piecewise_potential_kernel(
     d: float, activation_distance: float, slope: float, switch_ratio: float
 ) -> tuple[float, float, float]:
@@ -113,7 +114,7 @@ def piecewise_potential_kernel(
     return s0 * rest**3 / (3.0 * denom), -s0 * rest * rest / denom, 2.0 * s0 * rest / denom
 
 
-@njit(cache=True, error_model="numpy")
+@njit(**JIT_EXACT)
 def _piecewise_potential_many(d, activation_distance, slope, switch_ratio, value, first, second):  # noqa: ANN001, ANN202
     """:func:`piecewise_potential_kernel` over a flat array."""
     for k in range(d.shape[0]):
