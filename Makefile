@@ -34,11 +34,13 @@ baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress
 	$(BIN)/redundancy-gym bench curves --workers 2 --json baselines/results/curves.json --no-progress
 
-# a wheel for pip-install users in dist/, carrying the kernels compiled ahead for the x86-64-v3 CPU (about a minute
-# on 2 cores): a new process copies them into its numba cache instead of compiling
+# a wheel for pip-install users in dist/, carrying the kernels compiled ahead for the x86-64-v3 CPU (about two minutes
+# in one process): a new process copies them into its numba cache instead of compiling; build/ goes first, as it
+# would carry files of an earlier pack into the wheel
 # (docs/architecture.md#kernels-shipped-in-the-wheel)
 wheel: $(VENV)/.test-installed
-	$(BIN)/redundancy-gym warmup --pack --workers 2 --no-progress
+	$(BIN)/redundancy-gym warmup --pack --no-progress
+	rm -rf build
 	$(BIN)/pip wheel -q --no-deps --no-build-isolation -w dist .
 
 # libosmesa6 renders headless (import redundancy_gym selects MUJOCO_GL=osmesa without a display); installed when
@@ -73,5 +75,5 @@ $(VENV)/.test-installed: pyproject.toml | $(VENV)/bin/python system-deps
 
 # numba's on-disk cache keys a kernel on its own file only: after editing a kernel that others call, clean
 clean:
-	rm -rf $(VENV) results runs .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) results runs .pytest_cache .mypy_cache .ruff_cache build dist redundancy_gym/packed_kernels
 	find redundancy_gym -name '*.nbi' -delete -o -name '*.nbc' -delete

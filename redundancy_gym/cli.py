@@ -393,8 +393,9 @@ def _parser() -> argparse.ArgumentParser:
     wu.add_argument(
         "--pack",
         action="store_true",
-        help="instead, compile the kernels for the portable x86-64-v3 CPU into redundancy_gym/packed_kernels/, "
-        "which a wheel built next ships (a new process then copies them into its numba cache)",
+        help="instead, compile the kernels for the portable x86-64-v3 CPU (in one process) into "
+        "redundancy_gym/packed_kernels/, which a wheel built next ships (a new process then copies them into its "
+        "numba cache)",
     )
 
     ba = _add_parser(
@@ -654,10 +655,16 @@ def _workers(args: argparse.Namespace) -> int:
 
 
 def _warmup(args: argparse.Namespace) -> None:
+    from .eval.exceptions import EvalError
     from .eval.warmup import numba_cache_location, pack_kernels, warmup
 
     if args.pack:
-        packed = pack_kernels(args.env_ids or None, workers=args.workers, progress=not args.no_progress)
+        if args.workers != 1:
+            raise EvalError(
+                "--pack compiles in one process (numba's cache index is not safe against two), got --workers "
+                f"{args.workers}"
+            )
+        packed = pack_kernels(args.env_ids or None, progress=not args.no_progress)
         print(
             f"{packed.kernels} kernels ({packed.entries} compiled entries, {packed.size_bytes / 2**20:.1f} MiB) "
             f"packed in {packed.folder} in {packed.seconds:.0f} s"
@@ -669,6 +676,14 @@ def _warmup(args: argparse.Namespace) -> None:
         policies = ", ".join(row.policies) or "-"
         print(f"{row.env_id.ljust(width)}  {row.seconds:7.1f} s  (compiling {row.compile_s:5.1f} s)  {policies}")
     print(f"{len(rows)} env id(s) warmed up; numba cache: {numba_cache_location()} (NUMBA_CACHE_DIR moves it)")
+    from .kernel_pack import seeding_state
+
+    state = seeding_state()
+    print(
+        f"kernel pack: {state.pack} (its kernels copied into that cache)"
+        if state.pack
+        else f"kernel pack: none, {state.reason}"
+    )
 
 
 def _baselines(args: argparse.Namespace) -> None:

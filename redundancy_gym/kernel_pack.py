@@ -2,37 +2,42 @@
 (docs/architecture.md#kernels-shipped-in-the-wheel).
 
 ``redundancy-gym warmup --pack`` compiles every env's and analytic reference's kernels for the portable CPU
-:data:`PACK_CPU` (x86-64-v3: AVX2 and fused multiply-adds, every x86-64 CPU since 2013-2015) into
-``redundancy_gym/packed_kernels/<tag>/`` (:func:`pack_tag`: Python, numba, machine), numba's own cache files laid
-out by the package's folders, with a manifest naming the sources they were compiled from. A wheel built after it
-ships them; a clone without one behaves as before.
+:data:`PACK_CPU` (x86-64-v3: AVX2 and fused multiply-adds; most x86-64 CPUs since 2013-2015, not every low-end
+one) into ``redundancy_gym/packed_kernels/<tag>/`` (:func:`pack_tag`: Python, numba, machine, platform), numba's
+own cache files laid out by the package's folders, with a manifest: the hash of the sources they were compiled
+from, numpy's version, and every file's SHA-256. A wheel built after it ships them; a clone without one behaves as
+before.
 
 Seeding: numba asks its cache locators, in order, where a ``cache=True`` kernel's cache lives when the kernel is
 defined. :func:`install_seeding` (run by :mod:`redundancy_gym.kernel_options`, which every kernel module imports
 first) puts :class:`PackSeeder` at the head of that list. For a kernel of this package it finds the place numba's
 own locators choose (``NUMBA_CACHE_DIR``, ``__pycache__`` beside the sources, or numba's per-user folder), and
-where that place has no cache index for the kernel yet, copies the kernel's packed entries there, keyed to this
-machine's CPU; then it steps aside and numba's locators go on as always. numba loads the copied entries at the
-kernel's first call. Code for x86-64-v3 runs on any CPU that has its features, and rounds as code compiled for
-the host does (both fuse multiply-adds where the kernels allow it; held bit for bit by a test).
+where numba would find none of the kernel's packed entries there (no index, another numba's, one of older sources,
+or a current one without them), copies them in, keyed to this machine's CPU, each file checked against the
+manifest's SHA-256 and written as numba writes its own (a temporary name, then renamed); then it steps aside and
+numba's locators go on as always. numba loads the copied entries at the kernel's first call. Code for x86-64-v3
+runs on any CPU that has its features, and rounds as code compiled for the host does (both fuse multiply-adds where
+the kernels allow it; held bit for bit by a test on the machines it ran on).
 
 Nothing is copied (every kernel compiles as before) where the pack does not fit: another Python, numba or machine
-(no folder for :func:`pack_tag`), a CPU without x86-64-v3's features, sources that differ from the ones packed
-(an edited clone; numba keys a cache entry on its own file only, so a kernel whose callee changed would load stale
-code), or a process that chose its own numba CPU (``NUMBA_CPU_NAME``/``NUMBA_CPU_FEATURES``) or locators
-(``NUMBA_CACHE_LOCATOR_CLASSES``). ``REDUNDANCY_GYM_KERNEL_PACK`` names another folder of packs (a path that
-holds none switches seeding off).
+(no folder for :func:`pack_tag`), another numpy minor version, a CPU without x86-64-v3's features, sources that
+differ from the ones packed (an edited clone; numba keys a cache entry on its own file only, so a kernel whose
+callee changed would load stale code), or a process that chose its own numba CPU
+(``NUMBA_CPU_NAME``/``NUMBA_CPU_FEATURES``) or locators (``NUMBA_CACHE_LOCATOR_CLASSES``); nor where a pack cannot
+be read. ``REDUNDANCY_GYM_KERNEL_PACK`` names another folder of packs (a path that holds none switches seeding
+off); ``redundancy-gym warmup`` says whether the pack is used, or why not.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
+import itertools
 import json
 import logging
 import os
 import pickle
 import platform
-import shutil
 import sys
 from importlib import metadata
 from pathlib import Path
@@ -47,6 +52,7 @@ __all__ = [
     "host_magic_tuple",
     "install_seeding",
     "kernel_filename_base",
+    "numpy_version",
     "pack_root",
     "pack_tag",
     "seeding_state",
@@ -57,7 +63,8 @@ PACK_CPU = "x86-64-v3"
 """The CPU model packed kernels are compiled for (LLVM's name of the x86-64-v3 level)."""
 
 PACK_CPU_FEATURES = frozenset(
-    {"avx", "avx2", "bmi", "bmi2", "cx16", "f16c", "fma", "lzcnt", "movbe", "popcnt", "sse4.1", "sse4.2", "ssse3"}
+    {"cmov", "cx8", "fxsr", "sse2", "sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "cx16", "sahf", "crc32"}
+    | {"avx", "avx2", "bmi", "bmi2", "f16c", "fma", "lzcnt", "movbe", "xsave"}
 )
 """The x86-64-v3 features (LLVM's names) a host must have for packed kernels to be copied into its cache."""
 
@@ -118,11 +125,13 @@ def kernel_filename_base(py_func: Any, py_file: str) -> str:
 
 class SeedingState(NamedTuple):
     """Whether this process copies packed kernels, and from where: ``pack`` the tag's folder (``None``: it does
-    not), ``reason`` why not, ``magic`` the host's code generation the copied entries are keyed to."""
+    not), ``reason`` why not, ``magic`` the host's code generation the copied entries are keyed to, ``files`` the
+    manifest's SHA-256 of every packed file (relative to ``pack``), checked before a file is copied."""
 
     pack: Path | None
     reason: str
     magic: tuple[str, str, str] | None
+    files: dict[str, str]
 
 
 _STATE: SeedingState | None = None
@@ -132,77 +141,139 @@ def seeding_state() -> SeedingState:
     """Decide once per process whether the pack fits this machine and these sources (module docstring)."""
     global _STATE
     if _STATE is None:
-        _STATE = _decide()
+        try:
+            _STATE = _decide()
+        except Exception as exc:  # a pack that cannot be read is no pack: the kernels compile
+            _STATE = SeedingState(None, f"the pack could not be read ({type(exc).__name__}: {exc})", None, {})
     return _STATE
+
+
+def numpy_version() -> str:
+    """numpy's major.minor, which the compiled kernels depend on (numba types and lowers numpy calls per version)."""
+    return ".".join(metadata.version("numpy").split(".")[:2])
 
 
 def _decide() -> SeedingState:
     pack = pack_root() / pack_tag()
     manifest_path = pack / "manifest.json"
     if not manifest_path.is_file():
-        return SeedingState(None, f"no pack for {pack_tag()} in {pack.parent}", None)
+        return SeedingState(None, f"no pack for {pack_tag()} in {pack.parent}", None, {})
     from numba.core import config
 
     if getattr(config, "CPU_NAME", None) is not None or getattr(config, "CPU_FEATURES", None) is not None:
-        return SeedingState(None, "the process chose its own numba CPU (NUMBA_CPU_NAME/NUMBA_CPU_FEATURES)", None)
+        return SeedingState(None, "the process chose its own numba CPU (NUMBA_CPU_NAME/NUMBA_CPU_FEATURES)", None, {})
     if getattr(config, "CACHE_LOCATOR_CLASSES", None) or getattr(config, "DISABLE_JIT", False):
-        return SeedingState(None, "the process chose its own cache locators, or disabled the JIT", None)
+        return SeedingState(None, "the process chose its own cache locators, or disabled the JIT", None, {})
     magic = host_magic_tuple()
     missing = PACK_CPU_FEATURES - _enabled_features(magic[2])
     if missing:
-        return SeedingState(None, f"this CPU ({magic[1]}) lacks {', '.join(sorted(missing))} of {PACK_CPU}", None)
+        reason = f"this CPU ({magic[1]}) lacks {', '.join(sorted(missing))} of {PACK_CPU}"
+        return SeedingState(None, reason, None, {})
     manifest = json.loads(manifest_path.read_text())
     if manifest.get("sources_sha256") != sources_digest():
-        return SeedingState(None, f"the sources differ from those the pack in {pack} was compiled from", None)
+        return SeedingState(None, f"the sources differ from those the pack in {pack} was compiled from", None, {})
     if manifest.get("triple") != magic[0]:
-        return SeedingState(None, f"the pack was compiled for {manifest.get('triple')}, this is {magic[0]}", None)
-    return SeedingState(pack, "", magic)
+        return SeedingState(None, f"the pack was compiled for {manifest.get('triple')}, this is {magic[0]}", None, {})
+    if manifest.get("numpy") != numpy_version():
+        reason = f"the pack was compiled with numpy {manifest.get('numpy')}, this is numpy {numpy_version()}"
+        return SeedingState(None, reason, None, {})
+    return SeedingState(pack, "", magic, dict(manifest["files"]))
 
 
-def _seed(source_index: Path, target_index: Path, magic: tuple[str, str, str]) -> int:
-    """Copy one kernel's packed index and data files into its cache folder, the index keyed to ``magic``; returns
-    the number of entries copied (0 when the index is another numba's)."""
+def _verified(pack: Path, relative: str, files: dict[str, str]) -> bytes:
+    """A packed file's bytes, if the manifest lists it with this content (a file left from an older pack, or one
+    truncated, is refused)."""
+    data = (pack / relative).read_bytes()
+    if files.get(relative) != hashlib.sha256(data).hexdigest():
+        raise ValueError(f"{relative} is not the file the manifest lists")
+    return data
+
+
+def _write_atomic(path: Path, data: bytes) -> None:
+    """Write ``path`` as numba writes its cache files: to a temporary name, then renamed over it, so that a process
+    reading it meanwhile sees the old file or the whole new one."""
+    temporary = path.with_name(f"{path.name}.tmp.{os.getpid()}.{id(data)}")
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def _read_index(path: Path) -> tuple[str, Any, dict[Any, str]] | None:
+    """numba's index file: its numba version, the source stamp and the overloads (key -> data file name)."""
+    if not path.is_file():
+        return None
+    with path.open("rb") as handle:
+        version = pickle.load(handle)
+        stamp, overloads = pickle.loads(handle.read())
+    return version, stamp, dict(overloads)
+
+
+def _seed(state: SeedingState, relative_index: str, target_index: Path) -> int:
+    """Copy one kernel's packed entries into its cache folder, keyed to this machine's CPU: over an index numba
+    would not use (none, another numba's, stale sources), or beside the entries of a current one; returns the
+    number of entries copied."""
     import numba
     from numba.core.serialize import dumps
 
-    with source_index.open("rb") as handle:
-        version = pickle.load(handle)
-        payload = handle.read()
+    assert state.pack is not None and state.magic is not None
+    handle = io.BytesIO(_verified(state.pack, relative_index, state.files))
+    version = pickle.load(handle)
+    stamp, packed = pickle.loads(handle.read())
     if version != numba.__version__:
         return 0
-    stamp, overloads = pickle.loads(payload)
-    rekeyed = {(sig, magic, hashes): name for (sig, _packed, hashes), name in overloads.items()}
+    packed_magic = (state.magic[0], PACK_CPU, "")
+    wanted = {
+        (sig, state.magic, hashes): name for (sig, magic, hashes), name in packed.items() if magic == packed_magic
+    }
+    current = _read_index(target_index)
+    overloads = current[2] if current is not None and current[:2] == (version, stamp) else {}
+    missing = {key: name for key, name in wanted.items() if key not in overloads}
+    if not missing:
+        return 0
     folder = target_index.parent
-    folder.mkdir(parents=True, exist_ok=True)
-    for name in set(rekeyed.values()):
-        shutil.copyfile(source_index.parent / name, folder / name)
-    # the index last and atomically: a process that reads it finds every data file it names
-    temporary = folder / f"{target_index.name}.tmp.{os.getpid()}"
-    with temporary.open("wb") as handle:
-        pickle.dump(version, handle, protocol=-1)
-        handle.write(dumps((stamp, rekeyed)))
-    os.replace(temporary, target_index)
-    return len(rekeyed)
+    stem = target_index.name.removesuffix(".nbi")
+    taken = set(overloads.values())
+    for key, name in missing.items():
+        data = _verified(state.pack, f"{relative_index.rsplit('/', 1)[0]}/{name}", state.files)
+        target_name = name
+        if target_name in taken:  # beside a current index: the first free number, as numba picks it
+            target_name = next(f"{stem}.{n}.nbc" for n in itertools.count(1) if f"{stem}.{n}.nbc" not in taken)
+        _write_atomic(folder / target_name, data)
+        taken.add(target_name)
+        overloads[key] = target_name
+    # the index last: a process that reads it finds every data file it names
+    _write_atomic(target_index, pickle.dumps(version, protocol=-1) + dumps((stamp, overloads)))
+    return len(missing)
 
 
 class PackSeeder:
     """A numba cache "locator" that locates nothing: asked where a kernel of this package caches, it copies the
-    kernel's packed entries to the place numba's own locators choose, when that place has none, and returns
-    ``None`` so that numba asks them next (module docstring)."""
+    kernel's packed entries to the place numba's own locators choose, where numba would find none, and returns
+    ``None`` so that numba asks them next (module docstring). Nothing it meets (an unreadable pack, a file the
+    manifest does not list, a full disk) stops the kernel's definition: the kernel then compiles."""
 
     @classmethod
     def from_function(cls, py_func: Any, py_file: str) -> None:
         try:
             relative = Path(py_file).resolve().relative_to(PACKAGE_DIR)
-        except (ValueError, OSError):
+        except (ValueError, OSError, RuntimeError):
             return None  # not one of this package's kernels
+        try:
+            cls._seed_kernel(py_func, py_file, relative)
+        except Exception as exc:  # seeding only saves a compile
+            _log.debug("no packed copy of %s in %s: %s", getattr(py_func, "__qualname__", py_func), py_file, exc)
+        return None
+
+    @classmethod
+    def _seed_kernel(cls, py_func: Any, py_file: str, relative: Path) -> None:
         state = seeding_state()
-        if state.pack is None or state.magic is None:
-            return None
-        base = kernel_filename_base(py_func, py_file)
-        source = state.pack / relative.parent / f"{base}.nbi"
-        if not source.is_file():
-            return None
+        if state.pack is None:
+            return
+        relative_index = (relative.parent / f"{kernel_filename_base(py_func, py_file)}.nbi").as_posix()
+        if relative_index not in state.files:
+            return
         from numba.core import caching
 
         locator_classes: list[Any] = list(caching.CacheImpl._locator_classes)
@@ -213,21 +284,17 @@ class PackSeeder:
             if locator is not None:
                 break
         else:
-            return None
-        target = Path(locator.get_cache_path()) / f"{base}.nbi"
-        if not target.exists():
-            try:
-                _seed(source, target, state.magic)
-            except (OSError, pickle.UnpicklingError, EOFError, ValueError) as exc:
-                # the kernel then compiles, as it would without a pack
-                _log.debug("could not copy the packed kernel %s: %s", base, exc)
-        return None
+            return
+        _seed(state, relative_index, Path(locator.get_cache_path()) / relative_index.rsplit("/", 1)[-1])
 
 
 def install_seeding() -> bool:
     """Put :class:`PackSeeder` first in numba's cache locators when a pack for :func:`pack_tag` exists (idempotent;
     cheap when none does: numba is not imported for it). Returns whether it is installed."""
-    if not (pack_root() / pack_tag() / "manifest.json").is_file():
+    try:
+        if not (pack_root() / pack_tag() / "manifest.json").is_file():
+            return False
+    except metadata.PackageNotFoundError:  # numba without its package metadata (a frozen application)
         return False
     from numba.core import caching
 

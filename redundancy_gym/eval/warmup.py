@@ -129,75 +129,114 @@ class PackResult(NamedTuple):
 
 
 def pack_kernels(
-    env_ids: Sequence[str] | None = None, *, workers: int = 1, root: str | Path | None = None, progress: bool = True
+    env_ids: Sequence[str] | None = None, *, root: str | Path | None = None, progress: bool = True
 ) -> PackResult:
     """Compile every kernel that ``env_ids`` (default: every registered one) and their analytic policies run for the
-    portable CPU :data:`~redundancy_gym.kernel_pack.PACK_CPU`, in a separate process with an empty cache, and lay
-    numba's cache files out by the package's folders in ``root``/:func:`~redundancy_gym.kernel_pack.pack_tag`
-    (default root: :func:`~redundancy_gym.kernel_pack.pack_root`), with a manifest; a wheel built next ships them
-    (:mod:`redundancy_gym.kernel_pack`). The tag's folder is replaced."""
-    import json
+    portable CPU :data:`~redundancy_gym.kernel_pack.PACK_CPU`, in one separate process with an empty cache (one:
+    numba's cache index is not safe against two processes adding entries to one kernel at once), and lay numba's
+    cache files out by the package's folders in ``root``/:func:`~redundancy_gym.kernel_pack.pack_tag` (default
+    root: :func:`~redundancy_gym.kernel_pack.pack_root`), with a manifest; a wheel built next ships them
+    (:mod:`redundancy_gym.kernel_pack`). The tag's folder is replaced.
+
+    Raises:
+        EvalError: an unknown env id, a warm-up that fails, or a pack that would hold no kernel.
+    """
     import os
-    import pickle
-    import shutil
     import subprocess
     import sys
     import tempfile
 
-    from numba.core.caching import _CacheLocator
-
-    from ..kernel_pack import PACK_CPU, PACKAGE_DIR, pack_root, pack_tag, sources_digest
+    from ..kernel_pack import PACKAGE_DIR
 
     ids = list(env_ids) if env_ids else []
     _check_env_ids(ids)
-    if workers < 1:
-        raise EvalError(f"workers must be >= 1, got {workers!r}")
-    folder = Path(root if root is not None else pack_root()) / pack_tag()
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="redundancy_gym_pack_") as cache:
-        env = {**os.environ, "NUMBA_CACHE_DIR": cache, "NUMBA_CPU_NAME": PACK_CPU, "NUMBA_CPU_FEATURES": ""}
-        args = ["warmup", "--workers", str(workers), *([] if progress else ["--no-progress"]), *ids]
+        from ..kernel_pack import PACK_CPU
+
+        # no other NUMBA_* setting of this shell (NUMBA_OPT, NUMBA_BOUNDSCHECK, ...) goes into the shipped code
+        env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+        env.update({"NUMBA_CACHE_DIR": cache, "NUMBA_CPU_NAME": PACK_CPU, "NUMBA_CPU_FEATURES": ""})
+        # this package, whatever folder the command runs in
+        env["PYTHONPATH"] = os.pathsep.join([str(PACKAGE_DIR.parent), *filter(None, [env.get("PYTHONPATH")])])
+        args = ["warmup", *([] if progress else ["--no-progress"]), *ids]
         code = "import sys; from redundancy_gym.cli import main; sys.exit(main(sys.argv[1:]))"
-        done = subprocess.run([sys.executable, "-c", code, *args], env=env, check=False)
+        done = subprocess.run([sys.executable, "-c", code, *args], env=env, cwd=cache, check=False)
         if done.returncode != 0:
             raise EvalError(f"the warm-up for the pack exited {done.returncode}")
-        # numba names a cache folder after the source folder's path (_CacheLocator.get_suitable_cache_subpath)
-        by_subpath = {
-            _CacheLocator.get_suitable_cache_subpath(str(d / "module.py")): d.relative_to(PACKAGE_DIR)
-            for d in [PACKAGE_DIR, *(p for p in PACKAGE_DIR.rglob("*") if p.is_dir())]
-        }
-        if folder.exists():
-            shutil.rmtree(folder)
-        kernels = entries = size = 0
-        for sub in sorted(Path(cache).iterdir()):
-            relative = by_subpath.get(sub.name)
-            if relative is None:
-                continue  # another package's kernels
-            target = folder / relative
-            target.mkdir(parents=True, exist_ok=True)
-            for path in sorted(sub.iterdir()):
-                if path.suffix not in (".nbi", ".nbc"):
-                    continue
-                shutil.copyfile(path, target / path.name)
-                size += path.stat().st_size
-                if path.suffix == ".nbi":
-                    kernels += 1
-                    with path.open("rb") as handle:
-                        pickle.load(handle)  # numba's version
-                        entries += len(pickle.loads(handle.read())[1])
-    import llvmlite.binding as ll
+        folder = Path(root if root is not None else _default_pack_root())
+        result = _pack_cache(Path(cache), folder)
+    return result._replace(seconds=time.perf_counter() - start)
 
+
+def _default_pack_root() -> Path:
+    from ..kernel_pack import pack_root
+
+    return pack_root()
+
+
+def _pack_cache(cache: Path, root: Path) -> PackResult:
+    """Lay out the kernels of this package that ``cache`` (a ``NUMBA_CACHE_DIR``) holds in ``root``/tag, with the
+    manifest; every index is checked: compiled for the pack's CPU, and no data file named twice."""
+    import hashlib
+    import json
+    import os
+    import pickle
+    import shutil
+
+    import llvmlite.binding as ll
+    from numba.core.caching import _CacheLocator
+
+    # numba names a cache folder after the source folder's path as the kernel's module was imported (abspath, not
+    # resolved: a package reached through a symlink has two names)
+    from .. import __file__ as package_init
+    from ..kernel_pack import PACK_CPU, PACKAGE_DIR, numpy_version, pack_tag, sources_digest
+
+    imported = Path(os.path.abspath(str(package_init))).parent
+    by_subpath: dict[str, Path] = {}
+    for base in {PACKAGE_DIR, imported}:
+        for folder in [base, *(p for p in base.rglob("*") if p.is_dir())]:
+            by_subpath[_CacheLocator.get_suitable_cache_subpath(str(folder / "module.py"))] = folder.relative_to(base)
+    pack = root / pack_tag()
+    if pack.exists():
+        shutil.rmtree(pack)
+    files: dict[str, str] = {}
+    kernels = entries = size = 0
+    expected_magic = (ll.get_process_triple(), PACK_CPU, "")
+    for sub in sorted(cache.iterdir()):
+        relative = by_subpath.get(sub.name)
+        if relative is None:
+            continue  # another package's kernels
+        for path in sorted(sub.iterdir()):
+            if path.suffix not in (".nbi", ".nbc"):
+                continue
+            if path.suffix == ".nbi":
+                with path.open("rb") as handle:
+                    pickle.load(handle)  # numba's version
+                    overloads = pickle.loads(handle.read())[1]
+                names = list(overloads.values())
+                if len(set(names)) != len(names) or any(key[1] != expected_magic for key in overloads):
+                    raise EvalError(f"{path} names a data file twice or holds code for another CPU: not packed")
+                kernels += 1
+                entries += len(overloads)
+            data = path.read_bytes()
+            name = (relative / path.name).as_posix()
+            (pack / relative).mkdir(parents=True, exist_ok=True)
+            (pack / name).write_bytes(data)
+            files[name] = hashlib.sha256(data).hexdigest()
+            size += len(data)
+    if kernels == 0:
+        raise EvalError(f"the warm-up's cache {cache} holds no kernel of {PACKAGE_DIR}: nothing to pack")
     manifest = {
         "tag": pack_tag(),
         "cpu": PACK_CPU,
-        "triple": ll.get_process_triple(),
+        "triple": expected_magic[0],
+        "numpy": numpy_version(),
         "sources_sha256": sources_digest(),
-        "env_ids": ids or "every registered env id",
         "kernels": kernels,
         "entries": entries,
         "size_bytes": size,
-        "command": "redundancy-gym warmup --pack " + " ".join(ids),
+        "files": files,
     }
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
-    return PackResult(folder, kernels, entries, size, time.perf_counter() - start)
+    (pack / "manifest.json").write_text(json.dumps(manifest, indent=1) + "\n")
+    return PackResult(pack, kernels, entries, size, 0.0)
