@@ -17,6 +17,7 @@ import pytest
 from redundancy_gym import kernel_pack
 from redundancy_gym.kernel_pack import (
     PACK_CPU_FEATURES,
+    _read_index,
     host_magic_tuple,
     kernel_filename_base,
     numpy_version,
@@ -144,6 +145,19 @@ def _expected() -> list[float]:
     return list(piecewise_potential_kernel(0.01, 0.1, 1.0, 0.5))
 
 
+def _read(index: Path) -> tuple[str, Any, dict[Any, str]]:
+    read = _read_index(index)
+    assert read is not None, index
+    return read
+
+
+def _write_index(index: Path, version: str, stamp: Any, overloads: dict[Any, str]) -> None:
+    """An index file as numba writes one: its version, then the stamp and overloads."""
+    import pickle
+
+    index.write_bytes(pickle.dumps(version, protocol=-1) + pickle.dumps((stamp, overloads)))
+
+
 def _index(cache: Path) -> Path:
     (index,) = [p for p in cache.rglob("potentials.piecewise_potential_kernel-*.nbi")]
     return index
@@ -160,34 +174,24 @@ def test_a_packed_kernel_is_copied_into_an_empty_cache_and_loads_without_compili
 
 def test_an_index_of_older_sources_is_seeded_over(small_pack: Path, tmp_path: Path) -> None:
     """After an upgrade, numba ignores the old release's index (another stamp); the pack replaces it."""
-    import pickle
-
     _probe(tmp_path / "cache", small_pack)
     index = _index(tmp_path / "cache")
-    with index.open("rb") as handle:
-        version = pickle.load(handle)
-        _stamp, overloads = pickle.loads(handle.read())
-    index.write_bytes(pickle.dumps(version, protocol=-1) + pickle.dumps((b"older sources", overloads)))
+    version, _stamp, overloads = _read(index)
+    _write_index(index, version, b"older sources", overloads)
     again = _probe(tmp_path / "cache", small_pack)
     assert again["compiling_s"] == 0.0 and again["value"] == _expected()
 
 
 def test_a_current_index_without_the_packed_entries_gets_them_beside_its_own(small_pack: Path, tmp_path: Path) -> None:
-    import pickle
-
     _probe(tmp_path / "cache", small_pack)
     index = _index(tmp_path / "cache")
-    with index.open("rb") as handle:
-        version = pickle.load(handle)
-        stamp, overloads = pickle.loads(handle.read())
+    version, stamp, overloads = _read(index)
     (key, name), *_ = overloads.items()
     other = (key[0], ("another", "cpu", ""), key[2])  # an entry numba keeps but this machine does not use
-    index.write_bytes(pickle.dumps(version, protocol=-1) + pickle.dumps((stamp, {other: name})))
+    _write_index(index, version, stamp, {other: name})
     again = _probe(tmp_path / "cache", small_pack)
     assert again["compiling_s"] == 0.0
-    with index.open("rb") as handle:
-        pickle.load(handle)
-        merged = pickle.loads(handle.read())[1]
+    merged = _read(index)[2]
     assert merged[other] == name and len(merged) == 2 and len(set(merged.values())) == 2
 
 

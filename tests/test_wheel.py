@@ -12,7 +12,6 @@ Python consults after PYTHONPATH.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import shutil
@@ -23,7 +22,6 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 
 from redundancy_gym.kernel_pack import PACK_CPU_FEATURES, host_magic_tuple, pack_tag
@@ -257,7 +255,7 @@ def test_a_fresh_process_of_the_installed_wheel_loads_its_packed_kernels_and_run
     installed: tuple[Path, dict[str, str]], tmp_path: Path
 ) -> None:
     """With an empty numba cache, the installed package copies the wheel's x86-64-v3 kernels into it and compiles
-    nothing; the episode is the one kernels compiled for this host give (this process's own, compiled here)."""
+    nothing; the episode is the one kernels compiled for this host give."""
     target, env = installed
     magic = host_magic_tuple()
     if PACK_CPU_FEATURES - {f[1:] for f in magic[2].split(",") if f.startswith("+")}:
@@ -268,23 +266,6 @@ def test_a_fresh_process_of_the_installed_wheel_loads_its_packed_kernels_and_run
     assert seeded["compiling_s"] == 0.0, seeded  # every kernel loaded from the copied entries
     assert list((tmp_path / "empty").rglob("*.nbi"))
 
-    import gymnasium as gym
-
-    import redundancy_gym
-
-    digest = hashlib.sha256()
-    env_ = gym.make("redundancy_gym/PlanarReach-v0")
-    policy = redundancy_gym.make_policy("clik", env_)
-    obs, _ = env_.reset(seed=11)
-    for _ in range(120):
-        action, _ = policy.predict(obs, deterministic=True)
-        obs, reward, terminated, truncated, _ = env_.step(action)
-        digest.update(obs.tobytes() + action.tobytes() + np.float64(reward).tobytes())
-        if terminated or truncated:
-            break
-    env_.close()
-    assert seeded["sha256"] == digest.hexdigest()
-
-    # the pack switched off: the same process compiles, to the same episode
+    # the pack switched off: the same process compiles for this host, to the same episode bit for bit
     off = _episode(tmp_path, {**env, "NUMBA_CACHE_DIR": str(tmp_path / "cold"), "REDUNDANCY_GYM_KERNEL_PACK": "none"})
     assert off["pack"] == "None" and off["compiling_s"] > 0 and off["sha256"] == seeded["sha256"]
