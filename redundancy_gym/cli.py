@@ -388,7 +388,7 @@ def _parser() -> argparse.ArgumentParser:
         "(a first episode, test run or cluster worker then loads compiled kernels; NUMBA_CACHE_DIR moves the cache)",
     )
     wu.add_argument("env_ids", nargs="*", metavar="ENV", help="env ids to warm up (default: every registered one)")
-    wu.add_argument("--workers", type=int, default=1, metavar="N", help="warm up in N processes (default: 1)")
+    wu.add_argument("--workers", type=int, default=1, metavar="N", help="warm up in N processes")
     wu.add_argument("--no-progress", action="store_true", help="hide the progress bar")
     wu.add_argument(
         "--pack",
@@ -680,7 +680,7 @@ def _warmup(args: argparse.Namespace) -> None:
 
     state = seeding_state()
     print(
-        f"kernel pack: {state.pack} (its kernels copied into that cache)"
+        f"kernel pack: {state.pack} (copied into that cache where it lacked them)"
         if state.pack
         else f"kernel pack: none, {state.reason}"
     )

@@ -39,6 +39,7 @@ import os
 import pickle
 import platform
 import sys
+import warnings
 from importlib import metadata
 from pathlib import Path
 from typing import Any, NamedTuple
@@ -145,6 +146,14 @@ def seeding_state() -> SeedingState:
             _STATE = _decide()
         except Exception as exc:  # a pack that cannot be read is no pack: the kernels compile
             _STATE = SeedingState(None, f"the pack could not be read ({type(exc).__name__}: {exc})", None, {})
+        if _STATE.pack is None and not _STATE.reason.startswith("no pack for"):
+            # a pack is there but refused: say why the first run takes seconds instead of leaving the user to wait
+            warnings.warn(
+                f"redundancy_gym: the kernels compiled ahead in {pack_root()} are not used ({_STATE.reason}); "
+                "this process compiles the kernels it runs (seconds to a minute, once per numba cache)",
+                RuntimeWarning,
+                stacklevel=2,
+            )
     return _STATE
 
 

@@ -11,9 +11,11 @@ __all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint", "sile
 
 
 def install_hint(extra: str) -> str:
-    """How to install an optional extra, for a clone and for an installed package."""
+    """How to install an optional extra, for a clone and for an installed wheel (the package is installed from a
+    clone or a wheel file, not from the package index)."""
     return (
-        f"pip install -e '.[{extra}]' (in a clone, from the repository root) or pip install 'redundancy-gym[{extra}]'"
+        f"pip install -e '.[{extra}]' (in a clone, from the repository root) or "
+        f"pip install 'redundancy_gym-<version>-py3-none-any.whl[{extra}]' (the wheel you installed)"
     )
 
 

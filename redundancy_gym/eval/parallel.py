@@ -24,6 +24,7 @@ from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any
 
+from ..sb3_import import install_hint
 from .exceptions import EvalError
 
 __all__ = [
@@ -134,7 +135,7 @@ def _start_method() -> str:
 
 LOCAL_RAY = "local"
 """``ray_address`` of a Ray instance started on this machine (``ray.init()`` without an address)."""
-RAY_EXTRA_HINT = "Ray is not installed; pip install -e '.[ray]' (in a clone) or pip install 'redundancy-gym[ray]'"
+RAY_EXTRA_HINT = f"Ray is not installed; {install_hint('ray')}"
 
 
 def import_ray() -> Any:

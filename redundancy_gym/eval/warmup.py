@@ -157,6 +157,7 @@ def pack_kernels(
         # no other NUMBA_* setting of this shell (NUMBA_OPT, NUMBA_BOUNDSCHECK, ...) goes into the shipped code
         env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
         env.update({"NUMBA_CACHE_DIR": cache, "NUMBA_CPU_NAME": PACK_CPU, "NUMBA_CPU_FEATURES": ""})
+        env["REDUNDANCY_GYM_KERNEL_PACK"] = str(Path(cache) / "none")  # an earlier pack is not this one's source
         # this package, whatever folder the command runs in
         env["PYTHONPATH"] = os.pathsep.join([str(PACKAGE_DIR.parent), *filter(None, [env.get("PYTHONPATH")])])
         args = ["warmup", *([] if progress else ["--no-progress"]), *ids]
