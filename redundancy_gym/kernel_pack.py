@@ -53,9 +53,11 @@ __all__ = [
     "host_magic_tuple",
     "install_seeding",
     "kernel_filename_base",
+    "missing_pack_features",
     "numpy_version",
     "pack_root",
     "pack_tag",
+    "read_index",
     "seeding_state",
     "sources_digest",
 ]
@@ -110,8 +112,10 @@ def host_magic_tuple() -> tuple[str, str, str]:
     return ll.get_process_triple(), ll.get_host_cpu_name(), get_host_cpu_features()
 
 
-def _enabled_features(features: str) -> set[str]:
-    return {item[1:] for item in features.split(",") if item.startswith("+")}
+def missing_pack_features(features: str) -> set[str]:
+    """The :data:`PACK_CPU_FEATURES` that a CPU feature string (LLVM's ``+avx2,-avx512f,...``, as
+    :func:`host_magic_tuple` gives it) does not enable: empty where packed kernels run."""
+    return set(PACK_CPU_FEATURES - {item[1:] for item in features.split(",") if item.startswith("+")})
 
 
 def kernel_filename_base(py_func: Any, py_file: str) -> str:
@@ -174,7 +178,7 @@ def _decide() -> SeedingState:
     if getattr(config, "CACHE_LOCATOR_CLASSES", None) or getattr(config, "DISABLE_JIT", False):
         return SeedingState(None, "the process chose its own cache locators, or disabled the JIT", None, {})
     magic = host_magic_tuple()
-    missing = PACK_CPU_FEATURES - _enabled_features(magic[2])
+    missing = missing_pack_features(magic[2])
     if missing:
         reason = f"this CPU ({magic[1]}) lacks {', '.join(sorted(missing))} of {PACK_CPU}"
         return SeedingState(None, reason, None, {})
@@ -209,7 +213,7 @@ def _write_atomic(path: Path, data: bytes) -> None:
         temporary.unlink(missing_ok=True)
 
 
-def _read_index(path: Path) -> tuple[str, Any, dict[Any, str]] | None:
+def read_index(path: Path) -> tuple[str, Any, dict[Any, str]] | None:
     """numba's index file: its numba version, the source stamp and the overloads (key -> data file name)."""
     if not path.is_file():
         return None
@@ -236,7 +240,7 @@ def _seed(state: SeedingState, relative_index: str, target_index: Path) -> int:
     wanted = {
         (sig, state.magic, hashes): name for (sig, magic, hashes), name in packed.items() if magic == packed_magic
     }
-    current = _read_index(target_index)
+    current = read_index(target_index)
     overloads = current[2] if current is not None and current[:2] == (version, stamp) else {}
     missing = {key: name for key, name in wanted.items() if key not in overloads}
     if not missing:

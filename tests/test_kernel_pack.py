@@ -16,12 +16,12 @@ import pytest
 
 from redundancy_gym import kernel_pack
 from redundancy_gym.kernel_pack import (
-    PACK_CPU_FEATURES,
-    _read_index,
     host_magic_tuple,
     kernel_filename_base,
+    missing_pack_features,
     numpy_version,
     pack_tag,
+    read_index,
     seeding_state,
     sources_digest,
 )
@@ -61,7 +61,7 @@ def test_no_pack_is_used_where_none_fits(monkeypatch: pytest.MonkeyPatch, tmp_pa
     manifest = {"sources_sha256": "0" * 64, "triple": magic[0], "numpy": numpy_version(), "files": {}}
     (pack / "manifest.json").write_text(json.dumps(manifest))
     monkeypatch.setattr(kernel_pack, "_STATE", None)
-    if PACK_CPU_FEATURES - {f[1:] for f in magic[2].split(",") if f.startswith("+")}:
+    if missing_pack_features(magic[2]):
         assert "lacks" in seeding_state().reason
         return
     with pytest.warns(RuntimeWarning, match="are not used .*sources differ"):  # a refused pack says so, once
@@ -126,7 +126,7 @@ def small_pack(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from redundancy_gym.eval.warmup import _pack_cache
 
     magic = host_magic_tuple()
-    if PACK_CPU_FEATURES - {f[1:] for f in magic[2].split(",") if f.startswith("+")}:
+    if missing_pack_features(magic[2]):
         pytest.skip(f"this CPU ({magic[1]}) is not x86-64-v3")
     tmp = tmp_path_factory.mktemp("small_pack")
     env = _clean_env(NUMBA_CACHE_DIR=str(tmp / "compiled"), NUMBA_CPU_NAME="x86-64-v3", NUMBA_CPU_FEATURES="")
@@ -147,7 +147,7 @@ def _expected() -> list[float]:
 
 
 def _read(index: Path) -> tuple[str, Any, dict[Any, str]]:
-    read = _read_index(index)
+    read = read_index(index)
     assert read is not None, index
     return read
 

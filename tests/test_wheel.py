@@ -24,7 +24,7 @@ from typing import Any
 
 import pytest
 
-from redundancy_gym.kernel_pack import PACK_CPU_FEATURES, host_magic_tuple, pack_tag
+from redundancy_gym.kernel_pack import host_magic_tuple, missing_pack_features, pack_tag
 from redundancy_gym.learning.baselines import BASELINES_DIR, baselines
 from redundancy_gym.policies.shipped_models import SHIPPED_MODELS_DIR, shipped_models
 
@@ -258,7 +258,7 @@ def test_a_fresh_process_of_the_installed_wheel_loads_its_packed_kernels_and_run
     nothing; the episode is the one kernels compiled for this host give."""
     target, env = installed
     magic = host_magic_tuple()
-    if PACK_CPU_FEATURES - {f[1:] for f in magic[2].split(",") if f.startswith("+")}:
+    if missing_pack_features(magic[2]):
         pytest.skip(f"this CPU ({magic[1]}) is not x86-64-v3: the pack is refused")
     seeded = _episode(tmp_path, {**env, "NUMBA_CACHE_DIR": str(tmp_path / "empty")})
     assert Path(seeded["file"]).resolve().is_relative_to(target.resolve())

@@ -23,6 +23,7 @@ from multiprocessing import get_context
 from pathlib import Path
 from typing import NamedTuple
 
+from ..kernel_pack import PACK_CPU, PACKAGE_DIR, numpy_version, pack_root, pack_tag, read_index, sources_digest
 from .compile_clock import COMPILE_CLOCK
 from .exceptions import EvalError
 
@@ -146,14 +147,10 @@ def pack_kernels(
     import sys
     import tempfile
 
-    from ..kernel_pack import PACKAGE_DIR
-
     ids = list(env_ids) if env_ids else []
     _check_env_ids(ids)
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="redundancy_gym_pack_") as cache:
-        from ..kernel_pack import PACK_CPU
-
         # no other NUMBA_* setting of this shell (NUMBA_OPT, NUMBA_BOUNDSCHECK, ...) goes into the shipped code
         env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
         env.update({"NUMBA_CACHE_DIR": cache, "NUMBA_CPU_NAME": PACK_CPU, "NUMBA_CPU_FEATURES": ""})
@@ -165,15 +162,9 @@ def pack_kernels(
         done = subprocess.run([sys.executable, "-c", code, *args], env=env, cwd=cache, check=False)
         if done.returncode != 0:
             raise EvalError(f"the warm-up for the pack exited {done.returncode}")
-        folder = Path(root if root is not None else _default_pack_root())
+        folder = Path(root if root is not None else pack_root())
         result = _pack_cache(Path(cache), folder)
     return result._replace(seconds=time.perf_counter() - start)
-
-
-def _default_pack_root() -> Path:
-    from ..kernel_pack import pack_root
-
-    return pack_root()
 
 
 def _pack_cache(cache: Path, root: Path) -> PackResult:
@@ -182,7 +173,6 @@ def _pack_cache(cache: Path, root: Path) -> PackResult:
     import hashlib
     import json
     import os
-    import pickle
     import shutil
 
     import llvmlite.binding as ll
@@ -191,7 +181,6 @@ def _pack_cache(cache: Path, root: Path) -> PackResult:
     # numba names a cache folder after the source folder's path as the kernel's module was imported (abspath, not
     # resolved: a package reached through a symlink has two names)
     from .. import __file__ as package_init
-    from ..kernel_pack import PACK_CPU, PACKAGE_DIR, numpy_version, pack_tag, sources_digest
 
     imported = Path(os.path.abspath(str(package_init))).parent
     by_subpath: dict[str, Path] = {}
@@ -212,9 +201,8 @@ def _pack_cache(cache: Path, root: Path) -> PackResult:
             if path.suffix not in (".nbi", ".nbc"):
                 continue
             if path.suffix == ".nbi":
-                with path.open("rb") as handle:
-                    pickle.load(handle)  # numba's version
-                    overloads = pickle.loads(handle.read())[1]
+                index = read_index(path)
+                overloads = index[2] if index is not None else {}
                 names = list(overloads.values())
                 if len(set(names)) != len(names) or any(key[1] != expected_magic for key in overloads):
                     raise EvalError(f"{path} names a data file twice or holds code for another CPU: not packed")
