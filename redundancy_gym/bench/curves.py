@@ -23,8 +23,10 @@ with the env's own weights like every learner) asks whether the energy term is w
 instead of reaching; PPO observing none of the plant parts (``ppo-no-obstacles``: ``observed_obstacles`` 0 in
 training and evaluation; easy's approach corridors are clear by construction) whether the obstacle rows are why it
 does not reach; on that observation, PPO with rl-zoo3's tuned Reacher settings (``ppo-reacher-no-obstacles``) and
-TQC (``tqc-no-obstacles``) whether the learner is. CrossQ (sb3-contrib) is left out of the default study: rl-zoo3's
-MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
+TQC (``tqc-no-obstacles``) whether the learner is; and PPO and TQC commanding the TCP's velocity through
+``AgriReach-TaskSpace-v0`` on that observation (``ppo-task_space-no-obstacles``, ``tqc-task_space-no-obstacles``)
+whether the action space is: through it a proportional law on the observation grasps. CrossQ (sb3-contrib) is left
+out of the default study: rl-zoo3's MuJoCo CrossQ has 2048-unit critics, far beyond this 2-core machine's budget.
 """
 
 from __future__ import annotations
@@ -161,6 +163,23 @@ _EASY_VARIANTS = (
         "tqc-no-obstacles",
         "tqc",
         _AGRI,
+        budgets_between(10_000, OFF_POLICY_LAST),
+        dict(_OFF_POLICY),
+        env_kwargs={"observed_obstacles": 0},
+    ),
+    # does the action space decide it? Commanding the TCP's velocity (CLIK with avoidance moves the joints), the
+    # grasp is a nearly linear function of the observation (a proportional law on it succeeds), not one of joints
+    CurveLearner(
+        "ppo-task_space-no-obstacles",
+        "ppo",
+        "redundancy_gym/AgriReach-TaskSpace-v0",
+        budgets_between(10_000, ON_POLICY_LAST),
+        env_kwargs={"observed_obstacles": 0},
+    ),
+    CurveLearner(
+        "tqc-task_space-no-obstacles",
+        "tqc",
+        "redundancy_gym/AgriReach-TaskSpace-v0",
         budgets_between(10_000, OFF_POLICY_LAST),
         dict(_OFF_POLICY),
         env_kwargs={"observed_obstacles": 0},

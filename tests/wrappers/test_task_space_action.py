@@ -69,6 +69,36 @@ def test_held_full_speed_commands_stop_short_of_the_plants(seed: int) -> None:
     assert not collided and margin >= 0.0
 
 
+def _tool_axis(quaternion: np.ndarray) -> np.ndarray:
+    w, x, y, z = quaternion / np.linalg.norm(quaternion)
+    return np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
+
+
+@pytest.mark.parametrize("difficulty", ["easy", "hard"])
+def test_a_proportional_law_on_the_observation_grasps_through_it(difficulty: str) -> None:
+    """What a learner must find through this action space: TCP velocity proportional to the grasp point's offset,
+    turn rate to the tool axis' error (both from the observation, in the wrapper's basis orthogonal to the axis).
+    The wrapper's avoidance keeps it out of the plants, so on these seeds it grasps every time."""
+    env = gym.make(AGRI, difficulty=difficulty, observed_obstacles=0)
+    layout = env.unwrapped.observation_layout
+    successes = 0
+    for seed in range(123000, 123006):
+        obs, _ = env.reset(seed=seed)
+        terminated = truncated = False
+        while not (terminated or truncated):
+            axis = _tool_axis(obs[layout["tcp_quaternion"]])
+            helper = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+            u = np.cross(helper, axis)
+            u /= np.linalg.norm(u)
+            turn = 3.0 * np.cross(axis, obs[layout["approach"]])  # [rad/s], max_turn_rate 1
+            velocity = 4.0 * (obs[layout["grasp_position"]] - obs[layout["tcp_position"]]) / 0.3  # max_speed 0.3
+            action = np.clip(np.r_[velocity, turn @ u, turn @ np.cross(axis, u)], -1.0, 1.0)
+            obs, _, terminated, truncated, info = env.step(action.astype(np.float32))
+        assert not info["collision"]
+        successes += bool(info["is_success"])
+    assert successes == 6
+
+
 def test_bad_options_raise_naming_them() -> None:
     env = gym.make("redundancy_gym/AgriReach-v0")
     with pytest.raises(WrapperError, match="max_speed"):
