@@ -139,6 +139,7 @@ _ZOO_REACHER: dict[str, Any] = {  # rl-zoo3's ppo.yml, Reacher (normalize: true)
     "policy_kwargs": {"log_std_init": -2.0, "ortho_init": False, "net_arch": {"pi": [256, 256], "vf": [256, 256]}},
 }
 _PLANAR, _AGRI = "redundancy_gym/PlanarReach-v0", "redundancy_gym/AgriReach-v0"
+_AGRI_TASK_SPACE = "redundancy_gym/AgriReach-TaskSpace-v0"
 # the ladder's questions on easy: is the energy term why PPO holds still (trained without it, evaluated with it)?
 # Are the obstacle rows (480 of the 528 observation entries) why it does not reach (observing none of them)?
 _EASY_VARIANTS = (
@@ -172,14 +173,14 @@ _EASY_VARIANTS = (
     CurveLearner(
         "ppo-task_space-no-obstacles",
         "ppo",
-        "redundancy_gym/AgriReach-TaskSpace-v0",
+        _AGRI_TASK_SPACE,
         budgets_between(10_000, ON_POLICY_LAST),
         env_kwargs={"observed_obstacles": 0},
     ),
     CurveLearner(
         "tqc-task_space-no-obstacles",
         "tqc",
-        "redundancy_gym/AgriReach-TaskSpace-v0",
+        _AGRI_TASK_SPACE,
         budgets_between(10_000, OFF_POLICY_LAST),
         dict(_OFF_POLICY),
         env_kwargs={"observed_obstacles": 0},

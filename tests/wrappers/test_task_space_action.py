@@ -8,6 +8,7 @@ import pytest
 
 import redundancy_gym  # noqa: F401  (registers the ids)
 from redundancy_gym.wrappers import TaskSpaceAction, WrapperError
+from redundancy_gym.wrappers.task_space_action import _perpendicular_basis, _tool_axis
 
 AGRI = "redundancy_gym/AgriReach-TaskSpace-v0"
 
@@ -69,11 +70,6 @@ def test_held_full_speed_commands_stop_short_of_the_plants(seed: int) -> None:
     assert not collided and margin >= 0.0
 
 
-def _tool_axis(quaternion: np.ndarray) -> np.ndarray:
-    w, x, y, z = quaternion / np.linalg.norm(quaternion)
-    return np.array([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)])
-
-
 @pytest.mark.parametrize("difficulty", ["easy", "hard"])
 def test_a_proportional_law_on_the_observation_grasps_through_it(difficulty: str) -> None:
     """What a learner must find through this action space: TCP velocity proportional to the grasp point's offset,
@@ -87,12 +83,10 @@ def test_a_proportional_law_on_the_observation_grasps_through_it(difficulty: str
         terminated = truncated = False
         while not (terminated or truncated):
             axis = _tool_axis(obs[layout["tcp_quaternion"]])
-            helper = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-            u = np.cross(helper, axis)
-            u /= np.linalg.norm(u)
+            u, v = _perpendicular_basis(axis)
             turn = 3.0 * np.cross(axis, obs[layout["approach"]])  # [rad/s], max_turn_rate 1
             velocity = 4.0 * (obs[layout["grasp_position"]] - obs[layout["tcp_position"]]) / 0.3  # max_speed 0.3
-            action = np.clip(np.r_[velocity, turn @ u, turn @ np.cross(axis, u)], -1.0, 1.0)
+            action = np.clip(np.r_[velocity, turn @ u, turn @ v], -1.0, 1.0)
             obs, _, terminated, truncated, info = env.step(action.astype(np.float32))
         assert not info["collision"]
         successes += bool(info["is_success"])
