@@ -2,16 +2,17 @@
 resumable (the ``learn`` extra; TQC and CrossQ from sb3-contrib, which it brings).
 
 A run keeps its state in a folder: ``<name>.json`` (settings and the points so far, written after every point and
-checkpoint), and in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point or
-checkpoint; off-policy learners also ``<name>_replay.pkl``, their replay buffer; a run with ``normalize`` also
+checkpoint), and in ``agents`` (the same folder by default) ``<name>.zip`` (the agent at the last point or checkpoint;
+off-policy learners also ``<name>_replay.pkl``, their replay buffer; a run with ``normalize`` also
 ``<name>_vecnormalize.pkl``, SB3's ``VecNormalize`` statistics, which the evaluation's policy reads beside the
 ``.zip``). Within a segment the agent (and buffer) is saved every ``checkpoint_every`` environment steps (100k
-on-policy, 20k off-policy by default) and the state notes the steps saved (``checkpoint_steps``); called again, it
-loads the agent (and buffer) and trains on to the next budget, so an interrupted or extended study loses at most the
-steps since the last checkpoint. The agents folder may be shared by several state folders: a run without points
-refuses to start over an agent already there, and a resumed agent must have trained the steps its state says (either
-is another run's). A resumed run is not bitwise the uninterrupted one (the envs restart from fresh resets); its
-points are still each a trained agent's at that many environment steps.
+on-policy, 20k off-policy by default) and the state notes the steps saved (``checkpoint_steps``); a checkpoint is
+written to temporary files moved into place, the state last, so a run killed while saving keeps the one before whole.
+Called again, it loads the agent (and buffer) and trains on to the next budget, so an interrupted or extended study
+loses at most the steps since the last checkpoint. The agents folder may be shared by several state folders: a run
+without points refuses to start over an agent already there, and a resumed agent must have trained the steps its state
+says (either is another run's). A resumed run is not bitwise the uninterrupted one (the envs restart from fresh resets);
+its points are still each a trained agent's at that many environment steps.
 
 Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
 training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads; the
@@ -25,6 +26,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import os
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -126,6 +128,18 @@ def _load_state(path: Path, run: CurveRun) -> dict[str, Any]:
             "or keep its settings"
         )
     return state
+
+
+def _save_checkpoint(savers: dict[Path, Callable[[str], Any]], state_path: Path, state: dict[str, Any]) -> None:
+    """Write each file through its saver to a temporary name beside it, then move them all into place, the state
+    last: a run killed while writing (a replay buffer takes seconds to pickle) keeps its previous checkpoint whole
+    instead of a truncated buffer or an agent ahead of its state."""
+    temporary = {path: path.with_name(path.name + ".partial") for path in [*savers, state_path]}
+    for path, save in savers.items():
+        save(str(temporary[path]))
+    temporary[state_path].write_text(json.dumps(state, indent=1) + "\n")
+    for path in [*savers, state_path]:
+        os.replace(temporary[path], path)
 
 
 def train_learning_curve(
@@ -234,13 +248,16 @@ def train_learning_curve(
                     )
                 state["cpu_s"] += clock.cpu_s
                 state["wall_s"] += clock.wall_s
-                model.save(str(model_path))
-                if off_policy:
-                    model.save_replay_buffer(str(replay_path))
-                if normalizer is not None:
-                    normalizer.save(str(stats_path))
                 state["checkpoint_steps"] = int(model.num_timesteps)
-                state_path.write_text(json.dumps(state, indent=1) + "\n")
+                _save_checkpoint(
+                    {
+                        model_path: model.save,
+                        **({replay_path: model.save_replay_buffer} if off_policy else {}),
+                        **({stats_path: normalizer.save} if normalizer is not None else {}),
+                    },
+                    state_path,
+                    state,
+                )
             report = evaluate(
                 run.env_id,
                 str(model_path),
@@ -262,7 +279,7 @@ def train_learning_curve(
                     point[key] = float(value)
             state["points"].append(point)
             state.pop("checkpoint_steps", None)
-            state_path.write_text(json.dumps(state, indent=1) + "\n")
+            _save_checkpoint({}, state_path, state)
             if log is not None:
                 success, ret = point.get("success_rate", math.nan), point.get("episode_return", math.nan)
                 log(

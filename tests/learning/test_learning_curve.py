@@ -1,6 +1,7 @@
 """A learning curve trained in segments (seconds): budgets met in order, a run extended from its last point keeps the
-points it had, an interrupted segment resumes from its checkpoint, other settings or a lost agent are refused,
-sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is logarithmic."""
+points it had, an interrupted segment resumes from its checkpoint (whole, even when killed while saving), other settings
+or a lost agent are refused, sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is
+logarithmic."""
 
 from __future__ import annotations
 
@@ -89,6 +90,30 @@ def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
     assert [p["steps"] for p in state["points"]] == [40, 80]
     assert (tmp_path / "agents" / "pr-tqc-s0.zip").is_file()
     assert (tmp_path / "agents" / "pr-tqc-s0_replay.pkl").is_file()
+
+
+def test_a_run_killed_while_saving_keeps_its_last_checkpoint_whole(tmp_path, monkeypatch):
+    from stable_baselines3.common.off_policy_algorithm import OffPolicyAlgorithm
+
+    save_buffer, calls = OffPolicyAlgorithm.save_replay_buffer, []
+
+    def killed_at_the_second(self, path):
+        calls.append(path)
+        if len(calls) == 2:  # half a pickle written, as when the process is killed mid-write
+            with open(path, "wb") as handle:
+                handle.write(b"\x80\x04\x95")
+            raise KeyboardInterrupt
+        save_buffer(self, path)
+
+    monkeypatch.setattr(OffPolicyAlgorithm, "save_replay_buffer", killed_at_the_second)
+    run = _run((60,), name="pr-sac-s0", algo="sac", hyperparameters={"learning_starts": 10, "batch_size": 16})
+    with pytest.raises(KeyboardInterrupt):
+        train_learning_curve(run, tmp_path, checkpoint_every=20, log=None)
+    assert json.loads((tmp_path / "pr-sac-s0.json").read_text())["checkpoint_steps"] == 20  # the first checkpoint
+    monkeypatch.setattr(OffPolicyAlgorithm, "save_replay_buffer", save_buffer)
+    resumed = train_learning_curve(run, tmp_path, checkpoint_every=20, log=None)  # its agent at 20, its buffer whole
+    assert [p["steps"] for p in resumed["points"]] == [60]
+    assert not list(tmp_path.glob("*.partial"))
 
 
 def test_a_reward_variant_trains_on_its_kwargs_and_is_evaluated_on_the_envs(tmp_path, monkeypatch):
