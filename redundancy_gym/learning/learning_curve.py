@@ -130,10 +130,10 @@ def _load_state(path: Path, run: CurveRun) -> dict[str, Any]:
     return state
 
 
-def _save_checkpoint(savers: dict[Path, Callable[[str], Any]], state_path: Path, state: dict[str, Any]) -> None:
-    """Write each file through its saver to a temporary name beside it, then move them all into place, the state
-    last: a run killed while writing (a replay buffer takes seconds to pickle) keeps its previous checkpoint whole
-    instead of a truncated buffer or an agent ahead of its state."""
+def _write_whole(savers: dict[Path, Callable[[str], Any]], state_path: Path, state: dict[str, Any]) -> None:
+    """Write each file through its saver (none for a point's state alone) to a temporary name beside it, then move
+    them all into place, the state last: a run killed while writing (a replay buffer takes seconds to pickle) keeps
+    its previous checkpoint whole instead of a truncated buffer or an agent ahead of its state."""
     temporary = {path: path.with_name(path.name + ".partial") for path in [*savers, state_path]}
     for path, save in savers.items():
         save(str(temporary[path]))
@@ -249,7 +249,7 @@ def train_learning_curve(
                 state["cpu_s"] += clock.cpu_s
                 state["wall_s"] += clock.wall_s
                 state["checkpoint_steps"] = int(model.num_timesteps)
-                _save_checkpoint(
+                _write_whole(
                     {
                         model_path: model.save,
                         **({replay_path: model.save_replay_buffer} if off_policy else {}),
@@ -279,7 +279,7 @@ def train_learning_curve(
                     point[key] = float(value)
             state["points"].append(point)
             state.pop("checkpoint_steps", None)
-            _save_checkpoint({}, state_path, state)
+            _write_whole({}, state_path, state)
             if log is not None:
                 success, ret = point.get("success_rate", math.nan), point.get("episode_return", math.nan)
                 log(
