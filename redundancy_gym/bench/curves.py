@@ -426,12 +426,13 @@ def _budget(value: int | None, largest: int | None) -> str:
 
 def budget_table(table: dict[str, Any]) -> list[str]:
     """The study in one markdown table: per env and learner the largest budget every seed reached, the mean success
-    there, the best mean success over the budgets and where (a learner can peak and unlearn), and the first budgets
-    at which the mean success reaches 0.5 and 0.9."""
+    and the mean of the env's error measure there, the best mean success and the lowest mean error over the budgets
+    and where (a learner can peak and unlearn), and the first budgets at which the mean success reaches 0.5 and
+    0.9."""
     lines = [
-        "| env | learner | seeds | largest budget [steps] | success there | best success (at [steps]) | first >= 0.5 | "
-        "first >= 0.9 |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| env | learner | seeds | largest budget [steps] | success there | error there | best success (at [steps]) | "
+        "lowest error (at [steps]) | first >= 0.5 | first >= 0.9 |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for env in table["envs"].values():
         for name, learner in env["learners"].items():
@@ -441,12 +442,22 @@ def budget_table(table: dict[str, Any]) -> list[str]:
             last = rows[-1]
             best = max(rows, key=lambda row: row["success_mean"])
             peak = f"{best['success_mean']:.2f}" + (f" ({best['budget']:,})" if best["success_mean"] > 0 else "")
+            measured = [row for row in rows if row.get("error_mean") is not None]
+            lowest = min(measured, key=lambda row: row["error_mean"]) if measured else None
+            nearest = "-" if lowest is None else f"{_error(env, lowest)} ({lowest['budget']:,})"
             lines.append(
                 f"| {env['title']} | {name} | {len(learner['seeds'])} | {last['budget']:,} | "
-                f"{last['success_mean']:.2f} | {peak} | "
+                f"{last['success_mean']:.2f} | {_error(env, last)} | {peak} | {nearest} | "
                 f"{_firsts(learner, last['budget'])} |"
             )
     return [*lines, ""]
+
+
+def _error(env: dict[str, Any], row: dict[str, Any]) -> str:
+    """A table cell: the mean of the env's error measure at one budget, in the env's unit."""
+    if row.get("error_mean") is None:
+        return "-"
+    return f"{row['error_mean'] * env['error']['scale']:.3g} {env['error']['unit']}"
 
 
 def _firsts(learner: dict[str, Any], largest: int) -> str:

@@ -91,13 +91,18 @@ def test_the_markdown_lists_the_points_of_seeds_beyond_the_common_budget():
 
 
 def test_the_budget_table_names_the_peak_of_a_learner_that_unlearns():
-    peaked = _summary({"0": points([0.8, 1.0, 0.0]), "1": points([0.6, 1.0, 0.2])}, "goal_error")
+    drifting = [points([0.8, 1.0, 0.0]), points([0.6, 1.0, 0.2])]
+    for seed in drifting:  # nearest at 100 steps, then farther again: 10, 1 and 5 mm
+        seed[2]["goal_error"] = 0.005
+    peaked = _summary(dict(enumerate(drifting)), "goal_error")
     never = _summary({"0": points([0.0, 0.0, 0.0])}, "goal_error")
-    envs = {"x": {"title": "X", "learners": {"slow": {"seeds": {"0": [], "1": []}, **peaked}}}}
-    envs["y"] = {"title": "Y", "learners": {"ppo": {"seeds": {"0": []}, **never}}}
+    error = {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1e3}
+    envs = {"x": {"title": "X", "error": error, "learners": {"slow": {"seeds": {"0": [], "1": []}, **peaked}}}}
+    envs["y"] = {"title": "Y", "error": error, "learners": {"ppo": {"seeds": {"0": []}, **never}}}
     lines = budget_table({"envs": envs})
-    assert "| X | slow | 2 | 1,000 | 0.10 | 1.00 (100) | 10 | 100 |" in lines
-    assert "| Y | ppo | 1 | 1,000 | 0.00 | 0.00 | not within 1,000 | not within 1,000 |" in lines
+    assert "| X | slow | 2 | 1,000 | 0.10 | 5 mm | 1.00 (100) | 1 mm (100) | 10 | 100 |" in lines
+    never_row = "| Y | ppo | 1 | 1,000 | 0.00 | 0.1 mm | 0.00 | 0.1 mm (1,000) | not within 1,000 | not within 1,000 |"
+    assert never_row in lines
 
 
 def test_the_readme_table_is_the_committed_study():
