@@ -453,11 +453,13 @@ def budget_table(table: dict[str, Any]) -> list[str]:
     return [*lines, ""]
 
 
-def _error(env: dict[str, Any], row: dict[str, Any]) -> str:
-    """A table cell: the mean of the env's error measure at one budget, in the env's unit."""
+def _error(env: dict[str, Any], row: dict[str, Any], *, unit: bool = True) -> str:
+    """A table cell: the mean of the env's error measure at one budget, in the env's unit (named unless the column
+    header names it)."""
     if row.get("error_mean") is None:
         return "-"
-    return f"{row['error_mean'] * env['error']['scale']:.3g} {env['error']['unit']}"
+    value = f"{row['error_mean'] * env['error']['scale']:.3g}"
+    return f"{value} {env['error']['unit']}" if unit else value
 
 
 def _firsts(learner: dict[str, Any], largest: int) -> str:
@@ -502,7 +504,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
                 lines.append(f"| {name} | {len(learner['seeds'])} | - | - | - | - | - | - | - |")
                 continue
             last = rows[-1]
-            error = "-" if last["error_mean"] is None else f"{last['error_mean'] * err['scale']:.3g}"
+            error = _error(env, last, unit=False)
             ret = "-" if last.get("return_mean") is None else f"{last['return_mean']:.1f}"
             lines.append(
                 f"| {name} | {len(learner['seeds'])} | {last['budget']:,} | {last['success_mean']:.2f} "
