@@ -418,21 +418,30 @@ def run_curves_bench(
     }
 
 
+def _steps(value: int) -> str:
+    """A budget as the tables write it: ``3M``, ``300k``, or with separators where it is not round."""
+    if value and value % 1_000_000 == 0:
+        return f"{value // 1_000_000}M"
+    if value and value % 1_000 == 0:
+        return f"{value // 1_000}k"
+    return f"{value:,}"
+
+
 def _budget(value: int | None, largest: int | None) -> str:
     if value is None:
-        return f"not within {largest:,}" if largest else "-"
-    return f"{value:,}"
+        return f"not within {_steps(largest)}" if largest else "-"
+    return _steps(value)
 
 
 def budget_table(table: dict[str, Any]) -> list[str]:
     """The study in one markdown table: per env and learner the largest budget every seed reached, the mean success
     and the mean of the env's error measure there, the best mean success and the lowest mean error over the budgets
     and where (a learner can peak and unlearn), and the first budgets at which the mean success reaches 0.5 and
-    0.9."""
+    0.9. Budgets are written short (``300k``, ``3M``) to keep the table narrow."""
     lines = [
-        "| env | learner | seeds | largest budget [steps] | success there | error there | best success (at [steps]) | "
-        "lowest error (at [steps]) | first >= 0.5 | first >= 0.9 |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "| env | learner | seeds | largest budget [steps] | success there | error there | best success; lowest error "
+        "(at [steps]) | first >= 0.5 | first >= 0.9 |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for env in table["envs"].values():
         for name, learner in env["learners"].items():
@@ -441,13 +450,13 @@ def budget_table(table: dict[str, Any]) -> list[str]:
                 continue
             last = rows[-1]
             best = max(rows, key=lambda row: row["success_mean"])
-            peak = f"{best['success_mean']:.2f}" + (f" ({best['budget']:,})" if best["success_mean"] > 0 else "")
+            peak = f"{best['success_mean']:.2f}" + (f" ({_steps(best['budget'])})" if best["success_mean"] > 0 else "")
             measured = [row for row in rows if row.get("error_mean") is not None]
             lowest = min(measured, key=lambda row: row["error_mean"]) if measured else None
-            nearest = "-" if lowest is None else f"{_error(env, lowest)} ({lowest['budget']:,})"
+            nearest = "-" if lowest is None else f"{_error(env, lowest)} ({_steps(lowest['budget'])})"
             lines.append(
-                f"| {env['title']} | {name} | {len(learner['seeds'])} | {last['budget']:,} | "
-                f"{last['success_mean']:.2f} | {_error(env, last)} | {peak} | {nearest} | "
+                f"| {env['title']} | {name} | {len(learner['seeds'])} | {_steps(last['budget'])} | "
+                f"{last['success_mean']:.2f} | {_error(env, last)} | {peak}; {nearest} | "
                 f"{_firsts(learner, last['budget'])} |"
             )
     return [*lines, ""]
@@ -507,7 +516,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
             error = _error(env, last, unit=False)
             ret = "-" if last.get("return_mean") is None else f"{last['return_mean']:.1f}"
             lines.append(
-                f"| {name} | {len(learner['seeds'])} | {last['budget']:,} | {last['success_mean']:.2f} "
+                f"| {name} | {len(learner['seeds'])} | {_steps(last['budget'])} | {last['success_mean']:.2f} "
                 f"({last['success_min']:.2f}-{last['success_max']:.2f}) | {error} | {ret} | "
                 f"{last['cpu_s_mean'] / 60:.1f} | "
                 f"{_firsts(learner, last['budget'])} |"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from redundancy_gym.bench.curves import _select, _summary, budget_table, curves_markdown
+from redundancy_gym.bench.curves import _select, _steps, _summary, budget_table, curves_markdown
 from redundancy_gym.bench.exceptions import BenchError
 from redundancy_gym.cli import main
 
@@ -72,7 +72,7 @@ def test_the_summary_uses_budgets_every_seed_reached():
     assert both["first_0.5"] == 100 and both["first_0.9"] == 1000
     references = {"clik": {"success_rate": 1.0, "goal_error": 0.001}}
     text = curves_markdown(one_env_table({"ppo": {"seeds": {"0": [], "1": []}, **both}}, references))
-    assert "| ppo | 2 | 1,000 | 0.90 (0.80-1.00) |" in text and "| 100 | 1,000 |" in text
+    assert "| ppo | 2 | 1k | 0.90 (0.80-1.00) |" in text and "| 100 | 1k |" in text
 
 
 def test_the_markdown_lists_the_points_of_seeds_beyond_the_common_budget():
@@ -100,9 +100,20 @@ def test_the_budget_table_names_the_peak_of_a_learner_that_unlearns():
     envs = {"x": {"title": "X", "error": error, "learners": {"slow": {"seeds": {"0": [], "1": []}, **peaked}}}}
     envs["y"] = {"title": "Y", "error": error, "learners": {"ppo": {"seeds": {"0": []}, **never}}}
     lines = budget_table({"envs": envs})
-    assert "| X | slow | 2 | 1,000 | 0.10 | 5 mm | 1.00 (100) | 1 mm (100) | 10 | 100 |" in lines
-    never_row = "| Y | ppo | 1 | 1,000 | 0.00 | 0.1 mm | 0.00 | 0.1 mm (1,000) | not within 1,000 | not within 1,000 |"
+    assert "| X | slow | 2 | 1k | 0.10 | 5 mm | 1.00 (100); 1 mm (100) | 10 | 100 |" in lines
+    never_row = "| Y | ppo | 1 | 1k | 0.00 | 0.1 mm | 0.00; 0.1 mm (1k) | not within 1k | not within 1k |"
     assert never_row in lines
+
+
+def test_budgets_are_written_short_only_where_exact():
+    assert [_steps(n) for n in (3_000_000, 300_000, 10_000, 1_500, 1_001_472, 999)] == [
+        "3M",
+        "300k",
+        "10k",
+        "1,500",
+        "1,001,472",
+        "999",
+    ]
 
 
 def test_the_readme_table_is_the_committed_study():
