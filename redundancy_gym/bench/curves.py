@@ -547,11 +547,11 @@ def _beyond(env: dict[str, Any]) -> list[str]:
                 error = last.get(err["key"])
                 shown = "-" if error is None else f"{float(error) * err['scale']:.3g} {err['unit']}"
                 further.append(
-                    f"seed {seed} at {last['steps']:,} steps: success {last.get('success_rate', 0.0):.2f}, "
+                    f"seed {seed} at {_steps(last['steps'])} steps: success {last.get('success_rate', 0.0):.2f}, "
                     f"{err['label']} {shown}"
                 )
         if further:
-            lines.append(f"- {name} beyond {common:,} steps (not every seed there): " + "; ".join(further) + ".")
+            lines.append(f"- {name} beyond {_steps(common)} steps (not every seed there): " + "; ".join(further) + ".")
     return [*lines, ""] if lines else []
 
 

@@ -82,7 +82,7 @@ def test_the_markdown_lists_the_points_of_seeds_beyond_the_common_budget():
     table = one_env_table({"ppo": {"seeds": seeds, **_summary(seeds, "goal_error")}}, {})
     text = curves_markdown(table)
     assert "| ppo | 2 | 100 | 0.40 (0.20-0.60) |" in text
-    beyond = "- ppo beyond 100 steps (not every seed there): seed 0 at 1,000 steps: success 1.00, goal error 0.1 mm."
+    beyond = "- ppo beyond 100 steps (not every seed there): seed 0 at 1k steps: success 1.00, goal error 0.1 mm."
     assert beyond in text
     assert "seed 1 at" not in text
     seeds["1"] = points([0.0, 0.2, 0.4])
