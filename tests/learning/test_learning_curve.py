@@ -1,7 +1,7 @@
 """A learning curve trained in segments (seconds): budgets met in order, a run extended from its last point keeps the
 points it had, an interrupted segment resumes from its checkpoint (whole, even when killed while saving), other settings
-or a lost agent are refused, sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is
-logarithmic."""
+or a lost agent are refused, an uninterrupted run repeats bitwise, sb3-contrib's TQC trains and evaluates through
+the harness; the budget ladder is logarithmic."""
 
 from __future__ import annotations
 
@@ -90,6 +90,27 @@ def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
     assert [p["steps"] for p in state["points"]] == [40, 80]
     assert (tmp_path / "agents" / "pr-tqc-s0.zip").is_file()
     assert (tmp_path / "agents" / "pr-tqc-s0_replay.pkl").is_file()
+
+
+def test_an_uninterrupted_run_repeats_bitwise(tmp_path):
+    # every draw (init, exploration, replay sampling, env resets) comes from the run's seed: the same run in another
+    # folder gives the same points after gradient updates; only a resumed segment starts from other draws
+    run = _run((40, 80), name="pr-sac-s0", algo="sac", hyperparameters={"learning_starts": 20, "batch_size": 16})
+    first = train_learning_curve(run, tmp_path / "a", agents=tmp_path / "a" / "agents", log=None)
+    second = train_learning_curve(run, tmp_path / "b", agents=tmp_path / "b" / "agents", log=None)
+
+    def measured(state):
+        return [{k: v for k, v in p.items() if k not in ("cpu_s", "wall_s")} for p in state["points"]]
+
+    assert [p["steps"] for p in first["points"]] == [40, 80]
+    assert measured(first) == measured(second)
+    other = train_learning_curve(
+        _run((40, 80), name="pr-sac-s1", algo="sac", seed=1, hyperparameters={"learning_starts": 20, "batch_size": 16}),
+        tmp_path / "c",
+        agents=tmp_path / "c" / "agents",
+        log=None,
+    )
+    assert measured(other) != measured(first)  # the comparison can tell runs apart
 
 
 def test_a_run_killed_while_saving_keeps_its_last_checkpoint_whole(tmp_path, monkeypatch):
