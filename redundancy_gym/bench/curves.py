@@ -556,8 +556,9 @@ def _beyond(env: dict[str, Any]) -> list[str]:
 
 
 def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str = "curves_") -> list[Path]:
-    """One figure per env: success against environment steps and against CPU time, and the error against steps;
-    each learner's mean over seeds with its min-max band, the references as horizontal lines."""
+    """One figure per env: success (top) and the error (bottom) against environment steps (left) and against
+    training CPU time (right); each learner's mean over seeds, success with its min-max band, the references as
+    horizontal lines."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -569,7 +570,8 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
     written = []
     for key, env in table["envs"].items():
         err = env["error"]
-        fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+        fig, grid = plt.subplots(2, 2, figsize=(13, 8.4))
+        axes = grid.ravel()  # success: steps, CPU; error: steps, CPU
         for (name, learner), color in zip(env["learners"].items(), plt.get_cmap("tab10")(range(10)), strict=False):
             rows = learner["by_budget"]
             if not rows:
@@ -588,6 +590,7 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             axes[1].fill_between(cpu, low, high, color=color, alpha=0.15)
             errors = [np.nan if r["error_mean"] is None else r["error_mean"] * err["scale"] for r in rows]
             axes[2].plot(steps, errors, "o-", color=color, label=label)
+            axes[3].plot(cpu, errors, "o-", color=color, label=label)
         handles = []
         for (label, ref), style in zip(env["references"].items(), ("--", ":", "-."), strict=False):
             shown = f"{label} ({'baseline' if label == 'zero action' else 'reference'})"
@@ -596,24 +599,30 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             value = ref.get(err["key"])
             if value is not None and math.isfinite(float(value)):
                 handles.append(axes[2].axhline(float(value) * err["scale"], ls=style, color="k", lw=1, label=shown))
+                axes[3].axhline(float(value) * err["scale"], ls=style, color="k", lw=1)
         axes[0].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)), label="0.5 (the table's first threshold)")
         axes[1].axhline(0.5, color="0.4", lw=0.8, ls=(0, (1, 3)))
+        cpu_label = "training CPU time per seed [min] (runs on several machines)"
+        error_label = f"{err['label']} [{err['unit']}]"
         for ax, xlabel, ylabel in (
             (axes[0], "environment steps", "success rate"),
-            (axes[1], "training CPU time per seed [min] (runs on several machines)", "success rate"),
-            (axes[2], "environment steps", f"{err['label']} [{err['unit']}]"),
+            (axes[1], cpu_label, "success rate"),
+            (axes[2], "environment steps", error_label),
+            (axes[3], cpu_label, error_label),
         ):
             ax.set_xscale("log")
             ax.set_xlabel(xlabel)
             ax.set_ylabel(ylabel)
             ax.grid(True, which="both", alpha=0.3)
         # a CPU range of less than a decade got crowded labels at every minor tick (0.3, 0.4, ... overlapping)
-        axes[1].xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-        axes[1].xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
-        axes[1].xaxis.set_minor_formatter(NullFormatter())
-        axes[0].set_ylim(-0.05, 1.05)
-        axes[1].set_ylim(-0.05, 1.05)
-        axes[2].set_yscale("log")
+        for ax in axes[1::2]:
+            ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+            ax.xaxis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
+            ax.xaxis.set_minor_formatter(NullFormatter())
+        for ax in axes[:2]:
+            ax.set_ylim(-0.05, 1.05)
+        for ax in axes[2:]:
+            ax.set_yscale("log")
         axes[0].legend(fontsize=8)
         if handles:
             axes[2].legend(handles=handles, fontsize=8)

@@ -1,6 +1,6 @@
 """bench curves (seconds): the quick study writes its JSON, markdown and plot, says a learner that never reaches a
 threshold did not within its budget, picks runs by env or env-learner, summarizes seeds over common budgets and
-names a learner's best budget when it unlearns."""
+names a learner's best budget when it unlearns; the plot draws success and the error against steps and CPU time."""
 
 from __future__ import annotations
 
@@ -146,3 +146,48 @@ def test_a_run_that_cannot_be_trained_on_is_written_up_and_fails_the_command(tmp
     assert "has no points, but" in notes["planar_reach-ppo-s0"]
     assert "not extended: planar_reach-ppo-s0" in capsys.readouterr().err
     assert "Runs not extended" in (tmp_path / "b.md").read_text()
+
+
+def test_the_plot_draws_success_and_error_against_steps_and_cpu_time(tmp_path, monkeypatch):
+    from redundancy_gym.bench.curves import plot_curves_bench
+    from redundancy_gym.eval import plots
+
+    kept = []
+
+    def keep(fig, path, dpi=110):
+        kept.append(fig)
+        return Path(path)
+
+    monkeypatch.setattr(plots, "save_figure", keep)
+    rows = [
+        {
+            "budget": b,
+            "steps_mean": b,
+            "success_mean": s,
+            "success_min": 0.0,
+            "success_max": 2 * s,
+            "error_mean": e,
+            "cpu_s_mean": c,
+        }
+        for b, s, e, c in ((10, 0.1, 0.02, 60.0), (100, 0.3, 0.005, 600.0))
+    ]
+    env = {
+        "title": "T",
+        "error": {"key": "goal_error", "label": "goal error", "unit": "mm", "scale": 1000.0},
+        "references": {"clik": {"success_rate": 1.0, "goal_error": 0.001}},
+        "learners": {"ppo": {"by_budget": rows, "seeds": {"0": [], "1": []}}},
+    }
+    assert plot_curves_bench({"envs": {"t": env}, "eval_seed": 7, "episodes": 3}, tmp_path) == [
+        tmp_path / "curves_t.png"
+    ]
+    success_steps, success_cpu, error_steps, error_cpu = kept[0].axes
+    for ax, x, y in (
+        (success_steps, [10, 100], [0.1, 0.3]),
+        (success_cpu, [1.0, 10.0], [0.1, 0.3]),  # CPU time in minutes
+        (error_steps, [10, 100], [20.0, 5.0]),  # the error in its unit
+        (error_cpu, [1.0, 10.0], [20.0, 5.0]),
+    ):
+        line = ax.get_lines()[0]
+        assert list(line.get_xdata()) == pytest.approx(x) and list(line.get_ydata()) == pytest.approx(y)
+    assert "CPU time" in error_cpu.get_xlabel() and error_cpu.get_ylabel() == "goal error [mm]"
+    assert [ln.get_ydata()[0] for ln in error_cpu.get_lines()[1:]] == pytest.approx([1.0])  # clik's 1 mm
