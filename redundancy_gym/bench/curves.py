@@ -476,6 +476,23 @@ def _firsts(learner: dict[str, Any], largest: int) -> str:
     return f"{_budget(learner['first_0.5'], largest)} | {_budget(learner['first_0.9'], largest)}"
 
 
+def _warm_up_note(table: dict[str, Any]) -> str:
+    """Which learners make no gradient step before ``learning_starts`` steps: a point at or below it is their
+    seeded initial actor, not something learned."""
+    by_value: dict[int, set[str]] = {}
+    for env in table["envs"].values():
+        for name, learner in env["learners"].items():
+            if "learning_starts" in learner.get("hyperparameters", {}):
+                by_value.setdefault(int(learner["hyperparameters"]["learning_starts"]), set()).add(name)
+    if not by_value:
+        return ""
+    listed = "; ".join(f"{_steps(value)} for {', '.join(sorted(by_value[value]))}" for value in sorted(by_value))
+    return (
+        f" Off-policy learners make no gradient step before `learning_starts` steps ({listed}): a point at or below "
+        "that budget evaluates the seeded initial actor, nothing learned."
+    )
+
+
 def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym bench curves") -> str:
     """Per env: the references, and per learner the largest budget its seeds reached, the success there (mean,
     min-max over seeds), the error, the CPU time per seed and the first budgets at which the mean success reaches
@@ -488,7 +505,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
         "are taken; points of single seeds beyond it are listed under each env's table. Success: the mean over "
         "those seeds. This file was last written by `"
         f"{command}`; each learner's points come from the command under its table. "
-        "CPU time: the training's, per seed, evaluations excluded.",
+        "CPU time: the training's, per seed, evaluations excluded." + _warm_up_note(table),
         "",
         *budget_table(table),
     ]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from redundancy_gym.bench.curves import _select, _steps, _summary, budget_table, curves_markdown
+from redundancy_gym.bench.curves import _select, _steps, _summary, _warm_up_note, budget_table, curves_markdown
 from redundancy_gym.bench.exceptions import BenchError
 from redundancy_gym.cli import main
 
@@ -191,3 +191,13 @@ def test_the_plot_draws_success_and_error_against_steps_and_cpu_time(tmp_path, m
         assert list(line.get_xdata()) == pytest.approx(x) and list(line.get_ydata()) == pytest.approx(y)
     assert "CPU time" in error_cpu.get_xlabel() and error_cpu.get_ylabel() == "goal error [mm]"
     assert [ln.get_ydata()[0] for ln in error_cpu.get_lines()[1:]] == pytest.approx([1.0])  # clik's 1 mm
+
+
+def test_the_markdown_says_which_points_precede_learning():
+    def table(**hyperparameters):
+        learner = {"hyperparameters": hyperparameters}
+        return {"envs": {"a": {"learners": {"sac": learner, "tqc": learner}}, "b": {"learners": {"ppo": {}}}}}
+
+    note = _warm_up_note(table(learning_starts=10_000))
+    assert "(10k for sac, tqc)" in note and "ppo" not in note
+    assert _warm_up_note(table(batch_size=64)) == ""  # on-policy learners learn from the first rollout
