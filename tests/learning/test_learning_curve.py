@@ -15,6 +15,7 @@ from redundancy_gym.learning.learning_curve import CurveRun, budgets_between, tr
 
 PLANAR = "redundancy_gym/PlanarReach-v0"
 TINY_PPO = {"n_steps": 32, "batch_size": 16, "n_epochs": 1}
+SMALL_OFF_POLICY = {"learning_starts": 20, "batch_size": 16, "buffer_size": 1000}  # a 1M buffer pickles to GBs
 
 
 def _run(budgets, **changes):
@@ -85,7 +86,7 @@ def test_other_settings_or_a_lost_agent_are_refused(tmp_path):
 
 def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
     pytest.importorskip("sb3_contrib")
-    run = _run((40, 80), name="pr-tqc-s0", algo="tqc", hyperparameters={"learning_starts": 20, "batch_size": 16})
+    run = _run((40, 80), name="pr-tqc-s0", algo="tqc", hyperparameters=SMALL_OFF_POLICY)
     state = train_learning_curve(run, tmp_path, agents=tmp_path / "agents", log=None)
     assert [p["steps"] for p in state["points"]] == [40, 80]
     assert (tmp_path / "agents" / "pr-tqc-s0.zip").is_file()
@@ -95,7 +96,7 @@ def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
 def test_an_uninterrupted_run_repeats_bitwise(tmp_path):
     # every draw (init, exploration, replay sampling, env resets) comes from the run's seed: the same run in another
     # folder gives the same points after gradient updates; only a resumed segment starts from other draws
-    run = _run((40, 80), name="pr-sac-s0", algo="sac", hyperparameters={"learning_starts": 20, "batch_size": 16})
+    run = _run((40, 80), name="pr-sac-s0", algo="sac", hyperparameters=SMALL_OFF_POLICY)
     first = train_learning_curve(run, tmp_path / "a", agents=tmp_path / "a" / "agents", log=None)
     second = train_learning_curve(run, tmp_path / "b", agents=tmp_path / "b" / "agents", log=None)
 
@@ -105,7 +106,7 @@ def test_an_uninterrupted_run_repeats_bitwise(tmp_path):
     assert [p["steps"] for p in first["points"]] == [40, 80]
     assert measured(first) == measured(second)
     other = train_learning_curve(
-        _run((40, 80), name="pr-sac-s1", algo="sac", seed=1, hyperparameters={"learning_starts": 20, "batch_size": 16}),
+        _run((40, 80), name="pr-sac-s1", algo="sac", seed=1, hyperparameters=SMALL_OFF_POLICY),
         tmp_path / "c",
         agents=tmp_path / "c" / "agents",
         log=None,
@@ -127,7 +128,7 @@ def test_a_run_killed_while_saving_keeps_its_last_checkpoint_whole(tmp_path, mon
         save_buffer(self, path)
 
     monkeypatch.setattr(OffPolicyAlgorithm, "save_replay_buffer", killed_at_the_second)
-    run = _run((60,), name="pr-sac-s0", algo="sac", hyperparameters={"learning_starts": 10, "batch_size": 16})
+    run = _run((60,), name="pr-sac-s0", algo="sac", hyperparameters={**SMALL_OFF_POLICY, "learning_starts": 10})
     with pytest.raises(KeyboardInterrupt):
         train_learning_curve(run, tmp_path, checkpoint_every=20, log=None)
     assert json.loads((tmp_path / "pr-sac-s0.json").read_text())["checkpoint_steps"] == 20  # the first checkpoint
