@@ -15,10 +15,11 @@ says (either is another run's). A resumed run is not bitwise the uninterrupted o
 its points are still each a trained agent's at that many environment steps.
 
 Each point: the environment steps actually taken (SB3 finishes a PPO rollout, so a budget is met or passed), the
-training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads; the
-evaluations excluded), and the deterministic agent's evaluation on ``eval_episodes`` held-out episodes from
-``eval_seed`` through the evaluation harness (success rate, the failure rate, the env's error measures, return,
-episode length).
+training's CPU and wall time so far [s] (this process: envs stepped in it, torch on ``torch_threads`` threads, every
+thread's CPU time counted; the evaluations excluded), the threads of the segment that reached it (not a setting: a run
+resumes on any number of them), and the deterministic agent's evaluation on ``eval_episodes`` held-out episodes from
+``eval_seed`` through the evaluation harness (success rate, the failure rate, the env's error measures, return, episode
+length).
 """
 
 from __future__ import annotations
@@ -109,7 +110,9 @@ class CurveRun:
     def settings(self) -> dict[str, Any]:
         """What a state file must match to be resumed (the budgets may grow)."""
         kept = asdict(self)
+        # threads change only the order of float sums, not the experiment: a run resumes on any number of them
         kept.pop("budgets")
+        kept.pop("torch_threads")
         # states written before these options existed stay valid
         if not self.normalize:
             kept.pop("normalize")
@@ -122,7 +125,8 @@ def _load_state(path: Path, run: CurveRun) -> dict[str, Any]:
     if not path.is_file():
         return {"settings": run.settings(), "points": [], "cpu_s": 0.0, "wall_s": 0.0}
     state: dict[str, Any] = json.loads(path.read_text())
-    if state.get("settings") != json.loads(json.dumps(run.settings())):
+    kept = {k: v for k, v in state.get("settings", {}).items() if k != "torch_threads"}  # earlier states record them
+    if kept != json.loads(json.dumps(run.settings())):
         raise LearningError(
             f"{path} was made with other settings ({state.get('settings')}); delete it (and its .zip) to restart, "
             "or keep its settings"
@@ -272,6 +276,7 @@ def train_learning_curve(
                 "budget": budget,
                 "cpu_s": round(state["cpu_s"], 2),
                 "wall_s": round(state["wall_s"], 2),
+                "torch_threads": run.torch_threads,
             }
             for key in POINT_METRICS:
                 value = report.get(key)

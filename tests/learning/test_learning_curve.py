@@ -1,7 +1,7 @@
 """A learning curve trained in segments (seconds): budgets met in order, a run extended from its last point keeps the
-points it had, an interrupted segment resumes from its checkpoint (whole, even when killed while saving), other settings
-or a lost agent are refused, an uninterrupted run repeats bitwise, sb3-contrib's TQC trains and evaluates through
-the harness; the budget ladder is logarithmic."""
+points it had, an interrupted segment resumes from its checkpoint (whole, even when killed while saving), other
+settings or a lost agent are refused (the number of torch threads is not a setting), an uninterrupted run repeats
+bitwise, sb3-contrib's TQC trains and evaluates through the harness; the budget ladder is logarithmic."""
 
 from __future__ import annotations
 
@@ -82,6 +82,17 @@ def test_other_settings_or_a_lost_agent_are_refused(tmp_path):
     with pytest.raises(LearningError, match="agent .* is missing"):
         train_learning_curve(_run((32, 64)), tmp_path, log=None)
     assert len(json.loads((tmp_path / "pr-ppo-s0.json").read_text())["points"]) == 1  # kept
+
+
+def test_a_run_resumes_on_another_number_of_threads_and_records_them(tmp_path):
+    first = train_learning_curve(_run((32,)), tmp_path, log=None)
+    assert first["points"][0]["torch_threads"] == 1
+    saved = json.loads((tmp_path / "pr-ppo-s0.json").read_text())
+    saved["settings"]["torch_threads"] = 1  # as states written before threads left the settings
+    (tmp_path / "pr-ppo-s0.json").write_text(json.dumps(saved))
+    resumed = train_learning_curve(_run((32, 64), torch_threads=2), tmp_path, log=None)
+    assert [p["torch_threads"] for p in resumed["points"]] == [1, 2]
+    assert resumed["points"][0] == first["points"][0]
 
 
 def test_an_off_policy_contrib_learner_keeps_its_replay_buffer(tmp_path):
