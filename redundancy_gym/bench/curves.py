@@ -358,8 +358,8 @@ def run_curves_bench(
         raise BenchError(f"--steps must be >= 1, got {steps}")
     folder = Path(json_path).with_suffix("")
     chosen = _select(envs, quick)
-    # the cores shared out among off-policy runs (a SAC step on AgriReach's 530 observations is 34 ms of gradient
-    # on one core, 19 on two); PPO's 64x64 networks are too small to split and stay on one
+    # the cores shared out among off-policy runs (a SAC step on AgriReach's 530 observations takes 34 ms on one
+    # core, 27.5 on two: a run alone finishes sooner); PPO's 64x64 networks are too small to split and stay on one
     threads = max(1, (os.cpu_count() or 1) // workers)
     runs = [_run(env, learner, seed, steps, episodes, threads) for env, learner in chosen for seed in range(seeds)]
     notes: dict[str, str] = {}
