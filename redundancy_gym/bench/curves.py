@@ -7,8 +7,7 @@ committed; shared by every ``--json``, so a run with no points refuses to start 
 Running the bench again trains every run on from its last point to its last budget (raise a budget, or ``--steps``,
 to extend); a run whose points exist but whose agent is gone (a fresh clone) keeps its points and is not extended.
 ``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that many
-runs at once (one process each; off-policy runs share the machine's cores out among them for torch, so one alone
-trains on all of them; PPO's small networks stay on one thread).
+runs at once (one process each, torch on one thread).
 
 Hyperparameters: PPO with stable-baselines3's defaults, plain (``ppo``) and behind SB3's ``VecNormalize``
 (``ppo-norm``: rl-zoo3's PPO ``mujoco-defaults`` are SB3's defaults with ``normalize: true``; the agent's statistics
@@ -35,7 +34,6 @@ from __future__ import annotations
 import json
 import logging
 import math
-import os
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
@@ -47,7 +45,7 @@ import numpy as np
 
 from ..eval.evaluate import evaluate
 from ..eval.machine import machine_info
-from ..learning.learning_curve import CURVE_ALGOS, CurveRun, budgets_between, train_learning_curve
+from ..learning.learning_curve import CurveRun, budgets_between, train_learning_curve
 from .exceptions import BenchError
 
 __all__ = [
@@ -260,9 +258,7 @@ def _select(envs: Sequence[str] | None, quick: bool) -> list[tuple[CurveEnv, Cur
     return [(e, learner) for e, learner in pairs if e.key in envs or f"{e.key}-{learner.name}" in envs]
 
 
-def _run(
-    env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, episodes: int, threads: int = 1
-) -> CurveRun:
+def _run(env: CurveEnv, learner: CurveLearner, seed: int, steps: int | None, episodes: int) -> CurveRun:
     budgets = learner.budgets if steps is None else tuple(b for b in learner.budgets if b < steps) + (steps,)
     return CurveRun(
         name=f"{env.key}-{learner.name}-s{seed}",
@@ -276,7 +272,6 @@ def _run(
         eval_seed=CURVE_EVAL_SEED,
         normalize=learner.normalize,
         train_env_kwargs=dict(learner.train_env_kwargs),
-        torch_threads=threads if CURVE_ALGOS[learner.algo][2] else 1,
     )
 
 
@@ -358,10 +353,7 @@ def run_curves_bench(
         raise BenchError(f"--steps must be >= 1, got {steps}")
     folder = Path(json_path).with_suffix("")
     chosen = _select(envs, quick)
-    # the cores shared out among off-policy runs (a SAC step on AgriReach's 530 observations takes 34 ms on one
-    # core, 27.5 on two: a run alone finishes sooner); PPO's 64x64 networks are too small to split and stay on one
-    threads = max(1, (os.cpu_count() or 1) // workers)
-    runs = [_run(env, learner, seed, steps, episodes, threads) for env, learner in chosen for seed in range(seeds)]
+    runs = [_run(env, learner, seed, steps, episodes) for env, learner in chosen for seed in range(seeds)]
     notes: dict[str, str] = {}
     from tqdm.auto import tqdm
 

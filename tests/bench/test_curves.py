@@ -1,7 +1,6 @@
 """bench curves (seconds): the quick study writes its JSON, markdown and plot, says a learner that never reaches a
-threshold did not within its budget, picks runs by env or env-learner, summarizes seeds over common budgets and names
-a learner's best budget when it unlearns, shares the cores out among off-policy runs; the plot draws success and the
-error against steps and CPU time."""
+threshold did not within its budget, picks runs by env or env-learner, summarizes seeds over common budgets and
+names a learner's best budget when it unlearns; the plot draws success and the error against steps and CPU time."""
 
 from __future__ import annotations
 
@@ -47,27 +46,6 @@ def test_a_variant_changes_the_env_it_trains_and_is_evaluated_on_or_only_the_tra
     run = _run(env, no_energy, 0, None, 10)
     assert run.env_kwargs == {"difficulty": "easy"} and run.train_env_kwargs == {"energy_weight": 0.0}
     assert env.env_kwargs == {"difficulty": "easy"}  # the study's env is left as it was
-
-
-def test_off_policy_runs_share_the_cores_out_and_ppo_stays_on_one_thread(monkeypatch, tmp_path):
-    from redundancy_gym.bench import curves
-
-    seen: dict[str, int] = {}
-
-    def record(run, folder, agents):
-        seen[run.name] = run.torch_threads
-        return run.name, "not trained"
-
-    monkeypatch.setattr(curves, "_train_one", record)
-    monkeypatch.setattr(curves.os, "cpu_count", lambda: 4)
-    monkeypatch.setattr(curves, "_references", lambda *args: {})
-    curves.run_curves_bench(tmp_path / "c.json", seeds=1, envs=["planar_reach"], progress=False)
-    assert seen == {
-        "planar_reach-ppo-s0": 1,
-        "planar_reach-ppo-norm-s0": 1,
-        "planar_reach-sac-s0": 4,
-        "planar_reach-tqc-s0": 4,
-    }
 
 
 def points(successes):
