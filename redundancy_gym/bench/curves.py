@@ -467,7 +467,8 @@ def _error(env: dict[str, Any], row: dict[str, Any], *, unit: bool = True) -> st
     header names it)."""
     if row.get("error_mean") is None:
         return "-"
-    value = f"{row['error_mean'] * env['error']['scale']:.3g}"
+    scaled = row["error_mean"] * env["error"]["scale"]
+    value = f"{scaled:.3g}" if abs(scaled) < 1000 else f"{scaled:.0f}"  # 1004, not 1e+03
     return f"{value} {env['error']['unit']}" if unit else value
 
 

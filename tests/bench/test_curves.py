@@ -116,6 +116,14 @@ def test_budgets_are_written_short_only_where_exact():
     ]
 
 
+def test_an_error_of_a_metre_or_more_is_written_in_millimetres_in_full():
+    from redundancy_gym.bench.curves import _error
+
+    env = {"error": {"scale": 1000.0, "unit": "mm"}}
+    assert _error(env, {"error_mean": 1.0043}) == "1004 mm"
+    assert _error(env, {"error_mean": 0.0583}) == "58.3 mm" and _error(env, {"error_mean": None}) == "-"
+
+
 def test_the_readme_table_is_the_committed_study():
     """The README copies the budget table; it must say what ``baselines/results/curves.json`` says."""
     root = Path(__file__).resolve().parents[2]
