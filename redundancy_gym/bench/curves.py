@@ -302,8 +302,9 @@ def _references(env: CurveEnv, folder: Path, episodes: int, progress: bool) -> d
 
 
 def _summary(points_by_seed: dict[str, list[dict[str, Any]]], error_key: str) -> dict[str, Any]:
-    """Per budget reached by every seed: success mean, min and max, the error's mean, CPU time's mean; and the first
-    budget whose mean success reaches 0.5 and 0.9 (None: not within the largest)."""
+    """Per budget reached by every seed: success and the error, each with its mean, min and max over seeds; the
+    return's and CPU time's means; and the first budget whose mean success reaches 0.5 and 0.9 (None: not within the
+    largest)."""
     runs = [p for p in points_by_seed.values() if p]
     rows = []
     if runs:
@@ -321,6 +322,8 @@ def _summary(points_by_seed: dict[str, list[dict[str, Any]]], error_key: str) ->
                     "success_min": float(min(success)),
                     "success_max": float(max(success)),
                     "error_mean": float(np.mean(errors)) if errors else None,
+                    "error_min": float(min(errors)) if errors else None,
+                    "error_max": float(max(errors)) if errors else None,
                     "return_mean": float(np.mean(returns)) if returns else None,
                     "cpu_s_mean": float(np.mean([q["cpu_s"] for q in at])),
                 }
@@ -462,14 +465,20 @@ def budget_table(table: dict[str, Any]) -> list[str]:
     return [*lines, ""]
 
 
-def _error(env: dict[str, Any], row: dict[str, Any], *, unit: bool = True) -> str:
+def _error(env: dict[str, Any], row: dict[str, Any], *, unit: bool = True, spread: bool = False) -> str:
     """A table cell: the mean of the env's error measure at one budget, in the env's unit (named unless the column
-    header names it)."""
+    header names it); with ``spread``, followed by its min-max over seeds where the row has them."""
     if row.get("error_mean") is None:
         return "-"
-    scaled = row["error_mean"] * env["error"]["scale"]
-    value = f"{scaled:.3g}" if abs(scaled) < 1000 else f"{scaled:.0f}"  # 1004, not 1e+03
-    return f"{value} {env['error']['unit']}" if unit else value
+
+    def scaled(value: float) -> str:
+        value *= env["error"]["scale"]
+        return f"{value:.3g}" if abs(value) < 1000 else f"{value:.0f}"  # 1004, not 1e+03
+
+    cell = scaled(row["error_mean"])
+    if spread and row.get("error_min") is not None and row.get("error_max") is not None:
+        cell += f" ({scaled(row['error_min'])}-{scaled(row['error_max'])})"
+    return f"{cell} {env['error']['unit']}" if unit else cell
 
 
 def _firsts(learner: dict[str, Any], largest: int) -> str:
@@ -521,8 +530,8 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
         )
         lines += [f"References: {refs}.", ""]
         lines += [
-            f"| learner | seeds | largest budget [steps] | success (min-max) | {err['label']} [{err['unit']}] | "
-            "return | CPU per seed [min] | first >= 0.5 | first >= 0.9 |",
+            "| learner | seeds | largest budget [steps] | success (min-max) | "
+            f"{err['label']} (min-max) [{err['unit']}] | return | CPU per seed [min] | first >= 0.5 | first >= 0.9 |",
             "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
         ]
         for name, learner in env["learners"].items():
@@ -531,7 +540,7 @@ def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym ben
                 lines.append(f"| {name} | {len(learner['seeds'])} | - | - | - | - | - | - | - |")
                 continue
             last = rows[-1]
-            error = _error(env, last, unit=False)
+            error = _error(env, last, unit=False, spread=True)
             ret = "-" if last.get("return_mean") is None else f"{last['return_mean']:.1f}"
             lines.append(
                 f"| {name} | {len(learner['seeds'])} | {_steps(last['budget'])} | {last['success_mean']:.2f} "
@@ -575,8 +584,8 @@ def _beyond(env: dict[str, Any]) -> list[str]:
 
 def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str = "curves_") -> list[Path]:
     """One figure per env: success (top) and the error (bottom) against environment steps (left) and against
-    training CPU time (right); each learner's mean over seeds, success with its min-max band, the references as
-    horizontal lines."""
+    training CPU time (right); each learner's mean over seeds with its min-max band, the references as horizontal
+    lines."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -609,6 +618,12 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
             errors = [np.nan if r["error_mean"] is None else r["error_mean"] * err["scale"] for r in rows]
             axes[2].plot(steps, errors, "o-", color=color, label=label)
             axes[3].plot(cpu, errors, "o-", color=color, label=label)
+            # where every learner fails, the spread of the error over seeds is what tells them apart
+            if all(r.get("error_min") is not None and r.get("error_max") is not None for r in rows):
+                low = [r["error_min"] * err["scale"] for r in rows]
+                high = [r["error_max"] * err["scale"] for r in rows]
+                axes[2].fill_between(steps, low, high, color=color, alpha=0.15)
+                axes[3].fill_between(cpu, low, high, color=color, alpha=0.15)
         handles = []
         for (label, ref), style in zip(env["references"].items(), ("--", ":", "-."), strict=False):
             shown = f"{label} ({'baseline' if label == 'zero action' else 'reference'})"

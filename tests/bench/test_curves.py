@@ -67,6 +67,10 @@ def test_the_summary_uses_budgets_every_seed_reached():
     summary = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.2])}, "goal_error")
     assert [r["budget"] for r in summary["by_budget"]] == [10, 100]  # seed 1 has not reached 1000
     assert summary["by_budget"][1]["success_mean"] == pytest.approx(0.4)
+    apart = {"0": points([0.0, 0.6]), "1": points([0.0, 0.2])}
+    apart["1"][1]["goal_error"] = 0.004  # seed 0 at 100 steps: 1 mm
+    row = _summary(apart, "goal_error")["by_budget"][1]
+    assert (row["error_min"], row["error_mean"], row["error_max"]) == pytest.approx((0.001, 0.0025, 0.004))
     assert summary["first_0.5"] is None and summary["largest_budget"] == 100
     both = _summary({"0": points([0.0, 0.6, 1.0]), "1": points([0.0, 0.5, 0.8])}, "goal_error")
     assert both["first_0.5"] == 100 and both["first_0.9"] == 1000
@@ -122,6 +126,8 @@ def test_an_error_of_a_metre_or_more_is_written_in_millimetres_in_full():
     env = {"error": {"scale": 1000.0, "unit": "mm"}}
     assert _error(env, {"error_mean": 1.0043}) == "1004 mm"
     assert _error(env, {"error_mean": 0.0583}) == "58.3 mm" and _error(env, {"error_mean": None}) == "-"
+    row = {"error_mean": 0.501, "error_min": 0.412, "error_max": 1.2}
+    assert _error(env, row, spread=True) == "501 (412-1200) mm" and _error(env, row) == "501 mm"
 
 
 def test_the_readme_table_is_the_committed_study():
@@ -175,6 +181,8 @@ def test_the_plot_draws_success_and_error_against_steps_and_cpu_time(tmp_path, m
             "success_min": 0.0,
             "success_max": 2 * s,
             "error_mean": e,
+            "error_min": e / 2,
+            "error_max": 2 * e,
             "cpu_s_mean": c,
         }
         for b, s, e, c in ((10, 0.1, 0.02, 60.0), (100, 0.3, 0.005, 600.0))
@@ -198,6 +206,10 @@ def test_the_plot_draws_success_and_error_against_steps_and_cpu_time(tmp_path, m
         line = ax.get_lines()[0]
         assert list(line.get_xdata()) == pytest.approx(x) and list(line.get_ydata()) == pytest.approx(y)
     assert "CPU time" in error_cpu.get_xlabel() and error_cpu.get_ylabel() == "goal error [mm]"
+    for ax in (error_steps, error_cpu):  # the min-max band over seeds, in the error's unit
+        (band,) = ax.collections
+        assert band.get_paths()[0].vertices[:, 1].min() == pytest.approx(2.5)  # 5 mm / 2
+        assert band.get_paths()[0].vertices[:, 1].max() == pytest.approx(40.0)  # 20 mm * 2
     assert [ln.get_ydata()[0] for ln in error_cpu.get_lines()[1:]] == pytest.approx([1.0])  # clik's 1 mm
 
 
