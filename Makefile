@@ -25,10 +25,10 @@ lint: $(VENV)/.test-installed
 # the learned baselines of baselines/*.yaml: trains each (seeded, CPU; TensorBoard logs in runs/baselines_tb,
 # checkpoints in runs/baselines) into baselines/models/ with its training record, then evaluates every analytic
 # reference and learned model on held-out seeds 20000-20019 into baselines/results/learned.{json,md,*.png}; then
-# the learning curves (bench curves: many CPU-hours, resumable: run it again to go on) into
-# baselines/results/curves.{json,md,*.png}; runs whose agents are not in runs/curves/ (a fresh clone) keep their
-# committed points, and the command names them and exits 1
-# (the baselines: about 60 CPU-min of training and 5 min of evaluation here, 2 cores; the curves: many CPU-hours)
+# the learning curves (bench curves, resumable: run it again to go on) into baselines/results/curves.{json,md,*.png};
+# their committed points are complete at the study's budgets, so on a clone it only writes the tables and plots
+# again (delete baselines/results/curves/*-s?.json to train all 78 runs afresh: about 69 CPU-hours)
+# (the baselines: about 60 CPU-min of training and 5 min of evaluation here, 2 cores)
 baselines: $(VENV)/.test-installed
 	$(BIN)/redundancy-gym baselines
 	$(BIN)/redundancy-gym bench learned --json baselines/results/learned.json --no-progress

@@ -9,6 +9,12 @@ to extend); a run whose points exist but whose agent is gone (a fresh clone) kee
 ``--envs`` picks envs (``planar_reach``) or single learners (``planar_reach-ppo``); ``--workers`` runs that many
 runs at once (one process each, torch on one thread).
 
+Budgets, per learner as the study ran them (``docs/learned_baselines.md`` says why each stops where it does): PPO to
+3M environment steps on the arms, its variants to 1M (rl-zoo3's Reacher settings to 300k); SAC and TQC to 300k on
+PlanarReach and AgriReach easy, to 100k on AgriReach medium and hard (300k there would take about 27 more CPU-hours
+on this 2-core machine); on the bipeds the residual and walking-command learners to 100k-300k. ``--steps`` above a
+learner's last budget extends it.
+
 Hyperparameters: PPO with stable-baselines3's defaults, plain (``ppo``) and behind SB3's ``VecNormalize``
 (``ppo-norm``: rl-zoo3's PPO ``mujoco-defaults`` are SB3's defaults with ``normalize: true``; the agent's statistics
 are saved beside its ``.zip`` and read by its policy); SAC and TQC with rl-zoo3's MuJoCo settings
@@ -100,28 +106,41 @@ class CurveEnv:
     learners: tuple[CurveLearner, ...]
 
 
-def _arm_learners(env_id: str) -> tuple[CurveLearner, ...]:
+def _arm_learners(
+    env_id: str, *, off_policy_last: int = OFF_POLICY_LAST, norm: bool = True
+) -> tuple[CurveLearner, ...]:
     return (
         CurveLearner("ppo", "ppo", env_id, budgets_between(10_000, ON_POLICY_LAST)),
-        CurveLearner("ppo-norm", "ppo", env_id, budgets_between(10_000, ON_POLICY_LAST), normalize=True),
-        CurveLearner("sac", "sac", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
-        CurveLearner("tqc", "tqc", env_id, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
+        *(
+            (CurveLearner("ppo-norm", "ppo", env_id, budgets_between(10_000, 1_000_000), normalize=True),)
+            if norm
+            else ()
+        ),
+        CurveLearner("sac", "sac", env_id, budgets_between(10_000, off_policy_last), dict(_OFF_POLICY)),
+        CurveLearner("tqc", "tqc", env_id, budgets_between(10_000, off_policy_last), dict(_OFF_POLICY)),
     )
 
 
-def _biped_learners(name: str) -> tuple[CurveLearner, ...]:
-    base, residual = f"redundancy_gym/{name}-v0", f"redundancy_gym/{name}-Residual-v0"
-    on_policy = budgets_between(10_000, 1_000_000)
+def _biped_learners(name: str, *, obstacles: bool) -> tuple[CurveLearner, ...]:
+    residual = f"redundancy_gym/{name}-Residual-v0"
     quiet = {"log_std_init": -2.0}  # a standard deviation of 0.14 of the action bound
+    slow = CurveLearner(
+        "ppo-residual-slow",
+        "ppo",
+        residual,
+        budgets_between(10_000, 100_000 if obstacles else 300_000),
+        {"learning_rate": 3e-5, "policy_kwargs": dict(quiet)},
+    )
+    command = CurveLearner(
+        "ppo-walking_command", "ppo", f"redundancy_gym/{name}-WalkingCommand-v0", budgets_between(10_000, 100_000)
+    )
+    if obstacles:  # the residual learner that kept the reference's success longest on the walk, and the command's
+        return (slow, command)
     return (
-        CurveLearner("ppo", "ppo", base, on_policy),
-        CurveLearner("sac", "sac", base, budgets_between(10_000, OFF_POLICY_LAST), dict(_OFF_POLICY)),
-        CurveLearner("ppo-residual", "ppo", residual, on_policy),
-        CurveLearner("ppo-residual-quiet", "ppo", residual, on_policy, {"policy_kwargs": dict(quiet)}),
-        CurveLearner(
-            "ppo-residual-slow", "ppo", residual, on_policy, {"learning_rate": 3e-5, "policy_kwargs": dict(quiet)}
-        ),
-        CurveLearner("ppo-walking_command", "ppo", f"redundancy_gym/{name}-WalkingCommand-v0", on_policy),
+        CurveLearner("ppo-residual", "ppo", residual, budgets_between(10_000, 300_000)),
+        CurveLearner("ppo-residual-quiet", "ppo", residual, budgets_between(10_000, 100_000), {"policy_kwargs": quiet}),
+        slow,
+        command,
     )
 
 
@@ -144,17 +163,17 @@ _AGRI_TASK_SPACE = "redundancy_gym/AgriReach-TaskSpace-v0"
 # Are the obstacle rows (480 of the 528 observation entries) why it does not reach (observing none of them)?
 _EASY_VARIANTS = (
     CurveLearner(
-        "ppo-no-energy", "ppo", _AGRI, budgets_between(10_000, ON_POLICY_LAST), train_env_kwargs={"energy_weight": 0.0}
+        "ppo-no-energy", "ppo", _AGRI, budgets_between(10_000, 1_000_000), train_env_kwargs={"energy_weight": 0.0}
     ),
     CurveLearner(
-        "ppo-no-obstacles", "ppo", _AGRI, budgets_between(10_000, ON_POLICY_LAST), env_kwargs={"observed_obstacles": 0}
+        "ppo-no-obstacles", "ppo", _AGRI, budgets_between(10_000, 1_000_000), env_kwargs={"observed_obstacles": 0}
     ),
     # rl-zoo3's tuned PPO for Reacher, the closest MuJoCo task (its activation left at SB3's tanh: a JSON setting)
     CurveLearner(
         "ppo-reacher-no-obstacles",
         "ppo",
         _AGRI,
-        budgets_between(10_000, ON_POLICY_LAST),
+        budgets_between(10_000, 300_000),
         dict(_ZOO_REACHER),
         normalize=True,
         env_kwargs={"observed_obstacles": 0},
@@ -174,7 +193,7 @@ _EASY_VARIANTS = (
         "ppo-task_space-no-obstacles",
         "ppo",
         _AGRI_TASK_SPACE,
-        budgets_between(10_000, ON_POLICY_LAST),
+        budgets_between(10_000, 1_000_000),
         env_kwargs={"observed_obstacles": 0},
     ),
     CurveLearner(
@@ -213,7 +232,10 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
             _GOAL,
             "collision_rate",
             _ARM_REFERENCES,
-            _arm_learners(_AGRI) + (_EASY_VARIANTS if d == "easy" else ()),
+            # medium and hard: SAC and TQC to 100k, PPO with VecNormalize not run (docs/learned_baselines.md)
+            _arm_learners(_AGRI) + _EASY_VARIANTS
+            if d == "easy"
+            else _arm_learners(_AGRI, off_policy_last=100_000, norm=False),
         )
         for d in ("easy", "medium", "hard")
     ),
@@ -225,7 +247,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
         _SPEED,
         "fall_rate",
         _BIPED_REFERENCES,
-        _biped_learners("BipedWalk"),
+        _biped_learners("BipedWalk", obstacles=False),
     ),
     CurveEnv(
         "biped_obstacles",
@@ -235,7 +257,7 @@ CURVE_ENVS: tuple[CurveEnv, ...] = (
         _SPEED,
         "fall_rate",
         _BIPED_REFERENCES,
-        _biped_learners("BipedObstacles"),
+        _biped_learners("BipedObstacles", obstacles=True),
     ),
 )
 """The study's envs, in its order."""

@@ -150,6 +150,28 @@ def test_every_learner_of_the_study_trains_on_a_registered_env_id():
     assert [entry for entry in learners if entry[2] not in ENV_IDS] == []
 
 
+def test_the_committed_study_is_complete_at_the_budgets_it_defines():
+    """Every learner of the study has the points of its 3 seeds at each of its budgets (a capped run may have added
+    one between), and no points are committed for a learner the study does not define: the whole study's command
+    trains nothing on a clone, and the table's "not within N" is the learner's own last budget."""
+    from redundancy_gym.bench.curves import CURVE_ENVS
+
+    folder = Path(__file__).parents[2] / "redundancy_gym" / "baselines" / "results" / "curves"
+    defined, short = set(), []
+    for env in CURVE_ENVS:
+        for learner in env.learners:
+            for seed in range(3):
+                name = f"{env.key}-{learner.name}-s{seed}"
+                defined.add(f"{name}.json")
+                path = folder / f"{name}.json"
+                budgets = [p["budget"] for p in json.loads(path.read_text())["points"]] if path.is_file() else []
+                if not set(learner.budgets) <= set(budgets):  # a capped run (--steps 200000) adds its own point
+                    short.append((name, budgets))
+    assert short == []
+    committed = {p.name for p in folder.glob("*.json") if not p.name.startswith("references-")}
+    assert committed - defined == set()
+
+
 def test_a_run_that_cannot_be_trained_on_is_written_up_and_fails_the_command(tmp_path, monkeypatch, capsys):
     """A second study (another --json) finds the first's agent in the shared runs/curves: its run is refused, the
     refusal is in the study's notes and on stderr, and the exit status says the command did not do what it asked."""
