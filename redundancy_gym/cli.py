@@ -740,6 +740,7 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
         "seed",
         "progress",
         "log",
+        "torch_threads",
     }
     unknown = sorted(set(options) - valid)
     if unknown:
@@ -762,6 +763,7 @@ def _train_behaviour_cloning(args: argparse.Namespace, config: Any) -> None:
         env_kwargs={**config.env_kwargs, **args.env_kwargs},
         seed=args.seed,
         progress=not args.no_progress,
+        torch_threads=args.torch_threads,
         **options,
     )
     print(f"wrote {summary.path}; evaluate it with: redundancy-gym eval {args.env_id} --policy {summary.path}")

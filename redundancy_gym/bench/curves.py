@@ -414,10 +414,10 @@ def run_curves_bench(
             # the learner's last (running it without --steps extends the curve)
             reached = summary["largest_budget"]
             cap = f" --steps {reached}" if reached is not None and reached < learner.budgets[-1] else ""
+            pick = "--quick" if quick else f"--envs {env.key}-{learner.name}{cap} --trials {seeds}"
             learners[learner.name] = {
                 **asdict(learner),
-                "command": f"redundancy-gym bench curves --envs {env.key}-{learner.name}{cap} --trials {seeds} "
-                f"--json {json_path}",
+                "command": f"redundancy-gym bench curves {pick} --json {json_path}",
                 "seeds": points,
                 **summary,
             }
@@ -525,17 +525,22 @@ def _warm_up_note(table: dict[str, Any]) -> str:
     )
 
 
+def _held_out(table: dict[str, Any]) -> str:
+    """``held-out seeds 40000-40009`` (``held-out seed 40000`` for one episode)."""
+    first, episodes = table["eval_seed"], table["episodes"]
+    return f"held-out seed {first}" if episodes == 1 else f"held-out seeds {first}-{first + episodes - 1}"
+
+
 def curves_markdown(table: dict[str, Any], *, command: str = "redundancy-gym bench curves") -> str:
     """Per env: the references, and per learner the largest budget its seeds reached, the success there (mean,
     min-max over seeds), the error, the CPU time per seed and the first budgets at which the mean success reaches
     0.5 and 0.9."""
     lines = [
-        f"{table['seeds']} training seeds per learner (the seeds column: how many have points so far); every point "
-        "evaluated on held-out seeds "
-        f"{table['eval_seed']}-{table['eval_seed'] + table['episodes'] - 1} ({table['episodes']} episodes, the "
-        "deterministic agent). Largest budget: the largest that every seed with points has reached, where the means "
-        "are taken; points of single seeds beyond it are listed under each env's table. Success: the mean over "
-        "those seeds. This file was last written by `"
+        f"{table['seeds']} training seed{'s' if table['seeds'] != 1 else ''} per learner (the seeds column: how many "
+        f"have points); every point evaluated on {_held_out(table)} ({table['episodes']} "
+        f"episode{'s' if table['episodes'] != 1 else ''}, the deterministic agent). Largest budget: the largest "
+        "that every seed with points has reached, where the means are taken; points of single seeds beyond it are "
+        "listed under each env's table. Success: the mean over those seeds. This file was last written by `"
         f"{command}`; each learner's points come from the command under its table. "
         "CPU time: the training's, per seed, evaluations excluded." + _warm_up_note(table),
         "",
@@ -681,10 +686,8 @@ def plot_curves_bench(table: dict[str, Any], directory: str | Path, prefix: str 
         axes[0].legend(fontsize=8)
         if handles:
             axes[2].legend(handles=handles, fontsize=8)
-        last_seed = table["eval_seed"] + table["episodes"] - 1
         fig.suptitle(
-            f"{env['title']}: learning curves, mean over training seeds with min-max band (held-out seeds "
-            f"{table['eval_seed']}-{last_seed})"
+            f"{env['title']}: learning curves, mean over training seeds with min-max band ({_held_out(table)})"
         )
         fig.tight_layout()
         written.append(save_figure(fig, Path(directory) / f"{prefix}{key}.png"))

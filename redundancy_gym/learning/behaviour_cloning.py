@@ -106,6 +106,7 @@ def train_behaviour_cloning(
     progress: bool = True,
     log: Any = print,
     dataset: str | Path | None = None,
+    torch_threads: int | None = 1,
 ) -> BehaviourCloningSummary:
     """Clone ``expert`` (a registered policy; default: the env's reference, ``clik`` or ``walking``) into an SB3 PPO
     policy and save it to ``out``.
@@ -130,6 +131,8 @@ def train_behaviour_cloning(
             :func:`~redundancy_gym.datasets.find_dataset`) whose pairs are round 0's data in place of ``episodes``
             expert rollouts; the expert then only labels the DAgger rounds (none with ``dagger_rounds=0``: the
             dataset alone).
+        torch_threads: torch's CPU threads while fitting (None: torch's default, one per core). One is the
+            fastest for these small networks, and far the fastest on a machine busy with other work.
     """
     try:
         sb3 = import_stable_baselines3()
@@ -149,6 +152,8 @@ def train_behaviour_cloning(
             raise LearningError(f"{name} must be an int >= {least}, got {value!r}")
     if not math.isfinite(learning_rate) or learning_rate <= 0.0:
         raise LearningError(f"learning_rate must be finite and > 0, got {learning_rate!r}")
+    if torch_threads is not None and (not isinstance(torch_threads, int) or torch_threads < 1):
+        raise LearningError(f"torch_threads must be an int >= 1 or None, got {torch_threads!r}")
     demonstrations = None
     if dataset is not None:
         demonstrations = load_demonstrations(dataset)
@@ -156,6 +161,9 @@ def train_behaviour_cloning(
         if recorded != env_id:
             raise LearningError(f"the dataset in {demonstrations.path} was collected on {recorded}, not {env_id}")
     clock = CpuClock().__enter__()
+    threads = torch.get_num_threads()
+    if torch_threads is not None:
+        torch.set_num_threads(torch_threads)
     env = make_env(env_id, env_kwargs)
     if expert is None:
         expert = reference_policy(env_id)
@@ -230,6 +238,7 @@ def train_behaviour_cloning(
         model.save(str(out))
     finally:
         env.close()
+        torch.set_num_threads(threads)
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     clock.__exit__()
     summary = BehaviourCloningSummary(
@@ -242,19 +251,21 @@ def train_behaviour_cloning(
         wall_s=clock.wall_s,
         cpu_s=clock.cpu_s,
         seed=seed,
+        # a dataset alone has no expert and no rollouts of its own: its episodes are the dataset's
         settings={
-            "expert": expert,
-            "expert_kwargs": dict(expert_kwargs or {}),
+            "expert": expert if teacher is not None else None,
+            "expert_kwargs": dict(expert_kwargs or {}) if teacher is not None else {},
             "env_kwargs": dict(env_kwargs or {}),
-            "episodes": episodes,
+            "episodes": episodes if demonstrations is None else demonstrations.episodes,
             "dagger_rounds": dagger_rounds,
-            "dagger_episodes": dagger_episodes,
+            "dagger_episodes": dagger_episodes if dagger_rounds else None,
             "epochs": epochs,
             "batch_size": batch_size,
             "learning_rate": learning_rate,
             "net_arch": list(net_arch),
             "log_std": log_std,
             "dataset": None if demonstrations is None else str(demonstrations.path),
+            "torch_threads": torch_threads,
         },
         machine=machine(),
         result={"samples": len(observations), "action_mse": loss, "learner_success_per_dagger_round": list(success)},

@@ -22,6 +22,7 @@ def test_the_quick_study_writes_a_two_point_curve(tmp_path, monkeypatch):
     learner = table["envs"]["planar_reach"]["learners"]["ppo"]
     assert [p["budget"] for p in learner["seeds"]["0"]] == [64, 128]
     assert learner["largest_budget"] == 128 and learner["first_0.5"] is None  # 128 steps learn nothing
+    assert learner["command"] == f"redundancy-gym bench curves --quick --json {path}"  # what gives these points
     assert table["envs"]["planar_reach"]["references"]["clik"]["success_rate"] == 1.0
     assert "not within 128" in path.with_suffix(".md").read_text()
     assert (tmp_path / "curves_planar_reach.png").stat().st_size > 0

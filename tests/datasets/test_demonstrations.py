@@ -83,3 +83,29 @@ def test_the_cli_clones_a_dataset_and_refuses_it_for_ppo(planar_dataset, tmp_pat
     assert "from the dataset" in capsys.readouterr().out
     assert main(["train", PLANAR, "--algo", "ppo", "--steps", "10", "--dataset", str(planar_dataset.path)]) == 2
     assert "--dataset apply to --algo bc only" in capsys.readouterr().err
+
+
+def test_a_clone_of_a_dataset_fits_on_the_threads_asked_and_records_the_dataset_not_an_expert(
+    planar_dataset, tmp_path, monkeypatch
+):
+    """torch's default of one thread per core made fitting 12 times slower on a busy 2-core machine; the record of a
+    dataset-only clone named an expert and expert episodes it never had."""
+    import torch
+
+    from redundancy_gym.learning.training_record import read_training_record
+
+    before = torch.get_num_threads()
+    calls: list[int] = []
+    real = torch.set_num_threads
+    monkeypatch.setattr(torch, "set_num_threads", lambda n: (calls.append(n), real(n))[1])
+    summary = train_behaviour_cloning(
+        PLANAR, tmp_path / "bc.zip", dataset=planar_dataset.path, epochs=1, progress=False, log=None
+    )
+    assert calls == [1, before] and torch.get_num_threads() == before  # one thread while fitting, then restored
+    record = read_training_record(summary.path)
+    assert record is not None
+    settings = record.settings
+    assert settings["expert"] is None and settings["dagger_episodes"] is None
+    assert settings["episodes"] == 2 and settings["torch_threads"] == 1  # the dataset's episodes
+    with pytest.raises(LearningError, match="torch_threads must be an int >= 1 or None, got 0"):
+        train_behaviour_cloning(PLANAR, tmp_path / "x.zip", dataset=planar_dataset.path, torch_threads=0, log=None)
