@@ -87,7 +87,7 @@ def test_the_cli_clones_a_dataset_and_refuses_it_for_ppo(planar_dataset, tmp_pat
 
 def test_a_clone_of_a_dataset_fits_on_the_threads_asked_and_records_the_dataset_not_an_expert(
     planar_dataset, tmp_path, monkeypatch
-):
+) -> None:
     """torch's default of one thread per core made fitting 12 times slower on a busy 2-core machine; the record of a
     dataset-only clone named an expert and expert episodes it never had."""
     import torch
@@ -97,7 +97,12 @@ def test_a_clone_of_a_dataset_fits_on_the_threads_asked_and_records_the_dataset_
     before = torch.get_num_threads()
     calls: list[int] = []
     real = torch.set_num_threads
-    monkeypatch.setattr(torch, "set_num_threads", lambda n: (calls.append(n), real(n))[1])
+
+    def recording(n: int) -> None:
+        calls.append(n)
+        real(n)
+
+    monkeypatch.setattr(torch, "set_num_threads", recording)
     summary = train_behaviour_cloning(
         PLANAR, tmp_path / "bc.zip", dataset=planar_dataset.path, epochs=1, progress=False, log=None
     )
