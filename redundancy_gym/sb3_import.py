@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from types import ModuleType
 from typing import Any
 
 from .rendering_backend import guard_triton
 
-__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint", "silent_logger"]
+__all__ = ["LEARN_EXTRA_HINT", "import_stable_baselines3", "install_hint", "set_torch_threads", "silent_logger"]
 
 
 def install_hint(extra: str) -> str:
@@ -45,3 +46,18 @@ def silent_logger() -> Any:
     from stable_baselines3.common.logger import Logger
 
     return Logger(folder=None, output_formats=[])
+
+
+def set_torch_threads(threads: int | None) -> Callable[[], None]:
+    """Put torch on ``threads`` CPU threads (None: leave them as they are); returns what sets the previous count
+    back, for the ``finally`` of the training that asked.
+
+    One thread is the fastest for this package's small networks, and far the fastest on a machine busy with other
+    work (torch's default, one per core, waits on descheduled threads).
+    """
+    import torch
+
+    previous = torch.get_num_threads()
+    if threads is not None:
+        torch.set_num_threads(threads)
+    return lambda: torch.set_num_threads(previous)

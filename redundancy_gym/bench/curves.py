@@ -11,7 +11,7 @@ runs at once (one process each, torch on one thread).
 
 Budgets, per learner as the study ran them (``docs/learned_baselines.md`` says why each stops where it does): PPO to
 3M environment steps on the arms, its variants to 1M (rl-zoo3's Reacher settings to 300k); SAC and TQC to 300k on
-PlanarReach and AgriReach easy, to 100k on AgriReach medium and hard (300k there would take about 27 more CPU-hours
+PlanarReach and AgriReach easy, to 100k on AgriReach medium and hard (300k there would take about 34 more CPU-hours
 on this 2-core machine); on the bipeds the residual and walking-command learners to 100k-300k. ``--steps`` above a
 learner's last budget extends it.
 

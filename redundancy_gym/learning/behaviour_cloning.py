@@ -26,7 +26,7 @@ from tqdm.auto import tqdm
 from ..datasets import load_demonstrations
 from ..eval.evaluate import make_env
 from ..policies import make_policy, reference_policy
-from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, set_torch_threads
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
 
@@ -131,8 +131,8 @@ def train_behaviour_cloning(
             :func:`~redundancy_gym.datasets.find_dataset`) whose pairs are round 0's data in place of ``episodes``
             expert rollouts; the expert then only labels the DAgger rounds (none with ``dagger_rounds=0``: the
             dataset alone).
-        torch_threads: torch's CPU threads while fitting (None: torch's default, one per core). One is the
-            fastest for these small networks, and far the fastest on a machine busy with other work.
+        torch_threads: torch's CPU threads while fitting (None: torch's default, one per core;
+            :func:`~redundancy_gym.sb3_import.set_torch_threads`).
     """
     try:
         sb3 = import_stable_baselines3()
@@ -161,9 +161,7 @@ def train_behaviour_cloning(
         if recorded != env_id:
             raise LearningError(f"the dataset in {demonstrations.path} was collected on {recorded}, not {env_id}")
     clock = CpuClock().__enter__()
-    threads = torch.get_num_threads()
-    if torch_threads is not None:
-        torch.set_num_threads(torch_threads)
+    restore_threads = set_torch_threads(torch_threads)
     env = make_env(env_id, env_kwargs)
     if expert is None:
         expert = reference_policy(env_id)
@@ -238,7 +236,7 @@ def train_behaviour_cloning(
         model.save(str(out))
     finally:
         env.close()
-        torch.set_num_threads(threads)
+        restore_threads()
     path = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     clock.__exit__()
     summary = BehaviourCloningSummary(

@@ -35,7 +35,7 @@ from typing import Any
 
 from ..eval.evaluate import evaluate, make_env
 from ..policies.sb3_policy import vecnormalize_path
-from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, silent_logger
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, set_torch_threads, silent_logger
 from .exceptions import LearningError
 from .training_record import CpuClock
 
@@ -200,10 +200,7 @@ def train_learning_curve(
             "in another folder (another --json), or of a deleted state; move it away, or delete it (and its "
             "_replay.pkl / _vecnormalize.pkl) to start this run afresh"
         )
-    import torch
-
-    threads = torch.get_num_threads()
-    torch.set_num_threads(run.torch_threads)
+    restore_threads = set_torch_threads(run.torch_threads)
     # our envs and wrapped ids report is_success; SB3's Monitor records it per episode
     monitor = {"info_keywords": ("is_success",) if run.env_id.startswith("redundancy_gym/") else ()}
     env = make_vec_env(
@@ -293,7 +290,7 @@ def train_learning_curve(
                 )
     finally:
         env.close()
-        torch.set_num_threads(threads)
+        restore_threads()
     return state
 
 

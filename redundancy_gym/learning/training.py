@@ -22,7 +22,7 @@ from typing import Any
 
 from ..eval.evaluate import make_env
 from ..registration import ENV_IDS
-from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, silent_logger
+from ..sb3_import import LEARN_EXTRA_HINT, import_stable_baselines3, set_torch_threads, silent_logger
 from .exceptions import LearningError
 from .training_record import CpuClock, TrainingRecord, machine
 
@@ -401,11 +401,7 @@ def train(
     out = out if out.suffix == ".zip" else out.with_name(out.name + ".zip")
     stem = out.with_suffix("")
     monitor = {"info_keywords": ("is_success",) if env_id in ENV_IDS else ()}
-    import torch
-
-    threads = torch.get_num_threads()
-    if torch_threads is not None:
-        torch.set_num_threads(torch_threads)
+    restore_threads = set_torch_threads(torch_threads)
     eval_env = None
     with CpuClock() as clock:
         env = make_vec_env(
@@ -492,7 +488,7 @@ def train(
             env.close()
             if eval_env is not None:
                 eval_env.close()
-            torch.set_num_threads(threads)
+            restore_threads()
     summary = statistics.summary
     result: dict[str, Any] = (
         {}

@@ -156,8 +156,9 @@ def test_the_committed_study_is_complete_at_the_budgets_it_defines():
     one between), and no points are committed for a learner the study does not define: the whole study's command
     trains nothing on a clone, and the table's "not within N" is the learner's own last budget."""
     from redundancy_gym.bench.curves import CURVE_ENVS
+    from redundancy_gym.learning.baselines import BASELINES_DIR
 
-    folder = Path(__file__).parents[2] / "redundancy_gym" / "baselines" / "results" / "curves"
+    folder = BASELINES_DIR / "results" / "curves"
     defined, short = set(), []
     for env in CURVE_ENVS:
         for learner in env.learners:
